@@ -1,0 +1,51 @@
+# viosfm_add_library(NAME SRCS ... [PUBLIC_DEPS ...] [PRIVATE_DEPS ...])
+# Creates the target viosfm_<NAME> (alias viosfm::<NAME>) for one layer folder.
+function(viosfm_add_library NAME)
+  cmake_parse_arguments(ARG "" "" "SRCS;PUBLIC_DEPS;PRIVATE_DEPS" ${ARGN})
+  set(target viosfm_${NAME})
+  add_library(${target} ${ARG_SRCS})
+  add_library(viosfm::${NAME} ALIAS ${target})
+  target_include_directories(${target} PUBLIC ${PROJECT_SOURCE_DIR}/src)
+  target_compile_features(${target} PUBLIC cxx_std_20)
+  target_compile_options(${target} PRIVATE -Wall -Wextra)
+  target_link_libraries(${target} PUBLIC ${ARG_PUBLIC_DEPS} PRIVATE ${ARG_PRIVATE_DEPS})
+endfunction()
+
+# viosfm_add_test(MODULE NAME [DEPS ...])
+# Builds NAME.cc of the current folder into a GoogleTest binary registered
+# with ctest as MODULE/NAME. A test that calls GTEST_SKIP is reported as
+# skipped by ctest.
+function(viosfm_add_test MODULE NAME)
+  if(NOT VIOSFM_BUILD_TESTS)
+    return()
+  endif()
+  cmake_parse_arguments(ARG "" "" "DEPS" ${ARGN})
+  set(target test_${MODULE}_${NAME})
+  add_executable(${target} ${NAME}.cc)
+  target_compile_options(${target} PRIVATE -Wall -Wextra)
+  target_compile_definitions(${target} PRIVATE
+    VIOSFM_DATA_DIR="${VIOSFM_DATA_DIR}"
+    VIOSFM_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
+  target_link_libraries(${target} PRIVATE viosfm_${MODULE} viosfm_testing ${ARG_DEPS} GTest::gmock_main)
+  add_test(NAME ${MODULE}/${NAME} COMMAND ${target})
+  set_tests_properties(${MODULE}/${NAME} PROPERTIES
+    SKIP_REGULAR_EXPRESSION "\\[  SKIPPED \\]"
+    WORKING_DIRECTORY ${CMAKE_CURRENT_BINARY_DIR})
+endfunction()
+
+# viosfm_add_layer(NAME [PUBLIC_DEPS ...] [PRIVATE_DEPS ...] [TEST_DEPS ...])
+# One library per layer folder: every *.cc of the folder except *_test.cc and
+# *_benchmark.cc goes into viosfm_<NAME>; every *_test.cc becomes the ctest
+# test <NAME>/<file>.
+function(viosfm_add_layer NAME)
+  cmake_parse_arguments(ARG "" "" "PUBLIC_DEPS;PRIVATE_DEPS;TEST_DEPS" ${ARGN})
+  file(GLOB sources CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/*.cc)
+  list(FILTER sources EXCLUDE REGEX "_(test|benchmark)\\.cc$")
+  viosfm_add_library(${NAME} SRCS ${sources}
+    PUBLIC_DEPS ${ARG_PUBLIC_DEPS} PRIVATE_DEPS ${ARG_PRIVATE_DEPS})
+  file(GLOB tests CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/*_test.cc)
+  foreach(test ${tests})
+    get_filename_component(test_name ${test} NAME_WE)
+    viosfm_add_test(${NAME} ${test_name} DEPS ${ARG_TEST_DEPS})
+  endforeach()
+endfunction()

@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages viosfm needs to build, test and benchmark.
+# Idempotent: installs only what is missing. Needs root (or sudo) for apt-get.
+set -euo pipefail
+
+# Build and library packages (compiler, CMake, Ninja, and the libraries).
+packages=(
+  build-essential cmake ninja-build pkg-config git
+  libeigen3-dev libceres-dev libopencv-dev libsqlite3-dev libcli11-dev
+  libyaml-cpp-dev nlohmann-json3-dev libtbb-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
+)
+# The baseline the benchmarks compare against (not needed to build or test).
+if [[ "${VIOSFM_WITH_COLMAP:-0}" == "1" ]]; then
+  packages+=(colmap)
+fi
+
+missing=()
+for package in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$package" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$package")
+  fi
+done
+
+if [[ ${#missing[@]} -eq 0 ]]; then
+  echo "install-deps: all ${#packages[@]} packages present"
+  exit 0
+fi
+
+echo "install-deps: installing ${missing[*]}"
+if [[ $(id -u) -eq 0 ]]; then
+  SUDO=()
+elif command -v sudo >/dev/null 2>&1; then
+  SUDO=(sudo)
+else
+  echo "install-deps: need root to install: ${missing[*]}" >&2
+  echo "install-deps: run as root, or: apt-get install ${missing[*]}" >&2
+  exit 1
+fi
+export DEBIAN_FRONTEND=noninteractive
+"${SUDO[@]}" apt-get update -qq
+"${SUDO[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"

@@ -1,0 +1,12 @@
+// The table of `viosfm` subcommands. Each Register* adds one subcommand to the
+// CLI11 app and sets its callback, which parses arguments and calls a library
+// function; no algorithm lives in cli/.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace viosfm::cli {
+
+void RegisterEval(CLI::App& app);
+
+}  // namespace viosfm::cli

@@ -1,0 +1,33 @@
+// viosfm: VIO-aided structure from motion. See `viosfm --help`.
+#include <CLI/CLI.hpp>
+#include <exception>
+#include <iostream>
+
+#include "viosfm/cli/commands.h"
+#include "viosfm/util/errors.h"
+#include "viosfm/util/logging.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{"viosfm: VIO-aided structure from motion for sequences with an IMU"};
+  app.set_version_flag("--version", "viosfm 0.1.0");
+  app.require_subcommand(1);
+  std::string log_level = "info";
+  app.add_option("--log-level", log_level, "debug, info, warning or error")
+      ->capture_default_str();
+  app.parse_complete_callback([&log_level] { viosfm::SetLogLevel(viosfm::ParseLogLevel(log_level)); });
+
+  viosfm::cli::RegisterEval(app);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const viosfm::InputError& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "internal error: " << e.what() << "\n";
+    return 3;
+  }
+  return 0;
+}

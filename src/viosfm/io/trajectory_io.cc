@@ -1,0 +1,1 @@
+#include "viosfm/io/trajectory_io.h"

@@ -1,0 +1,1 @@
+#include "viosfm/scene/trajectory.h"

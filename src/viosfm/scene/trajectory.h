@@ -1,0 +1,28 @@
+// A trajectory: poses of a moving frame (camera or body) in a fixed world
+// frame, ordered by time.
+#pragma once
+
+#include <vector>
+
+#include "viosfm/geometry/rigid3.h"
+#include "viosfm/util/timestamp.h"
+
+namespace viosfm {
+
+struct StampedPose {
+  // Nanoseconds. For formats without stamps (KITTI) the row index.
+  timestamp_ns_t timestamp_ns = 0;
+  Rigid3d world_from_frame;
+};
+
+struct Trajectory {
+  std::vector<StampedPose> poses;
+  // False when the source file had no timestamps (KITTI); the stamps are then
+  // row indices and only association by index makes sense.
+  bool has_timestamps = true;
+
+  size_t size() const { return poses.size(); }
+  bool empty() const { return poses.empty(); }
+};
+
+}  // namespace viosfm

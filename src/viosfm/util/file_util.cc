@@ -1,0 +1,86 @@
+#include "viosfm/util/file_util.h"
+
+#include <unistd.h>
+
+#include <fstream>
+#include <sstream>
+
+#include "viosfm/util/errors.h"
+
+namespace viosfm {
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path TemporarySibling(const fs::path& path) {
+  fs::path tmp = path;
+  tmp += ".tmp-" + std::to_string(getpid());
+  return tmp;
+}
+
+}  // namespace
+
+void WriteFileAtomically(const fs::path& path, const std::function<void(std::ostream&)>& write,
+                         bool binary) {
+  if (path.has_parent_path() && !fs::exists(path.parent_path())) {
+    fs::create_directories(path.parent_path());
+  }
+  const fs::path tmp = TemporarySibling(path);
+  try {
+    {
+      std::ofstream stream(tmp, binary ? std::ios::binary | std::ios::trunc : std::ios::trunc);
+      if (!stream) throw InputError(tmp.string(), 0, "cannot open for writing");
+      write(stream);
+      stream.flush();
+      if (!stream) throw InputError(tmp.string(), 0, "write failed (disk full?)");
+    }
+    fs::rename(tmp, path);
+  } catch (...) {
+    std::error_code ignored;
+    fs::remove(tmp, ignored);
+    throw;
+  }
+}
+
+void WriteFolderAtomically(const fs::path& path,
+                           const std::function<void(const fs::path&)>& write) {
+  const fs::path tmp = TemporarySibling(path);
+  std::error_code ignored;
+  fs::remove_all(tmp, ignored);
+  fs::create_directories(tmp);
+  try {
+    write(tmp);
+    if (fs::exists(path)) {
+      const fs::path old = fs::path(path.string() + ".old-" + std::to_string(getpid()));
+      fs::rename(path, old);
+      fs::rename(tmp, path);
+      fs::remove_all(old, ignored);
+    } else {
+      fs::rename(tmp, path);
+    }
+  } catch (...) {
+    fs::remove_all(tmp, ignored);
+    throw;
+  }
+}
+
+void RequireFile(const fs::path& path, const std::string& what) {
+  if (!fs::exists(path)) throw InputError(path.string(), 0, what + " does not exist");
+  if (!fs::is_regular_file(path)) throw InputError(path.string(), 0, what + " is not a regular file");
+}
+
+void RequireFolder(const fs::path& path, const std::string& what) {
+  if (!fs::exists(path)) throw InputError(path.string(), 0, what + " does not exist");
+  if (!fs::is_directory(path)) throw InputError(path.string(), 0, what + " is not a folder");
+}
+
+std::string ReadTextFile(const fs::path& path) {
+  RequireFile(path);
+  std::ifstream stream(path, std::ios::binary);
+  if (!stream) throw InputError(path.string(), 0, "cannot open for reading");
+  std::ostringstream content;
+  content << stream.rdbuf();
+  return content.str();
+}
+
+}  // namespace viosfm

@@ -1,0 +1,64 @@
+#include "viosfm/util/testing.h"
+
+#include <unistd.h>
+
+#include <cstdlib>
+#include <mutex>
+#include <vector>
+
+namespace viosfm::testing {
+namespace fs = std::filesystem;
+
+namespace {
+
+std::mutex g_scratch_mutex;
+std::vector<fs::path>* g_scratch_folders = nullptr;
+
+void RemoveScratchFolders() {
+  if (g_scratch_folders == nullptr) return;
+  std::error_code ignored;
+  for (const auto& folder : *g_scratch_folders) fs::remove_all(folder, ignored);
+}
+
+}  // namespace
+
+fs::path DataDir() {
+  if (const char* env = std::getenv("VIOSFM_DATA_DIR"); env != nullptr && *env != '\0') {
+    return fs::path(env);
+  }
+#ifdef VIOSFM_DATA_DIR
+  return fs::path(VIOSFM_DATA_DIR);
+#else
+  return fs::path("../shared/data");
+#endif
+}
+
+fs::path FindDataset(const std::string& name) {
+  const fs::path path = DataDir() / name;
+  return fs::exists(path) ? path : fs::path();
+}
+
+fs::path SourcePath(const std::string& relative) {
+#ifdef VIOSFM_SOURCE_DIR
+  return fs::path(VIOSFM_SOURCE_DIR) / "src" / "viosfm" / relative;
+#else
+  return fs::path("src/viosfm") / relative;
+#endif
+}
+
+fs::path MakeScratchFolder(const std::string& name) {
+  std::lock_guard<std::mutex> lock(g_scratch_mutex);
+  if (g_scratch_folders == nullptr) {
+    g_scratch_folders = new std::vector<fs::path>();
+    std::atexit(RemoveScratchFolders);
+  }
+  const fs::path folder = fs::temp_directory_path() /
+                          ("viosfm_test_" + std::to_string(getpid()) + "_" +
+                           std::to_string(g_scratch_folders->size()) + "_" + name);
+  fs::remove_all(folder);
+  fs::create_directories(folder);
+  g_scratch_folders->push_back(folder);
+  return folder;
+}
+
+}  // namespace viosfm::testing

@@ -1,0 +1,26 @@
+// Helpers for tests: where the real datasets are, and scratch folders.
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+namespace viosfm::testing {
+
+// The real-data folder (../shared/data by default; env VIOSFM_DATA_DIR overrides).
+std::filesystem::path DataDir();
+// DataDir()/name if it exists, otherwise an empty path.
+std::filesystem::path FindDataset(const std::string& name);
+// Test fixtures committed next to the sources: src/viosfm/<relative>.
+std::filesystem::path SourcePath(const std::string& relative);
+// A fresh empty folder under the system temp dir, unique per test, removed at exit.
+std::filesystem::path MakeScratchFolder(const std::string& name);
+
+}  // namespace viosfm::testing
+
+// Skips the current test (GoogleTest) when a dataset folder is absent.
+#define VIOSFM_REQUIRE_DATASET(path_var, name)                                           \
+  const std::filesystem::path path_var = ::viosfm::testing::FindDataset(name);           \
+  if (path_var.empty()) {                                                                \
+    GTEST_SKIP() << "dataset '" << name << "' not found in "                            \
+                 << ::viosfm::testing::DataDir() << " (set VIOSFM_DATA_DIR); skipping"; \
+  }
