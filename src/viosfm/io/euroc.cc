@@ -1,0 +1,381 @@
+#include "viosfm/io/euroc.h"
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <fstream>
+#include <functional>
+#include <optional>
+#include <sstream>
+#include <string_view>
+
+#include "viosfm/io/yaml_util.h"
+#include "viosfm/util/errors.h"
+#include "viosfm/util/file_util.h"
+#include "viosfm/util/logging.h"
+#include "viosfm/util/string_util.h"
+
+namespace viosfm {
+namespace fs = std::filesystem;
+
+namespace {
+
+// Calls `row(line_number, fields)` for each data line of a comma-separated
+// file: blank lines and lines starting with '#' are skipped, fields trimmed.
+void ForEachCsvRow(const fs::path& path, const std::string& what,
+                   const std::function<void(int64_t, const std::vector<std::string_view>&)>& row) {
+  RequireFile(path, what);
+  std::ifstream stream(path);
+  if (!stream) throw InputError(path.string(), 0, "cannot open " + what + " for reading");
+  std::string line;
+  int64_t line_number = 0;
+  std::vector<std::string_view> fields;
+  while (std::getline(stream, line)) {
+    ++line_number;
+    const std::string_view text = Trim(line);
+    if (text.empty() || text.front() == '#') continue;
+    fields = Split(text, ",");
+    for (std::string_view& field : fields) field = Trim(field);
+    row(line_number, fields);
+  }
+  if (stream.bad()) throw InputError(path.string(), line_number, "read error");
+}
+
+std::string Quoted(std::string_view text) {
+  return "'" + std::string(text) + "'";
+}
+
+timestamp_ns_t ParseStampField(const fs::path& path, int64_t line, std::string_view field) {
+  const std::optional<timestamp_ns_t> stamp = ParseNs(field);
+  if (!stamp) {
+    throw InputError(
+        path.string(), line,
+        "expected an integer timestamp in nanoseconds in the first column, got " + Quoted(field));
+  }
+  return *stamp;
+}
+
+double ParseNumberField(const fs::path& path, int64_t line, size_t column, std::string_view field) {
+  const std::optional<double> value = ParseDouble(field);
+  if (!value || !std::isfinite(*value)) {
+    throw InputError(path.string(), line,
+                     "expected a finite number in column " + std::to_string(column + 1) + ", got " +
+                         Quoted(field));
+  }
+  return *value;
+}
+
+void CheckIncreasing(const fs::path& path, int64_t line, timestamp_ns_t stamp,
+                     const std::optional<timestamp_ns_t>& previous, int64_t previous_line) {
+  if (previous && stamp <= *previous) {
+    throw InputError(path.string(), line,
+                     "timestamps must strictly increase: " + std::to_string(stamp) +
+                         " ns is not after " + std::to_string(*previous) + " ns (line " +
+                         std::to_string(previous_line) + ")");
+  }
+}
+
+// body_from_sensor from a T_BS entry; the bottom row must be (0 0 0 1) and
+// the top-left 3x3 block a rotation.
+Rigid3d ReadTransform(const YamlMap& yaml, const std::string& key) {
+  const Eigen::Matrix4d matrix = yaml.GetMatrix4(key);
+  if ((matrix.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).cwiseAbs().maxCoeff() > 1e-9) {
+    yaml.Fail(key, "expected a homogeneous transform whose last row is 0 0 0 1");
+  }
+  const Eigen::Matrix3d rotation = matrix.topLeftCorner<3, 3>();
+  if ((rotation.transpose() * rotation - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() >
+          1e-3 ||
+      rotation.determinant() <= 0.0) {
+    yaml.Fail(key, "expected the top-left 3x3 block to be a rotation matrix");
+  }
+  return Rigid3d::FromMatrix(matrix.topRows<3>());
+}
+
+bool IsIdentity(const Rigid3d& transform) {
+  return transform.rotation.angularDistance(Eigen::Quaterniond::Identity()) < 1e-9 &&
+         transform.translation.norm() < 1e-9;
+}
+
+constexpr char kSupportedDistortionModels[] =
+    "radial-tangential (or radtan), equidistant (or equi), none";
+
+}  // namespace
+
+std::vector<GroundTruthState> ReadEurocGroundTruth(const fs::path& csv) {
+  std::vector<GroundTruthState> states;
+  std::optional<timestamp_ns_t> previous;
+  int64_t previous_line = 0;
+  ForEachCsvRow(csv, "EuRoC ground-truth file", [&](int64_t line, const auto& fields) {
+    if (fields.size() != 8 && fields.size() != 17) {
+      throw InputError(csv.string(), line,
+                       "expected 8 comma-separated fields (timestamp [ns], p_x, p_y, p_z, q_w, "
+                       "q_x, q_y, q_z) or 17 (those, then v_xyz, gyro bias xyz, accel bias xyz), "
+                       "got " +
+                           std::to_string(fields.size()));
+    }
+    GroundTruthState state;
+    state.timestamp_ns = ParseStampField(csv, line, fields[0]);
+    CheckIncreasing(csv, line, state.timestamp_ns, previous, previous_line);
+    double values[17];
+    for (size_t i = 1; i < fields.size(); ++i)
+      values[i] = ParseNumberField(csv, line, i, fields[i]);
+    Eigen::Quaterniond rotation(values[4], values[5], values[6], values[7]);
+    const double norm = rotation.norm();
+    if (std::abs(norm - 1.0) > 1e-3) {
+      std::ostringstream message;
+      message << "expected a unit quaternion (q_w, q_x, q_y, q_z in columns 5-8), its norm is "
+              << norm;
+      throw InputError(csv.string(), line, message.str());
+    }
+    rotation.normalize();
+    state.world_from_body = Rigid3d(rotation, Eigen::Vector3d(values[1], values[2], values[3]));
+    if (fields.size() == 17) {
+      state.velocity_in_world = Eigen::Vector3d(values[8], values[9], values[10]);
+      state.gyro_bias = Eigen::Vector3d(values[11], values[12], values[13]);
+      state.accel_bias = Eigen::Vector3d(values[14], values[15], values[16]);
+      state.has_velocity_and_biases = true;
+    }
+    states.push_back(state);
+    previous = state.timestamp_ns;
+    previous_line = line;
+  });
+  if (states.empty()) throw InputError(csv.string(), 0, "expected ground-truth rows, found none");
+  return states;
+}
+
+EurocCameraCalibration ReadEurocCameraYaml(const fs::path& yaml_path) {
+  const YamlMap yaml = YamlMap::Load(yaml_path);
+  EurocCameraCalibration calibration;
+  Camera& camera = calibration.camera;
+  camera.camera_id = 1;
+
+  if (yaml.Has("camera_model")) {
+    const std::string model = yaml.GetString("camera_model");
+    if (ToLower(model) != "pinhole") {
+      yaml.Fail("camera_model", "unknown camera model '" + model + "'; supported: pinhole");
+    }
+  }
+  const std::vector<double> resolution = yaml.GetDoubles("resolution", 2);
+  for (double value : resolution) {
+    if (value < 1.0 || value != std::floor(value) || value > 1e6) {
+      yaml.Fail("resolution", "expected [width, height] as positive integers (pixels)");
+    }
+  }
+  camera.width = static_cast<uint64_t>(resolution[0]);
+  camera.height = static_cast<uint64_t>(resolution[1]);
+  const std::vector<double> intrinsics = yaml.GetDoubles("intrinsics", 4);
+  if (intrinsics[0] <= 0.0 || intrinsics[1] <= 0.0) {
+    yaml.Fail("intrinsics", "expected [fu, fv, cu, cv] with positive focal lengths");
+  }
+
+  std::string distortion = "none";
+  if (yaml.Has("distortion_model")) distortion = ToLower(yaml.GetString("distortion_model"));
+  std::vector<double> coefficients;
+  if (yaml.Has("distortion_coefficients")) {
+    coefficients = yaml.GetDoubles("distortion_coefficients");
+  }
+  const auto require_coefficients = [&](size_t count, const std::string& names) {
+    if (coefficients.size() != count) {
+      yaml.Fail("distortion_coefficients", "distortion_model '" + distortion + "' expects " +
+                                               std::to_string(count) + " coefficients (" + names +
+                                               "), got " + std::to_string(coefficients.size()));
+    }
+  };
+  camera.params = intrinsics;
+  if (distortion == "radial-tangential" || distortion == "radtan") {
+    require_coefficients(4, "k1, k2, p1, p2");
+    camera.model_id = CameraModelId::kOpenCV;
+    camera.params.insert(camera.params.end(), coefficients.begin(), coefficients.end());
+  } else if (distortion == "equidistant" || distortion == "equi") {
+    require_coefficients(4, "k1, k2, k3, k4");
+    camera.model_id = CameraModelId::kOpenCVFisheye;
+    camera.params.insert(camera.params.end(), coefficients.begin(), coefficients.end());
+  } else if (distortion == "none") {
+    for (double value : coefficients) {
+      if (value != 0.0) {
+        yaml.Fail("distortion_coefficients",
+                  "distortion_model 'none' expects no (or only zero) coefficients");
+      }
+    }
+    camera.model_id = CameraModelId::kPinhole;
+  } else {
+    yaml.Fail("distortion_model", "unknown distortion model '" + distortion +
+                                      "'; supported: " + kSupportedDistortionModels);
+  }
+  VIOSFM_CHECK(camera.HasValidParams());
+
+  calibration.body_from_cam = ReadTransform(yaml, "T_BS");
+  if (yaml.Has("rate_hz")) {
+    calibration.rate_hz = yaml.GetDouble("rate_hz");
+    if (calibration.rate_hz <= 0.0) yaml.Fail("rate_hz", "expected a positive rate in Hz");
+  }
+  return calibration;
+}
+
+EurocImuCalibration ReadEurocImuYaml(const fs::path& yaml_path) {
+  const YamlMap yaml = YamlMap::Load(yaml_path);
+  EurocImuCalibration calibration;
+  ImuNoise& noise = calibration.noise;
+  const auto positive = [&](const std::string& key) {
+    const double value = yaml.GetDouble(key);
+    if (value <= 0.0) yaml.Fail(key, "expected a positive number");
+    return value;
+  };
+  noise.gyro_noise_density = positive("gyroscope_noise_density");
+  noise.gyro_random_walk = positive("gyroscope_random_walk");
+  noise.accel_noise_density = positive("accelerometer_noise_density");
+  noise.accel_random_walk = positive("accelerometer_random_walk");
+  if (yaml.Has("rate_hz")) noise.rate_hz = positive("rate_hz");
+  if (yaml.Has("T_BS")) calibration.body_from_imu = ReadTransform(yaml, "T_BS");
+  if (const std::string problem = noise.Validate(); !problem.empty()) {
+    throw InputError(yaml_path.string(), 0, "invalid IMU noise model: " + problem);
+  }
+  return calibration;
+}
+
+std::vector<SequenceImage> ReadEurocImageList(const fs::path& csv, const fs::path& image_folder,
+                                              bool check_images_exist) {
+  std::vector<SequenceImage> images;
+  std::optional<timestamp_ns_t> previous;
+  int64_t previous_line = 0;
+  ForEachCsvRow(csv, "EuRoC image list", [&](int64_t line, const auto& fields) {
+    if (fields.size() != 2) {
+      throw InputError(csv.string(), line,
+                       "expected 2 comma-separated fields (timestamp [ns], filename), got " +
+                           std::to_string(fields.size()));
+    }
+    SequenceImage image;
+    image.timestamp_ns = ParseStampField(csv, line, fields[0]);
+    CheckIncreasing(csv, line, image.timestamp_ns, previous, previous_line);
+    if (fields[1].empty()) throw InputError(csv.string(), line, "expected a filename in column 2");
+    image.path = image_folder / std::string(fields[1]);
+    if (check_images_exist && !fs::is_regular_file(image.path)) {
+      throw InputError(
+          csv.string(), line,
+          "listed image " + Quoted(fields[1]) + " does not exist: " + image.path.string());
+    }
+    images.push_back(std::move(image));
+    previous = images.back().timestamp_ns;
+    previous_line = line;
+  });
+  if (images.empty()) throw InputError(csv.string(), 0, "expected image rows, found none");
+  return images;
+}
+
+std::vector<ImuSample> ReadEurocImu(const fs::path& csv) {
+  std::vector<ImuSample> samples;
+  std::optional<timestamp_ns_t> previous;
+  int64_t previous_line = 0;
+  ForEachCsvRow(csv, "EuRoC IMU file", [&](int64_t line, const auto& fields) {
+    if (fields.size() != 7) {
+      throw InputError(csv.string(), line,
+                       "expected 7 comma-separated fields (timestamp [ns], w_x, w_y, w_z [rad/s], "
+                       "a_x, a_y, a_z [m/s^2]), got " +
+                           std::to_string(fields.size()));
+    }
+    ImuSample sample;
+    sample.timestamp_ns = ParseStampField(csv, line, fields[0]);
+    CheckIncreasing(csv, line, sample.timestamp_ns, previous, previous_line);
+    for (int i = 0; i < 3; ++i) {
+      sample.gyro[i] = ParseNumberField(csv, line, 1 + i, fields[1 + i]);
+      sample.accel[i] = ParseNumberField(csv, line, 4 + i, fields[4 + i]);
+    }
+    samples.push_back(sample);
+    previous = sample.timestamp_ns;
+    previous_line = line;
+  });
+  if (samples.empty()) throw InputError(csv.string(), 0, "expected IMU rows, found none");
+  return samples;
+}
+
+std::string EurocReadOptions::Validate() const {
+  const auto is_plain_name = [](const std::string& name) {
+    return !name.empty() && name.find('/') == std::string::npos && name != "." && name != "..";
+  };
+  if (!is_plain_name(cam_name)) return "cam_name must be a folder name such as 'cam0'";
+  if (!is_plain_name(imu_name)) return "imu_name must be a folder name such as 'imu0'";
+  return "";
+}
+
+Sequence ReadEurocDataset(const fs::path& root, const EurocReadOptions& options) {
+  if (const std::string problem = options.Validate(); !problem.empty()) {
+    throw InputError("EuRoC read options: " + problem);
+  }
+  RequireFolder(root, "EuRoC dataset folder");
+  fs::path mav0;
+  if (fs::is_directory(root / "mav0")) {
+    mav0 = root / "mav0";
+  } else if (fs::is_directory(root / options.cam_name)) {
+    mav0 = root;
+  } else {
+    throw InputError(root.string(), 0,
+                     "expected a EuRoC ASL folder: one containing mav0/, or mav0/ itself (with " +
+                         options.cam_name + "/)");
+  }
+
+  Sequence sequence;
+  sequence.root = root;
+
+  const fs::path cam_folder = mav0 / options.cam_name;
+  RequireFolder(cam_folder, "camera folder");
+  const EurocCameraCalibration camera = ReadEurocCameraYaml(cam_folder / "sensor.yaml");
+  sequence.camera = camera.camera;
+  sequence.body_from_cam = camera.body_from_cam;
+  sequence.camera_rate_hz = camera.rate_hz;
+  if (options.check_images_exist) RequireFolder(cam_folder / "data", "image folder");
+  sequence.images =
+      ReadEurocImageList(cam_folder / "data.csv", cam_folder / "data", options.check_images_exist);
+
+  // The body frame of a Sequence is the IMU frame.
+  Rigid3d body_from_imu;
+  const fs::path imu_folder = mav0 / options.imu_name;
+  if (fs::exists(imu_folder) || options.require_imu) {
+    RequireFolder(imu_folder, "IMU folder");
+    const EurocImuCalibration imu = ReadEurocImuYaml(imu_folder / "sensor.yaml");
+    sequence.imu_noise = imu.noise;
+    body_from_imu = imu.body_from_imu;
+    sequence.imu = ReadEurocImu(imu_folder / "data.csv");
+    if (!IsIdentity(body_from_imu)) {
+      VIOSFM_LOG(WARNING) << imu_folder / "sensor.yaml"
+                          << ": T_BS is not the identity; camera extrinsics and ground-truth "
+                             "poses are re-expressed in the IMU frame";
+      sequence.body_from_cam = body_from_imu.Inverse() * sequence.body_from_cam;
+    }
+
+    const fs::path imu_csv = imu_folder / "data.csv";
+    const timestamp_ns_t first_image = sequence.images.front().timestamp_ns;
+    const timestamp_ns_t last_image = sequence.images.back().timestamp_ns;
+    const timestamp_ns_t first_imu = sequence.imu.front().timestamp_ns;
+    const timestamp_ns_t last_imu = sequence.imu.back().timestamp_ns;
+    const std::string spans = "images span [" + std::to_string(first_image) + ", " +
+                              std::to_string(last_image) + "] ns, IMU samples span [" +
+                              std::to_string(first_imu) + ", " + std::to_string(last_imu) + "] ns";
+    if (last_imu < first_image || first_imu > last_image) {
+      throw InputError(
+          imu_csv.string(), 0,
+          "expected IMU samples over the time span of the images, found none: " + spans);
+    }
+    if (first_imu > first_image || last_imu < last_image) {
+      const std::string message = "the IMU does not cover the whole image time span: " + spans;
+      if (options.require_imu_coverage) throw InputError(imu_csv.string(), 0, message);
+      VIOSFM_LOG(WARNING) << imu_csv.string() << ": " << message;
+    }
+  }
+
+  const fs::path ground_truth_csv = mav0 / "state_groundtruth_estimate0" / "data.csv";
+  if (options.read_ground_truth && fs::exists(ground_truth_csv)) {
+    sequence.ground_truth = ReadEurocGroundTruth(ground_truth_csv);
+    if (!IsIdentity(body_from_imu)) {
+      for (GroundTruthState& state : sequence.ground_truth) {
+        state.world_from_body = state.world_from_body * body_from_imu;
+      }
+    }
+  }
+
+  VIOSFM_LOG(INFO) << "EuRoC " << mav0.string() << ": " << sequence.images.size() << " images ("
+                   << sequence.camera.ModelName() << " " << sequence.camera.width << "x"
+                   << sequence.camera.height << "), " << sequence.imu.size() << " IMU samples, "
+                   << sequence.ground_truth.size() << " ground-truth states";
+  return sequence;
+}
+
+}  // namespace viosfm

@@ -1,0 +1,112 @@
+// The EuRoC MAV / ASL dataset layout (Burri et al., IJRR 2016), also used by
+// TUM-VI, UZH-FPV and Kalibr:
+//
+//   <root>/mav0/cam0/data.csv       "#timestamp [ns],filename"
+//   <root>/mav0/cam0/data/<filename>
+//   <root>/mav0/cam0/sensor.yaml    Kalibr camera calibration (see below)
+//   <root>/mav0/imu0/data.csv       "#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y,w_RS_S_z,
+//                                    a_RS_S_x [m s^-2],a_RS_S_y,a_RS_S_z"
+//   <root>/mav0/imu0/sensor.yaml    gyroscope_noise_density, gyroscope_random_walk,
+//                                    accelerometer_noise_density, accelerometer_random_walk,
+//                                    rate_hz, T_BS
+//   <root>/mav0/state_groundtruth_estimate0/data.csv   (optional, see ReadEurocGroundTruth)
+//
+// CSV files: one record a line, comma-separated, fields trimmed; lines that
+// are blank or start with '#' are skipped; timestamps are integer ns and must
+// strictly increase.
+//
+// Camera sensor.yaml (OpenCV-style "%YAML:1.0" first line accepted):
+//   T_BS: {cols: 4, rows: 4, data: [16 numbers, row-major]}   body_from_cam
+//   rate_hz: 20
+//   resolution: [width, height]
+//   camera_model: pinhole                     (the only supported projection)
+//   intrinsics: [fu, fv, cu, cv]
+//   distortion_model: radial-tangential       -> OPENCV        fx fy cx cy k1 k2 p1 p2
+//                     equidistant             -> OPENCV_FISHEYE fx fy cx cy k1 k2 k3 k4
+//                     none (or key absent)    -> PINHOLE        fx fy cx cy
+//   distortion_coefficients: [4 numbers]      ([] or absent for none)
+//
+// Frames: viosfm's body frame is the IMU frame. EuRoC's imu0 T_BS is the
+// identity; if a dataset's is not, body_from_cam is re-expressed as
+// imu_from_cam and ground-truth poses as world_from_imu (velocities are left
+// as the file states them, for the EuRoC body origin).
+//
+// IMU coverage: an IMU stream that does not overlap the image time span at all
+// is an InputError; one that starts after the first image or ends before the
+// last is logged as a warning by default (the frames outside cannot be
+// IMU-constrained) and is an InputError with options.require_imu_coverage.
+//
+// All reading errors throw InputError naming the file, the line (where there
+// is one) and what was expected.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "viosfm/io/sequence.h"
+
+namespace viosfm {
+
+// GroundTruthState is defined in sequence.h (a Sequence holds them).
+
+// Reads a EuRoC ground-truth state file (state_groundtruth_estimate0/data.csv):
+//   "#timestamp [ns], p_RS_R_x [m], p_RS_R_y, p_RS_R_z, q_RS_w [], q_RS_x, q_RS_y, q_RS_z,
+//    v_RS_R_x [m s^-1], v_RS_R_y, v_RS_R_z, b_w_RS_S_x [rad s^-1], .._y, .._z,
+//    b_a_RS_S_x [m s^-2], .._y, .._z"
+// The quaternion is w first and is world_from_body (R = world, S = body).
+// Each row has either the first 8 columns or all 17. A quaternion whose norm
+// is off 1 by more than 1e-3 is an error; others are normalised. Throws
+// InputError (file and line) on a wrong column count, a non-numeric field, a
+// non-increasing timestamp, a non-unit quaternion or a file without rows.
+std::vector<GroundTruthState> ReadEurocGroundTruth(const std::filesystem::path& csv);
+
+// Camera calibration from a Kalibr/EuRoC camera sensor.yaml (format above).
+struct EurocCameraCalibration {
+  Camera camera;  // camera_id 1
+  Rigid3d body_from_cam;
+  double rate_hz = 0.0;  // 0 if the key is absent
+};
+EurocCameraCalibration ReadEurocCameraYaml(const std::filesystem::path& yaml);
+
+// IMU calibration from a Kalibr/EuRoC imu sensor.yaml. The four noise keys
+// are required; rate_hz keeps ImuNoise's default and T_BS the identity when
+// absent.
+struct EurocImuCalibration {
+  ImuNoise noise;
+  Rigid3d body_from_imu;
+};
+EurocImuCalibration ReadEurocImuYaml(const std::filesystem::path& yaml);
+
+// Reads "#timestamp [ns],filename" rows; paths are image_folder/filename.
+// With check_images_exist, a listed file that does not exist is an error.
+std::vector<SequenceImage> ReadEurocImageList(const std::filesystem::path& csv,
+                                              const std::filesystem::path& image_folder,
+                                              bool check_images_exist);
+// Reads imu0/data.csv rows (7 columns, see above).
+std::vector<ImuSample> ReadEurocImu(const std::filesystem::path& csv);
+
+struct EurocReadOptions {
+  // The camera sub-folder of mav0/. Default "cam0".
+  std::string cam_name = "cam0";
+  // The IMU sub-folder of mav0/. Default "imu0".
+  std::string imu_name = "imu0";
+  // Check that every image listed in data.csv exists (no decoding). Default true.
+  bool check_images_exist = true;
+  // Without an IMU folder: error (true) or a sequence without IMU (false). Default true.
+  bool require_imu = true;
+  // Partial IMU coverage of the image time span is an error (true) or a
+  // warning (false). Default false.
+  bool require_imu_coverage = false;
+  // Read state_groundtruth_estimate0/data.csv when present. Default true.
+  bool read_ground_truth = true;
+
+  // Empty if valid; otherwise names the bad field.
+  std::string Validate() const;
+  bool Check() const { return Validate().empty(); }
+};
+
+// `root` is the folder that contains mav0/, or the mav0 folder itself.
+Sequence ReadEurocDataset(const std::filesystem::path& root, const EurocReadOptions& options = {});
+
+}  // namespace viosfm

@@ -1,0 +1,173 @@
+#include "viosfm/io/image_folder.h"
+
+#include <algorithm>
+#include <fstream>
+#include <map>
+#include <tuple>
+
+#include "viosfm/io/euroc.h"
+#include "viosfm/util/errors.h"
+#include "viosfm/util/file_util.h"
+#include "viosfm/util/logging.h"
+#include "viosfm/util/string_util.h"
+
+namespace viosfm {
+namespace fs = std::filesystem;
+
+namespace {
+
+bool IsAllDigits(std::string_view text) {
+  return !text.empty() &&
+         std::all_of(text.begin(), text.end(), [](char c) { return c >= '0' && c <= '9'; });
+}
+
+// An image and where its stamp came from, for duplicate messages.
+struct StampedImage {
+  SequenceImage image;
+  std::string source_path;  // the image file (a) or the timestamps file (b)
+  int64_t source_line = 0;  // 0 (a) or the line of the timestamps file (b)
+
+  std::string Source() const {
+    return source_line > 0 ? source_path + ":" + std::to_string(source_line) : source_path;
+  }
+};
+
+std::vector<StampedImage> ImagesFromNames(const fs::path& folder) {
+  std::vector<StampedImage> images;
+  for (const fs::directory_entry& entry : fs::directory_iterator(folder)) {
+    if (!entry.is_regular_file() || !HasImageExtension(entry.path())) continue;
+    const std::string stem = entry.path().stem().string();
+    const std::optional<timestamp_ns_t> stamp =
+        IsAllDigits(stem) ? ParseNs(stem) : std::optional<timestamp_ns_t>();
+    if (!stamp) {
+      throw InputError(entry.path().string(), 0,
+                       "expected the image file name to be its timestamp in integer nanoseconds "
+                       "(e.g. 1403715273262142976.png), or give a timestamps file");
+    }
+    images.push_back({{*stamp, entry.path()}, entry.path().string(), 0});
+  }
+  if (images.empty()) {
+    throw InputError(folder.string(), 0,
+                     "expected image files (.png, .jpg, .jpeg) named by their timestamp in "
+                     "nanoseconds, found none");
+  }
+  return images;
+}
+
+std::vector<StampedImage> ImagesFromTimestampsFile(const fs::path& folder, const fs::path& file) {
+  RequireFile(file, "timestamps file");
+  std::ifstream stream(file);
+  if (!stream) throw InputError(file.string(), 0, "cannot open the timestamps file for reading");
+  std::vector<StampedImage> images;
+  std::map<fs::path, int64_t> line_of_path;
+  std::string line;
+  int64_t line_number = 0;
+  while (std::getline(stream, line)) {
+    ++line_number;
+    const std::string_view text = Trim(line);
+    if (text.empty() || text.front() == '#') continue;
+    std::vector<std::string_view> fields = Split(text, " \t", /*skip_empty=*/true);
+    if (fields.size() == 1) fields = Split(text, ",");
+    for (std::string_view& field : fields) field = Trim(field);
+    if (fields.size() != 2 || fields[0].empty() || fields[1].empty()) {
+      throw InputError(file.string(), line_number,
+                       "expected 'filename timestamp' (timestamp in integer ns, or seconds with a "
+                       "decimal point), got " +
+                           std::to_string(fields.size()) + " fields");
+    }
+    const std::string_view stamp_text = fields[1];
+    std::optional<timestamp_ns_t> stamp;
+    if (stamp_text.find('.') != std::string_view::npos) {
+      stamp = ParseSecondsToNs(stamp_text);
+    } else if (IsAllDigits(stamp_text) ||
+               (stamp_text.front() == '-' && IsAllDigits(stamp_text.substr(1)))) {
+      stamp = ParseNs(stamp_text);
+    }
+    if (!stamp) {
+      throw InputError(file.string(), line_number,
+                       "expected a timestamp in integer ns or in seconds with a decimal point in "
+                       "column 2, got '" +
+                           std::string(stamp_text) + "'");
+    }
+    const fs::path path = folder / std::string(fields[0]);
+    if (!fs::is_regular_file(path)) {
+      throw InputError(
+          file.string(), line_number,
+          "listed image '" + std::string(fields[0]) + "' does not exist: " + path.string());
+    }
+    const auto [it, inserted] = line_of_path.emplace(path.lexically_normal(), line_number);
+    if (!inserted) {
+      throw InputError(file.string(), line_number,
+                       "image '" + std::string(fields[0]) + "' is already listed on line " +
+                           std::to_string(it->second));
+    }
+    images.push_back({{*stamp, path}, file.string(), line_number});
+  }
+  if (images.empty()) {
+    throw InputError(file.string(), 0, "expected 'filename timestamp' lines, found none");
+  }
+  return images;
+}
+
+}  // namespace
+
+bool HasImageExtension(const fs::path& path) {
+  const std::string extension = ToLower(path.extension().string());
+  return extension == ".png" || extension == ".jpg" || extension == ".jpeg";
+}
+
+std::string ImageFolderOptions::Validate() const {
+  if (camera.has_value() == !camera_yaml.empty()) {
+    return "give exactly one of camera and camera_yaml";
+  }
+  if (camera && (!camera->HasValidParams() || camera->width == 0 || camera->height == 0)) {
+    return "camera must have a known model, its number of params and a positive size";
+  }
+  return "";
+}
+
+Sequence ReadImageFolder(const fs::path& folder, const ImageFolderOptions& options) {
+  if (const std::string problem = options.Validate(); !problem.empty()) {
+    throw InputError("image folder options: " + problem);
+  }
+  RequireFolder(folder, "image folder");
+
+  Sequence sequence;
+  sequence.root = folder;
+  if (options.camera) {
+    sequence.camera = *options.camera;
+    sequence.camera.camera_id = 1;
+  } else {
+    const EurocCameraCalibration calibration = ReadEurocCameraYaml(options.camera_yaml);
+    sequence.camera = calibration.camera;
+    sequence.body_from_cam = calibration.body_from_cam;
+    sequence.camera_rate_hz = calibration.rate_hz;
+  }
+
+  std::vector<StampedImage> images =
+      options.timestamps_file.empty() ? ImagesFromNames(folder)
+                                      : ImagesFromTimestampsFile(folder, options.timestamps_file);
+  // Sort by stamp, then by source so that the duplicate message is stable.
+  std::sort(images.begin(), images.end(), [](const StampedImage& a, const StampedImage& b) {
+    return a.image.timestamp_ns != b.image.timestamp_ns
+               ? a.image.timestamp_ns < b.image.timestamp_ns
+               : std::tie(a.source_path, a.source_line) < std::tie(b.source_path, b.source_line);
+  });
+  for (size_t i = 1; i < images.size(); ++i) {
+    if (images[i].image.timestamp_ns == images[i - 1].image.timestamp_ns) {
+      throw InputError(images[i].source_path, images[i].source_line,
+                       "duplicate timestamp " + std::to_string(images[i].image.timestamp_ns) +
+                           " ns, also given by " + images[i - 1].Source() +
+                           "; expected one image per timestamp");
+    }
+  }
+  sequence.images.reserve(images.size());
+  for (StampedImage& image : images) sequence.images.push_back(std::move(image.image));
+
+  VIOSFM_LOG(INFO) << "image folder " << folder.string() << ": " << sequence.images.size()
+                   << " images (" << sequence.camera.ModelName() << " " << sequence.camera.width
+                   << "x" << sequence.camera.height << "), no IMU";
+  return sequence;
+}
+
+}  // namespace viosfm

@@ -1,0 +1,197 @@
+#include "viosfm/io/image_folder.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <string>
+
+#include "viosfm/io/euroc.h"
+#include "viosfm/util/errors.h"
+#include "viosfm/util/testing.h"
+
+namespace viosfm {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+
+void WriteText(const fs::path& path, const std::string& text) {
+  std::ofstream stream(path, std::ios::binary);
+  stream << text;
+  ASSERT_TRUE(stream.good()) << path;
+}
+
+template <typename Function>
+InputError ExpectInputError(Function read) {
+  try {
+    read();
+  } catch (const InputError& error) {
+    return error;
+  }
+  ADD_FAILURE() << "expected an InputError";
+  return InputError("none");
+}
+
+ImageFolderOptions PinholeOptions() {
+  Camera camera;
+  camera.model_id = CameraModelId::kPinhole;
+  camera.width = 64;
+  camera.height = 48;
+  camera.params = {50.0, 51.0, 32.0, 24.0};
+  ImageFolderOptions options;
+  options.camera = camera;
+  return options;
+}
+
+TEST(ReadImageFolder, StampsFromFileNames) {
+  const fs::path folder = testing::MakeScratchFolder("images_by_name");
+  for (const char* name : {"300.png", "100.jpg", "200.JPEG", "notes.txt"}) {
+    WriteText(folder / name, "x");
+  }
+  fs::create_directory(folder / "sub");
+  WriteText(folder / "sub" / "frame.png", "x");  // sub-folders are not searched
+
+  const Sequence sequence = ReadImageFolder(folder, PinholeOptions());
+  EXPECT_EQ(sequence.root, folder);
+  ASSERT_EQ(sequence.images.size(), 3u);
+  EXPECT_EQ(sequence.images[0].timestamp_ns, 100);
+  EXPECT_EQ(sequence.images[0].path, folder / "100.jpg");
+  EXPECT_EQ(sequence.images[1].timestamp_ns, 200);
+  EXPECT_EQ(sequence.images[1].path, folder / "200.JPEG");
+  EXPECT_EQ(sequence.images[2].timestamp_ns, 300);
+  EXPECT_EQ(sequence.images[2].path, folder / "300.png");
+  EXPECT_EQ(sequence.camera.camera_id, 1u);
+  EXPECT_EQ(sequence.camera.model_id, CameraModelId::kPinhole);
+  EXPECT_THAT(sequence.camera.params, ::testing::ElementsAre(50.0, 51.0, 32.0, 24.0));
+  EXPECT_FALSE(sequence.has_imu());
+  EXPECT_FALSE(sequence.has_ground_truth());
+}
+
+TEST(ReadImageFolder, StampsFromTimestampsFile) {
+  const fs::path folder = testing::MakeScratchFolder("images_with_stamps");
+  for (const char* name : {"a.png", "b.png", "c.jpg", "unlisted.png"})
+    WriteText(folder / name, "x");
+  const fs::path stamps = folder / "times.txt";
+  WriteText(stamps,
+            "# filename timestamp\n"
+            "b.png   1403715273.5\n"
+            "a.png\t1403715273262142976\r\n"
+            "\n"
+            "c.jpg,12\n");
+  ImageFolderOptions options = PinholeOptions();
+  options.timestamps_file = stamps;
+  const Sequence sequence = ReadImageFolder(folder, options);
+  ASSERT_EQ(sequence.images.size(), 3u);
+  EXPECT_EQ(sequence.images[0].timestamp_ns, 12);
+  EXPECT_EQ(sequence.images[0].path, folder / "c.jpg");
+  EXPECT_EQ(sequence.images[1].timestamp_ns, 1403715273262142976);
+  EXPECT_EQ(sequence.images[1].path, folder / "a.png");
+  EXPECT_EQ(sequence.images[2].timestamp_ns, 1403715273500000000);
+  EXPECT_EQ(sequence.images[2].path, folder / "b.png");
+}
+
+TEST(ReadImageFolder, CameraFromSensorYaml) {
+  const fs::path folder = testing::MakeScratchFolder("images_yaml");
+  WriteText(folder / "5.png", "x");
+  WriteText(folder / "sensor.yaml",
+            "%YAML:1.0\n"
+            "T_BS:\n  cols: 4\n  rows: 4\n"
+            "  data: [1, 0, 0, 0.1, 0, 1, 0, 0.2, 0, 0, 1, 0.3, 0, 0, 0, 1]\n"
+            "rate_hz: 15\nresolution: [640, 480]\ncamera_model: pinhole\n"
+            "intrinsics: [500, 501, 320, 240]\n"
+            "distortion_model: radial-tangential\n"
+            "distortion_coefficients: [-0.1, 0.01, 0.001, 0.002]\n");
+  ImageFolderOptions options;
+  options.camera_yaml = folder / "sensor.yaml";
+  const Sequence sequence = ReadImageFolder(folder, options);
+  ASSERT_EQ(sequence.images.size(), 1u);
+  EXPECT_EQ(sequence.images[0].timestamp_ns, 5);
+  EXPECT_EQ(sequence.camera.model_id, CameraModelId::kOpenCV);
+  EXPECT_THAT(sequence.camera.params,
+              ::testing::ElementsAre(500, 501, 320, 240, -0.1, 0.01, 0.001, 0.002));
+  EXPECT_EQ(sequence.body_from_cam.translation, Eigen::Vector3d(0.1, 0.2, 0.3));
+  EXPECT_DOUBLE_EQ(sequence.camera_rate_hz, 15.0);
+}
+
+TEST(ReadImageFolder, EurocImageFolderMatchesEurocReader) {
+  VIOSFM_REQUIRE_DATASET(root, "euroc_v101_static_micro");
+  ImageFolderOptions options;
+  options.camera_yaml = root / "mav0/cam0/sensor.yaml";
+  const Sequence folder = ReadImageFolder(root / "mav0/cam0/data", options);
+  const Sequence euroc = ReadEurocDataset(root);
+  ASSERT_EQ(folder.images.size(), 95u);
+  ASSERT_EQ(euroc.images.size(), 95u);
+  for (size_t i = 0; i < folder.images.size(); ++i) {
+    EXPECT_EQ(folder.images[i].timestamp_ns, euroc.images[i].timestamp_ns);
+    EXPECT_EQ(folder.images[i].path, euroc.images[i].path);
+  }
+  EXPECT_EQ(folder.camera.params, euroc.camera.params);
+}
+
+TEST(ReadImageFolder, Errors) {
+  const fs::path folder = testing::MakeScratchFolder("images_errors");
+  const ImageFolderOptions options = PinholeOptions();
+
+  // Missing and empty folders.
+  EXPECT_THAT(ExpectInputError([&] { ReadImageFolder(folder / "absent", options); }).what(),
+              HasSubstr("image folder does not exist"));
+  WriteText(folder / "readme.txt", "x");
+  InputError error = ExpectInputError([&] { ReadImageFolder(folder, options); });
+  EXPECT_EQ(error.path(), folder.string());
+  EXPECT_THAT(error.what(), HasSubstr("found none"));
+
+  // A non-numeric name.
+  WriteText(folder / "100.png", "x");
+  WriteText(folder / "frame_7.png", "x");
+  error = ExpectInputError([&] { ReadImageFolder(folder, options); });
+  EXPECT_EQ(error.path(), (folder / "frame_7.png").string());
+  EXPECT_THAT(error.what(), HasSubstr("timestamp in integer nanoseconds"));
+  fs::remove(folder / "frame_7.png");
+
+  // Duplicate stamps: 0100 and 100.
+  WriteText(folder / "0100.jpg", "x");
+  error = ExpectInputError([&] { ReadImageFolder(folder, options); });
+  EXPECT_EQ(error.path(), (folder / "100.png").string());
+  EXPECT_THAT(error.what(), HasSubstr("duplicate timestamp 100 ns, also given by " +
+                                      (folder / "0100.jpg").string()));
+
+  // Timestamps file problems, each on line 3.
+  ImageFolderOptions with_file = options;
+  with_file.timestamps_file = folder / "times.txt";
+  struct Case {
+    std::string line3;
+    std::string expected;
+  };
+  const Case cases[] = {
+      {"missing.png 200", "listed image 'missing.png' does not exist"},
+      {"0100.jpg 100",
+       "duplicate timestamp 100 ns, also given by " + (folder / "times.txt").string() + ":2"},
+      {"0100.jpg 1e5", "got '1e5'"},
+      {"0100.jpg 12abc", "got '12abc'"},
+      {"0100.jpg", "expected 'filename timestamp'"},
+      {"0100.jpg 5 6", "got 3 fields"},
+      {"100.png 300", "already listed on line 2"},
+  };
+  for (const Case& c : cases) {
+    WriteText(folder / "times.txt", "# header\n100.png 100\n" + c.line3 + "\n");
+    error = ExpectInputError([&] { ReadImageFolder(folder, with_file); });
+    EXPECT_EQ(error.path(), (folder / "times.txt").string()) << c.line3;
+    EXPECT_EQ(error.line(), 3) << c.line3;
+    EXPECT_THAT(error.what(), HasSubstr(c.expected)) << c.line3;
+  }
+  WriteText(folder / "times.txt", "# nothing\n");
+  EXPECT_THAT(ExpectInputError([&] { ReadImageFolder(folder, with_file); }).what(),
+              HasSubstr("found none"));
+
+  // Options.
+  ImageFolderOptions no_camera;
+  EXPECT_THAT(ExpectInputError([&] { ReadImageFolder(folder, no_camera); }).what(),
+              HasSubstr("exactly one of camera and camera_yaml"));
+  ImageFolderOptions bad_camera = options;
+  bad_camera.camera->params.pop_back();
+  EXPECT_FALSE(bad_camera.Check());
+}
+
+}  // namespace
+}  // namespace viosfm

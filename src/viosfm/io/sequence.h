@@ -1,0 +1,64 @@
+// An image sequence in memory, as the dataset readers (euroc.h,
+// image_folder.h) return it: image stamps and paths, the camera, the
+// camera-IMU extrinsics, the IMU stream and, when the dataset has it, the
+// ground-truth state. Image pixels are not loaded here.
+#pragma once
+
+#include <Eigen/Core>
+#include <filesystem>
+#include <vector>
+
+#include "viosfm/geometry/rigid3.h"
+#include "viosfm/scene/trajectory.h"
+#include "viosfm/sensor/camera.h"
+#include "viosfm/sensor/imu.h"
+#include "viosfm/util/timestamp.h"
+
+namespace viosfm {
+
+// One row of a ground-truth state file (EuRoC state_groundtruth_estimate0).
+struct GroundTruthState {
+  timestamp_ns_t timestamp_ns = 0;
+  Rigid3d world_from_body;
+  Eigen::Vector3d velocity_in_world = Eigen::Vector3d::Zero();  // m/s
+  Eigen::Vector3d gyro_bias = Eigen::Vector3d::Zero();          // rad/s
+  Eigen::Vector3d accel_bias = Eigen::Vector3d::Zero();         // m/s^2
+  // False if the row had only stamp, position and orientation; velocity and
+  // biases are then zero.
+  bool has_velocity_and_biases = false;
+};
+
+struct SequenceImage {
+  timestamp_ns_t timestamp_ns = 0;
+  std::filesystem::path path;  // the image file (absolute or relative to the working dir)
+};
+
+struct Sequence {
+  // The dataset folder as given to the reader.
+  std::filesystem::path root;
+  // Ordered by strictly increasing timestamp.
+  std::vector<SequenceImage> images;
+  // camera_id 1.
+  Camera camera;
+  // Pose of the camera in the body (IMU) frame. Identity without IMU.
+  Rigid3d body_from_cam;
+  // Nominal camera frame rate (Hz); 0 if unknown.
+  double camera_rate_hz = 0.0;
+  // IMU noise model (the defaults of ImuNoise without an IMU).
+  ImuNoise imu_noise;
+  // Ordered by strictly increasing timestamp; empty without IMU.
+  std::vector<ImuSample> imu;
+  // Ordered by strictly increasing timestamp; empty without ground truth.
+  std::vector<GroundTruthState> ground_truth;
+
+  bool has_imu() const { return !imu.empty(); }
+  bool has_ground_truth() const { return !ground_truth.empty(); }
+  size_t num_images() const { return images.size(); }
+};
+
+// The ground truth as world_from_body poses.
+Trajectory GroundTruthBodyTrajectory(const Sequence& sequence);
+// The ground truth as world_from_cam poses: world_from_body * body_from_cam.
+Trajectory GroundTruthCameraTrajectory(const Sequence& sequence);
+
+}  // namespace viosfm
