@@ -8,5 +8,6 @@
 namespace viosfm::cli {
 
 void RegisterEval(CLI::App& app);
+void RegisterSimulate(CLI::App& app);
 
 }  // namespace viosfm::cli

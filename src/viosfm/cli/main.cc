@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.parse_complete_callback([&log_level] { viosfm::SetLogLevel(viosfm::ParseLogLevel(log_level)); });
 
+  viosfm::cli::RegisterSimulate(app);
   viosfm::cli::RegisterEval(app);
 
   try {
