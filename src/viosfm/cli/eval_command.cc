@@ -1,9 +1,157 @@
+// `viosfm eval`: absolute trajectory error and relative pose error of an
+// estimated trajectory against a reference (see eval/traj_eval.h).
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <string>
+
 #include "viosfm/cli/commands.h"
+#include "viosfm/eval/report.h"
+#include "viosfm/eval/traj_eval.h"
+#include "viosfm/io/trajectory_io.h"
+#include "viosfm/util/errors.h"
+#include "viosfm/util/string_util.h"
+#include "viosfm/util/timestamp.h"
 
 namespace viosfm::cli {
+namespace {
+
+struct EvalArguments {
+  std::string est_path;
+  std::string ref_path;
+  std::string est_format;  // empty: guess
+  std::string ref_format;
+  std::string colmap_prefix;
+  std::string association = "auto";
+  std::string max_dt = "0.01";
+  std::string offset = "0";
+  std::string alignment = "se3";
+  int64_t align_first = 0;
+  int64_t rpe_delta = 1;
+  double rpe_delta_m = 0.0;
+  bool rpe_consecutive = false;
+  std::string body_from_cam;
+  std::string extrinsics_yaml;
+  std::string cam_frame = "est";
+  std::string json_path;
+};
+
+timestamp_ns_t ParseSecondsOption(const std::string& text, const std::string& option) {
+  const std::optional<timestamp_ns_t> ns = ParseSecondsToNs(Trim(text));
+  if (!ns) throw InputError(option + ": expected decimal seconds, got '" + text + "'");
+  return *ns;
+}
+
+Trajectory ReadInput(const std::string& path, const std::string& format_name,
+                     const std::string& colmap_prefix, std::string* format_used) {
+  const TrajectoryFormat format =
+      format_name.empty() ? GuessTrajectoryFormat(path) : ParseTrajectoryFormat(format_name);
+  *format_used = TrajectoryFormatName(format);
+  if (format == TrajectoryFormat::kColmap) return ReadColmapTrajectory(path, colmap_prefix);
+  return ReadTrajectory(path, format);
+}
+
+void RunEval(const EvalArguments& args) {
+  EvaluationOptions options;
+  options.association = ParseAssociationMethod(args.association);
+  options.max_dt_ns = ParseSecondsOption(args.max_dt, "--max-dt");
+  options.offset_ns = ParseSecondsOption(args.offset, "--offset");
+  options.alignment = ParseAlignmentMode(args.alignment);
+  options.align_first = args.align_first;
+  options.rpe_delta_frames = args.rpe_delta;
+  options.rpe_delta_m = args.rpe_delta_m;
+  options.rpe_all_pairs = !args.rpe_consecutive;
+
+  if (!args.body_from_cam.empty() && !args.extrinsics_yaml.empty()) {
+    throw InputError("give either --body-from-cam or --extrinsics-yaml, not both");
+  }
+  std::optional<Rigid3d> body_from_cam;
+  if (!args.body_from_cam.empty()) {
+    body_from_cam = ParsePoseTxyzQxyzw(args.body_from_cam, "--body-from-cam");
+  } else if (!args.extrinsics_yaml.empty()) {
+    body_from_cam = ReadSensorYamlBodyFromSensor(args.extrinsics_yaml);
+  }
+  if (body_from_cam) {
+    const std::string cam_frame = ToLower(args.cam_frame);
+    if (cam_frame == "est" || cam_frame == "both") options.est_body_from_cam = body_from_cam;
+    if (cam_frame == "ref" || cam_frame == "both") options.ref_body_from_cam = body_from_cam;
+  }
+  if (const std::string error = options.Validate(); !error.empty()) {
+    throw InputError("invalid options: " + error);
+  }
+
+  EvaluationInputs inputs;
+  inputs.est_path = args.est_path;
+  inputs.ref_path = args.ref_path;
+  const Trajectory est =
+      ReadInput(args.est_path, args.est_format, args.colmap_prefix, &inputs.est_format);
+  const Trajectory ref =
+      ReadInput(args.ref_path, args.ref_format, args.colmap_prefix, &inputs.ref_format);
+  const EvaluationResult result = EvaluateTrajectories(est, ref, options);
+  std::cout << FormatEvaluationReport(result, options, inputs);
+  if (!args.json_path.empty()) {
+    WriteEvaluationJson(args.json_path, result, options, inputs);
+    std::cout << "wrote " << args.json_path << "\n";
+  }
+}
+
+}  // namespace
 
 void RegisterEval(CLI::App& app) {
-  app.add_subcommand("eval", "Evaluate a trajectory against a reference (ATE, RPE)");
+  CLI::App* command =
+      app.add_subcommand("eval", "Evaluate a trajectory against a reference (ATE, RPE)");
+  auto args = std::make_shared<EvalArguments>();
+  command
+      ->add_option("--est", args->est_path, "Estimated trajectory (file, or COLMAP model folder)")
+      ->required();
+  command
+      ->add_option("--ref", args->ref_path, "Reference trajectory (file, or COLMAP model folder)")
+      ->required();
+  const auto formats = CLI::IsMember({"tum", "euroc", "kitti", "colmap"}, CLI::ignore_case);
+  command
+      ->add_option("--est-format", args->est_format, "tum, euroc, kitti or colmap (default: guess)")
+      ->check(formats);
+  command
+      ->add_option("--ref-format", args->ref_format, "tum, euroc, kitti or colmap (default: guess)")
+      ->check(formats);
+  command->add_option("--colmap-prefix", args->colmap_prefix,
+                      "Only COLMAP images whose name starts with this (e.g. cam0/)");
+  command
+      ->add_option("--associate", args->association,
+                   "auto (index without stamps, else nearest), index, nearest (evo) or greedy "
+                   "(TUM evaluate_ate.py)")
+      ->check(CLI::IsMember({"auto", "index", "nearest", "greedy"}, CLI::ignore_case))
+      ->capture_default_str();
+  command->add_option("--max-dt", args->max_dt, "Largest stamp difference of a pair (s)")
+      ->capture_default_str();
+  command->add_option("--offset", args->offset, "Added to the estimate's stamps (s)")
+      ->capture_default_str();
+  command->add_option("--align", args->alignment, "none, se3, sim3 or posyaw")
+      ->check(CLI::IsMember({"none", "se3", "sim3", "posyaw"}, CLI::ignore_case))
+      ->capture_default_str();
+  command
+      ->add_option("--align-first", args->align_first, "Align on the first N pairs only (0: all)")
+      ->capture_default_str();
+  command->add_option("--rpe-delta", args->rpe_delta, "RPE frame delta (0: off)")
+      ->capture_default_str();
+  command
+      ->add_option("--rpe-delta-m", args->rpe_delta_m,
+                   "RPE travelled-distance delta along the reference, m (0: off)")
+      ->capture_default_str();
+  command->add_flag(
+      "--rpe-consecutive", args->rpe_consecutive,
+      "RPE on consecutive non-overlapping pairs (evo's default) instead of all pairs");
+  command->add_option("--body-from-cam", args->body_from_cam,
+                      "Camera-to-body extrinsics \"tx ty tz qx qy qz qw\"");
+  command->add_option("--extrinsics-yaml", args->extrinsics_yaml,
+                      "Camera sensor.yaml whose T_BS is body_from_cam (EuRoC)");
+  command
+      ->add_option("--cam-frame", args->cam_frame,
+                   "Which trajectory holds camera poses to convert to body poses: est, ref or both")
+      ->check(CLI::IsMember({"est", "ref", "both"}, CLI::ignore_case))
+      ->capture_default_str();
+  command->add_option("--json", args->json_path, "Write all numbers to this JSON file");
+  command->callback([args] { RunEval(*args); });
 }
 
 }  // namespace viosfm::cli

@@ -318,12 +318,15 @@ Sequence ReadEurocDataset(const fs::path& root, const EurocReadOptions& options)
   const fs::path cam_folder = mav0 / options.cam_name;
   RequireFolder(cam_folder, "camera folder");
   const EurocCameraCalibration camera = ReadEurocCameraYaml(cam_folder / "sensor.yaml");
-  sequence.camera = camera.camera;
-  sequence.body_from_cam = camera.body_from_cam;
-  sequence.camera_rate_hz = camera.rate_hz;
+  sequence.rig.camera = camera.camera;
+  sequence.rig.body_from_cam = camera.body_from_cam;
+  sequence.rig.camera_rate_hz = camera.rate_hz;
   if (options.check_images_exist) RequireFolder(cam_folder / "data", "image folder");
   sequence.images =
       ReadEurocImageList(cam_folder / "data.csv", cam_folder / "data", options.check_images_exist);
+  if (!(sequence.rig.camera_rate_hz > 0)) {
+    sequence.rig.camera_rate_hz = EstimateFrameRateHz(sequence.images);  // no rate_hz in the yaml
+  }
 
   // The body frame of a Sequence is the IMU frame.
   Rigid3d body_from_imu;
@@ -331,14 +334,14 @@ Sequence ReadEurocDataset(const fs::path& root, const EurocReadOptions& options)
   if (fs::exists(imu_folder) || options.require_imu) {
     RequireFolder(imu_folder, "IMU folder");
     const EurocImuCalibration imu = ReadEurocImuYaml(imu_folder / "sensor.yaml");
-    sequence.imu_noise = imu.noise;
+    sequence.rig.imu_noise = imu.noise;
     body_from_imu = imu.body_from_imu;
     sequence.imu = ReadEurocImu(imu_folder / "data.csv");
     if (!IsIdentity(body_from_imu)) {
       VIOSFM_LOG(WARNING) << imu_folder / "sensor.yaml"
                           << ": T_BS is not the identity; camera extrinsics and ground-truth "
                              "poses are re-expressed in the IMU frame";
-      sequence.body_from_cam = body_from_imu.Inverse() * sequence.body_from_cam;
+      sequence.rig.body_from_cam = body_from_imu.Inverse() * sequence.rig.body_from_cam;
     }
 
     const fs::path imu_csv = imu_folder / "data.csv";
@@ -372,8 +375,8 @@ Sequence ReadEurocDataset(const fs::path& root, const EurocReadOptions& options)
   }
 
   VIOSFM_LOG(INFO) << "EuRoC " << mav0.string() << ": " << sequence.images.size() << " images ("
-                   << sequence.camera.ModelName() << " " << sequence.camera.width << "x"
-                   << sequence.camera.height << "), " << sequence.imu.size() << " IMU samples, "
+                   << sequence.rig.camera.ModelName() << " " << sequence.rig.camera.width << "x"
+                   << sequence.rig.camera.height << "), " << sequence.imu.size() << " IMU samples, "
                    << sequence.ground_truth.size() << " ground-truth states";
   return sequence;
 }

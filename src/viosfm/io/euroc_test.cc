@@ -172,10 +172,10 @@ TEST(ReadEurocDataset, MicroSequence) {
   EXPECT_EQ(sequence.images.back().timestamp_ns, 1403715277962142976);
   EXPECT_EQ(sequence.images.front().path, root / "mav0/cam0/data/1403715273262142976.png");
   for (const SequenceImage& image : sequence.images) EXPECT_TRUE(fs::exists(image.path));
-  EXPECT_DOUBLE_EQ(sequence.camera_rate_hz, 20.0);
+  EXPECT_DOUBLE_EQ(sequence.rig.camera_rate_hz, 20.0);
 
   // cam0/sensor.yaml.
-  const Camera& camera = sequence.camera;
+  const Camera& camera = sequence.rig.camera;
   EXPECT_EQ(camera.camera_id, 1u);
   EXPECT_EQ(camera.model_id, CameraModelId::kOpenCV);
   EXPECT_EQ(camera.ModelName(), "OPENCV");
@@ -188,8 +188,8 @@ TEST(ReadEurocDataset, MicroSequence) {
       0.999557249008, 0.0149672133247, 0.025715529948, -0.064676986768, -0.0257744366974,
       0.00375618835797, 0.999660727178, 0.00981073058949;
   // The file's rotation has 12 digits; re-orthonormalising moves it by ~1e-12.
-  EXPECT_LT((sequence.body_from_cam.ToMatrix() - body_from_cam).cwiseAbs().maxCoeff(), 1e-9);
-  EXPECT_EQ(sequence.body_from_cam.translation, body_from_cam.col(3));
+  EXPECT_LT((sequence.rig.body_from_cam.ToMatrix() - body_from_cam).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_EQ(sequence.rig.body_from_cam.translation, body_from_cam.col(3));
 
   // imu0.
   ASSERT_TRUE(sequence.has_imu());
@@ -198,11 +198,11 @@ TEST(ReadEurocDataset, MicroSequence) {
   EXPECT_EQ(sequence.imu.back().timestamp_ns, 1403715418857143040);
   EXPECT_DOUBLE_EQ(sequence.imu.front().gyro.x(), -0.0020943951023931952);
   EXPECT_DOUBLE_EQ(sequence.imu.front().accel.z(), -3.6938381666666662);
-  EXPECT_DOUBLE_EQ(sequence.imu_noise.gyro_noise_density, 1.6968e-04);
-  EXPECT_DOUBLE_EQ(sequence.imu_noise.gyro_random_walk, 1.9393e-05);
-  EXPECT_DOUBLE_EQ(sequence.imu_noise.accel_noise_density, 2.0e-3);
-  EXPECT_DOUBLE_EQ(sequence.imu_noise.accel_random_walk, 3.0e-3);
-  EXPECT_DOUBLE_EQ(sequence.imu_noise.rate_hz, 200.0);
+  EXPECT_DOUBLE_EQ(sequence.rig.imu_noise.gyro_noise_density, 1.6968e-04);
+  EXPECT_DOUBLE_EQ(sequence.rig.imu_noise.gyro_random_walk, 1.9393e-05);
+  EXPECT_DOUBLE_EQ(sequence.rig.imu_noise.accel_noise_density, 2.0e-3);
+  EXPECT_DOUBLE_EQ(sequence.rig.imu_noise.accel_random_walk, 3.0e-3);
+  EXPECT_DOUBLE_EQ(sequence.rig.imu_noise.rate_hz, 200.0);
 
   // Ground truth.
   ASSERT_TRUE(sequence.has_ground_truth());
@@ -217,7 +217,7 @@ TEST(ReadEurocDataset, MicroSequence) {
   EXPECT_EQ(cam.poses[7].timestamp_ns, sequence.ground_truth[7].timestamp_ns);
   // world_from_cam maps the camera origin to world_from_body * (body_from_cam origin).
   const Eigen::Vector3d cam_center =
-      sequence.ground_truth[7].world_from_body * sequence.body_from_cam.translation;
+      sequence.ground_truth[7].world_from_body * sequence.rig.body_from_cam.translation;
   EXPECT_LT((cam.poses[7].world_from_frame.translation - cam_center).norm(), 1e-12);
   EXPECT_LT((body.poses[7].world_from_frame.translation -
              sequence.ground_truth[7].world_from_body.translation)
@@ -354,21 +354,21 @@ TEST(ReadEurocDataset, DistortionModels) {
         "distortion_model: equidistant\ndistortion_coefficients: [0.1, 0.2, 0.3, 0.4]\n", 1000,
         2000);
     const Sequence sequence = ReadEurocDataset(root);
-    EXPECT_EQ(sequence.camera.model_id, CameraModelId::kOpenCVFisheye);
-    EXPECT_THAT(sequence.camera.params,
+    EXPECT_EQ(sequence.rig.camera.model_id, CameraModelId::kOpenCVFisheye);
+    EXPECT_THAT(sequence.rig.camera.params,
                 ::testing::ElementsAre(500, 501, 320, 240, 0.1, 0.2, 0.3, 0.4));
-    EXPECT_EQ(sequence.body_from_cam.translation, Eigen::Vector3d(0.1, 0.2, 0.3));
-    EXPECT_DOUBLE_EQ(sequence.camera_rate_hz, 10.0);
+    EXPECT_EQ(sequence.rig.body_from_cam.translation, Eigen::Vector3d(0.1, 0.2, 0.3));
+    EXPECT_DOUBLE_EQ(sequence.rig.camera_rate_hz, 10.0);
     EXPECT_EQ(sequence.imu.size(), 11u);
-    EXPECT_DOUBLE_EQ(sequence.imu_noise.rate_hz, 1000.0);
-    EXPECT_DOUBLE_EQ(sequence.imu_noise.accel_random_walk, 4e-3);
+    EXPECT_DOUBLE_EQ(sequence.rig.imu_noise.rate_hz, 1000.0);
+    EXPECT_DOUBLE_EQ(sequence.rig.imu_noise.accel_random_walk, 4e-3);
     EXPECT_FALSE(sequence.has_ground_truth());
   }
   {
     const fs::path root = MakeSyntheticEuroc("euroc_none", "", 1000, 2000);
     const Sequence sequence = ReadEurocDataset(root);
-    EXPECT_EQ(sequence.camera.model_id, CameraModelId::kPinhole);
-    EXPECT_THAT(sequence.camera.params, ::testing::ElementsAre(500, 501, 320, 240));
+    EXPECT_EQ(sequence.rig.camera.model_id, CameraModelId::kPinhole);
+    EXPECT_THAT(sequence.rig.camera.params, ::testing::ElementsAre(500, 501, 320, 240));
   }
   {
     const fs::path root = MakeSyntheticEuroc(

@@ -132,12 +132,12 @@ void WriteEurocDataset(const fs::path& root, const Sequence& sequence) {
   const fs::path mav0 = root / "mav0";
   if (!sequence.images.empty()) {
     WriteEurocImageList(mav0 / "cam0" / "data.csv", sequence.images);
-    WriteEurocCameraYaml(mav0 / "cam0" / "sensor.yaml", sequence.camera, sequence.body_from_cam,
-                         sequence.camera_rate_hz);
+    WriteEurocCameraYaml(mav0 / "cam0" / "sensor.yaml", sequence.rig.camera, sequence.rig.body_from_cam,
+                         sequence.rig.camera_rate_hz);
   }
   if (sequence.has_imu()) {
     WriteEurocImu(mav0 / "imu0" / "data.csv", sequence.imu);
-    WriteEurocImuYaml(mav0 / "imu0" / "sensor.yaml", sequence.imu_noise);
+    WriteEurocImuYaml(mav0 / "imu0" / "sensor.yaml", sequence.rig.imu_noise);
   }
   if (sequence.has_ground_truth()) {
     WriteEurocGroundTruth(mav0 / "state_groundtruth_estimate0" / "data.csv", sequence.ground_truth);

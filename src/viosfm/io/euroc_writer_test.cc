@@ -26,14 +26,14 @@ TEST(EurocWriter, RoundTripsTheRealDatasetExactly) {
     EXPECT_EQ(copy.images[i].timestamp_ns, original.images[i].timestamp_ns);
     EXPECT_EQ(copy.images[i].path.filename(), original.images[i].path.filename());
   }
-  EXPECT_EQ(copy.camera.model_id, original.camera.model_id);
-  EXPECT_EQ(copy.camera.params, original.camera.params);
-  EXPECT_EQ(copy.camera.width, original.camera.width);
-  EXPECT_EQ(copy.body_from_cam.translation, original.body_from_cam.translation);
-  EXPECT_LT(copy.body_from_cam.rotation.angularDistance(original.body_from_cam.rotation), 1e-15);
-  EXPECT_EQ(copy.camera_rate_hz, original.camera_rate_hz);
-  EXPECT_EQ(copy.imu_noise.gyro_noise_density, original.imu_noise.gyro_noise_density);
-  EXPECT_EQ(copy.imu_noise.accel_random_walk, original.imu_noise.accel_random_walk);
+  EXPECT_EQ(copy.rig.camera.model_id, original.rig.camera.model_id);
+  EXPECT_EQ(copy.rig.camera.params, original.rig.camera.params);
+  EXPECT_EQ(copy.rig.camera.width, original.rig.camera.width);
+  EXPECT_EQ(copy.rig.body_from_cam.translation, original.rig.body_from_cam.translation);
+  EXPECT_LT(copy.rig.body_from_cam.rotation.angularDistance(original.rig.body_from_cam.rotation), 1e-15);
+  EXPECT_EQ(copy.rig.camera_rate_hz, original.rig.camera_rate_hz);
+  EXPECT_EQ(copy.rig.imu_noise.gyro_noise_density, original.rig.imu_noise.gyro_noise_density);
+  EXPECT_EQ(copy.rig.imu_noise.accel_random_walk, original.rig.imu_noise.accel_random_walk);
   ASSERT_EQ(copy.imu.size(), original.imu.size());
   for (size_t i = 0; i < copy.imu.size(); ++i) {
     ASSERT_EQ(copy.imu[i].timestamp_ns, original.imu[i].timestamp_ns);

@@ -135,13 +135,14 @@ Sequence ReadImageFolder(const fs::path& folder, const ImageFolderOptions& optio
   Sequence sequence;
   sequence.root = folder;
   if (options.camera) {
-    sequence.camera = *options.camera;
-    sequence.camera.camera_id = 1;
+    sequence.rig.camera = *options.camera;
+    sequence.rig.camera.camera_id = 1;
+    sequence.rig.camera_rate_hz = 0.0;  // estimated from the stamps below
   } else {
     const EurocCameraCalibration calibration = ReadEurocCameraYaml(options.camera_yaml);
-    sequence.camera = calibration.camera;
-    sequence.body_from_cam = calibration.body_from_cam;
-    sequence.camera_rate_hz = calibration.rate_hz;
+    sequence.rig.camera = calibration.camera;
+    sequence.rig.body_from_cam = calibration.body_from_cam;
+    sequence.rig.camera_rate_hz = calibration.rate_hz;
   }
 
   std::vector<StampedImage> images =
@@ -163,10 +164,13 @@ Sequence ReadImageFolder(const fs::path& folder, const ImageFolderOptions& optio
   }
   sequence.images.reserve(images.size());
   for (StampedImage& image : images) sequence.images.push_back(std::move(image.image));
+  if (!(sequence.rig.camera_rate_hz > 0)) {
+    sequence.rig.camera_rate_hz = EstimateFrameRateHz(sequence.images);
+  }
 
   VIOSFM_LOG(INFO) << "image folder " << folder.string() << ": " << sequence.images.size()
-                   << " images (" << sequence.camera.ModelName() << " " << sequence.camera.width
-                   << "x" << sequence.camera.height << "), no IMU";
+                   << " images (" << sequence.rig.camera.ModelName() << " " << sequence.rig.camera.width
+                   << "x" << sequence.rig.camera.height << "), no IMU";
   return sequence;
 }
 

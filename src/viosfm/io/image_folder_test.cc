@@ -7,6 +7,7 @@
 #include <string>
 
 #include "viosfm/io/euroc.h"
+#include "viosfm/sensor/camera_models.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/testing.h"
 
@@ -61,9 +62,9 @@ TEST(ReadImageFolder, StampsFromFileNames) {
   EXPECT_EQ(sequence.images[1].path, folder / "200.JPEG");
   EXPECT_EQ(sequence.images[2].timestamp_ns, 300);
   EXPECT_EQ(sequence.images[2].path, folder / "300.png");
-  EXPECT_EQ(sequence.camera.camera_id, 1u);
-  EXPECT_EQ(sequence.camera.model_id, CameraModelId::kPinhole);
-  EXPECT_THAT(sequence.camera.params, ::testing::ElementsAre(50.0, 51.0, 32.0, 24.0));
+  EXPECT_EQ(sequence.rig.camera.camera_id, 1u);
+  EXPECT_EQ(sequence.rig.camera.model_id, CameraModelId::kPinhole);
+  EXPECT_THAT(sequence.rig.camera.params, ::testing::ElementsAre(50.0, 51.0, 32.0, 24.0));
   EXPECT_FALSE(sequence.has_imu());
   EXPECT_FALSE(sequence.has_ground_truth());
 }
@@ -107,11 +108,11 @@ TEST(ReadImageFolder, CameraFromSensorYaml) {
   const Sequence sequence = ReadImageFolder(folder, options);
   ASSERT_EQ(sequence.images.size(), 1u);
   EXPECT_EQ(sequence.images[0].timestamp_ns, 5);
-  EXPECT_EQ(sequence.camera.model_id, CameraModelId::kOpenCV);
-  EXPECT_THAT(sequence.camera.params,
+  EXPECT_EQ(sequence.rig.camera.model_id, CameraModelId::kOpenCV);
+  EXPECT_THAT(sequence.rig.camera.params,
               ::testing::ElementsAre(500, 501, 320, 240, -0.1, 0.01, 0.001, 0.002));
-  EXPECT_EQ(sequence.body_from_cam.translation, Eigen::Vector3d(0.1, 0.2, 0.3));
-  EXPECT_DOUBLE_EQ(sequence.camera_rate_hz, 15.0);
+  EXPECT_EQ(sequence.rig.body_from_cam.translation, Eigen::Vector3d(0.1, 0.2, 0.3));
+  EXPECT_DOUBLE_EQ(sequence.rig.camera_rate_hz, 15.0);
 }
 
 TEST(ReadImageFolder, EurocImageFolderMatchesEurocReader) {
@@ -126,7 +127,7 @@ TEST(ReadImageFolder, EurocImageFolderMatchesEurocReader) {
     EXPECT_EQ(folder.images[i].timestamp_ns, euroc.images[i].timestamp_ns);
     EXPECT_EQ(folder.images[i].path, euroc.images[i].path);
   }
-  EXPECT_EQ(folder.camera.params, euroc.camera.params);
+  EXPECT_EQ(folder.rig.camera.params, euroc.rig.camera.params);
 }
 
 TEST(ReadImageFolder, Errors) {
@@ -191,6 +192,25 @@ TEST(ReadImageFolder, Errors) {
   ImageFolderOptions bad_camera = options;
   bad_camera.camera->params.pop_back();
   EXPECT_FALSE(bad_camera.Check());
+}
+
+}  // namespace
+}  // namespace viosfm
+
+namespace viosfm {
+namespace {
+
+TEST(ImageFolder, EstimatesTheFrameRateFromStamps) {
+  const std::filesystem::path folder = testing::MakeScratchFolder("image_folder_rate");
+  for (int i = 0; i < 6; ++i) {
+    std::ofstream(folder / (std::to_string(1000000000 + i * 100000000 + (i == 3 ? 7 : 0)) + ".png")) << "x";
+  }
+  ImageFolderOptions options;
+  options.camera = MakeCamera(CameraModelId::kPinhole, 64, 48, {50, 50, 32, 24});
+  const Sequence sequence = ReadImageFolder(folder, options);
+  ASSERT_EQ(sequence.images.size(), 6u);
+  EXPECT_DOUBLE_EQ(sequence.rig.camera_rate_hz, 10.0);  // median interval 100 ms
+  EXPECT_DOUBLE_EQ(EstimateFrameRateHz({}), 0.0);
 }
 
 }  // namespace

@@ -1,6 +1,21 @@
 #include "viosfm/io/sequence.h"
 
+#include <algorithm>
+
 namespace viosfm {
+
+double EstimateFrameRateHz(const std::vector<SequenceImage>& images) {
+  if (images.size() < 2) return 0.0;
+  std::vector<timestamp_ns_t> intervals;
+  intervals.reserve(images.size() - 1);
+  for (size_t i = 1; i < images.size(); ++i) {
+    intervals.push_back(images[i].timestamp_ns - images[i - 1].timestamp_ns);
+  }
+  std::nth_element(intervals.begin(), intervals.begin() + intervals.size() / 2, intervals.end());
+  const timestamp_ns_t median = intervals[intervals.size() / 2];
+  return median > 0 ? 1e9 / static_cast<double>(median) : 0.0;
+}
+
 
 Trajectory GroundTruthBodyTrajectory(const Sequence& sequence) {
   Trajectory trajectory;
@@ -16,7 +31,7 @@ Trajectory GroundTruthCameraTrajectory(const Sequence& sequence) {
   trajectory.poses.reserve(sequence.ground_truth.size());
   for (const GroundTruthState& state : sequence.ground_truth) {
     trajectory.poses.push_back(
-        {state.timestamp_ns, state.world_from_body * sequence.body_from_cam});
+        {state.timestamp_ns, state.world_from_body * sequence.rig.body_from_cam});
   }
   return trajectory;
 }

@@ -10,8 +10,8 @@
 
 #include "viosfm/geometry/rigid3.h"
 #include "viosfm/scene/trajectory.h"
-#include "viosfm/sensor/camera.h"
 #include "viosfm/sensor/imu.h"
+#include "viosfm/sensor/sensor_rig.h"
 #include "viosfm/util/timestamp.h"
 
 namespace viosfm {
@@ -38,14 +38,10 @@ struct Sequence {
   std::filesystem::path root;
   // Ordered by strictly increasing timestamp.
   std::vector<SequenceImage> images;
-  // camera_id 1.
-  Camera camera;
-  // Pose of the camera in the body (IMU) frame. Identity without IMU.
-  Rigid3d body_from_cam;
-  // Nominal camera frame rate (Hz); 0 if unknown.
-  double camera_rate_hz = 0.0;
-  // IMU noise model (the defaults of ImuNoise without an IMU).
-  ImuNoise imu_noise;
+  // Camera (camera_id 1), body_from_cam (identity without IMU), nominal
+  // camera rate (0 if unknown) and IMU noise model (ImuNoise's defaults
+  // without IMU).
+  SensorRig rig;
   // Ordered by strictly increasing timestamp; empty without IMU.
   std::vector<ImuSample> imu;
   // Ordered by strictly increasing timestamp; empty without ground truth.
@@ -55,6 +51,10 @@ struct Sequence {
   bool has_ground_truth() const { return !ground_truth.empty(); }
   size_t num_images() const { return images.size(); }
 };
+
+// Frame rate from the median interval between consecutive images; 0 with
+// fewer than two images.
+double EstimateFrameRateHz(const std::vector<SequenceImage>& images);
 
 // The ground truth as world_from_body poses.
 Trajectory GroundTruthBodyTrajectory(const Sequence& sequence);

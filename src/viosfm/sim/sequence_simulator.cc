@@ -72,10 +72,10 @@ SimulatedSequence SimulateSequence(const SimulationOptions& options) {
   const timestamp_ns_t end = start + SecondsToNs(options.duration_s);
 
   Sequence& sequence = out.sequence;
-  sequence.camera = options.camera;
-  sequence.body_from_cam = options.body_from_cam;
-  sequence.camera_rate_hz = options.camera_rate_hz;
-  sequence.imu_noise = imu_options.noise;
+  sequence.rig.camera = options.camera;
+  sequence.rig.body_from_cam = options.body_from_cam;
+  sequence.rig.camera_rate_hz = options.camera_rate_hz;
+  sequence.rig.imu_noise = imu_options.noise;
   const SynthesizedImu imu = SynthesizeImu(out.motion, start, end, imu_options);
   sequence.imu = imu.samples;
 
@@ -108,8 +108,8 @@ void WriteSimulatedSequence(const fs::path& out, const SimulatedSequence& simula
   WriteEurocDataset(out, without_images);
   const fs::path cam0 = out / "mav0" / "cam0";
   fs::create_directories(cam0);
-  WriteEurocCameraYaml(cam0 / "sensor.yaml", simulated.sequence.camera,
-                       simulated.sequence.body_from_cam, simulated.sequence.camera_rate_hz);
+  WriteEurocCameraYaml(cam0 / "sensor.yaml", simulated.sequence.rig.camera,
+                       simulated.sequence.rig.body_from_cam, simulated.sequence.rig.camera_rate_hz);
   WriteFileAtomically(out / "camera_stamps.txt", [&](std::ostream& stream) {
     stream << "# camera timestamps [ns], one per line\n";
     for (const SequenceImage& image : simulated.sequence.images) stream << image.timestamp_ns << '\n';

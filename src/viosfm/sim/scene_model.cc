@@ -1,0 +1,203 @@
+#include "viosfm/sim/scene_model.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <utility>
+
+#include "viosfm/util/errors.h"
+
+namespace viosfm {
+namespace {
+
+// Derives independent seeds from one (SplitMix64 finaliser).
+uint64_t MixSeed(uint64_t seed, uint64_t index) {
+  uint64_t z = seed + 0x9e3779b97f4a7c15ULL * (index + 1);
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+
+// A procedural texture covering a surface of size_u x size_v metres without
+// repeating.
+Texture MakeSurfaceTexture(double size_u, double size_v, double texels_per_metre, uint64_t seed) {
+  ProceduralTextureOptions options;
+  options.width =
+      std::max(8, NextPowerOfTwo(static_cast<int>(std::ceil(size_u * texels_per_metre))));
+  options.height =
+      std::max(8, NextPowerOfTwo(static_cast<int>(std::ceil(size_v * texels_per_metre))));
+  options.seed = seed;
+  return MakeProceduralTexture(options);
+}
+
+// Adds a quad with its own texture.
+void AddTexturedQuad(Scene& scene, const Eigen::Vector3d& origin, const Eigen::Vector3d& axis_u,
+                     const Eigen::Vector3d& axis_v, double texels_per_metre, uint64_t seed) {
+  TexturedQuad quad;
+  quad.origin = origin;
+  quad.axis_u = axis_u;
+  quad.axis_v = axis_v;
+  quad.texels_per_metre = texels_per_metre;
+  quad.texture_id =
+      scene.AddTexture(MakeSurfaceTexture(axis_u.norm(), axis_v.norm(), texels_per_metre, seed));
+  scene.AddQuad(quad);
+}
+
+}  // namespace
+
+int Scene::AddTexture(Texture texture) {
+  VIOSFM_CHECK_GT(texture.width(), 0);
+  textures_.push_back(std::move(texture));
+  return static_cast<int>(textures_.size()) - 1;
+}
+
+int Scene::AddQuad(const TexturedQuad& quad) {
+  VIOSFM_CHECK(quad.texture_id >= 0 && quad.texture_id < static_cast<int>(textures_.size()))
+      << "quad texture id " << quad.texture_id << " does not exist";
+  VIOSFM_CHECK_GT(quad.texels_per_metre, 0.0);
+  QuadFrame frame;
+  frame.length_u = quad.axis_u.norm();
+  frame.length_v = quad.axis_v.norm();
+  VIOSFM_CHECK(frame.length_u > 0.0 && frame.length_v > 0.0) << "degenerate quad";
+  frame.unit_u = quad.axis_u / frame.length_u;
+  frame.unit_v = quad.axis_v / frame.length_v;
+  VIOSFM_CHECK_LT(std::abs(frame.unit_u.dot(frame.unit_v)), 1e-9) << "quad axes not orthogonal";
+  frame.normal = frame.unit_u.cross(frame.unit_v).normalized();
+  frame.offset = frame.normal.dot(quad.origin);
+  quads_.push_back(quad);
+  frames_.push_back(frame);
+  return static_cast<int>(quads_.size()) - 1;
+}
+
+void Scene::AddBox(const Eigen::Vector3d& min, const Eigen::Vector3d& max, double texels_per_metre,
+                   uint64_t seed) {
+  const Eigen::Vector3d size = max - min;
+  VIOSFM_CHECK((size.array() > 0.0).all()) << "box with an empty extent";
+  const Eigen::Vector3d dx(size.x(), 0, 0);
+  const Eigen::Vector3d dy(0, size.y(), 0);
+  const Eigen::Vector3d dz(0, 0, size.z());
+  // Sides: u horizontal, v vertical; then the top.
+  AddTexturedQuad(*this, min, dx, dz, texels_per_metre, MixSeed(seed, 0));
+  AddTexturedQuad(*this, min + dy, dx, dz, texels_per_metre, MixSeed(seed, 1));
+  AddTexturedQuad(*this, min, dy, dz, texels_per_metre, MixSeed(seed, 2));
+  AddTexturedQuad(*this, min + dx, dy, dz, texels_per_metre, MixSeed(seed, 3));
+  AddTexturedQuad(*this, min + dz, dx, dy, texels_per_metre, MixSeed(seed, 4));
+}
+
+std::optional<RayHit> Scene::Intersect(const Eigen::Vector3d& origin,
+                                       const Eigen::Vector3d& direction, double t_min) const {
+  RayHit best;
+  best.t = std::numeric_limits<double>::infinity();
+  for (size_t k = 0; k < frames_.size(); ++k) {
+    const QuadFrame& frame = frames_[k];
+    const double denominator = frame.normal.dot(direction);
+    if (std::abs(denominator) < 1e-12) continue;
+    const double t = (frame.offset - frame.normal.dot(origin)) / denominator;
+    if (!(t > t_min) || t >= best.t) continue;
+    const Eigen::Vector3d relative = origin + t * direction - quads_[k].origin;
+    const double u = relative.dot(frame.unit_u);
+    if (u < 0.0 || u > frame.length_u) continue;
+    const double v = relative.dot(frame.unit_v);
+    if (v < 0.0 || v > frame.length_v) continue;
+    best.t = t;
+    best.quad_id = static_cast<int>(k);
+    best.u = u;
+    best.v = v;
+    best.cos_incidence = std::abs(denominator);
+  }
+  if (best.quad_id < 0) return std::nullopt;
+  return best;
+}
+
+Eigen::Vector3d Scene::PointOnQuad(int quad_id, double u, double v) const {
+  VIOSFM_CHECK(quad_id >= 0 && quad_id < static_cast<int>(quads_.size()));
+  const QuadFrame& frame = frames_[quad_id];
+  return quads_[quad_id].origin + u * frame.unit_u + v * frame.unit_v;
+}
+
+std::string RoomSceneOptions::Validate() const {
+  const Eigen::Vector3d size = room_max - room_min;
+  if (!(size.x() >= 3.0 && size.y() >= 3.0))
+    return "room_min/room_max: the room must be >= 3 m wide";
+  if (!(size.z() >= 2.5)) return "room_min/room_max: the room must be >= 2.5 m high";
+  if (!(texels_per_metre > 0.0 && texels_per_metre <= 2048.0)) {
+    return "texels_per_metre must be in (0, 2048]";
+  }
+  return "";
+}
+
+Scene MakeRoomScene(const RoomSceneOptions& options) {
+  VIOSFM_CHECK(options.Check()) << options.Validate();
+  Scene scene;
+  const Eigen::Vector3d& lo = options.room_min;
+  const Eigen::Vector3d& hi = options.room_max;
+  const Eigen::Vector3d size = hi - lo;
+  const double tpm = options.texels_per_metre;
+  const Eigen::Vector3d dx(size.x(), 0, 0);
+  const Eigen::Vector3d dy(0, size.y(), 0);
+  const Eigen::Vector3d dz(0, 0, size.z());
+  uint64_t surface = 0;
+  const auto next_seed = [&]() { return MixSeed(options.seed, surface++); };
+
+  AddTexturedQuad(scene, lo, dx, dy, tpm, next_seed());       // floor
+  AddTexturedQuad(scene, lo + dz, dx, dy, tpm, next_seed());  // ceiling
+  AddTexturedQuad(scene, lo, dx, dz, tpm, next_seed());       // wall y = min
+  AddTexturedQuad(scene, lo + dy, dx, dz, tpm, next_seed());  // wall y = max
+  AddTexturedQuad(scene, lo, dy, dz, tpm, next_seed());       // wall x = min
+  AddTexturedQuad(scene, lo + dx, dy, dz, tpm, next_seed());  // wall x = max
+
+  if (options.furniture) {
+    // Boxes in a strip at most 0.7 m deep along the walls: (wall, depth,
+    // start and end as fractions of the wall, height). Walls: 0 = +x, 1 = +y,
+    // 2 = -x, 3 = -y.
+    struct Furniture {
+      int wall;
+      double depth, from, to, height;
+    };
+    const Furniture furniture[] = {
+        {0, 0.60, 0.30, 0.55, 0.90},                               // cabinet facing the start pose
+        {0, 0.55, 0.70, 0.88, 1.60},                               // shelf
+        {1, 0.55, 0.15, 0.40, 1.10},                               // desk-like block
+        {1, 0.65, 0.60, 0.75, 2.20},                               // wardrobe
+        {2, 0.60, 0.55, 0.80, 0.70},                               // low chest
+        {2, 0.50, 0.10, 0.30, 1.40}, {3, 0.45, 0.30, 0.55, 1.80},  // bookcase
+        {3, 0.60, 0.75, 0.92, 1.00},
+    };
+    for (const Furniture& item : furniture) {
+      Eigen::Vector3d min = lo;
+      Eigen::Vector3d max = lo;
+      max.z() = lo.z() + item.height;
+      switch (item.wall) {
+        case 0:  // +x
+          min.x() = hi.x() - item.depth;
+          max.x() = hi.x() - 0.02;
+          min.y() = lo.y() + item.from * size.y();
+          max.y() = lo.y() + item.to * size.y();
+          break;
+        case 1:  // +y
+          min.y() = hi.y() - item.depth;
+          max.y() = hi.y() - 0.02;
+          min.x() = lo.x() + item.from * size.x();
+          max.x() = lo.x() + item.to * size.x();
+          break;
+        case 2:  // -x
+          min.x() = lo.x() + 0.02;
+          max.x() = lo.x() + item.depth;
+          min.y() = lo.y() + item.from * size.y();
+          max.y() = lo.y() + item.to * size.y();
+          break;
+        default:  // -y
+          min.y() = lo.y() + 0.02;
+          max.y() = lo.y() + item.depth;
+          min.x() = lo.x() + item.from * size.x();
+          max.x() = lo.x() + item.to * size.x();
+          break;
+      }
+      scene.AddBox(min, max, tpm, next_seed());
+    }
+  }
+  return scene;
+}
+
+}  // namespace viosfm

@@ -1,0 +1,92 @@
+// Synthetic scenes for the renderer: textured planar rectangles, ray casting
+// against them, and the "room" preset.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "viosfm/sim/texture.h"
+
+namespace viosfm {
+
+// A rectangle origin + a * axis_u + b * axis_v, a, b in [0, 1]. axis_u and
+// axis_v are its edges (metres) and must be orthogonal. Surface coordinates
+// (u, v) are metres from the origin along the two edges; the texture is laid
+// out with texel = (u, v) * texels_per_metre (so it tiles if the rectangle is
+// larger than the texture).
+struct TexturedQuad {
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+  Eigen::Vector3d axis_u = Eigen::Vector3d::UnitX();
+  Eigen::Vector3d axis_v = Eigen::Vector3d::UnitY();
+  int texture_id = 0;
+  double texels_per_metre = 100.0;
+};
+
+struct RayHit {
+  double t = 0.0;              // distance along the (unit) ray direction, metres
+  int quad_id = -1;            // index into Scene::quads()
+  double u = 0.0;              // metres along axis_u from the quad's origin
+  double v = 0.0;              // metres along axis_v
+  double cos_incidence = 1.0;  // |cos| of the angle between the ray and the quad normal
+};
+
+class Scene {
+ public:
+  // Returns the id of the added texture / quad. A quad's axes must be
+  // orthogonal and non-degenerate and its texture must exist (checked).
+  int AddTexture(Texture texture);
+  int AddQuad(const TexturedQuad& quad);
+  // Adds the five faces (no bottom) of the axis-aligned box [min, max], each
+  // with its own procedural texture of the given seed base and resolution.
+  void AddBox(const Eigen::Vector3d& min, const Eigen::Vector3d& max, double texels_per_metre,
+              uint64_t seed);
+
+  const std::vector<TexturedQuad>& quads() const { return quads_; }
+  const std::vector<Texture>& textures() const { return textures_; }
+  const Texture& texture(int texture_id) const { return textures_[texture_id]; }
+
+  // Nearest hit with t > t_min of the ray origin + t * direction (direction
+  // must have unit norm); nullopt if the ray misses every quad. Quads are
+  // two-sided.
+  std::optional<RayHit> Intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
+                                  double t_min = 1e-6) const;
+
+  // Point in the world of surface coordinates (u, v) of a quad.
+  Eigen::Vector3d PointOnQuad(int quad_id, double u, double v) const;
+
+ private:
+  // Per-quad data precomputed for intersection.
+  struct QuadFrame {
+    Eigen::Vector3d normal;  // unit
+    double offset = 0.0;     // normal . origin
+    Eigen::Vector3d unit_u;
+    Eigen::Vector3d unit_v;
+    double length_u = 0.0;
+    double length_v = 0.0;
+  };
+  std::vector<Texture> textures_;
+  std::vector<TexturedQuad> quads_;
+  std::vector<QuadFrame> frames_;
+};
+
+struct RoomSceneOptions {
+  Eigen::Vector3d room_min{-4.0, -4.0, 0.0};  // m, inside of the walls (floor at z = 0)
+  Eigen::Vector3d room_max{4.0, 4.0, 3.0};    // m
+  double texels_per_metre = 128.0;            // texture resolution on every surface
+  bool furniture = true;                      // boxes along the walls (outside [-3.2, 3.2]^2)
+  uint64_t seed = 0;                          // textures are derived from it
+
+  std::string Validate() const;  // empty if valid, else names the bad field
+  bool Check() const { return Validate().empty(); }
+};
+
+// A room (floor, ceiling, four walls, z up) with furniture-like boxes placed
+// along the walls, leaving the default walk box [-3, 3] x [-3, 3] x [0.8, 2]
+// free. Every surface has its own procedural texture, large enough that it
+// does not repeat across the surface.
+Scene MakeRoomScene(const RoomSceneOptions& options);
+
+}  // namespace viosfm
