@@ -41,8 +41,16 @@ function(viosfm_add_layer NAME)
   cmake_parse_arguments(ARG "" "" "PUBLIC_DEPS;PRIVATE_DEPS;TEST_DEPS" ${ARGN})
   file(GLOB sources CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/*.cc)
   list(FILTER sources EXCLUDE REGEX "_(test|benchmark)\\.cc$")
-  viosfm_add_library(${NAME} SRCS ${sources}
-    PUBLIC_DEPS ${ARG_PUBLIC_DEPS} PRIVATE_DEPS ${ARG_PRIVATE_DEPS})
+  if(sources)
+    viosfm_add_library(${NAME} SRCS ${sources}
+      PUBLIC_DEPS ${ARG_PUBLIC_DEPS} PRIVATE_DEPS ${ARG_PRIVATE_DEPS})
+  else()
+    # A header-only layer.
+    add_library(viosfm_${NAME} INTERFACE)
+    add_library(viosfm::${NAME} ALIAS viosfm_${NAME})
+    target_include_directories(viosfm_${NAME} INTERFACE ${PROJECT_SOURCE_DIR}/src)
+    target_link_libraries(viosfm_${NAME} INTERFACE ${ARG_PUBLIC_DEPS})
+  endif()
   file(GLOB tests CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/*_test.cc)
   foreach(test ${tests})
     get_filename_component(test_name ${test} NAME_WE)

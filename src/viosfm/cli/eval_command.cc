@@ -8,6 +8,7 @@
 #include "viosfm/cli/commands.h"
 #include "viosfm/eval/report.h"
 #include "viosfm/eval/traj_eval.h"
+#include "viosfm/io/euroc.h"
 #include "viosfm/io/trajectory_io.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/string_util.h"
@@ -69,7 +70,7 @@ void RunEval(const EvalArguments& args) {
   if (!args.body_from_cam.empty()) {
     body_from_cam = ParsePoseTxyzQxyzw(args.body_from_cam, "--body-from-cam");
   } else if (!args.extrinsics_yaml.empty()) {
-    body_from_cam = ReadSensorYamlBodyFromSensor(args.extrinsics_yaml);
+    body_from_cam = ReadEurocSensorTransform(args.extrinsics_yaml);
   }
   if (body_from_cam) {
     const std::string cam_frame = ToLower(args.cam_frame);

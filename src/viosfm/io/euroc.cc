@@ -8,6 +8,7 @@
 #include <sstream>
 #include <string_view>
 
+#include "viosfm/io/text_lines.h"
 #include "viosfm/io/yaml_util.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/file_util.h"
@@ -23,21 +24,9 @@ namespace {
 // file: blank lines and lines starting with '#' are skipped, fields trimmed.
 void ForEachCsvRow(const fs::path& path, const std::string& what,
                    const std::function<void(int64_t, const std::vector<std::string_view>&)>& row) {
-  RequireFile(path, what);
-  std::ifstream stream(path);
-  if (!stream) throw InputError(path.string(), 0, "cannot open " + what + " for reading");
-  std::string line;
-  int64_t line_number = 0;
-  std::vector<std::string_view> fields;
-  while (std::getline(stream, line)) {
-    ++line_number;
-    const std::string_view text = Trim(line);
-    if (text.empty() || text.front() == '#') continue;
-    fields = Split(text, ",");
-    for (std::string_view& field : fields) field = Trim(field);
-    row(line_number, fields);
-  }
-  if (stream.bad()) throw InputError(path.string(), line_number, "read error");
+  ForEachDataLine(path, what, [&](int64_t line, std::string_view text) {
+    row(line, SplitFields(text, ","));
+  });
 }
 
 std::string Quoted(std::string_view text) {
@@ -99,6 +88,10 @@ constexpr char kSupportedDistortionModels[] =
     "radial-tangential (or radtan), equidistant (or equi), none";
 
 }  // namespace
+
+Rigid3d ReadEurocSensorTransform(const fs::path& yaml_path) {
+  return ReadTransform(YamlMap::Load(yaml_path), "T_BS");
+}
 
 std::vector<GroundTruthState> ReadEurocGroundTruth(const fs::path& csv) {
   std::vector<GroundTruthState> states;

@@ -69,6 +69,10 @@ struct EurocCameraCalibration {
 };
 EurocCameraCalibration ReadEurocCameraYaml(const std::filesystem::path& yaml);
 
+// The T_BS entry (body_from_sensor) of any Kalibr/EuRoC sensor.yaml. Throws
+// InputError naming the file and line if it is absent or not a rigid transform.
+Rigid3d ReadEurocSensorTransform(const std::filesystem::path& yaml);
+
 // IMU calibration from a Kalibr/EuRoC imu sensor.yaml. The four noise keys
 // are required; rate_hz keeps ImuNoise's default and T_BS the identity when
 // absent.

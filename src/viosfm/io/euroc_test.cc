@@ -16,31 +16,16 @@ namespace {
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
-
-void WriteText(const fs::path& path, const std::string& text) {
-  std::ofstream stream(path, std::ios::binary);
-  stream << text;
-  ASSERT_TRUE(stream.good()) << path;
-}
-
-// Runs `read` and returns the InputError it throws; fails the test if none.
-template <typename Function>
-InputError ExpectInputError(Function read) {
-  try {
-    read();
-  } catch (const InputError& error) {
-    return error;
-  }
-  ADD_FAILURE() << "expected an InputError";
-  return InputError("none");
-}
+using testing::ExpectInputError;
+using testing::InputErrorMessage;
+using testing::WriteTextFile;
 
 // ---------------------------------------------------------------- ground truth
 
 TEST(ReadEurocGroundTruth, ReadsFullAndPoseOnlyRows) {
   const fs::path folder = testing::MakeScratchFolder("gt_ok");
   const fs::path csv = folder / "data.csv";
-  WriteText(csv,
+  WriteTextFile(csv,
             "#timestamp [ns], p_RS_R_x [m], p_RS_R_y [m], p_RS_R_z [m], q_RS_w [], q_RS_x [], "
             "q_RS_y [], q_RS_z []\n"
             "\n"
@@ -82,14 +67,14 @@ TEST(ReadEurocGroundTruth, ErrorsNameFileLineAndExpectation) {
       {"200,1,2,3,nan,0,0,0\n", "finite number in column 5"},
   };
   for (const Case& c : cases) {
-    WriteText(csv, good + c.row);
+    WriteTextFile(csv, good + c.row);
     const InputError error = ExpectInputError([&] { ReadEurocGroundTruth(csv); });
     EXPECT_EQ(error.path(), csv.string()) << c.row;
     EXPECT_EQ(error.line(), 3) << c.row;
     EXPECT_THAT(error.what(), HasSubstr(csv.string() + ":3:")) << c.row;
     EXPECT_THAT(error.what(), HasSubstr(c.expected)) << c.row;
   }
-  WriteText(csv, "# only a header\n");
+  WriteTextFile(csv, "# only a header\n");
   EXPECT_THAT(ExpectInputError([&] { ReadEurocGroundTruth(csv); }).what(), HasSubstr("found none"));
   EXPECT_THAT(ExpectInputError([&] { ReadEurocGroundTruth(folder / "absent.csv"); }).what(),
               HasSubstr("does not exist"));
@@ -134,7 +119,7 @@ std::vector<std::string> ReadLines(const fs::path& path) {
 void WriteLines(const fs::path& path, const std::vector<std::string>& lines) {
   std::ostringstream text;
   for (const std::string& line : lines) text << line << "\n";
-  WriteText(path, text.str());
+  WriteTextFile(path, text.str());
 }
 
 // A copy of a EuRoC folder in a scratch folder: text files copied, image
@@ -326,24 +311,24 @@ fs::path MakeSyntheticEuroc(const std::string& name, const std::string& cam_yaml
   const fs::path root = testing::MakeScratchFolder(name);
   fs::create_directories(root / "mav0/cam0/data");
   fs::create_directories(root / "mav0/imu0");
-  WriteText(root / "mav0/cam0/data.csv", "#timestamp [ns],filename\n1000,a.png\n2000,b.png\n");
-  WriteText(root / "mav0/cam0/data/a.png", "x");
-  WriteText(root / "mav0/cam0/data/b.png", "x");
-  WriteText(root / "mav0/cam0/sensor.yaml",
+  WriteTextFile(root / "mav0/cam0/data.csv", "#timestamp [ns],filename\n1000,a.png\n2000,b.png\n");
+  WriteTextFile(root / "mav0/cam0/data/a.png", "x");
+  WriteTextFile(root / "mav0/cam0/data/b.png", "x");
+  WriteTextFile(root / "mav0/cam0/sensor.yaml",
             "%YAML:1.0\n"
             "T_BS:\n  cols: 4\n  rows: 4\n"
             "  data: [1, 0, 0, 0.1, 0, 1, 0, 0.2, 0, 0, 1, 0.3, 0, 0, 0, 1]\n"
             "rate_hz: 10\nresolution: [640, 480]\ncamera_model: pinhole\n"
             "intrinsics: [500, 501, 320, 240]\n" +
                 cam_yaml_tail);
-  WriteText(root / "mav0/imu0/sensor.yaml",
+  WriteTextFile(root / "mav0/imu0/sensor.yaml",
             "%YAML:1.0\nrate_hz: 1000\ngyroscope_noise_density: 1e-4\n"
             "gyroscope_random_walk: 2e-5\naccelerometer_noise_density: 3e-3\n"
             "accelerometer_random_walk: 4e-3\n");
   std::ostringstream imu;
   imu << "#timestamp [ns],w_x,w_y,w_z,a_x,a_y,a_z\n";
   for (timestamp_ns_t t = imu_first; t <= imu_last; t += 100) imu << t << ",0,0,0,0,0,9.81\n";
-  WriteText(root / "mav0/imu0/data.csv", imu.str());
+  WriteTextFile(root / "mav0/imu0/data.csv", imu.str());
   return root;
 }
 
@@ -424,7 +409,7 @@ TEST(ReadEurocDataset, MissingPiecesAndEmptyList) {
   options.require_imu = false;
   EXPECT_FALSE(ReadEurocDataset(root, options).has_imu());
 
-  WriteText(root / "mav0/cam0/data.csv", "#timestamp [ns],filename\n\n");
+  WriteTextFile(root / "mav0/cam0/data.csv", "#timestamp [ns],filename\n\n");
   const InputError error = ExpectInputError([&] { ReadEurocDataset(root, options); });
   EXPECT_EQ(error.path(), (root / "mav0/cam0/data.csv").string());
   EXPECT_THAT(error.what(), HasSubstr("expected image rows, found none"));

@@ -6,6 +6,7 @@
 #include <tuple>
 
 #include "viosfm/io/euroc.h"
+#include "viosfm/io/text_lines.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/file_util.h"
 #include "viosfm/util/logging.h"
@@ -55,20 +56,11 @@ std::vector<StampedImage> ImagesFromNames(const fs::path& folder) {
 }
 
 std::vector<StampedImage> ImagesFromTimestampsFile(const fs::path& folder, const fs::path& file) {
-  RequireFile(file, "timestamps file");
-  std::ifstream stream(file);
-  if (!stream) throw InputError(file.string(), 0, "cannot open the timestamps file for reading");
   std::vector<StampedImage> images;
   std::map<fs::path, int64_t> line_of_path;
-  std::string line;
-  int64_t line_number = 0;
-  while (std::getline(stream, line)) {
-    ++line_number;
-    const std::string_view text = Trim(line);
-    if (text.empty() || text.front() == '#') continue;
-    std::vector<std::string_view> fields = Split(text, " \t", /*skip_empty=*/true);
-    if (fields.size() == 1) fields = Split(text, ",");
-    for (std::string_view& field : fields) field = Trim(field);
+  ForEachDataLine(file, "timestamps file", [&](int64_t line_number, std::string_view text) {
+    std::vector<std::string_view> fields = SplitFields(text, " \t");
+    if (fields.size() == 1) fields = SplitFields(text, ",");
     if (fields.size() != 2 || fields[0].empty() || fields[1].empty()) {
       throw InputError(file.string(), line_number,
                        "expected 'filename timestamp' (timestamp in integer ns, or seconds with a "
@@ -102,7 +94,7 @@ std::vector<StampedImage> ImagesFromTimestampsFile(const fs::path& folder, const
                            std::to_string(it->second));
     }
     images.push_back({{*stamp, path}, file.string(), line_number});
-  }
+  });
   if (images.empty()) {
     throw InputError(file.string(), 0, "expected 'filename timestamp' lines, found none");
   }

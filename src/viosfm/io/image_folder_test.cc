@@ -16,23 +16,9 @@ namespace {
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
-
-void WriteText(const fs::path& path, const std::string& text) {
-  std::ofstream stream(path, std::ios::binary);
-  stream << text;
-  ASSERT_TRUE(stream.good()) << path;
-}
-
-template <typename Function>
-InputError ExpectInputError(Function read) {
-  try {
-    read();
-  } catch (const InputError& error) {
-    return error;
-  }
-  ADD_FAILURE() << "expected an InputError";
-  return InputError("none");
-}
+using testing::ExpectInputError;
+using testing::InputErrorMessage;
+using testing::WriteTextFile;
 
 ImageFolderOptions PinholeOptions() {
   Camera camera;
@@ -48,10 +34,10 @@ ImageFolderOptions PinholeOptions() {
 TEST(ReadImageFolder, StampsFromFileNames) {
   const fs::path folder = testing::MakeScratchFolder("images_by_name");
   for (const char* name : {"300.png", "100.jpg", "200.JPEG", "notes.txt"}) {
-    WriteText(folder / name, "x");
+    WriteTextFile(folder / name, "x");
   }
   fs::create_directory(folder / "sub");
-  WriteText(folder / "sub" / "frame.png", "x");  // sub-folders are not searched
+  WriteTextFile(folder / "sub" / "frame.png", "x");  // sub-folders are not searched
 
   const Sequence sequence = ReadImageFolder(folder, PinholeOptions());
   EXPECT_EQ(sequence.root, folder);
@@ -72,9 +58,9 @@ TEST(ReadImageFolder, StampsFromFileNames) {
 TEST(ReadImageFolder, StampsFromTimestampsFile) {
   const fs::path folder = testing::MakeScratchFolder("images_with_stamps");
   for (const char* name : {"a.png", "b.png", "c.jpg", "unlisted.png"})
-    WriteText(folder / name, "x");
+    WriteTextFile(folder / name, "x");
   const fs::path stamps = folder / "times.txt";
-  WriteText(stamps,
+  WriteTextFile(stamps,
             "# filename timestamp\n"
             "b.png   1403715273.5\n"
             "a.png\t1403715273262142976\r\n"
@@ -94,8 +80,8 @@ TEST(ReadImageFolder, StampsFromTimestampsFile) {
 
 TEST(ReadImageFolder, CameraFromSensorYaml) {
   const fs::path folder = testing::MakeScratchFolder("images_yaml");
-  WriteText(folder / "5.png", "x");
-  WriteText(folder / "sensor.yaml",
+  WriteTextFile(folder / "5.png", "x");
+  WriteTextFile(folder / "sensor.yaml",
             "%YAML:1.0\n"
             "T_BS:\n  cols: 4\n  rows: 4\n"
             "  data: [1, 0, 0, 0.1, 0, 1, 0, 0.2, 0, 0, 1, 0.3, 0, 0, 0, 1]\n"
@@ -137,21 +123,21 @@ TEST(ReadImageFolder, Errors) {
   // Missing and empty folders.
   EXPECT_THAT(ExpectInputError([&] { ReadImageFolder(folder / "absent", options); }).what(),
               HasSubstr("image folder does not exist"));
-  WriteText(folder / "readme.txt", "x");
+  WriteTextFile(folder / "readme.txt", "x");
   InputError error = ExpectInputError([&] { ReadImageFolder(folder, options); });
   EXPECT_EQ(error.path(), folder.string());
   EXPECT_THAT(error.what(), HasSubstr("found none"));
 
   // A non-numeric name.
-  WriteText(folder / "100.png", "x");
-  WriteText(folder / "frame_7.png", "x");
+  WriteTextFile(folder / "100.png", "x");
+  WriteTextFile(folder / "frame_7.png", "x");
   error = ExpectInputError([&] { ReadImageFolder(folder, options); });
   EXPECT_EQ(error.path(), (folder / "frame_7.png").string());
   EXPECT_THAT(error.what(), HasSubstr("timestamp in integer nanoseconds"));
   fs::remove(folder / "frame_7.png");
 
   // Duplicate stamps: 0100 and 100.
-  WriteText(folder / "0100.jpg", "x");
+  WriteTextFile(folder / "0100.jpg", "x");
   error = ExpectInputError([&] { ReadImageFolder(folder, options); });
   EXPECT_EQ(error.path(), (folder / "100.png").string());
   EXPECT_THAT(error.what(), HasSubstr("duplicate timestamp 100 ns, also given by " +
@@ -175,13 +161,13 @@ TEST(ReadImageFolder, Errors) {
       {"100.png 300", "already listed on line 2"},
   };
   for (const Case& c : cases) {
-    WriteText(folder / "times.txt", "# header\n100.png 100\n" + c.line3 + "\n");
+    WriteTextFile(folder / "times.txt", "# header\n100.png 100\n" + c.line3 + "\n");
     error = ExpectInputError([&] { ReadImageFolder(folder, with_file); });
     EXPECT_EQ(error.path(), (folder / "times.txt").string()) << c.line3;
     EXPECT_EQ(error.line(), 3) << c.line3;
     EXPECT_THAT(error.what(), HasSubstr(c.expected)) << c.line3;
   }
-  WriteText(folder / "times.txt", "# nothing\n");
+  WriteTextFile(folder / "times.txt", "# nothing\n");
   EXPECT_THAT(ExpectInputError([&] { ReadImageFolder(folder, with_file); }).what(),
               HasSubstr("found none"));
 

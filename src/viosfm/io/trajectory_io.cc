@@ -1,7 +1,5 @@
 #include "viosfm/io/trajectory_io.h"
 
-#include <yaml-cpp/yaml.h>
-
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -11,6 +9,7 @@
 
 #include "viosfm/io/colmap_model.h"
 #include "viosfm/io/euroc.h"
+#include "viosfm/io/text_lines.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/file_util.h"
 #include "viosfm/util/logging.h"
@@ -20,22 +19,6 @@ namespace viosfm {
 namespace fs = std::filesystem;
 
 namespace {
-
-// Calls `visit(line_number, fields)` for every non-blank, non-comment line.
-template <typename Visit>
-void ForEachDataLine(const fs::path& path, std::string_view delimiters, Visit&& visit) {
-  RequireFile(path, "trajectory file");
-  std::ifstream stream(path);
-  if (!stream) throw InputError(path.string(), 0, "cannot open for reading");
-  std::string line;
-  int64_t line_number = 0;
-  while (std::getline(stream, line)) {
-    ++line_number;
-    const std::string_view trimmed = Trim(line);
-    if (trimmed.empty() || trimmed.front() == '#') continue;
-    visit(line_number, Split(trimmed, delimiters, /*skip_empty=*/true));
-  }
-}
 
 double ParseField(const fs::path& path, int64_t line, std::string_view field, size_t column,
                   const char* name) {
@@ -141,7 +124,8 @@ Trajectory ReadTumTrajectory(const fs::path& path) {
   static constexpr const char* kNames[8] = {"timestamp", "tx", "ty", "tz", "qx", "qy", "qz", "qw"};
   Trajectory trajectory;
   trajectory.has_timestamps = true;
-  ForEachDataLine(path, " \t", [&](int64_t line, const std::vector<std::string_view>& fields) {
+  ForEachDataLine(path, "trajectory file", [&](int64_t line, std::string_view text) {
+    const std::vector<std::string_view> fields = SplitFields(text, " \t");
     if (fields.size() != 8) {
       throw InputError(path.string(), line,
                        "expected 8 columns (timestamp tx ty tz qx qy qz qw), got " +
@@ -181,7 +165,8 @@ Trajectory ReadEurocTrajectory(const fs::path& path) {
 Trajectory ReadKittiTrajectory(const fs::path& path) {
   Trajectory trajectory;
   trajectory.has_timestamps = false;
-  ForEachDataLine(path, " \t", [&](int64_t line, const std::vector<std::string_view>& fields) {
+  ForEachDataLine(path, "trajectory file", [&](int64_t line, std::string_view text) {
+    const std::vector<std::string_view> fields = SplitFields(text, " \t");
     if (fields.size() != 12) {
       throw InputError(
           path.string(), line,
@@ -331,43 +316,6 @@ Rigid3d ParsePoseTxyzQxyzw(std::string_view text, const std::string& what) {
   const Eigen::Quaterniond q(values[6], values[3], values[4], values[5]);
   if (!(q.squaredNorm() > 1e-20)) throw InputError(what + ": expected a non-zero quaternion");
   return Rigid3d(q.normalized(), Eigen::Vector3d(values[0], values[1], values[2]));
-}
-
-Rigid3d ReadSensorYamlBodyFromSensor(const fs::path& yaml) {
-  std::string text = ReadTextFile(yaml);
-  // OpenCV writes a "%YAML:1.0" directive that yaml-cpp rejects.
-  if (StartsWith(text, "%YAML")) {
-    const size_t end = text.find('\n');
-    text = end == std::string::npos ? std::string() : text.substr(end + 1);
-  }
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::Exception& e) {
-    throw InputError(yaml.string(), e.mark.line + 1, std::string("invalid YAML: ") + e.msg);
-  }
-  const YAML::Node t_bs = root["T_BS"];
-  if (!t_bs) throw InputError(yaml.string(), 0, "expected a key 'T_BS' (4x4 body_from_sensor)");
-  const YAML::Node data = t_bs.IsMap() ? t_bs["data"] : t_bs;
-  const int64_t line = t_bs.Mark().line + 1;
-  if (!data || !data.IsSequence() || data.size() != 16) {
-    throw InputError(yaml.string(), line, "expected T_BS with a 'data' list of 16 numbers");
-  }
-  Eigen::Matrix4d matrix;
-  for (size_t i = 0; i < 16; ++i) {
-    try {
-      matrix(i / 4, i % 4) = data[i].as<double>();
-    } catch (const YAML::Exception&) {
-      throw InputError(yaml.string(), line,
-                       "expected a number as entry " + std::to_string(i + 1) + " of T_BS data");
-    }
-  }
-  const Eigen::Matrix3d rotation = matrix.topLeftCorner<3, 3>();
-  if ((rotation.transpose() * rotation - Eigen::Matrix3d::Identity()).norm() > 1e-3 ||
-      rotation.determinant() < 0) {
-    throw InputError(yaml.string(), line, "expected a rotation in the top-left 3x3 of T_BS");
-  }
-  return Rigid3d::FromMatrix(matrix.topRows<3>());
 }
 
 }  // namespace viosfm

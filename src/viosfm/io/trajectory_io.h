@@ -62,8 +62,5 @@ void WriteTrajectory(const std::filesystem::path& path, const Trajectory& trajec
 // the InputError thrown on a malformed text (e.g. "--body-from-cam").
 Rigid3d ParsePoseTxyzQxyzw(std::string_view text, const std::string& what);
 
-// Reads the "T_BS" 4x4 matrix (row-major "data" list, Kalibr/EuRoC
-// sensor.yaml, "%YAML:1.0" first line accepted) as body_from_sensor.
-Rigid3d ReadSensorYamlBodyFromSensor(const std::filesystem::path& yaml);
 
 }  // namespace viosfm

@@ -1,3 +1,4 @@
+#include "viosfm/io/euroc.h"
 #include "viosfm/io/trajectory_io.h"
 
 #include <gmock/gmock.h>
@@ -16,23 +17,9 @@ namespace {
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
-
-void WriteText(const fs::path& path, const std::string& text) {
-  std::ofstream stream(path, std::ios::binary);
-  stream << text;
-  ASSERT_TRUE(stream.good()) << path;
-}
-
-template <typename Function>
-std::string InputErrorMessage(Function function) {
-  try {
-    function();
-  } catch (const InputError& error) {
-    return error.what();
-  }
-  ADD_FAILURE() << "expected an InputError";
-  return "";
-}
+using testing::ExpectInputError;
+using testing::InputErrorMessage;
+using testing::WriteTextFile;
 
 // Random poses with awkward doubles and stamps with all 9 decimals.
 Trajectory RandomTrajectory(size_t count, uint32_t seed) {
@@ -86,7 +73,7 @@ TEST(TumTrajectory, WriteReadIsLosslessAndStable) {
 
 TEST(TumTrajectory, ParsesCommentsBlankLinesAndStampsDigitExactly) {
   const fs::path folder = testing::MakeScratchFolder("tum_parse");
-  WriteText(folder / "t.txt",
+  WriteTextFile(folder / "t.txt",
             "# ground truth trajectory\n"
             "\n"
             "1311868164.363181 1 2 3 0 0 0 1\n"
@@ -105,9 +92,9 @@ TEST(TumTrajectory, ParsesCommentsBlankLinesAndStampsDigitExactly) {
 
 TEST(TumTrajectory, RepeatedStampIsKeptDecreasingIsAnError) {
   const fs::path folder = testing::MakeScratchFolder("tum_stamps");
-  WriteText(folder / "repeat.txt", "1.5 0 0 0 0 0 0 1\n1.5 1 0 0 0 0 0 1\n2 0 0 0 0 0 0 1\n");
+  WriteTextFile(folder / "repeat.txt", "1.5 0 0 0 0 0 0 1\n1.5 1 0 0 0 0 0 1\n2 0 0 0 0 0 0 1\n");
   EXPECT_EQ(ReadTumTrajectory(folder / "repeat.txt").size(), 3u);
-  WriteText(folder / "decrease.txt", "1.5 0 0 0 0 0 0 1\n1.4 0 0 0 0 0 0 1\n");
+  WriteTextFile(folder / "decrease.txt", "1.5 0 0 0 0 0 0 1\n1.4 0 0 0 0 0 0 1\n");
   const std::string message =
       InputErrorMessage([&] { ReadTumTrajectory(folder / "decrease.txt"); });
   EXPECT_THAT(message, HasSubstr("decrease.txt:2"));
@@ -116,28 +103,28 @@ TEST(TumTrajectory, RepeatedStampIsKeptDecreasingIsAnError) {
 
 TEST(TumTrajectory, ErrorsNameFileLineAndExpectation) {
   const fs::path folder = testing::MakeScratchFolder("tum_errors");
-  WriteText(folder / "columns.txt", "# c\n1 0 0 0 0 0 0 1\n2 0 0 0 0 0 1\n");
+  WriteTextFile(folder / "columns.txt", "# c\n1 0 0 0 0 0 0 1\n2 0 0 0 0 0 1\n");
   std::string message = InputErrorMessage([&] { ReadTumTrajectory(folder / "columns.txt"); });
   EXPECT_THAT(message, HasSubstr("columns.txt:3"));
   EXPECT_THAT(message, HasSubstr("expected 8 columns"));
   EXPECT_THAT(message, HasSubstr("got 7"));
 
-  WriteText(folder / "number.txt", "1 0 0 zero 0 0 0 1\n");
+  WriteTextFile(folder / "number.txt", "1 0 0 zero 0 0 0 1\n");
   message = InputErrorMessage([&] { ReadTumTrajectory(folder / "number.txt"); });
   EXPECT_THAT(message, HasSubstr("number.txt:1"));
   EXPECT_THAT(message, HasSubstr("column 4 (tz): expected a finite number, got 'zero'"));
 
-  WriteText(folder / "stamp.txt", "1.2.3 0 0 0 0 0 0 1\n");
+  WriteTextFile(folder / "stamp.txt", "1.2.3 0 0 0 0 0 0 1\n");
   message = InputErrorMessage([&] { ReadTumTrajectory(folder / "stamp.txt"); });
   EXPECT_THAT(message, HasSubstr("stamp.txt:1"));
   EXPECT_THAT(message, HasSubstr("column 1 (timestamp): expected decimal seconds"));
 
-  WriteText(folder / "quat.txt", "1 0 0 0 0 0 0 0\n");
+  WriteTextFile(folder / "quat.txt", "1 0 0 0 0 0 0 0\n");
   message = InputErrorMessage([&] { ReadTumTrajectory(folder / "quat.txt"); });
   EXPECT_THAT(message, HasSubstr("quat.txt:1"));
   EXPECT_THAT(message, HasSubstr("non-zero quaternion"));
 
-  WriteText(folder / "empty.txt", "# nothing\n");
+  WriteTextFile(folder / "empty.txt", "# nothing\n");
   message = InputErrorMessage([&] { ReadTumTrajectory(folder / "empty.txt"); });
   EXPECT_THAT(message, HasSubstr("empty.txt"));
   EXPECT_THAT(message, HasSubstr("at least one pose"));
@@ -162,15 +149,15 @@ TEST(KittiTrajectory, RoundTripAndIndexStamps) {
 
 TEST(KittiTrajectory, ErrorsNameFileLineAndExpectation) {
   const fs::path folder = testing::MakeScratchFolder("kitti_errors");
-  WriteText(folder / "short.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 1\n");
+  WriteTextFile(folder / "short.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 1\n");
   std::string message = InputErrorMessage([&] { ReadKittiTrajectory(folder / "short.txt"); });
   EXPECT_THAT(message, HasSubstr("short.txt:2"));
   EXPECT_THAT(message, HasSubstr("expected 12 numbers"));
-  WriteText(folder / "nan.txt", "1 0 0 0 0 1 0 0 0 0 1 x\n");
+  WriteTextFile(folder / "nan.txt", "1 0 0 0 0 1 0 0 0 0 1 x\n");
   message = InputErrorMessage([&] { ReadKittiTrajectory(folder / "nan.txt"); });
   EXPECT_THAT(message, HasSubstr("nan.txt:1"));
   EXPECT_THAT(message, HasSubstr("column 12"));
-  WriteText(folder / "zero.txt", "0 0 0 0 0 0 0 0 0 0 0 0\n");
+  WriteTextFile(folder / "zero.txt", "0 0 0 0 0 0 0 0 0 0 0 0\n");
   message = InputErrorMessage([&] { ReadKittiTrajectory(folder / "zero.txt"); });
   EXPECT_THAT(message, HasSubstr("zero.txt:1"));
   EXPECT_THAT(message, HasSubstr("expected a rotation"));
@@ -185,7 +172,7 @@ TEST(EurocTrajectory, RoundTripAndFullStateFile) {
   ExpectSamePoses(original, read, 1e-15, 0.0, /*same_stamps=*/true);
   EXPECT_EQ(GuessTrajectoryFormat(folder / "e.csv"), TrajectoryFormat::kEuroc);
 
-  WriteText(folder / "full.csv",
+  WriteTextFile(folder / "full.csv",
             "#timestamp [ns],p_RS_R_x [m],p_RS_R_y [m],p_RS_R_z [m],q_RS_w [],q_RS_x [],"
             "q_RS_y [],q_RS_z [],v_RS_R_x [m s^-1],v_RS_R_y,v_RS_R_z,b_w_RS_S_x,b_w_RS_S_y,"
             "b_w_RS_S_z,b_a_RS_S_x,b_a_RS_S_y,b_a_RS_S_z\n"
@@ -203,7 +190,7 @@ TEST(EurocTrajectory, RoundTripAndFullStateFile) {
 
 TEST(EurocTrajectory, ErrorNamesFileAndLine) {
   const fs::path folder = testing::MakeScratchFolder("euroc_errors");
-  WriteText(folder / "bad.csv", "#t\n100,0,0,0,1,0,0,0\n200,0,0,0,1,0,0\n");
+  WriteTextFile(folder / "bad.csv", "#t\n100,0,0,0,1,0,0,0\n200,0,0,0,1,0,0\n");
   const std::string message = InputErrorMessage([&] { ReadEurocTrajectory(folder / "bad.csv"); });
   EXPECT_THAT(message, HasSubstr("bad.csv:3"));
 }
@@ -216,7 +203,7 @@ TEST(TrajectoryFormat, NamesParseAndGuessFailures) {
   EXPECT_THAT(InputErrorMessage([] { ParseTrajectoryFormat("bag"); }),
               HasSubstr("expected tum, euroc, kitti or colmap"));
   const fs::path folder = testing::MakeScratchFolder("guess");
-  WriteText(folder / "five.txt", "# x\n1 2 3 4 5\n");
+  WriteTextFile(folder / "five.txt", "# x\n1 2 3 4 5\n");
   const std::string message =
       InputErrorMessage([&] { GuessTrajectoryFormat(folder / "five.txt"); });
   EXPECT_THAT(message, HasSubstr("five.txt:2"));
@@ -248,7 +235,7 @@ TEST(ParsePoseTxyzQxyzw, ParsesAndRejects) {
 
 TEST(SensorYaml, ReadsTbsOfEurocCamera) {
   const fs::path folder = testing::MakeScratchFolder("sensor_yaml");
-  WriteText(folder / "sensor.yaml",
+  WriteTextFile(folder / "sensor.yaml",
             "%YAML:1.0\n"
             "sensor_type: camera\n"
             "T_BS:\n"
@@ -258,14 +245,14 @@ TEST(SensorYaml, ReadsTbsOfEurocCamera) {
             "         0.999557249008, 0.0149672133247, 0.025715529948, -0.064676986768,\n"
             "        -0.0257744366974, 0.00375618835797, 0.999660727178, 0.00981073058949,\n"
             "         0.0, 0.0, 0.0, 1.0]\n");
-  const Rigid3d body_from_cam = ReadSensorYamlBodyFromSensor(folder / "sensor.yaml");
+  const Rigid3d body_from_cam = ReadEurocSensorTransform(folder / "sensor.yaml");
   EXPECT_NEAR((body_from_cam.translation -
                Eigen::Vector3d(-0.0216401454975, -0.064676986768, 0.00981073058949))
                   .norm(),
               0.0, 1e-15);
   EXPECT_NEAR(body_from_cam.rotation.toRotationMatrix()(0, 1), -0.999880929698, 1e-9);
-  WriteText(folder / "no_tbs.yaml", "%YAML:1.0\nrate_hz: 20\n");
-  EXPECT_THAT(InputErrorMessage([&] { ReadSensorYamlBodyFromSensor(folder / "no_tbs.yaml"); }),
+  WriteTextFile(folder / "no_tbs.yaml", "%YAML:1.0\nrate_hz: 20\n");
+  EXPECT_THAT(InputErrorMessage([&] { ReadEurocSensorTransform(folder / "no_tbs.yaml"); }),
               HasSubstr("T_BS"));
 }
 
@@ -282,16 +269,16 @@ TEST(TrajectoryReaders, ReadTheRealTrajEvalFiles) {
 
 TEST(ColmapTrajectory, RegisteredImagesSortedByNameStamp) {
   const fs::path folder = testing::MakeScratchFolder("colmap_trajectory");
-  WriteText(folder / "cameras.txt", "1 PINHOLE 640 480 500 500 320 240\n");
+  WriteTextFile(folder / "cameras.txt", "1 PINHOLE 640 480 500 500 320 240\n");
   // cam_from_world of image 1: rotation 90 deg about z, t = (1, 2, 3).
-  WriteText(folder / "images.txt",
+  WriteTextFile(folder / "images.txt",
             "1 0.70710678118654757 0 0 0.70710678118654757 1 2 3 1 cam0/1403715273312142976.png\n"
             "\n"
             "2 1 0 0 0 0 0 0 1 cam0/1403715273262142976.png\n"
             "\n"
             "3 1 0 0 0 5 5 5 1 cam1/1403715273262142976.png\n"
             "\n");
-  WriteText(folder / "points3D.txt", "");
+  WriteTextFile(folder / "points3D.txt", "");
   EXPECT_EQ(GuessTrajectoryFormat(folder), TrajectoryFormat::kColmap);
   const Trajectory trajectory = ReadColmapTrajectory(folder, "cam0/");
   ASSERT_EQ(trajectory.size(), 2u);

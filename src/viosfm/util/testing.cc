@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <cstdlib>
+#include <fstream>
 #include <mutex>
 #include <vector>
 
@@ -59,6 +60,13 @@ fs::path MakeScratchFolder(const std::string& name) {
   fs::create_directories(folder);
   g_scratch_folders->push_back(folder);
   return folder;
+}
+
+void WriteTextFile(const fs::path& path, const std::string& text) {
+  std::ofstream stream(path, std::ios::binary);
+  stream << text;
+  stream.flush();
+  EXPECT_TRUE(stream.good()) << "cannot write " << path;
 }
 
 }  // namespace viosfm::testing

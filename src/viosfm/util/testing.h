@@ -1,8 +1,12 @@
 // Helpers for tests: where the real datasets are, and scratch folders.
 #pragma once
 
+#include <gtest/gtest.h>
+
 #include <filesystem>
 #include <string>
+
+#include "viosfm/util/errors.h"
 
 namespace viosfm::testing {
 
@@ -14,6 +18,28 @@ std::filesystem::path FindDataset(const std::string& name);
 std::filesystem::path SourcePath(const std::string& relative);
 // A fresh empty folder under the system temp dir, unique per test, removed at exit.
 std::filesystem::path MakeScratchFolder(const std::string& name);
+
+// Writes `text` to `path` (binary, no newline translation); fails the test on error.
+void WriteTextFile(const std::filesystem::path& path, const std::string& text);
+
+// Runs `function` and returns the InputError it throws; fails the test if it
+// throws none.
+template <typename Function>
+InputError ExpectInputError(Function function) {
+  try {
+    function();
+  } catch (const InputError& error) {
+    return error;
+  }
+  ADD_FAILURE() << "expected an InputError";
+  return InputError("(no error)");
+}
+
+// The message of the InputError `function` throws ("" and a test failure if none).
+template <typename Function>
+std::string InputErrorMessage(Function function) {
+  return ExpectInputError(function).what();
+}
 
 }  // namespace viosfm::testing
 
