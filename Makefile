@@ -3,7 +3,7 @@ BUILD_DIR ?= build
 JOBS ?= $(shell nproc)
 CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Release
 
-.PHONY: deps configure build test demo clean
+.PHONY: deps configure build test demo bench clean
 
 deps:
 	./scripts/install-deps.sh
@@ -21,6 +21,11 @@ test: build
 # Builds and runs the main job on the built-in simulated default.
 demo: build
 	./scripts/demo.sh $(BUILD_DIR)
+
+# Builds the benchmarks and runs them; see docs/benchmarks.md.
+bench: configure
+	cmake --build $(BUILD_DIR) -j $(JOBS) --target viosfm_benchmarks viosfm
+	./scripts/run-benchmarks.sh $(BUILD_DIR)
 
 clean:
 	rm -rf $(BUILD_DIR)

@@ -58,4 +58,27 @@ function(viosfm_add_layer NAME)
     get_filename_component(test_name ${test} NAME_WE)
     viosfm_add_test(${NAME} ${test_name} DEPS ${ARG_TEST_DEPS})
   endforeach()
+  file(GLOB benchmarks CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/*_benchmark.cc)
+  foreach(bench ${benchmarks})
+    get_filename_component(bench_name ${bench} NAME_WE)
+    viosfm_add_benchmark(${NAME} ${bench_name} DEPS ${ARG_TEST_DEPS})
+  endforeach()
+endfunction()
+
+# viosfm_add_benchmark(MODULE NAME [DEPS ...])
+# Builds NAME.cc (Google Benchmark) into bench_MODULE_NAME, collected by the
+# `viosfm_benchmarks` target; benchmarks are not ctest tests (timings are
+# measured, never asserted).
+function(viosfm_add_benchmark MODULE NAME)
+  if(NOT VIOSFM_BUILD_BENCHMARKS)
+    return()
+  endif()
+  cmake_parse_arguments(ARG "" "" "DEPS" ${ARGN})
+  set(target bench_${MODULE}_${NAME})
+  add_executable(${target} EXCLUDE_FROM_ALL ${NAME}.cc)
+  target_compile_options(${target} PRIVATE -Wall -Wextra)
+  target_compile_definitions(${target} PRIVATE
+    VIOSFM_DATA_DIR="${VIOSFM_DATA_DIR}" VIOSFM_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
+  target_link_libraries(${target} PRIVATE viosfm_${MODULE} ${ARG_DEPS} benchmark::benchmark_main)
+  add_dependencies(viosfm_benchmarks ${target})
 endfunction()
