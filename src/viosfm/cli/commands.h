@@ -9,5 +9,6 @@ namespace viosfm::cli {
 
 void RegisterEval(CLI::App& app);
 void RegisterSimulate(CLI::App& app);
+void RegisterFeatures(CLI::App& app);
 
 }  // namespace viosfm::cli

@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
   app.parse_complete_callback([&log_level] { viosfm::SetLogLevel(viosfm::ParseLogLevel(log_level)); });
 
   viosfm::cli::RegisterSimulate(app);
+  viosfm::cli::RegisterFeatures(app);
   viosfm::cli::RegisterEval(app);
 
   try {

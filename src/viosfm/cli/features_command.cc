@@ -1,0 +1,137 @@
+// `viosfm features`: SIFT/RootSIFT features of every image of a dataset into
+// a COLMAP-compatible database (see features/feature_extraction.h).
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <string>
+
+#include "viosfm/cli/commands.h"
+#include "viosfm/features/feature_extraction.h"
+#include "viosfm/io/colmap_database.h"
+#include "viosfm/io/euroc.h"
+#include "viosfm/io/image_folder.h"
+#include "viosfm/sensor/camera_models.h"
+#include "viosfm/util/errors.h"
+#include "viosfm/util/logging.h"
+#include "viosfm/util/string_util.h"
+
+namespace viosfm::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct FeaturesArguments {
+  std::string dataset;
+  std::string database;
+  SiftOptions sift;
+  bool no_root_sift = false;
+  std::string camera_yaml;
+  std::string camera;
+  std::string timestamps;
+};
+
+// "MODEL,WIDTH,HEIGHT,p1,p2,..." e.g. "PINHOLE,752,480,458.6,457.3,367.2,248.4".
+Camera ParseCameraOption(const std::string& text) {
+  const std::vector<std::string_view> fields = Split(text, ",", /*skip_empty=*/false);
+  const auto fail = [&text](const std::string& what) -> Camera {
+    throw InputError("--camera '" + text + "': " + what);
+  };
+  if (fields.size() < 4) return fail("expected MODEL,WIDTH,HEIGHT,PARAMS...");
+  const CameraModelId model_id = CameraModelIdFromName(std::string(Trim(fields[0])));
+  if (model_id == CameraModelId::kInvalid) {
+    return fail("unknown camera model '" + std::string(fields[0]) + "'");
+  }
+  const std::optional<int64_t> width = ParseInt(Trim(fields[1]));
+  const std::optional<int64_t> height = ParseInt(Trim(fields[2]));
+  if (!width || !height || *width <= 0 || *height <= 0) {
+    return fail("expected a positive integer width and height");
+  }
+  std::vector<double> params;
+  for (size_t i = 3; i < fields.size(); ++i) {
+    const std::optional<double> value = ParseDouble(Trim(fields[i]));
+    if (!value) return fail("parameter '" + std::string(fields[i]) + "' is not a number");
+    params.push_back(*value);
+  }
+  return MakeCamera(model_id, static_cast<uint64_t>(*width), static_cast<uint64_t>(*height),
+                    std::move(params));
+}
+
+bool IsEurocDataset(const fs::path& root) {
+  return fs::is_directory(root / "mav0") ||
+         (root.filename() == "mav0" && fs::is_directory(root / "cam0"));
+}
+
+Sequence ReadDataset(const FeaturesArguments& args) {
+  const fs::path root = args.dataset;
+  if (!fs::is_directory(root)) throw InputError(args.dataset, 0, "dataset folder not found");
+  if (IsEurocDataset(root)) {
+    EurocReadOptions options;
+    options.require_imu = false;  // features need only the camera
+    return ReadEurocDataset(root, options);
+  }
+  ImageFolderOptions options;
+  options.timestamps_file = args.timestamps;
+  options.camera_yaml = args.camera_yaml;
+  if (!args.camera.empty()) options.camera = ParseCameraOption(args.camera);
+  if (const std::string error = options.Validate(); !error.empty()) {
+    throw InputError(args.dataset, 0,
+                     "not a EuRoC dataset (no mav0/), so read as an image folder: " + error +
+                         " (give --camera-yaml or --camera)");
+  }
+  return ReadImageFolder(root, options);
+}
+
+void RunFeatures(const FeaturesArguments& args) {
+  SiftOptions options = args.sift;
+  options.root_sift = !args.no_root_sift;
+  if (const std::string error = options.Validate(); !error.empty()) {
+    throw InputError("invalid feature options: " + error);
+  }
+  const Sequence sequence = ReadDataset(args);
+  const fs::path database_path = args.database;
+  if (database_path.has_parent_path()) fs::create_directories(database_path.parent_path());
+  ColmapDatabase database = ColmapDatabase::Open(database_path);
+  VIOSFM_LOG(INFO) << "features: " << sequence.images.size() << " images of " << args.dataset
+                   << " -> " << database_path.string() << " (max " << options.max_num_features
+                   << " per image, " << (options.root_sift ? "RootSIFT" : "SIFT") << ", "
+                   << options.num_threads << " threads)";
+  const FeatureExtractionSummary summary = ExtractFeatures(sequence, options, &database);
+  VIOSFM_LOG(INFO) << "features: " << summary.ToString() << "; database holds "
+                   << database.NumImages() << " images, " << database.NumKeypoints()
+                   << " keypoints";
+}
+
+}  // namespace
+
+void RegisterFeatures(CLI::App& app) {
+  auto args = std::make_shared<FeaturesArguments>();
+  CLI::App* command = app.add_subcommand(
+      "features",
+      "Extract SIFT (RootSIFT) features of every image into a COLMAP 3.8 database; a re-run "
+      "skips the images already stored");
+  command
+      ->add_option("dataset", args->dataset,
+                   "EuRoC dataset (folder containing mav0/) or a folder of images")
+      ->required();
+  command->add_option("--database", args->database, "COLMAP database (created if missing)")
+      ->required();
+  command->add_option("--max-features", args->sift.max_num_features, "Features kept per image")
+      ->capture_default_str();
+  command->add_flag("--no-root-sift", args->no_root_sift,
+                    "L2-normalised SIFT descriptors instead of RootSIFT");
+  command->add_option("--threads", args->sift.num_threads, "Images extracted in parallel")
+      ->capture_default_str();
+  command
+      ->add_option("--peak-threshold", args->sift.peak_threshold,
+                   "Minimum DoG response (intensities in [0, 1])")
+      ->capture_default_str();
+  command->add_option("--camera-yaml", args->camera_yaml,
+                      "Image folder: Kalibr/EuRoC camera sensor.yaml");
+  command->add_option("--camera", args->camera,
+                      "Image folder: MODEL,WIDTH,HEIGHT,PARAMS... (COLMAP model and order)");
+  command->add_option("--timestamps", args->timestamps,
+                      "Image folder: file of 'filename timestamp' lines");
+  command->callback([args] { RunFeatures(*args); });
+}
+
+}  // namespace viosfm::cli

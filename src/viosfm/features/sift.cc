@@ -1,0 +1,144 @@
+#include "viosfm/features/sift.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <numeric>
+#include <opencv2/core.hpp>
+#include <opencv2/features2d.hpp>
+
+#include "viosfm/sensor/camera_models.h"
+#include "viosfm/util/errors.h"
+
+namespace viosfm {
+namespace {
+
+// COLMAP's pixel convention minus the calibration (OpenCV) convention.
+constexpr double kKeypointPixelOffset = 0.5;
+// cv::SIFT in OpenCV 4.6 doubles the image with cv::resize (INTER_LINEAR,
+// which puts pixel j of the doubled image at j / 2 - 0.25 of the original)
+// and later halves with INTER_NEAREST (pixel i at 2 i), but maps keypoints
+// back as if pixel j were at j / 2: every position it reports is 0.25 pixel
+// too large in x and y, at every octave. (OpenCV 4.8's
+// enable_precise_upscale removes this.) Measured by the rotation and
+// projected-blob tests in sift_test.cc.
+constexpr double kOpenCvSiftPositionBias = 0.25;
+// cv::SIFT's initial blur (Lowe's sigma_0), as VLFeat's and COLMAP's.
+constexpr double kSiftSigma = 1.6;
+// Scale applied to unit-norm descriptors before rounding (COLMAP).
+constexpr float kDescriptorQuantizationScale = 512.0f;
+
+}  // namespace
+
+std::string SiftOptions::Validate() const {
+  if (max_num_features < 1) return "max_num_features must be >= 1";
+  if (!(peak_threshold >= 0.0)) return "peak_threshold must be >= 0";
+  if (!(edge_threshold > 0.0)) return "edge_threshold must be > 0";
+  if (num_octave_layers < 1) return "num_octave_layers must be >= 1";
+  if (num_threads < 1) return "num_threads must be >= 1";
+  return "";
+}
+
+FeatureDescriptorsFloat L2NormalizeDescriptors(const FeatureDescriptorsFloat& descriptors) {
+  FeatureDescriptorsFloat normalized = descriptors;
+  for (Eigen::Index r = 0; r < normalized.rows(); ++r) {
+    const float norm = normalized.row(r).norm();
+    if (norm > 0.0f) normalized.row(r) /= norm;
+  }
+  return normalized;
+}
+
+FeatureDescriptorsFloat RootSiftNormalizeDescriptors(const FeatureDescriptorsFloat& descriptors) {
+  FeatureDescriptorsFloat normalized = descriptors;
+  for (Eigen::Index r = 0; r < normalized.rows(); ++r) {
+    // SIFT histograms are non-negative; the absolute value guards the sqrt.
+    const float norm = normalized.row(r).lpNorm<1>();
+    if (norm > 0.0f) normalized.row(r) = (normalized.row(r).array().abs() / norm).sqrt();
+  }
+  return normalized;
+}
+
+FeatureDescriptors QuantizeDescriptors(const FeatureDescriptorsFloat& descriptors) {
+  FeatureDescriptors quantized(descriptors.rows(), descriptors.cols());
+  for (Eigen::Index i = 0; i < descriptors.size(); ++i) {
+    const float value = std::round(kDescriptorQuantizationScale * descriptors.data()[i]);
+    quantized.data()[i] = static_cast<uint8_t>(std::clamp(value, 0.0f, 255.0f));
+  }
+  return quantized;
+}
+
+ImageFeatures ExtractSift(const GreyImage& image, const SiftOptions& options) {
+  if (const std::string error = options.Validate(); !error.empty()) {
+    throw InputError("SiftOptions: " + error);
+  }
+  VIOSFM_CHECK(image.width >= 0 && image.height >= 0 &&
+               image.pixels.size() == static_cast<size_t>(image.width) * image.height)
+      << "image of " << image.width << " x " << image.height << " pixels has "
+      << image.pixels.size() << " values";
+  ImageFeatures features;
+  features.descriptors.resize(0, 128);
+  if (image.empty()) return features;
+
+  // OpenCV divides contrastThreshold by nOctaveLayers before comparing it
+  // with the DoG (intensities in [0, 1]); VLFeat/COLMAP compare directly.
+  const double contrast_threshold = options.peak_threshold * options.num_octave_layers;
+  cv::Ptr<cv::SIFT> sift =
+      cv::SIFT::create(options.max_num_features, options.num_octave_layers, contrast_threshold,
+                       options.edge_threshold, kSiftSigma, CV_32F);
+  // A view of the pixels (cv::Mat does not take ownership).
+  const cv::Mat mat(image.height, image.width, CV_8UC1, const_cast<uint8_t*>(image.pixels.data()));
+  std::vector<cv::KeyPoint> cv_keypoints;
+  cv::Mat cv_descriptors;
+  sift->detectAndCompute(mat, cv::noArray(), cv_keypoints, cv_descriptors);
+  VIOSFM_CHECK(cv_descriptors.rows == static_cast<int>(cv_keypoints.size()))
+      << cv_keypoints.size() << " keypoints but " << cv_descriptors.rows << " descriptors";
+
+  // OpenCV keeps every keypoint tied with the n-th response, so there may be
+  // a few more than asked for: order by response and cut.
+  std::vector<int> order(cv_keypoints.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&cv_keypoints](int a, int b) {
+    return cv_keypoints[a].response > cv_keypoints[b].response;
+  });
+  if (order.size() > static_cast<size_t>(options.max_num_features)) {
+    order.resize(options.max_num_features);
+  }
+
+  const int num_cols = cv_descriptors.empty() ? 128 : cv_descriptors.cols;
+  FeatureDescriptorsFloat raw(static_cast<Eigen::Index>(order.size()), num_cols);
+  features.keypoints.reserve(order.size());
+  for (size_t i = 0; i < order.size(); ++i) {
+    const cv::KeyPoint& k = cv_keypoints[order[i]];
+    const float scale = 0.5f * k.size;  // KeyPoint::size is the diameter 2 sigma
+    const float orientation = k.angle * static_cast<float>(std::numbers::pi / 180.0);
+    features.keypoints.push_back(FeatureKeypoint::FromScaleOrientation(
+        static_cast<float>(k.pt.x - kOpenCvSiftPositionBias + kKeypointPixelOffset),
+        static_cast<float>(k.pt.y - kOpenCvSiftPositionBias + kKeypointPixelOffset), scale,
+        orientation));
+    const float* row = cv_descriptors.ptr<float>(order[i]);
+    std::copy(row, row + num_cols, raw.row(static_cast<Eigen::Index>(i)).data());
+  }
+  features.descriptors = QuantizeDescriptors(options.root_sift ? RootSiftNormalizeDescriptors(raw)
+                                                               : L2NormalizeDescriptors(raw));
+  return features;
+}
+
+Eigen::Vector2d CalibrationPixelToKeypoint(const Eigen::Vector2d& pixel) {
+  return pixel + Eigen::Vector2d::Constant(kKeypointPixelOffset);
+}
+
+Eigen::Vector2d KeypointToCalibrationPixel(const FeatureKeypoint& keypoint) {
+  return Eigen::Vector2d(keypoint.x, keypoint.y) - Eigen::Vector2d::Constant(kKeypointPixelOffset);
+}
+
+std::vector<Eigen::Vector2d> UndistortKeypoints(const Camera& camera,
+                                                const FeatureKeypoints& keypoints) {
+  std::vector<Eigen::Vector2d> normalized;
+  normalized.reserve(keypoints.size());
+  for (const FeatureKeypoint& keypoint : keypoints) {
+    normalized.push_back(ImageToCam(camera, KeypointToCalibrationPixel(keypoint)));
+  }
+  return normalized;
+}
+
+}  // namespace viosfm

@@ -1,0 +1,97 @@
+// SIFT keypoints with RootSIFT descriptors (OpenCV 4.6's cv::SIFT), stored
+// the way COLMAP stores its own:
+//  - keypoints in raw (distorted) pixel coordinates in COLMAP's convention:
+//    the centre of the top-left pixel is (0.5, 0.5). OpenCV puts it at
+//    (0, 0), so 0.5 is added to OpenCV's positions (as COLMAP does to
+//    VLFeat's), after removing cv::SIFT 4.6's bias of +0.25 pixel (its
+//    upsampled first octave is misaligned by a quarter pixel; see sift.cc);
+//  - the affine shape of FeatureKeypoint::FromScaleOrientation(x, y, scale,
+//    orientation) with scale = the Gaussian scale sigma in pixels (OpenCV's
+//    KeyPoint::size is a diameter, 2 sigma) and orientation in radians,
+//    measured from the +x axis towards +y in image coordinates (y down), i.e.
+//    OpenCV's KeyPoint::angle (degrees, same direction) times pi / 180;
+//  - descriptors normalised (RootSIFT: L1-normalise, then element-wise
+//    square root, which gives a unit L2 norm; or plain L2 normalisation) and
+//    quantised as COLMAP's FeatureDescriptorsToUnsignedByte does:
+//    min(255, round(512 * value)).
+// The descriptor layout is OpenCV's (4 x 4 spatial cells, row-major, each
+// with 8 orientation bins). COLMAP's VLFeat extractor reorders its
+// descriptors to Lowe's layout, which may number the orientation bins in
+// the other direction: viosfm descriptors match viosfm descriptors; do not
+// mix them with descriptors COLMAP extracted.
+//
+// Geometry works on undistorted normalised coordinates: UndistortKeypoints.
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "viosfm/scene/features.h"
+#include "viosfm/sensor/camera.h"
+#include "viosfm/sensor/grey_image.h"
+
+namespace viosfm {
+
+struct SiftOptions {
+  // Keypoints kept per image, the strongest by DoG response. Default 8192
+  // (COLMAP's SiftExtraction.max_num_features).
+  int max_num_features = 8192;
+  // RootSIFT (true) or L2-normalised SIFT (false) descriptors. Default true
+  // (COLMAP's default normalisation is L1_ROOT as well).
+  bool root_sift = true;
+  // Minimum absolute DoG value of a keypoint, intensities in [0, 1]. Default
+  // 0.02 / 3 (COLMAP's peak_threshold 0.02 / octave_resolution, VLFeat's
+  // semantics). OpenCV's contrastThreshold is this times num_octave_layers
+  // (OpenCV divides it by the layers), i.e. 0.02 here instead of OpenCV's
+  // default 0.04, which keeps about twice as many weak keypoints in
+  // low-texture indoor images.
+  double peak_threshold = 0.02 / 3.0;
+  // Maximum ratio of principal curvatures of a keypoint (rejects edges).
+  // Default 10 (COLMAP and OpenCV).
+  double edge_threshold = 10.0;
+  // DoG levels per octave. Default 3 (COLMAP's octave_resolution, OpenCV's
+  // nOctaveLayers).
+  int num_octave_layers = 3;
+  // Worker threads of the batch extraction (feature_extraction.h), each
+  // extracting one image at a time. Default 2.
+  int num_threads = 2;
+
+  std::string Validate() const;  // empty if valid, else names the bad field
+  bool Check() const { return Validate().empty(); }
+};
+
+struct ImageFeatures {
+  FeatureKeypoints keypoints;
+  FeatureDescriptors descriptors;  // one row of 128 bytes per keypoint
+};
+
+// Detects and describes SIFT keypoints, ordered by decreasing response.
+// Throws InputError if the options are invalid, InternalError if the image's
+// pixel count does not match its size.
+ImageFeatures ExtractSift(const GreyImage& image, const SiftOptions& options);
+
+// Descriptor normalisations on float descriptors (one a row); rows that are
+// all zero stay zero.
+using FeatureDescriptorsFloat =
+    Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+FeatureDescriptorsFloat L2NormalizeDescriptors(const FeatureDescriptorsFloat& descriptors);
+FeatureDescriptorsFloat RootSiftNormalizeDescriptors(const FeatureDescriptorsFloat& descriptors);
+// min(255, max(0, round(512 * value))), COLMAP's quantisation of unit-norm
+// descriptors.
+FeatureDescriptors QuantizeDescriptors(const FeatureDescriptorsFloat& descriptors);
+
+// Keypoint positions (COLMAP convention) -> undistorted normalised camera
+// coordinates (x/z, y/z). `camera` holds intrinsics in viosfm's convention
+// for calibrations, OpenCV's (pixel (0, 0) is the centre of the top-left
+// pixel; EuRoC, Kalibr, the simulator), so 0.5 is subtracted before
+// sensor/camera_models.h's ImageToCam. Throws InputError if the camera model
+// cannot project.
+std::vector<Eigen::Vector2d> UndistortKeypoints(const Camera& camera,
+                                                const FeatureKeypoints& keypoints);
+// The pixel in COLMAP's convention of a point given in the calibration
+// convention, and back (adds / subtracts 0.5).
+Eigen::Vector2d CalibrationPixelToKeypoint(const Eigen::Vector2d& pixel);
+Eigen::Vector2d KeypointToCalibrationPixel(const FeatureKeypoint& keypoint);
+
+}  // namespace viosfm
