@@ -1,0 +1,315 @@
+#include "viosfm/estimators/prior_verification.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <iostream>
+
+#include "viosfm/estimators/synthetic_test_scenes.h"
+#include "viosfm/estimators/two_view_geometry.h"
+#include "viosfm/geometry/epipolar.h"
+#include "viosfm/geometry/lie.h"
+#include "viosfm/sensor/camera_models.h"
+
+namespace viosfm {
+namespace {
+
+using testing::RandomUnitVector;
+
+constexpr double kDegToRad = M_PI / 180.0;
+
+Camera TestCamera() {
+  return MakeCamera(CameraModelId::kPinhole, 752, 480, {458.654, 457.296, 367.215, 248.375});
+}
+
+// Camera to IMU: a EuRoC-like rotation and lever arm.
+Rigid3d TestBodyFromCam() {
+  return Rigid3d(So3Exp(Eigen::Vector3d(0.02, -0.01, M_PI / 2)),
+                 Eigen::Vector3d(-0.02, 0.06, 0.01));
+}
+
+// world_from_cam of a level camera at `position` (world z up) looking along
+// +y rotated by `yaw` about z, pitched down by `pitch`.
+Rigid3d LevelCamera(const Eigen::Vector3d& position, double yaw, double pitch = 0.0) {
+  Eigen::Matrix3d world_from_level;
+  // Columns: camera x (right), y (down), z (forward) in the world.
+  world_from_level << 1, 0, 0, 0, 0, 1, 0, -1, 0;
+  const Eigen::Matrix3d rotation = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) *
+                                   world_from_level *
+                                   Eigen::AngleAxisd(-pitch, Eigen::Vector3d::UnitX());
+  return Rigid3d(rotation, position);
+}
+
+// One floor of a corridor: a textured wall 5 m ahead with some relief, and
+// the floor in front of it.
+std::vector<Eigen::Vector3d> FloorScene(Random& random) {
+  std::vector<Eigen::Vector3d> points;
+  for (int i = 0; i < 300; ++i) {
+    points.emplace_back(random.Uniform(-4, 4), 5.0 + random.Uniform(-0.3, 0.3),
+                        random.Uniform(0.1, 2.9));
+  }
+  for (int i = 0; i < 100; ++i) {
+    points.emplace_back(random.Uniform(-3, 3), random.Uniform(1.5, 5.0), 0.0);
+  }
+  return points;
+}
+
+struct PairData {
+  std::vector<Eigen::Vector2d> points1;  // normalised
+  std::vector<Eigen::Vector2d> points2;
+  FeatureMatches matches;
+};
+
+// Matches of points seen by camera 1 at p and by camera 2 at p + offset (the
+// same-looking structure `offset` away when offset is not zero), with
+// Gaussian pixel noise.
+PairData MakeMatches(const Camera& camera, const std::vector<Eigen::Vector3d>& points,
+                     const Rigid3d& world_from_cam1, const Rigid3d& world_from_cam2,
+                     const Eigen::Vector3d& offset, double noise_px, Random& random) {
+  const Rigid3d cam1_from_world = world_from_cam1.Inverse();
+  const Rigid3d cam2_from_world = world_from_cam2.Inverse();
+  const double focal = MeanFocalLength(camera);
+  const auto visible = [&](const Eigen::Vector3d& point_in_cam) {
+    const auto pixel = Project(camera, point_in_cam);
+    return point_in_cam.z() > 0.1 && pixel && pixel->x() >= 0 && pixel->y() >= 0 &&
+           pixel->x() < camera.width && pixel->y() < camera.height;
+  };
+  PairData data;
+  for (const Eigen::Vector3d& point : points) {
+    const Eigen::Vector3d in_cam1 = cam1_from_world * point;
+    const Eigen::Vector3d in_cam2 = cam2_from_world * (point + offset);
+    if (!visible(in_cam1) || !visible(in_cam2)) continue;
+    const auto index = static_cast<point2D_t>(data.points1.size());
+    data.points1.push_back(in_cam1.hnormalized() +
+                           Eigen::Vector2d(random.Normal(0, noise_px), random.Normal(0, noise_px)) /
+                               focal);
+    data.points2.push_back(in_cam2.hnormalized() +
+                           Eigen::Vector2d(random.Normal(0, noise_px), random.Normal(0, noise_px)) /
+                               focal);
+    data.matches.push_back({index, index});
+  }
+  return data;
+}
+
+TEST(PriorVerification, ZeroEpipolarErrorForExactCorrespondences) {
+  Random random(1);
+  const Camera camera1 = TestCamera();
+  const Camera camera2 = MakeCamera(CameraModelId::kPinhole, 640, 480, {600, 590, 330, 245});
+  const Rigid3d body_from_cam = TestBodyFromCam();
+  for (int trial = 0; trial < 20; ++trial) {
+    const Rigid3d world_from_body1(So3Exp(RandomUnitVector(random) * random.Uniform(0, 3)),
+                                   Eigen::Vector3d(random.Normal(), random.Normal(), 1.0));
+    const Rigid3d cam1_from_cam2(So3Exp(RandomUnitVector(random) * random.Uniform(0, 0.3)),
+                                 RandomUnitVector(random) * random.Uniform(0.1, 2.0));
+    const Rigid3d world_from_body2 =
+        world_from_body1 * body_from_cam * cam1_from_cam2 * body_from_cam.Inverse();
+    const testing::SyntheticTwoView view = [&] {
+      // Points in front of both cameras.
+      testing::SyntheticTwoView result;
+      result.cam2_from_cam1 = cam1_from_cam2.Inverse();
+      while (result.points1.size() < 50) {
+        const Eigen::Vector3d point(random.Uniform(-2, 2), random.Uniform(-2, 2),
+                                    random.Uniform(2, 8));
+        const Eigen::Vector3d in_cam2 = result.cam2_from_cam1 * point;
+        if (in_cam2.z() < 0.5) continue;
+        result.points1.push_back(point.hnormalized());
+        result.points2.push_back(in_cam2.hnormalized());
+      }
+      return result;
+    }();
+    FeatureMatches matches;
+    for (point2D_t i = 0; i < view.points1.size(); ++i) matches.push_back({i, i});
+    const PriorVerificationResult result =
+        VerifyPairWithVioPoses(camera1, camera2, world_from_body1, world_from_body2, body_from_cam,
+                               view.points1, view.points2, matches, PriorVerificationOptions());
+    EXPECT_FALSE(result.rotation_only);
+    ASSERT_EQ(result.errors_px.size(), matches.size());
+    for (const double error : result.errors_px) EXPECT_LT(error, 1e-7);
+    EXPECT_EQ(result.num_outliers, 0);
+    EXPECT_EQ(result.outlier_ratio, 0.0);
+    EXPECT_TRUE(result.accepted);
+  }
+}
+
+TEST(PriorVerification, RelativePoseFromVioComposesExtrinsics) {
+  const Rigid3d body_from_cam = TestBodyFromCam();
+  const Rigid3d world_from_cam1 = LevelCamera(Eigen::Vector3d(0, 0, 1.5), 0.0);
+  const Rigid3d world_from_cam2 = LevelCamera(Eigen::Vector3d(1, 2, 1.5), 0.3);
+  const Rigid3d cam2_from_cam1 =
+      RelativePoseFromVio(world_from_cam1 * body_from_cam.Inverse(),
+                          world_from_cam2 * body_from_cam.Inverse(), body_from_cam, body_from_cam);
+  const Rigid3d expected = world_from_cam2.Inverse() * world_from_cam1;
+  EXPECT_LT(cam2_from_cam1.rotation.angularDistance(expected.rotation), 1e-12);
+  EXPECT_LT((cam2_from_cam1.translation - expected.translation).norm(), 1e-12);
+}
+
+// Two floors of a building with identical corridors 3.5 m apart: camera 2
+// on the upper floor sees the same-looking wall and floor as camera 1 below.
+// The matches agree with an epipolar geometry (that of camera 2 moved down a
+// floor), so RANSAC accepts the pair; the VIO poses put the cameras 3.5 m
+// apart vertically, and the epipolar error rejects it.
+TEST(PriorVerification, RepeatedTextureOnDifferentFloorsIsRejected) {
+  const Camera camera = TestCamera();
+  const Rigid3d body_from_cam = TestBodyFromCam();
+  const Eigen::Vector3d floor_offset(0, 0, 3.5);
+  struct Placement {
+    Eigen::Vector3d shift;  // of camera 2 within its floor, m
+    double yaw_deg;
+  };
+  const std::vector<Placement> placements = {{{0.8, 0.6, 0.0}, 12.0},
+                                             {{-1.0, 0.3, 0.0}, -8.0},
+                                             {{0.3, -0.5, 0.0}, 5.0},
+                                             {{0.0, 1.0, 0.0}, 0.0},
+                                             {{1.5, 0.0, 0.0}, -15.0}};
+  Random random(2);
+  const std::vector<Eigen::Vector3d> scene = FloorScene(random);
+  for (const Placement& placement : placements) {
+    const Rigid3d world_from_cam1 = LevelCamera(Eigen::Vector3d(0, 0, 1.5), 0.0);
+    const Rigid3d world_from_cam2 = LevelCamera(
+        Eigen::Vector3d(0, 0, 1.5) + placement.shift + floor_offset, placement.yaw_deg * kDegToRad);
+    const PairData data =
+        MakeMatches(camera, scene, world_from_cam1, world_from_cam2, floor_offset, 0.5, random);
+    ASSERT_GE(data.matches.size(), 100u);
+
+    const TwoViewGeometryResult ransac = EstimateCalibratedTwoViewGeometry(
+        data.points1, data.points2, data.matches, camera, camera, TwoViewGeometryOptions());
+    const PriorVerificationResult prior = VerifyPairWithVioPoses(
+        camera, camera, world_from_cam1 * body_from_cam.Inverse(),
+        world_from_cam2 * body_from_cam.Inverse(), body_from_cam, data.points1, data.points2,
+        data.matches, PriorVerificationOptions());
+    std::cout << "two floors, camera 2 shifted " << placement.shift.transpose() << " m, yaw "
+              << placement.yaw_deg << " deg: " << data.matches.size()
+              << " matches, RANSAC-only inliers " << ransac.num_inliers()
+              << ", VIO-aided outlier ratio " << prior.outlier_ratio << "\n";
+    EXPECT_EQ(ransac.config, TwoViewGeometryConfig::kCalibrated);
+    EXPECT_GE(ransac.num_inliers(), 0.9 * data.matches.size());
+    EXPECT_FALSE(prior.accepted);
+    EXPECT_GT(prior.outlier_ratio, 0.5);
+  }
+}
+
+// The same floor: correct matches, VIO poses off by 0.1 m and 1 degree.
+TEST(PriorVerification, CorrectPairWithVioNoiseIsAccepted) {
+  const Camera camera = TestCamera();
+  const Rigid3d body_from_cam = TestBodyFromCam();
+  Random random(3);
+  const std::vector<Eigen::Vector3d> scene = FloorScene(random);
+  const Rigid3d world_from_cam1 = LevelCamera(Eigen::Vector3d(0, 0, 1.5), 0.0);
+  const Rigid3d world_from_cam2 = LevelCamera(Eigen::Vector3d(0.8, 0.6, 1.5), 12.0 * kDegToRad);
+  const PairData data = MakeMatches(camera, scene, world_from_cam1, world_from_cam2,
+                                    Eigen::Vector3d::Zero(), 0.5, random);
+  ASSERT_GE(data.matches.size(), 100u);
+  const Rigid3d world_from_body1 = world_from_cam1 * body_from_cam.Inverse();
+  const Rigid3d world_from_body2 = world_from_cam2 * body_from_cam.Inverse();
+  double worst_ratio = 0.0;
+  double mean_ratio = 0.0;
+  constexpr int kDraws = 20;
+  for (int draw = 0; draw < kDraws; ++draw) {
+    // Error of the relative pose: 0.1 m and 1 degree in random directions.
+    const Rigid3d vio_error(So3Exp(RandomUnitVector(random) * (1.0 * kDegToRad)),
+                            RandomUnitVector(random) * 0.1);
+    const PriorVerificationResult result = VerifyPairWithVioPoses(
+        camera, camera, world_from_body1, vio_error * world_from_body2, body_from_cam, data.points1,
+        data.points2, data.matches, PriorVerificationOptions());
+    EXPECT_TRUE(result.accepted) << "draw " << draw;
+    worst_ratio = std::max(worst_ratio, result.outlier_ratio);
+    mean_ratio += result.outlier_ratio / kDraws;
+  }
+  std::cout << "same floor, " << data.matches.size()
+            << " matches, VIO noise 0.1 m / 1 deg: outlier ratio mean " << mean_ratio << ", worst "
+            << worst_ratio << " over " << kDraws << " draws\n";
+  EXPECT_LT(mean_ratio, 0.1);
+  EXPECT_LT(worst_ratio, 0.4);
+  // Without VIO noise only the 0.5 px pixel noise remains.
+  const PriorVerificationResult exact =
+      VerifyPairWithVioPoses(camera, camera, world_from_body1, world_from_body2, body_from_cam,
+                             data.points1, data.points2, data.matches, PriorVerificationOptions());
+  EXPECT_EQ(exact.num_outliers, 0);
+  EXPECT_LT(*std::max_element(exact.errors_px.begin(), exact.errors_px.end()), 5.0);
+}
+
+// Pure rotation: F = K^-T [0]x R K^-1 = 0 and every epipolar line is
+// undefined, so the transfer error of H = K2 R K1^-1 is used instead.
+TEST(PriorVerification, PureRotationUsesInfiniteHomography) {
+  const Camera camera = TestCamera();
+  Random random(4);
+  const std::vector<Eigen::Vector3d> scene = FloorScene(random);
+  const Eigen::Vector3d position(0, 0, 1.5);
+  const Rigid3d world_from_cam1 = LevelCamera(position, 0.0);
+  const Rigid3d world_from_cam2 = LevelCamera(position, 15.0 * kDegToRad, 5.0 * kDegToRad);
+  const Rigid3d cam2_from_cam1 = world_from_cam2.Inverse() * world_from_cam1;
+  ASSERT_LT(cam2_from_cam1.translation.norm(), 1e-12);
+  const Eigen::Matrix3d k = CalibrationMatrix(camera);
+  EXPECT_TRUE(
+      std::isinf(EpipolarLineDistance(FundamentalFromRelativePose(cam2_from_cam1, k, k),
+                                      Eigen::Vector2d(100, 100), Eigen::Vector2d(120, 90))));
+
+  const PairData data = MakeMatches(camera, scene, world_from_cam1, world_from_cam2,
+                                    Eigen::Vector3d::Zero(), 0.0, random);
+  ASSERT_GE(data.matches.size(), 100u);
+  const PriorVerificationResult exact = VerifyPairWithPrior(
+      camera, camera, cam2_from_cam1, data.points1, data.points2, data.matches, {});
+  EXPECT_TRUE(exact.rotation_only);
+  EXPECT_TRUE(exact.accepted);
+  EXPECT_EQ(exact.outlier_ratio, 0.0);
+  for (const double error : exact.errors_px) EXPECT_LT(error, 1e-8);
+
+  // The same keypoints matched to the wrong partners (shifted by 7).
+  FeatureMatches wrong = data.matches;
+  for (size_t i = 0; i < wrong.size(); ++i) {
+    wrong[i].point2D_idx2 = data.matches[(i + 7) % wrong.size()].point2D_idx2;
+  }
+  const PriorVerificationResult rejected =
+      VerifyPairWithPrior(camera, camera, cam2_from_cam1, data.points1, data.points2, wrong, {});
+  EXPECT_TRUE(rejected.rotation_only);
+  EXPECT_FALSE(rejected.accepted);
+  EXPECT_GT(rejected.outlier_ratio, 0.8);
+}
+
+// A baseline below min_baseline_m (a nearly static camera): the transfer
+// error is the parallax, at most f |t| / depth.
+TEST(PriorVerification, SmallBaselineFallsBackToRotation) {
+  const Camera camera = TestCamera();
+  Random random(5);
+  const std::vector<Eigen::Vector3d> scene = FloorScene(random);
+  const Rigid3d world_from_cam1 = LevelCamera(Eigen::Vector3d(0, 0, 1.5), 0.0);
+  const Rigid3d world_from_cam2 = LevelCamera(Eigen::Vector3d(0.004, 0.003, 1.5), 0.1);
+  const Rigid3d cam2_from_cam1 = world_from_cam2.Inverse() * world_from_cam1;
+  const PairData data = MakeMatches(camera, scene, world_from_cam1, world_from_cam2,
+                                    Eigen::Vector3d::Zero(), 0.0, random);
+  const PriorVerificationResult result = VerifyPairWithPrior(
+      camera, camera, cam2_from_cam1, data.points1, data.points2, data.matches, {});
+  EXPECT_TRUE(result.rotation_only);
+  EXPECT_TRUE(result.accepted);
+  // Points at depth >= 1.5 m within ~40 degrees of the axis: parallax below
+  // f |t| sqrt(1 + |x|^2) / z = 460 * 0.005 * 1.3 / 1.5 = 2 px.
+  EXPECT_LT(*std::max_element(result.errors_px.begin(), result.errors_px.end()), 2.0);
+  EXPECT_GT(*std::max_element(result.errors_px.begin(), result.errors_px.end()), 0.0);
+}
+
+TEST(PriorVerification, NoMatchesIsRejected) {
+  const Camera camera = TestCamera();
+  const PriorVerificationResult result = VerifyPairWithPrior(
+      camera, camera, Rigid3d(Eigen::Quaterniond::Identity(), Eigen::Vector3d(1, 0, 0)), {}, {}, {},
+      PriorVerificationOptions());
+  EXPECT_FALSE(result.accepted);
+  EXPECT_EQ(result.num_matches, 0);
+  EXPECT_EQ(result.outlier_ratio, 1.0);
+}
+
+TEST(PriorVerificationOptions, PaperDefaultsAndValidation) {
+  const PriorVerificationOptions defaults;
+  EXPECT_EQ(defaults.max_epipolar_error_px, 20.0);
+  EXPECT_EQ(defaults.max_outlier_ratio, 0.5);
+  EXPECT_TRUE(defaults.Check());
+  PriorVerificationOptions options;
+  options.max_outlier_ratio = 1.5;
+  EXPECT_NE(options.Validate().find("max_outlier_ratio"), std::string::npos);
+  options = PriorVerificationOptions();
+  options.max_epipolar_error_px = -1.0;
+  EXPECT_NE(options.Validate().find("max_epipolar_error_px"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace viosfm
