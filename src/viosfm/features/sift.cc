@@ -13,8 +13,6 @@
 namespace viosfm {
 namespace {
 
-// COLMAP's pixel convention minus the calibration (OpenCV) convention.
-constexpr double kKeypointPixelOffset = 0.5;
 // cv::SIFT in OpenCV 4.6 doubles the image with cv::resize (INTER_LINEAR,
 // which puts pixel j of the doubled image at j / 2 - 0.25 of the original)
 // and later halves with INTER_NEAREST (pixel i at 2 i), but maps keypoints
@@ -112,8 +110,8 @@ ImageFeatures ExtractSift(const GreyImage& image, const SiftOptions& options) {
     const float scale = 0.5f * k.size;  // KeyPoint::size is the diameter 2 sigma
     const float orientation = k.angle * static_cast<float>(std::numbers::pi / 180.0);
     features.keypoints.push_back(FeatureKeypoint::FromScaleOrientation(
-        static_cast<float>(k.pt.x - kOpenCvSiftPositionBias + kKeypointPixelOffset),
-        static_cast<float>(k.pt.y - kOpenCvSiftPositionBias + kKeypointPixelOffset), scale,
+        static_cast<float>(k.pt.x - kOpenCvSiftPositionBias),
+        static_cast<float>(k.pt.y - kOpenCvSiftPositionBias), scale,
         orientation));
     const float* row = cv_descriptors.ptr<float>(order[i]);
     std::copy(row, row + num_cols, raw.row(static_cast<Eigen::Index>(i)).data());
@@ -123,20 +121,12 @@ ImageFeatures ExtractSift(const GreyImage& image, const SiftOptions& options) {
   return features;
 }
 
-Eigen::Vector2d CalibrationPixelToKeypoint(const Eigen::Vector2d& pixel) {
-  return pixel + Eigen::Vector2d::Constant(kKeypointPixelOffset);
-}
-
-Eigen::Vector2d KeypointToCalibrationPixel(const FeatureKeypoint& keypoint) {
-  return Eigen::Vector2d(keypoint.x, keypoint.y) - Eigen::Vector2d::Constant(kKeypointPixelOffset);
-}
-
 std::vector<Eigen::Vector2d> UndistortKeypoints(const Camera& camera,
                                                 const FeatureKeypoints& keypoints) {
   std::vector<Eigen::Vector2d> normalized;
   normalized.reserve(keypoints.size());
   for (const FeatureKeypoint& keypoint : keypoints) {
-    normalized.push_back(ImageToCam(camera, KeypointToCalibrationPixel(keypoint)));
+    normalized.push_back(ImageToCam(camera, Eigen::Vector2d(keypoint.x, keypoint.y)));
   }
   return normalized;
 }

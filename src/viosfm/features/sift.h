@@ -1,10 +1,10 @@
 // SIFT keypoints with RootSIFT descriptors (OpenCV 4.6's cv::SIFT), stored
 // the way COLMAP stores its own:
-//  - keypoints in raw (distorted) pixel coordinates in COLMAP's convention:
-//    the centre of the top-left pixel is (0.5, 0.5). OpenCV puts it at
-//    (0, 0), so 0.5 is added to OpenCV's positions (as COLMAP does to
-//    VLFeat's), after removing cv::SIFT 4.6's bias of +0.25 pixel (its
-//    upsampled first octave is misaligned by a quarter pixel; see sift.cc);
+//  - keypoints in raw (distorted) pixel coordinates in viosfm's convention
+//    (the centre of the top-left pixel is (0, 0), as OpenCV's; io/ adds 0.5
+//    for COLMAP's files), after removing cv::SIFT 4.6's bias of +0.25 pixel
+//    (its upsampled first octave is misaligned by a quarter pixel; see
+//    sift.cc);
 //  - the affine shape of FeatureKeypoint::FromScaleOrientation(x, y, scale,
 //    orientation) with scale = the Gaussian scale sigma in pixels (OpenCV's
 //    KeyPoint::size is a diameter, 2 sigma) and orientation in radians,
@@ -81,17 +81,10 @@ FeatureDescriptorsFloat RootSiftNormalizeDescriptors(const FeatureDescriptorsFlo
 // descriptors.
 FeatureDescriptors QuantizeDescriptors(const FeatureDescriptorsFloat& descriptors);
 
-// Keypoint positions (COLMAP convention) -> undistorted normalised camera
-// coordinates (x/z, y/z). `camera` holds intrinsics in viosfm's convention
-// for calibrations, OpenCV's (pixel (0, 0) is the centre of the top-left
-// pixel; EuRoC, Kalibr, the simulator), so 0.5 is subtracted before
-// sensor/camera_models.h's ImageToCam. Throws InputError if the camera model
-// cannot project.
+// Keypoint positions -> undistorted normalised camera coordinates (x/z, y/z)
+// through sensor/camera_models.h's ImageToCam. Throws InputError if the
+// camera model cannot project.
 std::vector<Eigen::Vector2d> UndistortKeypoints(const Camera& camera,
                                                 const FeatureKeypoints& keypoints);
-// The pixel in COLMAP's convention of a point given in the calibration
-// convention, and back (adds / subtracts 0.5).
-Eigen::Vector2d CalibrationPixelToKeypoint(const Eigen::Vector2d& pixel);
-Eigen::Vector2d KeypointToCalibrationPixel(const FeatureKeypoint& keypoint);
 
 }  // namespace viosfm

@@ -180,7 +180,8 @@ TEST(Sift, KeypointsMoveWithAnIntegerShift) {
 }
 
 // Rotating the image by 90 degrees clockwise (on screen) maps the pixel
-// centre (x, y) to (H - y, x) in COLMAP's convention (H the height) and adds
+// centre (x, y) to (H - 1 - y, x) (H the height; pixel centres at integer
+// coordinates, viosfm's convention) and adds
 // pi / 2 to the orientation (measured from +x towards +y, y down).
 TEST(Sift, RotationMovesPositionsAndOrientations) {
   const GreyImage& image = RoomImage();
@@ -193,7 +194,7 @@ TEST(Sift, RotationMovesPositionsAndOrientations) {
   std::vector<double> angle_errors;
   std::vector<double> scale_ratios;
   for (const FeatureKeypoint& keypoint : RoomFeatures().keypoints) {
-    const Eigen::Vector2d expected(image.height - keypoint.y, keypoint.x);
+    const Eigen::Vector2d expected(image.height - 1 - keypoint.y, keypoint.x);
     const auto [index, distance] = Nearest(rotated_features.keypoints, expected);
     if (distance > 0.5) continue;
     const FeatureKeypoint& match = rotated_features.keypoints[index];
@@ -209,9 +210,8 @@ TEST(Sift, RotationMovesPositionsAndOrientations) {
 }
 
 // Bright Gaussian blobs drawn at the projections of known 3D points (pixel
-// positions in the calibration convention, as Project() returns them):
-// SIFT finds them at those positions + 0.5, and UndistortKeypoints gives back
-// the points' normalised coordinates.
+// positions as Project() returns them): SIFT finds them at those positions,
+// and UndistortKeypoints gives back the points' normalised coordinates.
 TEST(Sift, ProjectedPointsUndistortToTheirNormalisedCoordinates) {
   const Camera camera = SimulationOptions::DefaultCamera();
   std::vector<Eigen::Vector3d> points;
@@ -246,7 +246,7 @@ TEST(Sift, ProjectedPointsUndistortToTheirNormalisedCoordinates) {
   std::vector<double> normalized_errors;
   for (size_t i = 0; i < points.size(); ++i) {
     const auto [index, distance] =
-        Nearest(features.keypoints, CalibrationPixelToKeypoint(pixels[i]));
+        Nearest(features.keypoints, pixels[i]);
     ASSERT_LT(distance, 0.2) << "blob " << i << " at " << pixels[i].transpose();
     pixel_errors.push_back(distance);
     const Eigen::Vector2d expected = points[i].hnormalized();
@@ -257,13 +257,6 @@ TEST(Sift, ProjectedPointsUndistortToTheirNormalisedCoordinates) {
   EXPECT_LT(Median(pixel_errors), 0.05);
   EXPECT_LT(Median(normalized_errors), 0.06);
   std::cout << "blob localisation: median " << Median(pixel_errors) << " px\n";
-
-  // The helpers are inverse of each other.
-  FeatureKeypoint keypoint;
-  keypoint.x = 10.25f;
-  keypoint.y = 3.5f;
-  EXPECT_EQ(KeypointToCalibrationPixel(keypoint), Eigen::Vector2d(9.75, 3.0));
-  EXPECT_EQ(CalibrationPixelToKeypoint(Eigen::Vector2d(9.75, 3.0)), Eigen::Vector2d(10.25, 3.5));
 }
 
 TEST(Sift, RealEurocFrames) {

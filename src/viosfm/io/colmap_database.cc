@@ -7,6 +7,7 @@
 #include <map>
 #include <sstream>
 
+#include "viosfm/io/colmap_convention.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/logging.h"
 
@@ -71,28 +72,6 @@ const char* const kCreateStatements[] = {
 };
 
 using RowMajorMatrix3d = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>;
-
-// Number of focal length parameters of a COLMAP model: cx is the next one.
-int NumFocalParams(CameraModelId model_id) {
-  switch (model_id) {
-    case CameraModelId::kSimplePinhole:
-    case CameraModelId::kSimpleRadial:
-    case CameraModelId::kRadial:
-    case CameraModelId::kSimpleRadialFisheye:
-    case CameraModelId::kRadialFisheye: return 1;
-    default: return 2;
-  }
-}
-
-// Adds `offset` to the principal point of a camera with valid params.
-void ShiftPrincipalPoint(Camera* camera, double offset) {
-  const int cx = NumFocalParams(camera->model_id);
-  camera->params[cx] += offset;
-  camera->params[cx + 1] += offset;
-}
-
-// COLMAP's pixel convention minus the calibration (OpenCV) convention.
-constexpr double kColmapPixelOffset = 0.5;
 
 }  // namespace
 
@@ -383,8 +362,7 @@ camera_t ColmapDatabase::WriteCamera(const Camera& camera, bool use_camera_id) {
     throw InputError(impl_->path.string(), 0,
                      "camera_id " + std::to_string(camera.camera_id) + " already exists");
   }
-  Camera stored = camera;
-  ShiftPrincipalPoint(&stored, kColmapPixelOffset);
+  const Camera stored = CameraToColmapConvention(camera);
   Query query(*impl_,
               "INSERT INTO cameras(camera_id, model, width, height, params, prior_focal_length) "
               "VALUES(?, ?, ?, ?, ?, ?)");
@@ -432,8 +410,7 @@ Camera CameraFromRow(const ColmapDatabase::Impl& impl, const Query& query) {
   camera.params.resize(expected);
   std::memcpy(camera.params.data(), data, num_bytes);
   camera.has_prior_focal_length = query.ColumnInt64(5) != 0;
-  ShiftPrincipalPoint(&camera, -kColmapPixelOffset);
-  return camera;
+  return CameraFromColmapConvention(std::move(camera));
 }
 
 constexpr const char* kSelectCamera =
@@ -561,7 +538,10 @@ void ColmapDatabase::WriteKeypoints(image_t image_id, const FeatureKeypoints& ke
   std::vector<float> blob(kCols * keypoints.size());
   for (size_t i = 0; i < keypoints.size(); ++i) {
     const FeatureKeypoint& k = keypoints[i];
-    const float row[kCols] = {k.x, k.y, k.a11, k.a12, k.a21, k.a22};
+    // Positions in COLMAP's pixel convention.
+    const float row[kCols] = {k.x + static_cast<float>(kColmapPixelOffset),
+                              k.y + static_cast<float>(kColmapPixelOffset),
+                              k.a11, k.a12, k.a21, k.a22};
     std::copy(row, row + kCols, blob.begin() + kCols * i);
   }
   Query query(*impl_,
@@ -610,13 +590,16 @@ FeatureKeypoints ColmapDatabase::ReadKeypoints(image_t image_id) const {
   }
   for (size_t i = 0; i < keypoints.size(); ++i) {
     const float* row = blob.data() + cols * i;
+    // Positions from COLMAP's pixel convention to viosfm's.
+    const float x = row[0] - static_cast<float>(kColmapPixelOffset);
+    const float y = row[1] - static_cast<float>(kColmapPixelOffset);
     if (cols == 2) {
-      keypoints[i].x = row[0];
-      keypoints[i].y = row[1];
+      keypoints[i].x = x;
+      keypoints[i].y = y;
     } else if (cols == 4) {
-      keypoints[i] = FeatureKeypoint::FromScaleOrientation(row[0], row[1], row[2], row[3]);
+      keypoints[i] = FeatureKeypoint::FromScaleOrientation(x, y, row[2], row[3]);
     } else {
-      keypoints[i] = {row[0], row[1], row[2], row[3], row[4], row[5]};
+      keypoints[i] = {x, y, row[2], row[3], row[4], row[5]};
     }
   }
   return keypoints;

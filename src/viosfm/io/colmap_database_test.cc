@@ -242,14 +242,15 @@ TEST(ColmapDatabase, KeypointAndDescriptorBlobs) {
     EXPECT_EQ(database.NumKeypoints(), 50u);
     EXPECT_EQ(database.NumDescriptors(), 50u);
   }
-  // Layout: rows x 6 float32 (x, y, a11, a12, a21, a22) and rows x 128 uint8.
+  // Layout: rows x 6 float32 (x, y, a11, a12, a21, a22) and rows x 128 uint8;
+  // positions in COLMAP's pixel convention (viosfm's + 0.5).
   const std::vector<float> stored =
       BytesAs<float>(RawBlob(path, "SELECT data FROM keypoints WHERE image_id = 1"));
   ASSERT_EQ(stored.size(), 6u * 50u);
   for (size_t i = 0; i < keypoints.size(); ++i) {
     const FeatureKeypoint& k = keypoints[i];
     EXPECT_EQ(std::vector<float>(stored.begin() + 6 * i, stored.begin() + 6 * i + 6),
-              (std::vector<float>{k.x, k.y, k.a11, k.a12, k.a21, k.a22}));
+              (std::vector<float>{k.x + 0.5f, k.y + 0.5f, k.a11, k.a12, k.a21, k.a22}));
   }
   const std::vector<uint8_t> bytes =
       RawBlob(path, "SELECT data FROM descriptors WHERE image_id = 1");
@@ -285,12 +286,12 @@ TEST(ColmapDatabase, ReadsOtherKeypointLayoutsAndRejectsBadBlobs) {
   ColmapDatabase database = ColmapDatabase::Open(path);
   const FeatureKeypoints four = database.ReadKeypoints(1);
   ASSERT_EQ(four.size(), 1u);
-  EXPECT_EQ(four[0].x, 10.0f);
+  EXPECT_EQ(four[0].x, 9.5f);  // COLMAP's 10 in viosfm's convention
   EXPECT_FLOAT_EQ(four[0].Scale(), 2.0f);
   EXPECT_FLOAT_EQ(four[0].Orientation(), 1.0f);
   const FeatureKeypoints two = database.ReadKeypoints(2);
   ASSERT_EQ(two.size(), 1u);
-  EXPECT_EQ(two[0].y, 6.0f);
+  EXPECT_EQ(two[0].y, 5.5f);
   EXPECT_EQ(two[0].a11, 1.0f);
   try {
     database.ReadKeypoints(3);

@@ -13,6 +13,7 @@
 #include <utility>
 #include <vector>
 
+#include "viosfm/io/colmap_convention.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/file_util.h"
 #include "viosfm/util/string_util.h"
@@ -60,7 +61,8 @@ class ModelAssembler {
     if (reconstruction_.ExistsCamera(camera.camera_id)) {
       Throw(fail, "duplicate camera id " + std::to_string(camera.camera_id));
     }
-    reconstruction_.AddCamera(std::move(camera));
+    // The readers check the parameter count before this.
+    reconstruction_.AddCamera(CameraFromColmapConvention(std::move(camera)));
   }
 
   // `declared` are the keypoints' 3D point ids as the file states them;
@@ -272,8 +274,10 @@ void ReadImagesText(const fs::path& path, ModelAssembler* assembler) {
     declared.reserve(values.size() / 3);
     image.points2D.resize(values.size() / 3);
     for (size_t k = 0; k < image.points2D.size(); ++k) {
-      image.points2D[k].xy.x() = ParseDoubleField(values[3 * k], fail_points, "X");
-      image.points2D[k].xy.y() = ParseDoubleField(values[3 * k + 1], fail_points, "Y");
+      image.points2D[k].xy.x() =
+          ParseDoubleField(values[3 * k], fail_points, "X") - kColmapPixelOffset;
+      image.points2D[k].xy.y() =
+          ParseDoubleField(values[3 * k + 1], fail_points, "Y") - kColmapPixelOffset;
       const std::string_view id = values[3 * k + 2];
       declared.push_back(id == "-1"
                              ? kInvalidPoint3DId
@@ -447,8 +451,8 @@ void ReadImagesBinary(const fs::path& path, ModelAssembler* assembler) {
     image.points2D.resize(num_points2D);
     std::vector<point3D_t> declared(num_points2D);
     for (uint64_t k = 0; k < num_points2D; ++k) {
-      image.points2D[k].xy.x() = reader.Read<double>("keypoint x (double)");
-      image.points2D[k].xy.y() = reader.Read<double>("keypoint y (double)");
+      image.points2D[k].xy.x() = reader.Read<double>("keypoint x (double)") - kColmapPixelOffset;
+      image.points2D[k].xy.y() = reader.Read<double>("keypoint y (double)") - kColmapPixelOffset;
       declared[k] = reader.Read<point3D_t>("keypoint 3D point id (uint64)");
     }
     assembler->AddImage(std::move(image), std::move(declared), fail, fail_points);
@@ -495,8 +499,8 @@ void WriteCamerasText(const fs::path& path, const Reconstruction& reconstruction
       << "#   CAMERA_ID, MODEL, WIDTH, HEIGHT, PARAMS[]\n"
       << "# Number of cameras: " << reconstruction.NumCameras() << "\n";
   for (const camera_t camera_id : reconstruction.CameraIds()) {
-    const Camera& camera = reconstruction.GetCamera(camera_id);
-    VIOSFM_CHECK(camera.HasValidParams()) << "camera " << camera_id;
+    VIOSFM_CHECK(reconstruction.GetCamera(camera_id).HasValidParams()) << "camera " << camera_id;
+    const Camera camera = CameraToColmapConvention(reconstruction.GetCamera(camera_id));
     out << camera_id << ' ' << camera.ModelName() << ' ' << camera.width << ' ' << camera.height;
     for (const double param : camera.params) out << ' ' << param;
     out << '\n';
@@ -524,7 +528,8 @@ void WriteImagesText(const fs::path& path, const Reconstruction& reconstruction)
     for (const Point2D& point2D : image.points2D) {
       if (!first) out << ' ';
       first = false;
-      out << point2D.xy.x() << ' ' << point2D.xy.y() << ' ';
+      out << point2D.xy.x() + kColmapPixelOffset << ' ' << point2D.xy.y() + kColmapPixelOffset
+          << ' ';
       if (point2D.HasPoint3D()) {
         out << point2D.point3D_id;
       } else {
@@ -594,8 +599,8 @@ void WriteCamerasBinary(const fs::path& path, const Reconstruction& reconstructi
   BinaryWriter out;
   out.Write<uint64_t>(reconstruction.NumCameras());
   for (const camera_t camera_id : reconstruction.CameraIds()) {
-    const Camera& camera = reconstruction.GetCamera(camera_id);
-    VIOSFM_CHECK(camera.HasValidParams()) << "camera " << camera_id;
+    VIOSFM_CHECK(reconstruction.GetCamera(camera_id).HasValidParams()) << "camera " << camera_id;
+    const Camera camera = CameraToColmapConvention(reconstruction.GetCamera(camera_id));
     out.Write<camera_t>(camera_id);
     out.Write<int32_t>(static_cast<int32_t>(camera.model_id));
     out.Write<uint64_t>(camera.width);
@@ -622,8 +627,8 @@ void WriteImagesBinary(const fs::path& path, const Reconstruction& reconstructio
     out.WriteNullTerminated(image.name);
     out.Write<uint64_t>(image.points2D.size());
     for (const Point2D& point2D : image.points2D) {
-      out.Write<double>(point2D.xy.x());
-      out.Write<double>(point2D.xy.y());
+      out.Write<double>(point2D.xy.x() + kColmapPixelOffset);
+      out.Write<double>(point2D.xy.y() + kColmapPixelOffset);
       out.Write<point3D_t>(point2D.point3D_id);
     }
   }

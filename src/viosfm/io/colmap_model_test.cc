@@ -136,7 +136,8 @@ TEST(ColmapModelTest, ReadsFountainContent) {
   EXPECT_EQ(camera.width, 3072u);
   EXPECT_EQ(camera.height, 2048u);
   EXPECT_EQ(camera.params,
-            (std::vector<double>{2752.5354627566685, 1536, 1024, -0.010751085836105652}));
+            (std::vector<double>{2752.5354627566685, 1535.5, 1023.5, -0.010751085836105652}))
+      << "COLMAP's principal point (1536, 1024) in viosfm's convention";
   EXPECT_EQ(reconstruction.NumRegImages(), 3u);
   EXPECT_EQ(reconstruction.NumPoints3D(), 174u);
   const Image* image = reconstruction.ImageByName("0006.jpg");
@@ -162,9 +163,11 @@ TEST(ColmapModelTest, ReadsOpenCvAndPinholeCameras) {
   EXPECT_EQ(reconstruction.GetCamera(1).model_id, CameraModelId::kOpenCV);
   EXPECT_EQ(
       reconstruction.GetCamera(1).params,
-      (std::vector<double>{2750.5, 2752.25, 1535.5, 1023.5, -0.0107, 0.0021, 0.0001, -0.0002}));
+      (std::vector<double>{2750.5, 2752.25, 1535, 1023, -0.0107, 0.0021, 0.0001, -0.0002}))
+      << "principal point in viosfm's convention: COLMAP's minus 0.5";
   EXPECT_EQ(reconstruction.GetCamera(2).model_id, CameraModelId::kPinhole);
-  EXPECT_EQ(reconstruction.GetCamera(2).params, (std::vector<double>{2760, 2761.5, 1536, 1024}));
+  EXPECT_EQ(reconstruction.GetCamera(2).params,
+            (std::vector<double>{2760, 2761.5, 1535.5, 1023.5}));
   EXPECT_EQ(reconstruction.GetImage(2).camera_id, 2u);
   EXPECT_EQ(reconstruction.NumPoints3D(), 12u);
 }
@@ -176,15 +179,15 @@ TEST(ColmapModelTest, WritesColmapFormattingDetails) {
   camera.model_id = CameraModelId::kPinhole;
   camera.width = 640;
   camera.height = 480;
-  camera.params = {500, 500.25, 320, 1e-5};
+  camera.params = {500, 500.25, 319.5, 239.5};  // viosfm's convention: COLMAP's - 0.5
   reconstruction.AddCamera(camera);
   Image image;
   image.image_id = 2;
   image.camera_id = 5;
   image.name = "cam0/1403715273262142976.png";
   image.registered = true;
-  image.points2D = {Point2D{Eigen::Vector2d(1.5, 2), kInvalidPoint3DId},
-                    Point2D{Eigen::Vector2d(0.1, 3), kInvalidPoint3DId}};
+  image.points2D = {Point2D{Eigen::Vector2d(1.0, 1.5), kInvalidPoint3DId},
+                    Point2D{Eigen::Vector2d(0.1, 2.5), kInvalidPoint3DId}};
   reconstruction.AddImage(image);
   Image unregistered = image;
   unregistered.image_id = 3;
@@ -197,7 +200,7 @@ TEST(ColmapModelTest, WritesColmapFormattingDetails) {
   empty.points2D.clear();
   reconstruction.AddImage(empty);
   reconstruction.AddPoint3DWithId(
-      7, Point3D{Eigen::Vector3d(1, -2, 0.5), Vector3ub(255, 0, 9), 0.25, {{2, 1}}});
+      7, Point3D{Eigen::Vector3d(1, -2, 1e-5), Vector3ub(255, 0, 9), 0.25, {{2, 1}}});
   reconstruction.AddPoint3DWithId(8, Point3D{Eigen::Vector3d(0, 0, 0), Vector3ub(1, 2, 3), -1, {}});
 
   const fs::path out = viosfm::testing::MakeScratchFolder("format") / "model";
@@ -206,21 +209,21 @@ TEST(ColmapModelTest, WritesColmapFormattingDetails) {
             "# Camera list with one line of data per camera:\n"
             "#   CAMERA_ID, MODEL, WIDTH, HEIGHT, PARAMS[]\n"
             "# Number of cameras: 1\n"
-            "5 PINHOLE 640 480 500 500.25 320 1.0000000000000001e-05\n");
+            "5 PINHOLE 640 480 500 500.25 320 240\n");
   EXPECT_EQ(ReadBytes(out / "images.txt"),
             "# Image list with two lines of data per image:\n"
             "#   IMAGE_ID, QW, QX, QY, QZ, TX, TY, TZ, CAMERA_ID, NAME\n"
             "#   POINTS2D[] as (X, Y, POINT3D_ID)\n"
             "# Number of images: 2, mean observations per image: 0.5\n"
             "2 1 0 0 0 0 0 0 5 cam0/1403715273262142976.png\n"
-            "1.5 2 -1 0.10000000000000001 3 7\n"
+            "1.5 2 -1 0.59999999999999998 3 7\n"
             "4 1 0 0 0 0 0 0 5 empty.png\n"
             "\n");
   EXPECT_EQ(ReadBytes(out / "points3D.txt"),
             "# 3D point list with one line of data per point:\n"
             "#   POINT3D_ID, X, Y, Z, R, G, B, ERROR, TRACK[] as (IMAGE_ID, POINT2D_IDX)\n"
             "# Number of points: 2, mean track length: 0.5\n"
-            "7 1 -2 0.5 255 0 9 0.25 2 1\n"
+            "7 1 -2 1.0000000000000001e-05 255 0 9 0.25 2 1\n"
             "8 0 0 0 1 2 3 -1 \n");
 
   // Read back: the image name gives the time stamp, the empty line no keypoints.

@@ -1,7 +1,8 @@
-// Local features and matches, as stored in COLMAP's database: keypoints in
-// raw (distorted) pixel coordinates with COLMAP's convention (the centre of
-// the top-left pixel is (0.5, 0.5)), 128-byte SIFT-like descriptors, and
-// matches as pairs of keypoint indices.
+// Local features and matches: keypoints in raw (distorted) pixel coordinates
+// in viosfm's convention (the centre of the top-left pixel is (0, 0), as in
+// OpenCV and Kalibr; io/colmap_convention.h converts to COLMAP's (0.5, 0.5)
+// for COLMAP's files), 128-byte SIFT-like descriptors, and matches as pairs
+// of keypoint indices.
 #pragma once
 
 #include <Eigen/Core>
