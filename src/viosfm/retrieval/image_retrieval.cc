@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <unordered_set>
 
-#include "viosfm/retrieval/parallel.h"
+#include "viosfm/util/parallel.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/logging.h"
 #include "viosfm/util/progress.h"
@@ -67,7 +67,7 @@ std::vector<std::vector<ImageScore>> RetrieveSimilarImageScores(
   std::vector<std::vector<ImageScore>> results(image_ids.size());
   {
     ProgressBar progress("Retrieving similar images", static_cast<int64_t>(image_ids.size()));
-    retrieval_internal::ParallelForChunks(
+    ParallelForChunks(
         static_cast<int64_t>(image_ids.size()), options.num_threads, 8,
         [&](int64_t begin, int64_t end) {
           for (int64_t i = begin; i < end; ++i) {

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <limits>
 
-#include "viosfm/retrieval/parallel.h"
+#include "viosfm/util/parallel.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/random.h"
 
@@ -88,9 +88,9 @@ int64_t Assign(const FloatDescriptors& points, const std::vector<int32_t>& rows,
   const int dim = static_cast<int>(points.cols());
   const Eigen::VectorXf center_norms = centers.rowwise().squaredNorm();
   const int threads =
-      n * k * dim >= kMinParallelWork ? retrieval_internal::ResolveNumThreads(num_threads) : 1;
+      n * k * dim >= kMinParallelWork ? ResolveNumThreads(num_threads) : 1;
   std::vector<int64_t> changed_per_chunk((n + kAssignChunk - 1) / kAssignChunk, 0);
-  retrieval_internal::ParallelForChunks(n, threads, kAssignChunk, [&](int64_t begin, int64_t end) {
+  ParallelForChunks(n, threads, kAssignChunk, [&](int64_t begin, int64_t end) {
     FloatDescriptors block(end - begin, dim);
     for (int64_t i = begin; i < end; ++i) block.row(i - begin) = points.row(rows[i]);
     // ||x - c||^2 = ||x||^2 - 2 x.c + ||c||^2; ||x||^2 does not change the argmin.

@@ -8,7 +8,7 @@
 #include <numeric>
 
 #include "viosfm/io/vocabulary_io.h"
-#include "viosfm/retrieval/parallel.h"
+#include "viosfm/util/parallel.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/logging.h"
 #include "viosfm/util/progress.h"
@@ -147,7 +147,7 @@ std::vector<int32_t> VocabularyTree::Quantize(const FloatDescriptors& descriptor
                                               int num_threads) const {
   VIOSFM_CHECK_EQ(descriptors.cols(), data_.descriptor_dim);
   std::vector<int32_t> words(descriptors.rows());
-  retrieval_internal::ParallelForChunks(descriptors.rows(), num_threads, kQuantizeChunk,
+  ParallelForChunks(descriptors.rows(), num_threads, kQuantizeChunk,
                                         [&](int64_t begin, int64_t end) {
                                           for (int64_t i = begin; i < end; ++i)
                                             words[i] = Quantize(descriptors.row(i).data());
