@@ -13,6 +13,7 @@
 #include <utility>
 #include <vector>
 
+#include "viosfm/io/binary_io.h"
 #include "viosfm/io/colmap_convention.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/file_util.h"
@@ -316,83 +317,12 @@ void ReadPoints3DText(const fs::path& path, ModelAssembler* assembler) {
 
 // -------------------------------------------------------------- binary ----
 
-class BinaryReader {
- public:
-  explicit BinaryReader(const fs::path& path) : path_(path.string()), data_(ReadTextFile(path)) {}
-
-  // Describes the record being read, for error messages.
-  void SetRecord(std::string record) { record_ = std::move(record); }
-
-  template <typename T>
-  T Read(const std::string& what) {
-    Require(sizeof(T), what);
-    uint64_t bits = 0;
-    for (size_t i = 0; i < sizeof(T); ++i) {
-      bits |= static_cast<uint64_t>(static_cast<uint8_t>(data_[offset_ + i])) << (8 * i);
-    }
-    offset_ += sizeof(T);
-    if constexpr (std::is_same_v<T, double>) {
-      return std::bit_cast<double>(bits);
-    } else {
-      return static_cast<T>(bits);
-    }
-  }
-
-  std::string ReadNullTerminated(const std::string& what) {
-    const size_t end = data_.find('\0', offset_);
-    if (end == std::string::npos) {
-      Fail("the file ends at byte " + std::to_string(data_.size()) + " inside " + what +
-           " (expected a '\\0'-terminated string)");
-    }
-    std::string text = data_.substr(offset_, end - offset_);
-    offset_ = end + 1;
-    return text;
-  }
-
-  // Checks that `count` records of at least `min_bytes` each can follow.
-  void RequireCount(uint64_t count, size_t min_bytes, const std::string& what) {
-    if (count > (data_.size() - offset_) / min_bytes) {
-      Fail("truncated or corrupt: " + std::to_string(count) + " " + what + " need at least " +
-           std::to_string(count * min_bytes) + " bytes, only " +
-           std::to_string(data_.size() - offset_) + " remain");
-    }
-  }
-
-  void ExpectEnd() {
-    SetRecord("after the last record");
-    if (offset_ != data_.size()) {
-      Fail("expected the end of the file, found " + std::to_string(data_.size() - offset_) +
-           " more bytes");
-    }
-  }
-
-  [[noreturn]] void Fail(const std::string& what) const {
-    throw InputError(path_, 0,
-                     "at byte offset " + std::to_string(offset_) +
-                         (record_.empty() ? std::string() : " (" + record_ + ")") + ": " + what);
-  }
-
-  FailFn Failer() const {
-    return [path = path_, offset = offset_, record = record_](const std::string& what) {
-      throw InputError(path, 0,
-                       "at byte offset " + std::to_string(offset) +
-                           (record.empty() ? std::string() : " (" + record + ")") + ": " + what);
-    };
-  }
-
- private:
-  void Require(size_t num_bytes, const std::string& what) {
-    if (data_.size() - offset_ < num_bytes) {
-      Fail("truncated file: it ends at byte " + std::to_string(data_.size()) + ", expected " +
-           what + " (" + std::to_string(num_bytes) + " bytes)");
-    }
-  }
-
-  std::string path_;
-  std::string data_;
-  size_t offset_ = 0;
-  std::string record_;
-};
+// A FailFn that throws at the reader's current position.
+FailFn FailerAt(const LittleEndianReader& reader) {
+  return [path = reader.path(), prefix = reader.Describe("")](const std::string& what) {
+    throw InputError(path, 0, prefix + what);
+  };
+}
 
 std::string RecordName(const char* kind, uint64_t index, uint64_t count) {
   return std::string(kind) + " record " + std::to_string(index + 1) + " of " +
@@ -400,12 +330,12 @@ std::string RecordName(const char* kind, uint64_t index, uint64_t count) {
 }
 
 void ReadCamerasBinary(const fs::path& path, ModelAssembler* assembler) {
-  BinaryReader reader(path);
+  LittleEndianReader reader(path);
   const uint64_t count = reader.Read<uint64_t>("the number of cameras (uint64)");
   reader.RequireCount(count, 24, "cameras");
   for (uint64_t i = 0; i < count; ++i) {
     reader.SetRecord(RecordName("camera", i, count));
-    const FailFn fail = reader.Failer();
+    const FailFn fail = FailerAt(reader);
     Camera camera;
     camera.camera_id = reader.Read<camera_t>("the camera id (uint32)");
     const int32_t model = reader.Read<int32_t>("the camera model id (int32)");
@@ -427,12 +357,12 @@ void ReadCamerasBinary(const fs::path& path, ModelAssembler* assembler) {
 }
 
 void ReadImagesBinary(const fs::path& path, ModelAssembler* assembler) {
-  BinaryReader reader(path);
+  LittleEndianReader reader(path);
   const uint64_t count = reader.Read<uint64_t>("the number of images (uint64)");
   reader.RequireCount(count, 4 + 7 * 8 + 4 + 1 + 8, "images");
   for (uint64_t i = 0; i < count; ++i) {
     reader.SetRecord(RecordName("image", i, count));
-    const FailFn fail = reader.Failer();
+    const FailFn fail = FailerAt(reader);
     Image image;
     image.image_id = reader.Read<image_t>("the image id (uint32)");
     double pose[7];
@@ -445,7 +375,7 @@ void ReadImagesBinary(const fs::path& path, ModelAssembler* assembler) {
     image.name = reader.ReadNullTerminated("the image name");
     reader.SetRecord(RecordName("image", i, count) + ", id " + std::to_string(image.image_id) +
                      " '" + image.name + "'");
-    const FailFn fail_points = reader.Failer();
+    const FailFn fail_points = FailerAt(reader);
     const uint64_t num_points2D = reader.Read<uint64_t>("the number of keypoints (uint64)");
     reader.RequireCount(num_points2D, 24, "keypoints");
     image.points2D.resize(num_points2D);
@@ -461,12 +391,12 @@ void ReadImagesBinary(const fs::path& path, ModelAssembler* assembler) {
 }
 
 void ReadPoints3DBinary(const fs::path& path, ModelAssembler* assembler) {
-  BinaryReader reader(path);
+  LittleEndianReader reader(path);
   const uint64_t count = reader.Read<uint64_t>("the number of 3D points (uint64)");
   reader.RequireCount(count, 8 + 3 * 8 + 3 + 8 + 8, "3D points");
   for (uint64_t i = 0; i < count; ++i) {
     reader.SetRecord(RecordName("3D point", i, count));
-    const FailFn fail = reader.Failer();
+    const FailFn fail = FailerAt(reader);
     const point3D_t point3D_id = reader.Read<point3D_t>("the 3D point id (uint64)");
     Point3D point3D;
     for (int k = 0; k < 3; ++k) point3D.xyz[k] = reader.Read<double>("a coordinate (double)");
@@ -565,38 +495,8 @@ void WritePoints3DText(const fs::path& path, const Reconstruction& reconstructio
   WriteFileAtomically(path, [&](std::ostream& stream) { stream << text; });
 }
 
-class BinaryWriter {
- public:
-  template <typename T>
-  void Write(T value) {
-    uint64_t bits;
-    if constexpr (std::is_same_v<T, double>) {
-      bits = std::bit_cast<uint64_t>(value);
-    } else {
-      bits = static_cast<uint64_t>(value);
-    }
-    for (size_t i = 0; i < sizeof(T); ++i)
-      data_.push_back(static_cast<char>((bits >> (8 * i)) & 0xff));
-  }
-  void WriteNullTerminated(const std::string& text) {
-    data_ += text;
-    data_.push_back('\0');
-  }
-  void SaveTo(const fs::path& path) const {
-    WriteFileAtomically(
-        path,
-        [&](std::ostream& stream) {
-          stream.write(data_.data(), static_cast<std::streamsize>(data_.size()));
-        },
-        /*binary=*/true);
-  }
-
- private:
-  std::string data_;
-};
-
 void WriteCamerasBinary(const fs::path& path, const Reconstruction& reconstruction) {
-  BinaryWriter out;
+  LittleEndianWriter out;
   out.Write<uint64_t>(reconstruction.NumCameras());
   for (const camera_t camera_id : reconstruction.CameraIds()) {
     VIOSFM_CHECK(reconstruction.GetCamera(camera_id).HasValidParams()) << "camera " << camera_id;
@@ -612,7 +512,7 @@ void WriteCamerasBinary(const fs::path& path, const Reconstruction& reconstructi
 
 void WriteImagesBinary(const fs::path& path, const Reconstruction& reconstruction) {
   const std::vector<image_t> image_ids = reconstruction.RegImageIds();
-  BinaryWriter out;
+  LittleEndianWriter out;
   out.Write<uint64_t>(image_ids.size());
   for (const image_t image_id : image_ids) {
     const Image& image = reconstruction.GetImage(image_id);
@@ -636,7 +536,7 @@ void WriteImagesBinary(const fs::path& path, const Reconstruction& reconstructio
 }
 
 void WritePoints3DBinary(const fs::path& path, const Reconstruction& reconstruction) {
-  BinaryWriter out;
+  LittleEndianWriter out;
   out.Write<uint64_t>(reconstruction.NumPoints3D());
   for (const point3D_t point3D_id : reconstruction.Point3DIds()) {
     const Point3D& point3D = reconstruction.GetPoint3D(point3D_id);

@@ -7,6 +7,7 @@
 #include <string_view>
 #include <type_traits>
 
+#include "viosfm/io/binary_io.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/file_util.h"
 
@@ -18,73 +19,6 @@ constexpr std::string_view kMagic = "VIOSFMVT";
 // Bytes per node record (three int32).
 constexpr uint64_t kNodeRecordBytes = 12;
 
-// Appends the little-endian bytes of an integer or float.
-template <typename T>
-void Append(T value, std::string* out) {
-  static_assert(std::is_integral_v<T> || std::is_same_v<T, float>);
-  uint64_t bits = 0;
-  if constexpr (std::is_same_v<T, float>) {
-    bits = std::bit_cast<uint32_t>(value);
-  } else {
-    bits = static_cast<std::make_unsigned_t<T>>(value);
-  }
-  for (size_t i = 0; i < sizeof(T); ++i)
-    out->push_back(static_cast<char>((bits >> (8 * i)) & 0xff));
-}
-
-// Sequential little-endian reader over a whole file; every failure throws
-// InputError naming the file, the byte offset and what was expected.
-class Reader {
- public:
-  Reader(std::string path, std::string data) : path_(std::move(path)), data_(std::move(data)) {}
-
-  template <typename T>
-  T Read(const std::string& what) {
-    Require(sizeof(T), what);
-    uint64_t bits = 0;
-    for (size_t i = 0; i < sizeof(T); ++i) {
-      bits |= static_cast<uint64_t>(static_cast<uint8_t>(data_[offset_ + i])) << (8 * i);
-    }
-    offset_ += sizeof(T);
-    if constexpr (std::is_same_v<T, float>) {
-      return std::bit_cast<float>(static_cast<uint32_t>(bits));
-    } else {
-      return static_cast<T>(static_cast<std::make_unsigned_t<T>>(bits));
-    }
-  }
-
-  std::string_view ReadBytes(size_t count, const std::string& what) {
-    Require(count, what);
-    const std::string_view bytes(data_.data() + offset_, count);
-    offset_ += count;
-    return bytes;
-  }
-
-  size_t remaining() const { return data_.size() - offset_; }
-
-  void ExpectEnd() {
-    if (offset_ != data_.size()) {
-      Fail("expected the end of the file, found " + std::to_string(remaining()) + " more bytes");
-    }
-  }
-
-  [[noreturn]] void Fail(const std::string& what) const {
-    throw InputError(path_, 0, "at byte offset " + std::to_string(offset_) + ": " + what);
-  }
-
- private:
-  void Require(size_t num_bytes, const std::string& what) {
-    if (remaining() < num_bytes) {
-      Fail("truncated file: it ends at byte " + std::to_string(data_.size()) + ", expected " +
-           what + " (" + std::to_string(num_bytes) + " bytes)");
-    }
-  }
-
-  std::string path_;
-  std::string data_;
-  size_t offset_ = 0;
-};
-
 }  // namespace
 
 void WriteVocabulary(const fs::path& path, const VocabularyData& vocabulary) {
@@ -92,28 +26,26 @@ void WriteVocabulary(const fs::path& path, const VocabularyData& vocabulary) {
   VIOSFM_CHECK(problem.empty()) << "writing an inconsistent vocabulary to " << path.string() << ": "
                                 << problem;
   const uint64_t num_nodes = static_cast<uint64_t>(vocabulary.num_nodes());
-  std::string bytes;
-  bytes.reserve(kMagic.size() + 28 + num_nodes * kNodeRecordBytes + vocabulary.centers.size() * 4);
-  bytes.append(kMagic);
-  Append<uint32_t>(kVocabularyFileVersion, &bytes);
-  Append<int32_t>(vocabulary.branching, &bytes);
-  Append<int32_t>(vocabulary.depth, &bytes);
-  Append<int32_t>(vocabulary.descriptor_dim, &bytes);
-  Append<int32_t>(vocabulary.num_words, &bytes);
-  Append<uint64_t>(num_nodes, &bytes);
+  LittleEndianWriter bytes;
+  bytes.Reserve(kMagic.size() + 28 + num_nodes * kNodeRecordBytes + vocabulary.centers.size() * 4);
+  bytes.WriteBytes(kMagic);
+  bytes.Write<uint32_t>(kVocabularyFileVersion);
+  bytes.Write<int32_t>(vocabulary.branching);
+  bytes.Write<int32_t>(vocabulary.depth);
+  bytes.Write<int32_t>(vocabulary.descriptor_dim);
+  bytes.Write<int32_t>(vocabulary.num_words);
+  bytes.Write<uint64_t>(num_nodes);
   for (uint64_t node = 0; node < num_nodes; ++node) {
-    Append<int32_t>(vocabulary.first_child[node], &bytes);
-    Append<int32_t>(vocabulary.num_children[node], &bytes);
-    Append<int32_t>(vocabulary.word_of_node[node], &bytes);
+    bytes.Write<int32_t>(vocabulary.first_child[node]);
+    bytes.Write<int32_t>(vocabulary.num_children[node]);
+    bytes.Write<int32_t>(vocabulary.word_of_node[node]);
   }
-  for (const float value : vocabulary.centers) Append<float>(value, &bytes);
-  WriteFileAtomically(
-      path, [&bytes](std::ostream& stream) { stream.write(bytes.data(), bytes.size()); },
-      /*binary=*/true);
+  for (const float value : vocabulary.centers) bytes.Write<float>(value);
+  bytes.SaveTo(path);
 }
 
 VocabularyData ReadVocabulary(const fs::path& path) {
-  Reader reader(path.string(), ReadTextFile(path));
+  LittleEndianReader reader(path);
   const std::string_view magic = reader.ReadBytes(kMagic.size(), "the magic \"VIOSFMVT\"");
   if (magic != kMagic) {
     reader.Fail("bad magic: not a viosfm vocabulary file (expected it to start with \"VIOSFMVT\")");
