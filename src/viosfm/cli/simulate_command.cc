@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <filesystem>
 
 #include "viosfm/cli/commands.h"
@@ -14,26 +15,38 @@ struct SimulateArgs {
   std::string out;
   double drift_factor = 1.0;
   bool no_imu_noise = false;
+  bool no_images = false;
+  bool row_parallel = false;
 };
 
 void RunSimulate(const SimulateArgs& args) {
   SimulationOptions options = args.options;
   options.vio_drift = options.vio_drift.Scaled(args.drift_factor);
   options.imu.add_noise = !args.no_imu_noise;
+  options.render_images = !args.no_images;
+  options.threads_over_frames = !args.row_parallel;
   Timer timer;
   const SimulatedSequence simulated = SimulateSequence(options);
+  const double setup_seconds = timer.ElapsedSeconds();
   WriteFolderAtomically(args.out, [&](const std::filesystem::path& folder) {
     WriteSimulatedSequence(folder, simulated, options);
   });
   const Sequence& sequence = simulated.sequence;
+  if (options.render_images) {
+    const double write_seconds = timer.ElapsedSeconds() - setup_seconds;
+    VIOSFM_LOG(INFO) << "scene and motion in " << setup_seconds << " s; rendered and wrote "
+                     << sequence.images.size() << " images in " << write_seconds << " s ("
+                     << sequence.images.size() / std::max(write_seconds, 1e-9) << " frames/s, "
+                     << options.num_threads << " thread(s))";
+  }
   const double length = simulated.motion.PathLength(sequence.images.front().timestamp_ns,
                                                     sequence.images.back().timestamp_ns);
   const double vio_end_error = (simulated.vio_body.poses.back().world_from_frame.translation -
                                 sequence.ground_truth.back().world_from_body.translation)
                                    .norm();
   VIOSFM_LOG(INFO) << "simulated '" << options.scenario << "': " << sequence.images.size()
-                   << " camera stamps, " << sequence.imu.size() << " IMU samples, path "
-                   << length << " m, emulated VIO end drift " << vio_end_error << " m, in "
+                   << " camera stamps, " << sequence.imu.size() << " IMU samples, path " << length
+                   << " m, emulated VIO end drift " << vio_end_error << " m, in "
                    << timer.ElapsedSeconds() << " s -> " << args.out;
 }
 
@@ -43,24 +56,50 @@ void RegisterSimulate(CLI::App& app) {
   auto args = std::make_shared<SimulateArgs>();
   CLI::App* command = app.add_subcommand(
       "simulate",
-      "Simulate a visual-inertial sequence with exact ground truth (EuRoC ASL layout): motion, "
-      "IMU, ground-truth state and an emulated drifting VIO trajectory");
+      "Simulate a visual-inertial sequence with exact ground truth (EuRoC ASL layout): rendered "
+      "images, motion, IMU, ground-truth state, per-frame scene regions and an emulated "
+      "drifting VIO trajectory");
   command->add_option("--out", args->out, "Output folder (replaced atomically)")->required();
-  command->add_option("--scenario", args->options.scenario, "Scene and motion preset")
+  command
+      ->add_option("--scenario", args->options.scenario,
+                   "Scene and motion preset: room, two_floors, corridor or dark")
       ->capture_default_str();
   command->add_option("--duration", args->options.duration_s, "Length in seconds")
       ->capture_default_str();
-  command->add_option("--static-start", args->options.static_start_s,
-                      "Motionless seconds at the start")
+  command
+      ->add_option("--static-start", args->options.static_start_s,
+                   "Motionless seconds at the start")
       ->capture_default_str();
   command->add_option("--rate", args->options.camera_rate_hz, "Camera rate in Hz")
       ->capture_default_str();
   command->add_option("--seed", args->options.seed, "Seed of every random stream")
       ->capture_default_str();
-  command->add_option("--vio-drift", args->drift_factor,
-                      "Multiplier of the emulated VIO's drift and noise (0: perfect VIO)")
+  command
+      ->add_option("--vio-drift", args->drift_factor,
+                   "Multiplier of the emulated VIO's drift and noise (0: perfect VIO)")
       ->capture_default_str();
   command->add_flag("--no-imu-noise", args->no_imu_noise, "Exact IMU measurements");
+  command
+      ->add_option("--speed", args->options.route_speed_mps,
+                   "Walking speed in m/s on route scenarios (two_floors, corridor, dark); 0 "
+                   "fits the whole route into the duration")
+      ->capture_default_str();
+  command
+      ->add_option("--texels-per-metre", args->options.texels_per_metre,
+                   "Texture resolution of the textured surfaces")
+      ->capture_default_str();
+  command
+      ->add_option("--exposure-time", args->options.exposure_time_s,
+                   "Shutter time in s for motion blur (negative: the scenario's own, dark "
+                   "0.02 s, others 0 = sharp)")
+      ->capture_default_str();
+  command->add_flag("--no-images", args->no_images,
+                    "Write motion, IMU and ground truth only (no rendering)");
+  command->add_option("--threads", args->options.num_threads, "Rendering threads")
+      ->capture_default_str();
+  command->add_flag("--row-parallel", args->row_parallel,
+                    "Render one frame at a time with its rows split over the threads (default: "
+                    "frames in parallel)");
   command->callback([args] { RunSimulate(*args); });
 }
 

@@ -10,10 +10,9 @@ namespace {
 
 size_t SampleIndexAt(const ImuSamples& samples, timestamp_ns_t t) {
   VIOSFM_CHECK(!samples.empty());
-  const auto it = std::upper_bound(samples.begin(), samples.end(), t,
-                                   [](timestamp_ns_t value, const ImuSample& sample) {
-                                     return value < sample.timestamp_ns;
-                                   });
+  const auto it = std::upper_bound(
+      samples.begin(), samples.end(), t,
+      [](timestamp_ns_t value, const ImuSample& sample) { return value < sample.timestamp_ns; });
   return it == samples.begin() ? 0 : static_cast<size_t>(it - samples.begin() - 1);
 }
 

@@ -13,8 +13,8 @@
 namespace viosfm {
 
 struct ImuSynthesisOptions {
-  ImuNoise noise;            // densities and random walks; noise.rate_hz is the sample rate
-  bool add_noise = true;     // false: exact measurements with constant initial biases
+  ImuNoise noise;         // densities and random walks; noise.rate_hz is the sample rate
+  bool add_noise = true;  // false: exact measurements with constant initial biases
   Eigen::Vector3d initial_gyro_bias = Eigen::Vector3d::Zero();   // rad/s
   Eigen::Vector3d initial_accel_bias = Eigen::Vector3d::Zero();  // m/s^2
   uint64_t seed = 1;

@@ -38,7 +38,8 @@ TEST(ImuSynthesis, NoiseFreeIntegrationReproducesGroundTruth) {
     // Rotation: exponential of the mean rate with a second-order (commutator) term.
     const Eigen::Vector3d mean_rate = 0.5 * (a.gyro + b.gyro);
     const Eigen::Vector3d correction = dt * dt / 12.0 * a.gyro.cross(b.gyro);
-    const Eigen::Quaterniond next_rotation = (rotation * ExpQuaternion(mean_rate * dt + correction)).normalized();
+    const Eigen::Quaterniond next_rotation =
+        (rotation * ExpQuaternion(mean_rate * dt + correction)).normalized();
     const Eigen::Vector3d accel_a = rotation * a.accel + gravity;
     const Eigen::Vector3d accel_b = next_rotation * b.accel + gravity;
     // Acceleration is linear in time between samples to the order used here.
@@ -60,8 +61,8 @@ TEST(ImuSynthesis, NoiseHasTheModelledStandardDeviation) {
   options.noise.gyro_random_walk = 0.0;
   options.noise.accel_random_walk = 0.0;
   options.initial_gyro_bias = Eigen::Vector3d(0.01, -0.02, 0.03);
-  const SynthesizedImu imu =
-      SynthesizeImu(trajectory, trajectory.start_ns(), trajectory.start_ns() + SecondsToNs(25.0), options);
+  const SynthesizedImu imu = SynthesizeImu(trajectory, trajectory.start_ns(),
+                                           trajectory.start_ns() + SecondsToNs(25.0), options);
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   double sum_sq = 0.0;
   for (const ImuSample& sample : imu.samples) {

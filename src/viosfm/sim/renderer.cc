@@ -5,6 +5,8 @@
 #include <cmath>
 #include <exception>
 #include <functional>
+#include <iterator>
+#include <limits>
 #include <thread>
 
 #include "viosfm/sensor/camera_models.h"
@@ -66,12 +68,13 @@ void AccumulateRadiance(const Scene& scene, const RayTable& rays, const Rigid3d&
   const Eigen::Vector3d center = ProjectionCenter(cam_from_world);
   const int width = rays.width();
   const double footprint_scale = std::exp2(options.mip_bias);
+  const std::vector<int> candidates = rays.VisibleQuads(scene, cam_from_world);
   ForEachRow(rays.height(), options.num_threads, [&](int y) {
     float* row = radiance->data() + static_cast<size_t>(y) * width;
     for (int x = 0; x < width; ++x) {
       const Eigen::Vector3d direction =
           world_from_cam_rotation * rays.Direction(x, y).cast<double>();
-      const std::optional<RayHit> hit = scene.Intersect(center, direction);
+      const std::optional<RayHit> hit = scene.Intersect(center, direction, 1e-6, candidates);
       double value = options.background;
       if (hit) {
         const TexturedQuad& quad = scene.quads()[hit->quad_id];
@@ -81,8 +84,9 @@ void AccumulateRadiance(const Scene& scene, const RayTable& rays, const Rigid3d&
                                      std::sqrt(std::max(hit->cos_incidence, kMinCosIncidence)) *
                                      tpm * footprint_scale
                                : 0.0;
-        const double texel =
-            scene.texture(quad.texture_id).Sample(hit->u * tpm, hit->v * tpm, footprint);
+        const double texel = scene.texture(quad.texture_id)
+                                 .Sample((hit->u + quad.texture_offset.x()) * tpm,
+                                         (hit->v + quad.texture_offset.y()) * tpm, footprint);
         value = 255.0 * options.exposure_gain * texel *
                 (1.0 - options.vignetting * rays.RadiusSquared(x, y)) /
                 (1.0 + options.distance_falloff * hit->t);
@@ -148,6 +152,57 @@ RayTable::RayTable(const Camera& camera)
           static_cast<float>(((x - cx) * (x - cx) + (y - cy) * (y - cy)) / half_diagonal_sq);
     }
   }
+  has_frustum_ = true;
+  min_x_ = min_y_ = std::numeric_limits<double>::infinity();
+  max_x_ = max_y_ = -std::numeric_limits<double>::infinity();
+  for (const Eigen::Vector3d& ray : rays) {
+    if (!(ray.z() > 1e-3 * ray.norm())) {
+      has_frustum_ = false;
+      break;
+    }
+    min_x_ = std::min(min_x_, ray.x() / ray.z());
+    max_x_ = std::max(max_x_, ray.x() / ray.z());
+    min_y_ = std::min(min_y_, ray.y() / ray.z());
+    max_y_ = std::max(max_y_, ray.y() / ray.z());
+  }
+  // A small margin for the float directions.
+  const double margin = 1e-3;
+  min_x_ -= margin;
+  max_x_ += margin;
+  min_y_ -= margin;
+  max_y_ += margin;
+}
+
+std::vector<int> RayTable::VisibleQuads(const Scene& scene, const Rigid3d& cam_from_world) const {
+  const std::vector<TexturedQuad>& quads = scene.quads();
+  std::vector<int> visible;
+  visible.reserve(quads.size());
+  for (size_t k = 0; k < quads.size(); ++k) {
+    if (!has_frustum_) {
+      visible.push_back(static_cast<int>(k));
+      continue;
+    }
+    const TexturedQuad& quad = quads[k];
+    const Eigen::Vector3d corners[4] = {quad.origin, quad.origin + quad.axis_u,
+                                        quad.origin + quad.axis_v,
+                                        quad.origin + quad.axis_u + quad.axis_v};
+    // Outside if all corners violate the same half-space: z > 0,
+    // x <= max_x z, x >= min_x z, y <= max_y z, y >= min_y z.
+    int inside_count[5] = {0, 0, 0, 0, 0};
+    for (const Eigen::Vector3d& corner : corners) {
+      const Eigen::Vector3d p = cam_from_world * corner;
+      inside_count[0] += p.z() > 0.0;
+      inside_count[1] += p.x() <= max_x_ * p.z();
+      inside_count[2] += p.x() >= min_x_ * p.z();
+      inside_count[3] += p.y() <= max_y_ * p.z();
+      inside_count[4] += p.y() >= min_y_ * p.z();
+    }
+    if (std::all_of(std::begin(inside_count), std::end(inside_count),
+                    [](int count) { return count > 0; })) {
+      visible.push_back(static_cast<int>(k));
+    }
+  }
+  return visible;
 }
 
 std::string RenderOptions::Validate() const {

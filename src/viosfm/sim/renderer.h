@@ -47,6 +47,10 @@ class RayTable {
   // Squared distance of the pixel from the principal point, divided by the
   // squared half-diagonal of the image (0 at the centre, ~1 in the corners).
   float RadiusSquared(int x, int y) const { return radius_squared_[Index(x, y)]; }
+  // Quads of `scene` that may be seen from cam_from_world: all but those
+  // lying entirely outside one side of the view frustum (the cone of the
+  // table's rays). Every quad if the rays span a hemisphere or more.
+  std::vector<int> VisibleQuads(const Scene& scene, const Rigid3d& cam_from_world) const;
 
  private:
   size_t Index(int x, int y) const { return static_cast<size_t>(y) * width_ + x; }
@@ -55,6 +59,9 @@ class RayTable {
   std::vector<Eigen::Vector3f> directions_;
   std::vector<float> pixel_angles_;
   std::vector<float> radius_squared_;
+  // Frustum: x/z and y/z of every ray lie in [min_x, max_x] x [min_y, max_y].
+  bool has_frustum_ = false;
+  double min_x_ = 0.0, max_x_ = 0.0, min_y_ = 0.0, max_y_ = 0.0;
 };
 
 struct RenderOptions {

@@ -9,9 +9,7 @@
 #include "viosfm/util/errors.h"
 
 namespace viosfm {
-namespace {
 
-// Derives independent seeds from one (SplitMix64 finaliser).
 uint64_t MixSeed(uint64_t seed, uint64_t index) {
   uint64_t z = seed + 0x9e3779b97f4a7c15ULL * (index + 1);
   z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
@@ -19,10 +17,9 @@ uint64_t MixSeed(uint64_t seed, uint64_t index) {
   return z ^ (z >> 31);
 }
 
-// A procedural texture covering a surface of size_u x size_v metres without
-// repeating.
-Texture MakeSurfaceTexture(double size_u, double size_v, double texels_per_metre, uint64_t seed) {
-  ProceduralTextureOptions options;
+Texture MakeSurfaceTexture(double size_u, double size_v, double texels_per_metre, uint64_t seed,
+                           const ProceduralTextureOptions& style) {
+  ProceduralTextureOptions options = style;
   options.width =
       std::max(8, NextPowerOfTwo(static_cast<int>(std::ceil(size_u * texels_per_metre))));
   options.height =
@@ -30,6 +27,8 @@ Texture MakeSurfaceTexture(double size_u, double size_v, double texels_per_metre
   options.seed = seed;
   return MakeProceduralTexture(options);
 }
+
+namespace {
 
 // Adds a quad with its own texture.
 void AddTexturedQuad(Scene& scene, const Eigen::Vector3d& origin, const Eigen::Vector3d& axis_u,
@@ -85,27 +84,92 @@ void Scene::AddBox(const Eigen::Vector3d& min, const Eigen::Vector3d& max, doubl
   AddTexturedQuad(*this, min + dz, dx, dy, texels_per_metre, MixSeed(seed, 4));
 }
 
+int Scene::AddSurfaceWithOpenings(const Eigen::Vector3d& origin, const Eigen::Vector3d& axis_u,
+                                  const Eigen::Vector3d& axis_v, int texture_id,
+                                  double texels_per_metre,
+                                  const std::vector<SurfaceRect>& openings) {
+  const double length_u = axis_u.norm();
+  const double length_v = axis_v.norm();
+  VIOSFM_CHECK(length_u > 0.0 && length_v > 0.0) << "degenerate surface";
+  const Eigen::Vector3d unit_u = axis_u / length_u;
+  const Eigen::Vector3d unit_v = axis_v / length_v;
+  // Columns between consecutive opening edges; in each column, the v
+  // intervals that no opening covers.
+  std::vector<double> cuts = {0.0, length_u};
+  for (const SurfaceRect& opening : openings) {
+    VIOSFM_CHECK(opening.u0 < opening.u1 && opening.v0 < opening.v1) << "empty opening";
+    cuts.push_back(std::clamp(opening.u0, 0.0, length_u));
+    cuts.push_back(std::clamp(opening.u1, 0.0, length_u));
+  }
+  std::sort(cuts.begin(), cuts.end());
+  cuts.erase(std::unique(cuts.begin(), cuts.end()), cuts.end());
+  int added = 0;
+  for (size_t c = 0; c + 1 < cuts.size(); ++c) {
+    const double u0 = cuts[c];
+    const double u1 = cuts[c + 1];
+    if (u1 - u0 < 1e-9) continue;
+    const double middle = 0.5 * (u0 + u1);
+    std::vector<std::pair<double, double>> holes;
+    for (const SurfaceRect& opening : openings) {
+      if (opening.u0 < middle && middle < opening.u1) {
+        holes.emplace_back(std::max(opening.v0, 0.0), std::min(opening.v1, length_v));
+      }
+    }
+    std::sort(holes.begin(), holes.end());
+    double v = 0.0;
+    holes.emplace_back(length_v, length_v);
+    for (const auto& [hole_begin, hole_end] : holes) {
+      if (hole_begin - v > 1e-9) {
+        TexturedQuad quad;
+        quad.origin = origin + u0 * unit_u + v * unit_v;
+        quad.axis_u = (u1 - u0) * unit_u;
+        quad.axis_v = (hole_begin - v) * unit_v;
+        quad.texture_id = texture_id;
+        quad.texels_per_metre = texels_per_metre;
+        quad.texture_offset = Eigen::Vector2d(u0, v);
+        AddQuad(quad);
+        ++added;
+      }
+      v = std::max(v, hole_end);
+    }
+  }
+  return added;
+}
+
+void Scene::IntersectQuad(size_t k, const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
+                          double t_min, RayHit* best) const {
+  const QuadFrame& frame = frames_[k];
+  const double denominator = frame.normal.dot(direction);
+  if (std::abs(denominator) < 1e-12) return;
+  const double t = (frame.offset - frame.normal.dot(origin)) / denominator;
+  if (!(t > t_min) || t >= best->t) return;
+  const Eigen::Vector3d relative = origin + t * direction - quads_[k].origin;
+  const double u = relative.dot(frame.unit_u);
+  if (u < 0.0 || u > frame.length_u) return;
+  const double v = relative.dot(frame.unit_v);
+  if (v < 0.0 || v > frame.length_v) return;
+  best->t = t;
+  best->quad_id = static_cast<int>(k);
+  best->u = u;
+  best->v = v;
+  best->cos_incidence = std::abs(denominator);
+}
+
 std::optional<RayHit> Scene::Intersect(const Eigen::Vector3d& origin,
                                        const Eigen::Vector3d& direction, double t_min) const {
   RayHit best;
   best.t = std::numeric_limits<double>::infinity();
-  for (size_t k = 0; k < frames_.size(); ++k) {
-    const QuadFrame& frame = frames_[k];
-    const double denominator = frame.normal.dot(direction);
-    if (std::abs(denominator) < 1e-12) continue;
-    const double t = (frame.offset - frame.normal.dot(origin)) / denominator;
-    if (!(t > t_min) || t >= best.t) continue;
-    const Eigen::Vector3d relative = origin + t * direction - quads_[k].origin;
-    const double u = relative.dot(frame.unit_u);
-    if (u < 0.0 || u > frame.length_u) continue;
-    const double v = relative.dot(frame.unit_v);
-    if (v < 0.0 || v > frame.length_v) continue;
-    best.t = t;
-    best.quad_id = static_cast<int>(k);
-    best.u = u;
-    best.v = v;
-    best.cos_incidence = std::abs(denominator);
-  }
+  for (size_t k = 0; k < frames_.size(); ++k) IntersectQuad(k, origin, direction, t_min, &best);
+  if (best.quad_id < 0) return std::nullopt;
+  return best;
+}
+
+std::optional<RayHit> Scene::Intersect(const Eigen::Vector3d& origin,
+                                       const Eigen::Vector3d& direction, double t_min,
+                                       const std::vector<int>& candidates) const {
+  RayHit best;
+  best.t = std::numeric_limits<double>::infinity();
+  for (const int k : candidates) IntersectQuad(k, origin, direction, t_min, &best);
   if (best.quad_id < 0) return std::nullopt;
   return best;
 }

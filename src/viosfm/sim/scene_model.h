@@ -23,6 +23,9 @@ struct TexturedQuad {
   Eigen::Vector3d axis_v = Eigen::Vector3d::UnitY();
   int texture_id = 0;
   double texels_per_metre = 100.0;
+  // Metres added to (u, v) before the texture lookup, so that pieces of one
+  // surface (a wall cut around a doorway) continue one texture seamlessly.
+  Eigen::Vector2d texture_offset = Eigen::Vector2d::Zero();
 };
 
 struct RayHit {
@@ -31,6 +34,15 @@ struct RayHit {
   double u = 0.0;              // metres along axis_u from the quad's origin
   double v = 0.0;              // metres along axis_v
   double cos_incidence = 1.0;  // |cos| of the angle between the ray and the quad normal
+};
+
+// An axis-aligned rectangle [u0, u1] x [v0, v1] in a quad's surface
+// coordinates (metres), e.g. a doorway cut out of a wall.
+struct SurfaceRect {
+  double u0 = 0.0;
+  double u1 = 0.0;
+  double v0 = 0.0;
+  double v1 = 0.0;
 };
 
 class Scene {
@@ -43,6 +55,13 @@ class Scene {
   // with its own procedural texture of the given seed base and resolution.
   void AddBox(const Eigen::Vector3d& min, const Eigen::Vector3d& max, double texels_per_metre,
               uint64_t seed);
+  // Adds the rectangle origin + [0, 1] axis_u + [0, 1] axis_v with the
+  // `openings` (surface coordinates, metres; they must not overlap) left
+  // out: it is cut into pieces that share texture_id with continuous texture
+  // coordinates. Returns the number of quads added.
+  int AddSurfaceWithOpenings(const Eigen::Vector3d& origin, const Eigen::Vector3d& axis_u,
+                             const Eigen::Vector3d& axis_v, int texture_id, double texels_per_metre,
+                             const std::vector<SurfaceRect>& openings);
 
   const std::vector<TexturedQuad>& quads() const { return quads_; }
   const std::vector<Texture>& textures() const { return textures_; }
@@ -53,11 +72,18 @@ class Scene {
   // two-sided.
   std::optional<RayHit> Intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
                                   double t_min = 1e-6) const;
+  // The same, testing only the quads in `candidates` (e.g. those in a view
+  // frustum).
+  std::optional<RayHit> Intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
+                                  double t_min, const std::vector<int>& candidates) const;
 
   // Point in the world of surface coordinates (u, v) of a quad.
   Eigen::Vector3d PointOnQuad(int quad_id, double u, double v) const;
 
  private:
+  // Updates `best` if quad k is hit nearer than best->t.
+  void IntersectQuad(size_t k, const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
+                     double t_min, RayHit* best) const;
   // Per-quad data precomputed for intersection.
   struct QuadFrame {
     Eigen::Vector3d normal;  // unit
@@ -71,6 +97,14 @@ class Scene {
   std::vector<TexturedQuad> quads_;
   std::vector<QuadFrame> frames_;
 };
+
+// Independent seeds derived from one (SplitMix64 finaliser of seed and index).
+uint64_t MixSeed(uint64_t seed, uint64_t index);
+
+// A procedural texture (style: every option but width, height and seed) that
+// covers size_u x size_v metres at texels_per_metre without repeating.
+Texture MakeSurfaceTexture(double size_u, double size_v, double texels_per_metre, uint64_t seed,
+                           const ProceduralTextureOptions& style = {});
 
 struct RoomSceneOptions {
   Eigen::Vector3d room_min{-4.0, -4.0, 0.0};  // m, inside of the walls (floor at z = 0)

@@ -1,13 +1,18 @@
 #include "viosfm/sim/sequence_simulator.h"
 
 #include <algorithm>
+#include <atomic>
+#include <exception>
 #include <iomanip>
 #include <sstream>
+#include <thread>
 
 #include "viosfm/io/euroc_writer.h"
+#include "viosfm/io/image_io.h"
 #include "viosfm/io/trajectory_io.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/file_util.h"
+#include "viosfm/util/progress.h"
 
 namespace viosfm {
 namespace fs = std::filesystem;
@@ -18,8 +23,8 @@ Camera SimulationOptions::DefaultCamera() {
   camera.model_id = CameraModelId::kOpenCV;
   camera.width = 752;
   camera.height = 480;
-  camera.params = {458.654, 457.296, 367.215, 248.375, -0.28340811, 0.07395907, 0.00019359,
-                   1.76187114e-05};
+  camera.params = {458.654,     457.296,    367.215,    248.375,
+                   -0.28340811, 0.07395907, 0.00019359, 1.76187114e-05};
   return camera;
 }
 
@@ -27,21 +32,19 @@ Rigid3d SimulationOptions::DefaultBodyFromCam() {
   // Columns: the camera's x (right), y (down), z (forward) axes in the body
   // frame (x forward, y left, z up).
   Eigen::Matrix3d body_from_cam;
-  body_from_cam << 0, 0, 1,   //
-      -1, 0, 0,               //
+  body_from_cam << 0, 0, 1,  //
+      -1, 0, 0,              //
       0, -1, 0;
   return Rigid3d(body_from_cam, Eigen::Vector3d(0.05, -0.02, 0.01));
 }
 
-std::vector<std::string> AvailableScenarios() { return {"room"}; }
-
 std::string SimulationOptions::Validate() const {
-  const auto scenarios = AvailableScenarios();
-  if (std::find(scenarios.begin(), scenarios.end(), scenario) == scenarios.end()) {
-    std::string list;
-    for (const auto& name : scenarios) list += (list.empty() ? "" : ", ") + name;
-    return "scenario '" + scenario + "' is unknown (available: " + list + ")";
-  }
+  ScenarioOptions scenario_options;
+  scenario_options.name = scenario;
+  scenario_options.texels_per_metre = texels_per_metre;
+  if (const std::string error = scenario_options.Validate(); !error.empty()) return error;
+  if (!(route_speed_mps >= 0)) return "route_speed_mps must be >= 0";
+  if (num_threads < 1) return "num_threads must be >= 1";
   if (!(duration_s > 0)) return "duration_s must be > 0";
   if (!(static_start_s >= 0 && static_start_s < duration_s)) {
     return "static_start_s must be in [0, duration_s)";
@@ -57,17 +60,32 @@ SimulatedSequence SimulateSequence(const SimulationOptions& options) {
   if (const std::string error = options.Validate(); !error.empty()) {
     throw InputError("simulation options: " + error);
   }
-  WalkOptions walk = options.walk;
-  walk.duration_s = options.duration_s;
-  walk.static_start_s = options.static_start_s;
-  walk.seed = options.seed * 3 + 0;
+  ScenarioOptions scenario_options;
+  scenario_options.name = options.scenario;
+  // Without images the textures are never sampled: build the geometry only.
+  scenario_options.texels_per_metre = options.render_images ? options.texels_per_metre : 8.0;
+  scenario_options.seed = options.seed;
+  ScenarioMotionOptions motion;
+  motion.duration_s = options.duration_s;
+  motion.static_start_s = options.static_start_s;
+  motion.speed_mps = options.route_speed_mps;
+  motion.walk = options.walk;
+  motion.start_ns = options.walk.start_ns;
+  motion.seed = options.seed * 3 + 0;
   ImuSynthesisOptions imu_options = options.imu;
   imu_options.seed = options.seed * 3 + 1;
   VioDriftOptions drift = options.vio_drift;
   drift.seed = options.seed * 3 + 2;
 
   SimulatedSequence out;
-  out.motion = GenerateWalk(walk);
+  auto scenario = std::make_shared<Scenario>(MakeScenario(scenario_options));
+  if (options.scenario == "room") {
+    // The room keeps WalkOptions' own box.
+    scenario->walk_box_min = options.walk.box_min;
+    scenario->walk_box_max = options.walk.box_max;
+  }
+  out.motion = GenerateScenarioMotion(*scenario, motion);
+  out.scenario = scenario;
   const timestamp_ns_t start = out.motion.start_ns();
   const timestamp_ns_t end = start + SecondsToNs(options.duration_s);
 
@@ -96,23 +114,109 @@ SimulatedSequence SimulateSequence(const SimulationOptions& options) {
     state.accel_bias = imu.AccelBiasAt(t);
     state.has_velocity_and_biases = true;
     sequence.ground_truth.push_back(state);
+    out.frame_regions.push_back(
+        out.scenario->RegionIndex(ProjectionCenter(SimulatedCamFromWorld(out, t))));
   }
   out.vio_body = EmulateVioDrift(out.motion.Sample(stamps), drift);
   return out;
 }
 
+Rigid3d SimulatedCamFromWorld(const SimulatedSequence& simulated, timestamp_ns_t t) {
+  return (simulated.motion.WorldFromBody(t) * simulated.sequence.rig.body_from_cam).Inverse();
+}
+
+GreyImage RenderSimulatedFrame(const SimulatedSequence& simulated, const RayTable& rays,
+                               size_t frame_index, const SimulationOptions& options,
+                               int num_threads) {
+  VIOSFM_CHECK(simulated.scenario != nullptr);
+  VIOSFM_CHECK_LT(frame_index, simulated.sequence.images.size());
+  RenderOptions render = simulated.scenario->render;
+  render.seed = MixSeed(options.seed, frame_index);
+  render.num_threads = num_threads;
+  const double exposure_s = options.exposure_time_s >= 0.0 ? options.exposure_time_s
+                                                           : simulated.scenario->exposure_time_s;
+  const timestamp_ns_t t = simulated.sequence.images[frame_index].timestamp_ns;
+  if (exposure_s <= 0.0)
+    return Render(simulated.scenario->scene, rays, SimulatedCamFromWorld(simulated, t), render);
+  const timestamp_ns_t half = SecondsToNs(0.5 * exposure_s);
+  const timestamp_ns_t open = std::max(simulated.motion.start_ns(), t - half);
+  const timestamp_ns_t close = std::min(simulated.motion.end_ns(), t + half);
+  return RenderWithMotionBlur(simulated.scenario->scene, rays,
+                              SimulatedCamFromWorld(simulated, open),
+                              SimulatedCamFromWorld(simulated, close), render);
+}
+
+void RenderSimulatedImages(const fs::path& folder, const SimulatedSequence& simulated,
+                           const SimulationOptions& options) {
+  VIOSFM_CHECK(options.Check()) << options.Validate();
+  fs::create_directories(folder);
+  const RayTable rays(simulated.sequence.rig.camera);
+  const std::vector<SequenceImage>& images = simulated.sequence.images;
+  ProgressBar progress("rendering " + simulated.scenario->name,
+                       static_cast<int64_t>(images.size()));
+  const auto render_and_write = [&](size_t k, int row_threads) {
+    WriteGreyPng(folder / images[k].path.filename(),
+                 RenderSimulatedFrame(simulated, rays, k, options, row_threads));
+    progress.Update();
+  };
+  const int workers = options.threads_over_frames
+                          ? std::min<int>(options.num_threads, static_cast<int>(images.size()))
+                          : 1;
+  if (workers <= 1) {
+    for (size_t k = 0; k < images.size(); ++k) render_and_write(k, options.num_threads);
+  } else {
+    std::atomic<size_t> next{0};
+    std::vector<std::exception_ptr> errors(workers);
+    std::vector<std::thread> threads;
+    for (int w = 0; w < workers; ++w) {
+      threads.emplace_back([&, w]() {
+        try {
+          for (size_t k = next++; k < images.size(); k = next++) render_and_write(k, 1);
+        } catch (...) {
+          errors[w] = std::current_exception();
+          next = images.size();  // the others stop early
+        }
+      });
+    }
+    for (std::thread& thread : threads) thread.join();
+    for (const std::exception_ptr& error : errors) {
+      if (error) std::rethrow_exception(error);
+    }
+  }
+  progress.Finish();
+}
+
 void WriteSimulatedSequence(const fs::path& out, const SimulatedSequence& simulated,
                             const SimulationOptions& options) {
-  Sequence without_images = simulated.sequence;
-  without_images.images.clear();  // no rendered image files yet
-  WriteEurocDataset(out, without_images);
   const fs::path cam0 = out / "mav0" / "cam0";
+  if (options.render_images) {
+    RenderSimulatedImages(cam0 / "data", simulated, options);
+    WriteEurocDataset(out, simulated.sequence);  // lists the images in cam0/data.csv
+  } else {
+    Sequence without_images = simulated.sequence;
+    without_images.images.clear();
+    WriteEurocDataset(out, without_images);
+  }
   fs::create_directories(cam0);
   WriteEurocCameraYaml(cam0 / "sensor.yaml", simulated.sequence.rig.camera,
                        simulated.sequence.rig.body_from_cam, simulated.sequence.rig.camera_rate_hz);
+  WriteFileAtomically(out / "frames.csv", [&](std::ostream& stream) {
+    stream << "#timestamp [ns],region,floor,p_cam_x [m],p_cam_y [m],p_cam_z [m]\n"
+           << std::setprecision(17);
+    const auto& regions = simulated.scenario->regions;
+    for (size_t k = 0; k < simulated.sequence.images.size(); ++k) {
+      const timestamp_ns_t t = simulated.sequence.images[k].timestamp_ns;
+      const int region = simulated.frame_regions[k];
+      const Eigen::Vector3d center = ProjectionCenter(SimulatedCamFromWorld(simulated, t));
+      stream << t << ',' << (region >= 0 ? regions[region].name : "none") << ','
+             << (region >= 0 ? regions[region].floor : -1) << ',' << center.x() << ',' << center.y()
+             << ',' << center.z() << '\n';
+    }
+  });
   WriteFileAtomically(out / "camera_stamps.txt", [&](std::ostream& stream) {
     stream << "# camera timestamps [ns], one per line\n";
-    for (const SequenceImage& image : simulated.sequence.images) stream << image.timestamp_ns << '\n';
+    for (const SequenceImage& image : simulated.sequence.images)
+      stream << image.timestamp_ns << '\n';
   });
   WriteTumTrajectory(out / "vio_emulated.tum", simulated.vio_body);
   WriteFileAtomically(out / "simulation.yaml", [&](std::ostream& stream) {
@@ -122,6 +226,13 @@ void WriteSimulatedSequence(const fs::path& out, const SimulatedSequence& simula
            << "static_start_s: " << options.static_start_s << "\n"
            << "camera_rate_hz: " << options.camera_rate_hz << "\n"
            << "seed: " << options.seed << "\n"
+           << "route_speed_mps: " << options.route_speed_mps << "\n"
+           << "texels_per_metre: " << options.texels_per_metre << "\n"
+           << "render_images: " << (options.render_images ? "true" : "false") << "\n"
+           << "exposure_time_s: "
+           << (options.exposure_time_s >= 0.0 ? options.exposure_time_s
+                                              : simulated.scenario->exposure_time_s)
+           << "\n"
            << "walk:\n"
            << "  speed_mps: " << options.walk.speed_mps << "\n"
            << "  knot_spacing_s: " << options.walk.knot_spacing_s << "\n"
@@ -130,7 +241,8 @@ void WriteSimulatedSequence(const fs::path& out, const SimulatedSequence& simula
            << "imu:\n"
            << "  add_noise: " << (options.imu.add_noise ? "true" : "false") << "\n"
            << "vio_drift:\n"
-           << "  position_walk_m_per_sqrt_m: " << options.vio_drift.position_walk_m_per_sqrt_m << "\n"
+           << "  position_walk_m_per_sqrt_m: " << options.vio_drift.position_walk_m_per_sqrt_m
+           << "\n"
            << "  yaw_walk_rad_per_sqrt_m: " << options.vio_drift.yaw_walk_rad_per_sqrt_m << "\n"
            << "  scale_error: " << options.vio_drift.scale_error << "\n"
            << "  position_jitter_m: " << options.vio_drift.position_jitter_m << "\n"

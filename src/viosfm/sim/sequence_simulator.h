@@ -1,15 +1,19 @@
-// A simulated visual-inertial sequence with exact ground truth: body motion,
-// IMU at 200 Hz with noise and bias random walks, ground-truth state at the
-// camera stamps, and an emulated (drifting) VIO trajectory, written in the
-// EuRoC ASL layout so every reader and stage can consume it.
+// A simulated visual-inertial sequence with exact ground truth: a scenario's
+// scene and body motion, rendered camera images, IMU at 200 Hz with noise and
+// bias random walks, ground-truth state at the camera stamps, the region of
+// the floor plan of every frame, and an emulated (drifting) VIO trajectory,
+// written in the EuRoC ASL layout so every reader and stage can consume it.
 #pragma once
 
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "viosfm/io/sequence.h"
 #include "viosfm/sim/imu_synthesis.h"
+#include "viosfm/sim/renderer.h"
+#include "viosfm/sim/scenarios.h"
 #include "viosfm/sim/trajectory.h"
 #include "viosfm/sim/vio_emulator.h"
 
@@ -20,10 +24,22 @@ struct SimulationOptions {
   double duration_s = 60.0;       // s, sequence length including the static start
   double static_start_s = 2.0;    // s, motionless start (as every EuRoC sequence has)
   double camera_rate_hz = 20.0;   // Hz
-  uint64_t seed = 0;              // every random stream is derived from it
-  WalkOptions walk;               // motion; duration/static start/seed are set from above
-  ImuSynthesisOptions imu;        // IMU noise; seed set from above
-  VioDriftOptions vio_drift;      // emulated VIO; seed set from above
+  uint64_t seed = 0;              // every random stream (and the textures) derive from it
+  // m/s, walking speed of route scenarios (two_floors, corridor, dark); 0
+  // (default) fits the scenario's whole route into the duration.
+  double route_speed_mps = 0.0;
+  double texels_per_metre = 128.0;  // texture resolution of the textured surfaces
+  bool render_images = true;        // false: motion, IMU and ground truth only (fast)
+  // s, shutter time for motion blur; < 0 (default): the scenario's own (dark:
+  // 0.02 s, others 0 = sharp).
+  double exposure_time_s = -1.0;
+  int num_threads = 2;  // rendering threads (>= 1)
+  // true (default): frames are rendered in parallel, one thread each; false:
+  // one frame at a time with its rows split over the threads.
+  bool threads_over_frames = true;
+  WalkOptions walk;         // random walk of `room`; duration/static start/seed are set from above
+  ImuSynthesisOptions imu;  // IMU noise; seed set from above
+  VioDriftOptions vio_drift;  // emulated VIO; seed set from above
   Camera camera = DefaultCamera();
   Rigid3d body_from_cam = DefaultBodyFromCam();
 
@@ -36,19 +52,41 @@ struct SimulationOptions {
   bool Check() const { return Validate().empty(); }
 };
 
-std::vector<std::string> AvailableScenarios();
-
 struct SimulatedSequence {
-  Sequence sequence;        // no image files yet: `images` lists the camera stamps
-  BodyTrajectory motion;    // continuous-time truth
-  Trajectory vio_body;      // emulated VIO, world_from_body at the camera stamps
+  // `images` lists the camera stamps with paths <stamp>.png relative to
+  // mav0/cam0/data/ (the files exist once written).
+  Sequence sequence;
+  // Scene, regions, exposure. Without options.render_images its textures
+  // are coarse (8 texels/m): only the geometry is meant to be used.
+  std::shared_ptr<const Scenario> scenario;
+  BodyTrajectory motion;           // continuous-time truth
+  Trajectory vio_body;             // emulated VIO, world_from_body at the camera stamps
+  std::vector<int> frame_regions;  // per image: index into scenario->regions (-1: none)
 };
 
 SimulatedSequence SimulateSequence(const SimulationOptions& options);
 
-// Writes <out>/mav0/{imu0, state_groundtruth_estimate0, cam0/sensor.yaml},
-// <out>/vio_emulated.tum (world_from_body at the camera stamps),
-// <out>/camera_stamps.txt and <out>/simulation.yaml (the options used).
+// Camera pose at stamp t: (world_from_body(t) * body_from_cam)^-1.
+Rigid3d SimulatedCamFromWorld(const SimulatedSequence& simulated, timestamp_ns_t t);
+
+// Renders image `frame_index` with the scenario's exposure, noise seed
+// MixSeed(options.seed, frame_index), and motion blur over the shutter time
+// centred on the stamp when the exposure time is > 0. `rays` is the
+// sequence camera's RayTable; num_threads splits the rows.
+GreyImage RenderSimulatedFrame(const SimulatedSequence& simulated, const RayTable& rays,
+                               size_t frame_index, const SimulationOptions& options,
+                               int num_threads = 1);
+
+// Renders every image to <folder>/<stamp>.png (8-bit grey), in parallel as
+// options.num_threads/threads_over_frames say, with a progress bar.
+void RenderSimulatedImages(const std::filesystem::path& folder, const SimulatedSequence& simulated,
+                           const SimulationOptions& options);
+
+// Writes <out>/mav0/{cam0/{data.csv, data/*.png, sensor.yaml}, imu0,
+// state_groundtruth_estimate0}, <out>/frames.csv (per frame: stamp, region,
+// floor, camera centre), <out>/vio_emulated.tum (world_from_body at the
+// camera stamps), <out>/camera_stamps.txt and <out>/simulation.yaml (the
+// options used). Without options.render_images, cam0 has sensor.yaml only.
 void WriteSimulatedSequence(const std::filesystem::path& out, const SimulatedSequence& simulated,
                             const SimulationOptions& options);
 

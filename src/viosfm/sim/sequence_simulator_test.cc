@@ -16,6 +16,7 @@ SimulationOptions ShortOptions() {
   options.duration_s = 10.0;
   options.static_start_s = 1.0;
   options.seed = 5;
+  options.render_images = false;  // motion and IMU only (images: scenarios_test)
   return options;
 }
 
@@ -31,7 +32,9 @@ TEST(SequenceSimulator, ProducesConsistentStreams) {
   const Eigen::Vector3d f = sequence.imu[10].accel - sequence.ground_truth[0].accel_bias;
   EXPECT_NEAR(f.norm(), kStandardGravity, 6 * options.imu.noise.AccelSampleStddev());
   // The default camera looks forward: the body's x axis is the camera's z axis.
-  EXPECT_LT((options.body_from_cam.rotation * Eigen::Vector3d::UnitZ() - Eigen::Vector3d::UnitX()).norm(), 1e-12);
+  EXPECT_LT(
+      (options.body_from_cam.rotation * Eigen::Vector3d::UnitZ() - Eigen::Vector3d::UnitX()).norm(),
+      1e-12);
 }
 
 TEST(SequenceSimulator, WritesAReadableDataset) {
@@ -50,7 +53,10 @@ TEST(SequenceSimulator, WritesAReadableDataset) {
   const Trajectory vio = ReadTumTrajectory(out / "vio_emulated.tum");
   ASSERT_EQ(vio.size(), simulated.vio_body.size());
   EXPECT_EQ(vio.poses[7].timestamp_ns, simulated.vio_body.poses[7].timestamp_ns);
-  EXPECT_LT((vio.poses[7].world_from_frame.translation - simulated.vio_body.poses[7].world_from_frame.translation).norm(), 1e-9);
+  EXPECT_LT((vio.poses[7].world_from_frame.translation -
+             simulated.vio_body.poses[7].world_from_frame.translation)
+                .norm(),
+            1e-9);
 }
 
 TEST(SequenceSimulator, IsReproducibleAndRejectsUnknownScenarios) {
@@ -65,7 +71,9 @@ TEST(SequenceSimulator, IsReproducibleAndRejectsUnknownScenarios) {
     SimulateSequence(options);
     FAIL() << "no error";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("scenario 'moon' is unknown (available: room)"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find(
+                  "scenario 'moon' is unknown (available: room, two_floors, corridor, dark)"),
+              std::string::npos);
   }
 }
 

@@ -36,10 +36,10 @@ class CubicBSpline {
   // Derivative of the given order (0: value, 1: d/dt, 2: d2/dt2) at t,
   // clamped to [StartTime(), EndTime()].
   Vector Evaluate(double t, int order = 0) const {
-    const double s = std::clamp((t - t0_) / dt_, 0.0,
-                                static_cast<double>(control_points_.size()) - 3.0);
-    const int segment = std::min(static_cast<int>(std::floor(s)),
-                                 static_cast<int>(control_points_.size()) - 4);
+    const double s =
+        std::clamp((t - t0_) / dt_, 0.0, static_cast<double>(control_points_.size()) - 3.0);
+    const int segment =
+        std::min(static_cast<int>(std::floor(s)), static_cast<int>(control_points_.size()) - 4);
     const double u = s - segment;
     double weights[4];
     switch (order) {
@@ -61,8 +61,7 @@ class CubicBSpline {
         weights[2] = (-3 * u + 1) / (dt_ * dt_);
         weights[3] = u / (dt_ * dt_);
         break;
-      default:
-        VIOSFM_CHECK(false) << "unsupported derivative order " << order;
+      default: VIOSFM_CHECK(false) << "unsupported derivative order " << order;
     }
     Vector value = Vector::Zero();
     for (int k = 0; k < 4; ++k) value += weights[k] * control_points_[segment + k];

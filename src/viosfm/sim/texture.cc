@@ -300,6 +300,18 @@ Texture MakeProceduralTexture(const ProceduralTextureOptions& options) {
   return Texture(options.width, options.height, std::move(texels));
 }
 
+Texture WithContrast(const Texture& texture, float mean, float contrast) {
+  VIOSFM_CHECK_GT(texture.width(), 0);
+  std::vector<float> texels(static_cast<size_t>(texture.width()) * texture.height());
+  for (int j = 0; j < texture.height(); ++j) {
+    for (int i = 0; i < texture.width(); ++i) {
+      texels[static_cast<size_t>(j) * texture.width() + i] =
+          std::clamp(mean + contrast * (texture.Texel(0, i, j) - 0.5f), 0.0f, 1.0f);
+    }
+  }
+  return Texture(texture.width(), texture.height(), std::move(texels));
+}
+
 Texture MakeCheckerboardTexture(int width, int height, int square, float dark, float bright) {
   VIOSFM_CHECK(IsPowerOfTwo(width) && IsPowerOfTwo(height) && IsPowerOfTwo(square));
   VIOSFM_CHECK(square <= width && square <= height);

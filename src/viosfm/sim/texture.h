@@ -71,6 +71,10 @@ Texture MakeProceduralTexture(const ProceduralTextureOptions& options);
 Texture MakeCheckerboardTexture(int width, int height, int square, float dark = 0.1f,
                                 float bright = 0.9f);
 
+// The texture with its level-0 values remapped to mean + contrast * (value -
+// 0.5), clamped to [0, 1] (e.g. contrast 0.1 for a weakly textured surface).
+Texture WithContrast(const Texture& texture, float mean, float contrast);
+
 // Smallest power of two >= value (value >= 1).
 int NextPowerOfTwo(int value);
 

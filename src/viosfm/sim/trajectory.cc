@@ -1,5 +1,6 @@
 #include "viosfm/sim/trajectory.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "viosfm/util/random.h"
@@ -8,7 +9,9 @@ namespace viosfm {
 
 BodyTrajectory::BodyTrajectory(timestamp_ns_t start_ns, CubicBSpline<3> position,
                                CubicBSpline<3> yaw_pitch_roll)
-    : start_ns_(start_ns), position_(std::move(position)), yaw_pitch_roll_(std::move(yaw_pitch_roll)) {}
+    : start_ns_(start_ns),
+      position_(std::move(position)),
+      yaw_pitch_roll_(std::move(yaw_pitch_roll)) {}
 
 timestamp_ns_t BodyTrajectory::end_ns() const {
   return start_ns_ + SecondsToNs(std::min(position_.EndTime(), yaw_pitch_roll_.EndTime()));
@@ -142,6 +145,108 @@ BodyTrajectory GenerateWalk(const WalkOptions& options) {
     angles.push_back(angle);
   }
   // Spline time 0 is at the start of the curve, i.e. at the second knot.
+  return BodyTrajectory(options.start_ns, CubicBSpline<3>(0.0, dt, positions),
+                        CubicBSpline<3>(0.0, dt, angles));
+}
+
+double PolylineLength(const std::vector<Eigen::Vector3d>& points) {
+  double length = 0.0;
+  for (size_t k = 1; k < points.size(); ++k) length += (points[k] - points[k - 1]).norm();
+  return length;
+}
+
+Eigen::Vector3d PolylinePoint(const std::vector<Eigen::Vector3d>& points, double s) {
+  VIOSFM_CHECK(!points.empty());
+  if (s <= 0.0) return points.front();
+  for (size_t k = 1; k < points.size(); ++k) {
+    const double segment = (points[k] - points[k - 1]).norm();
+    if (s <= segment && segment > 0.0)
+      return points[k - 1] + (s / segment) * (points[k] - points[k - 1]);
+    s -= segment;
+  }
+  return points.back();
+}
+
+std::string RouteWalkOptions::Validate() const {
+  if (waypoints.size() < 2) return "waypoints: the route needs >= 2 points";
+  if (!(PolylineLength(waypoints) > 0.0)) return "waypoints: the route has zero length";
+  if (!(duration_s > 0)) return "duration_s must be > 0";
+  if (!(static_start_s >= 0 && static_start_s < duration_s)) {
+    return "static_start_s must be in [0, duration_s)";
+  }
+  if (!(speed_mps >= 0)) return "speed_mps must be >= 0";
+  if (!(max_fit_speed_mps > 0)) return "max_fit_speed_mps must be > 0";
+  if (!(pace_stddev >= 0 && pace_stddev < 0.5)) return "pace_stddev must be in [0, 0.5)";
+  if (!(knot_spacing_s > 0)) return "knot_spacing_s must be > 0";
+  if (!(lateral_wander_m >= 0 && max_lateral_m >= 0)) {
+    return "lateral_wander_m and max_lateral_m must be >= 0";
+  }
+  if (!(vertical_wander_m >= 0)) return "vertical_wander_m must be >= 0";
+  if (!(heading_lookahead_m > 0)) return "heading_lookahead_m must be > 0";
+  return "";
+}
+
+BodyTrajectory GenerateRouteWalk(const RouteWalkOptions& options) {
+  VIOSFM_CHECK(options.Check()) << options.Validate();
+  Random random(options.seed);
+  const double dt = options.knot_spacing_s;
+  const int num_segments = static_cast<int>(std::ceil(options.duration_s / dt));
+  const int num_static = static_cast<int>(std::floor(options.static_start_s / dt));
+  const int first_moving = num_static + 3;  // control points before it repeat the start
+  const int num_points = num_segments + 3;
+  const std::vector<Eigen::Vector3d>& route = options.waypoints;
+  const double route_length = PolylineLength(route);
+
+  // Arc length at every control point: random pace, scaled to the route.
+  std::vector<double> arc(num_points, 0.0);
+  {
+    std::vector<double> steps(num_points, 0.0);
+    double total = 0.0;
+    for (int i = first_moving; i < num_points; ++i) {
+      steps[i] = std::clamp(1.0 + random.Normal(0.0, options.pace_stddev), 0.4, 1.6);
+      total += steps[i];
+    }
+    const double fitted_scale =
+        std::min(total > 0.0 ? route_length / total : 0.0, options.max_fit_speed_mps * dt);
+    const double scale = options.speed_mps > 0.0 ? options.speed_mps * dt : fitted_scale;
+    for (int i = 1; i < num_points; ++i) {
+      arc[i] = std::min(route_length, arc[i - 1] + scale * steps[i]);
+    }
+  }
+  const auto heading_at = [&](double s) -> Eigen::Vector3d {
+    const Eigen::Vector3d ahead = PolylinePoint(route, s + options.heading_lookahead_m);
+    const Eigen::Vector3d behind = PolylinePoint(route, s - options.heading_lookahead_m);
+    return ahead - behind;
+  };
+  std::vector<Eigen::Vector3d> positions;
+  std::vector<Eigen::Vector3d> angles;
+  double lateral = 0.0;
+  double look_phase = random.Uniform(0.0, 2.0 * M_PI);
+  const Eigen::Vector3d start_direction = heading_at(0.0);
+  const double start_yaw = std::atan2(start_direction.y(), start_direction.x());
+  Eigen::Vector3d angle(start_yaw, 0.0, 0.0);
+  for (int i = 0; i < num_points; ++i) {
+    Eigen::Vector3d position = PolylinePoint(route, arc[i]);
+    if (i >= first_moving) {
+      const Eigen::Vector3d direction = heading_at(arc[i]);
+      const double horizontal = std::hypot(direction.x(), direction.y());
+      const double heading = std::atan2(direction.y(), direction.x());
+      lateral = std::clamp(0.7 * lateral + random.Normal(0.0, options.lateral_wander_m),
+                           -options.max_lateral_m, options.max_lateral_m);
+      position += lateral * Eigen::Vector3d(-std::sin(heading), std::cos(heading), 0.0);
+      position.z() += random.Normal(0.0, options.vertical_wander_m);
+      look_phase += random.Uniform(0.2, 0.6);
+      double yaw = heading + options.look_around_rad * std::sin(look_phase);
+      yaw = angle[0] + std::remainder(yaw - angle[0], 2.0 * M_PI);
+      const double slope = std::atan2(direction.z(), std::max(horizontal, 1e-9));
+      angle = Eigen::Vector3d(
+          yaw,
+          -options.slope_pitch_factor * slope + random.Normal(0.0, options.pitch_roll_stddev_rad),
+          random.Normal(0.0, options.pitch_roll_stddev_rad));
+    }
+    positions.push_back(position);
+    angles.push_back(angle);
+  }
   return BodyTrajectory(options.start_ns, CubicBSpline<3>(0.0, dt, positions),
                         CubicBSpline<3>(0.0, dt, angles));
 }

@@ -43,7 +43,8 @@ Trajectory EmulateVioDrift(const Trajectory& ground_truth, const VioDriftOptions
     if (k == 0) {
       position = gt.translation;
     } else {
-      const Eigen::Vector3d step = gt.translation - ground_truth.poses[k - 1].world_from_frame.translation;
+      const Eigen::Vector3d step =
+          gt.translation - ground_truth.poses[k - 1].world_from_frame.translation;
       const double distance = step.norm();
       yaw_drift += random.Normal(0.0, options.yaw_walk_rad_per_sqrt_m * std::sqrt(distance));
       position += Eigen::AngleAxisd(yaw_drift, Eigen::Vector3d::UnitZ()) *
@@ -54,12 +55,12 @@ Trajectory EmulateVioDrift(const Trajectory& ground_truth, const VioDriftOptions
     const Eigen::Vector3d jitter_angle = normal3(options.rotation_jitter_rad);
     Eigen::Quaterniond rotation = drift_rotation * gt.rotation;
     if (jitter_angle.norm() > 0) {
-      rotation = rotation * Eigen::Quaterniond(Eigen::AngleAxisd(jitter_angle.norm(),
-                                                                 jitter_angle.normalized()));
+      rotation = rotation * Eigen::Quaterniond(
+                                Eigen::AngleAxisd(jitter_angle.norm(), jitter_angle.normalized()));
     }
-    vio.poses.push_back({ground_truth.poses[k].timestamp_ns,
-                         Rigid3d(rotation.normalized(),
-                                 position + normal3(options.position_jitter_m))});
+    vio.poses.push_back(
+        {ground_truth.poses[k].timestamp_ns,
+         Rigid3d(rotation.normalized(), position + normal3(options.position_jitter_m))});
   }
   return vio;
 }

@@ -18,11 +18,11 @@
 namespace viosfm {
 
 struct VioDriftOptions {
-  double position_walk_m_per_sqrt_m = 0.01;     // m / sqrt(m travelled)
-  double yaw_walk_rad_per_sqrt_m = 0.002;       // rad / sqrt(m travelled)
-  double scale_error = 0.0;                     // relative, e.g. 0.01 = 1 % too long
-  double position_jitter_m = 0.003;             // m, per-frame white noise (std)
-  double rotation_jitter_rad = 0.002;           // rad, per-frame white noise (std)
+  double position_walk_m_per_sqrt_m = 0.01;  // m / sqrt(m travelled)
+  double yaw_walk_rad_per_sqrt_m = 0.002;    // rad / sqrt(m travelled)
+  double scale_error = 0.0;                  // relative, e.g. 0.01 = 1 % too long
+  double position_jitter_m = 0.003;          // m, per-frame white noise (std)
+  double rotation_jitter_rad = 0.002;        // rad, per-frame white noise (std)
   uint64_t seed = 2;
 
   // All drift terms multiplied by `factor` (to sweep the drift level).

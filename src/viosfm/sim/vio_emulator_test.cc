@@ -18,7 +18,8 @@ Trajectory GroundTruth(double duration_s) {
 }
 
 double FinalPositionError(const Trajectory& a, const Trajectory& b) {
-  return (a.poses.back().world_from_frame.translation - b.poses.back().world_from_frame.translation).norm();
+  return (a.poses.back().world_from_frame.translation - b.poses.back().world_from_frame.translation)
+      .norm();
 }
 
 TEST(VioEmulator, ZeroDriftReproducesGroundTruth) {
@@ -27,8 +28,12 @@ TEST(VioEmulator, ZeroDriftReproducesGroundTruth) {
   ASSERT_EQ(vio.size(), gt.size());
   for (size_t k = 0; k < gt.size(); ++k) {
     EXPECT_EQ(vio.poses[k].timestamp_ns, gt.poses[k].timestamp_ns);
-    EXPECT_LT((vio.poses[k].world_from_frame.translation - gt.poses[k].world_from_frame.translation).norm(), 1e-9);
-    EXPECT_LT(vio.poses[k].world_from_frame.rotation.angularDistance(gt.poses[k].world_from_frame.rotation), 1e-9);
+    EXPECT_LT((vio.poses[k].world_from_frame.translation - gt.poses[k].world_from_frame.translation)
+                  .norm(),
+              1e-9);
+    EXPECT_LT(vio.poses[k].world_from_frame.rotation.angularDistance(
+                  gt.poses[k].world_from_frame.rotation),
+              1e-9);
   }
 }
 
@@ -37,8 +42,10 @@ TEST(VioEmulator, ScaleErrorStretchesDisplacements) {
   VioDriftOptions options = VioDriftOptions().Scaled(0.0);
   options.scale_error = 0.05;
   const Trajectory vio = EmulateVioDrift(gt, options);
-  const Eigen::Vector3d gt_span = gt.poses.back().world_from_frame.translation - gt.poses.front().world_from_frame.translation;
-  const Eigen::Vector3d vio_span = vio.poses.back().world_from_frame.translation - vio.poses.front().world_from_frame.translation;
+  const Eigen::Vector3d gt_span =
+      gt.poses.back().world_from_frame.translation - gt.poses.front().world_from_frame.translation;
+  const Eigen::Vector3d vio_span = vio.poses.back().world_from_frame.translation -
+                                   vio.poses.front().world_from_frame.translation;
   EXPECT_LT((vio_span - 1.05 * gt_span).norm(), 1e-9);
 }
 
@@ -61,8 +68,10 @@ TEST(VioEmulator, DriftGrowsWithTheDriftLevelAndIsSeeded) {
   EXPECT_EQ(FinalPositionError(a, b), 0.0);
   // Roll and pitch do not drift: gravity direction in the body frame is kept to jitter level.
   for (size_t k = 0; k < gt.size(); k += 50) {
-    const Eigen::Vector3d up_gt = gt.poses[k].world_from_frame.rotation.inverse() * Eigen::Vector3d::UnitZ();
-    const Eigen::Vector3d up_vio = a.poses[k].world_from_frame.rotation.inverse() * Eigen::Vector3d::UnitZ();
+    const Eigen::Vector3d up_gt =
+        gt.poses[k].world_from_frame.rotation.inverse() * Eigen::Vector3d::UnitZ();
+    const Eigen::Vector3d up_vio =
+        a.poses[k].world_from_frame.rotation.inverse() * Eigen::Vector3d::UnitZ();
     EXPECT_LT(std::acos(std::min(1.0, up_gt.dot(up_vio))), 6 * options.rotation_jitter_rad);
   }
 }
