@@ -1,0 +1,62 @@
+// Filtering 3D points after bundle adjustment: observations that reproject
+// too far from their keypoint, points seen under too small an angle, points
+// left with fewer than two observations.
+//
+// Only observations in registered images are judged (and count towards the
+// angle); observations in unregistered images are left as they are.
+#pragma once
+
+#include <cstddef>
+#include <string>
+
+#include "viosfm/scene/reconstruction.h"
+
+namespace viosfm {
+
+struct PointFilterOptions {
+  // Observations reprojecting farther than this from their keypoint (or
+  // behind the camera) are deleted, pixels, > 0. Default 4 (COLMAP's
+  // filter_max_reproj_error).
+  double max_reprojection_error_px = 4.0;
+  // Points whose largest pairwise triangulation angle over their registered
+  // observations is below this are deleted, degrees, >= 0. Default 1.5
+  // (COLMAP's filter_min_tri_angle).
+  double min_triangulation_angle_deg = 1.5;
+
+  std::string Validate() const;  // empty if valid, else names the bad field
+  bool Check() const { return Validate().empty(); }
+};
+
+struct PointFilterStatistics {
+  size_t num_points_before = 0;
+  // Observations deleted for their reprojection error (or negative depth).
+  size_t num_observations_removed = 0;
+  // Points deleted because fewer than two observations remained.
+  size_t num_points_removed_few_observations = 0;
+  // Points deleted for their small triangulation angle.
+  size_t num_points_removed_small_angle = 0;
+  size_t num_points_after = 0;
+
+  std::string Summary() const;
+};
+
+// Deletes observations with a reprojection error above the threshold.
+// Returns the number deleted; a point left with fewer than two observations
+// is deleted with them (Reconstruction::DeleteObservation).
+size_t FilterObservationsWithLargeReprojectionError(Reconstruction* reconstruction,
+                                                    double max_reprojection_error_px);
+
+// Deletes points whose largest triangulation angle is below the threshold.
+// Returns the number of points deleted.
+size_t FilterPointsWithSmallTriangulationAngle(Reconstruction* reconstruction,
+                                               double min_triangulation_angle_deg);
+
+// Deletes points with fewer than two observations. Returns the number deleted.
+size_t FilterPointsWithFewObservations(Reconstruction* reconstruction);
+
+// All three, in that order, and sets each remaining point's `error` to the
+// mean reprojection error of its registered observations. CHECKs options.
+PointFilterStatistics FilterPoints(Reconstruction* reconstruction,
+                                   const PointFilterOptions& options = {});
+
+}  // namespace viosfm

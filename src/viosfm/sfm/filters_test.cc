@@ -1,0 +1,128 @@
+#include "viosfm/sfm/filters.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <set>
+
+#include "viosfm/sfm/synthetic_test_scene.h"
+#include "viosfm/util/errors.h"
+#include "viosfm/util/random.h"
+
+namespace viosfm {
+namespace {
+
+using testing::MakeSyntheticReconstruction;
+using testing::MakeSyntheticScene;
+using testing::ProjectToPixel;
+using testing::SyntheticScene;
+
+// Adds a point at `xyz` observed by keypoint `idx` of the given images (the
+// keypoints are moved to its exact projections).
+point3D_t AddExactPoint(Reconstruction* reconstruction, const Eigen::Vector3d& xyz,
+                        const std::vector<image_t>& image_ids, point2D_t idx) {
+  Point3D point3D;
+  point3D.xyz = xyz;
+  for (image_t image_id : image_ids) {
+    Image& image = reconstruction->GetImage(image_id);
+    image.points2D[idx].xy =
+        ProjectToPixel(reconstruction->GetCamera(image.camera_id), image.cam_from_world, xyz);
+    point3D.track.push_back({image_id, idx});
+  }
+  return reconstruction->AddPoint3D(point3D);
+}
+
+TEST(FiltersTest, RemovesInjectedBadObservationsAndOnlyThose) {
+  constexpr int kNumPoints = 200;
+  constexpr int kNumImages = 10;
+  SyntheticScene scene = MakeSyntheticScene(kNumImages, kNumPoints + 2, 11);
+  Reconstruction reconstruction = MakeSyntheticReconstruction(scene, kNumImages);
+  for (int j = 0; j < kNumPoints; ++j) {
+    Point3D point3D;
+    point3D.xyz = scene.points[j];
+    for (image_t id = 1; id <= kNumImages; ++id) {
+      point3D.track.push_back({id, static_cast<point2D_t>(j)});
+    }
+    reconstruction.AddPoint3D(point3D);
+  }
+  // Far point (2 km, baseline 0.22 m: ~0.006 degrees): removed by the angle.
+  const point3D_t far_id =
+      AddExactPoint(&reconstruction, Eigen::Vector3d(10.0, 5.0, 2000.0), {1, 2}, kNumPoints);
+  // A three-view point with two bad observations: removing them leaves one.
+  const point3D_t weak_id =
+      AddExactPoint(&reconstruction, Eigen::Vector3d(0.2, 0.1, 6.0), {3, 6, 9}, kNumPoints + 1);
+  reconstruction.GetImage(6).points2D[kNumPoints + 1].xy += Eigen::Vector2d(8.0, 0.0);
+  reconstruction.GetImage(9).points2D[kNumPoints + 1].xy += Eigen::Vector2d(0.0, -6.0);
+
+  // 15 bad observations (5 to 20 px off) on distinct points.
+  Random random(12);
+  std::set<std::pair<image_t, point2D_t>> injected;
+  // Keypoint kNumPoints - 1 gets a small offset below, not a bad one.
+  std::set<point2D_t> used_points = {kNumPoints - 1};
+  while (injected.size() < 15) {
+    const point2D_t j = static_cast<point2D_t>(random.UniformInt(0, kNumPoints - 1));
+    if (!used_points.insert(j).second) continue;
+    const image_t id = static_cast<image_t>(random.UniformInt(1, kNumImages));
+    const double angle = random.Uniform(0.0, 2.0 * M_PI);
+    const double offset = random.Uniform(5.0, 20.0);
+    reconstruction.GetImage(id).points2D[j].xy +=
+        offset * Eigen::Vector2d(std::cos(angle), std::sin(angle));
+    injected.insert({id, j});
+  }
+  // A good observation with 3 px of error stays (threshold 4 px).
+  reconstruction.GetImage(5).points2D[kNumPoints - 1].xy += Eigen::Vector2d(3.0, 0.0);
+
+  const PointFilterStatistics stats = FilterPoints(&reconstruction);
+  EXPECT_EQ(stats.num_points_before, 202u);
+  EXPECT_EQ(stats.num_observations_removed, 15u + 2u);
+  EXPECT_EQ(stats.num_points_removed_few_observations, 1u);
+  EXPECT_EQ(stats.num_points_removed_small_angle, 1u);
+  EXPECT_EQ(stats.num_points_after, 200u);
+  EXPECT_FALSE(reconstruction.ExistsPoint3D(far_id));
+  EXPECT_FALSE(reconstruction.ExistsPoint3D(weak_id));
+  EXPECT_FALSE(reconstruction.GetImage(3).points2D[kNumPoints + 1].HasPoint3D());
+
+  // Exactly the injected observations are gone.
+  for (image_t id = 1; id <= kNumImages; ++id) {
+    const Image& image = reconstruction.GetImage(id);
+    for (int j = 0; j < kNumPoints; ++j) {
+      EXPECT_EQ(image.points2D[j].HasPoint3D(), injected.count({id, j}) == 0)
+          << "image " << id << " keypoint " << j;
+    }
+  }
+  EXPECT_EQ(reconstruction.ComputeNumObservations(), kNumPoints * kNumImages - 15u);
+  // Errors are updated: 0 for exact points, 0.3 px mean for the 3 px one.
+  for (const point3D_t point3D_id : reconstruction.Point3DIds()) {
+    const Point3D& point3D = reconstruction.GetPoint3D(point3D_id);
+    const bool has_offset = point3D.track.front().point2D_idx == kNumPoints - 1;
+    EXPECT_NEAR(point3D.error, has_offset ? 0.3 : 0.0, 1e-6);
+  }
+}
+
+TEST(FiltersTest, IgnoresObservationsInUnregisteredImages) {
+  const SyntheticScene scene = MakeSyntheticScene(4, 5, 13);
+  Reconstruction reconstruction = MakeSyntheticReconstruction(scene, 3);  // image 4 not registered
+  for (int j = 0; j < 5; ++j) {
+    Point3D point3D;
+    point3D.xyz = scene.points[j];
+    for (image_t id = 1; id <= 4; ++id) point3D.track.push_back({id, static_cast<point2D_t>(j)});
+    reconstruction.AddPoint3D(point3D);
+  }
+  reconstruction.GetImage(4).points2D[0].xy += Eigen::Vector2d(50.0, 0.0);
+  reconstruction.GetImage(1).points2D[1].xy += Eigen::Vector2d(50.0, 0.0);
+  EXPECT_EQ(FilterObservationsWithLargeReprojectionError(&reconstruction, 4.0), 1u);
+  EXPECT_TRUE(reconstruction.GetImage(4).points2D[0].HasPoint3D());
+  EXPECT_FALSE(reconstruction.GetImage(1).points2D[1].HasPoint3D());
+}
+
+TEST(FiltersTest, OptionsValidate) {
+  PointFilterOptions options;
+  EXPECT_TRUE(options.Check());
+  options.max_reprojection_error_px = -1.0;
+  EXPECT_THAT(options.Validate(), ::testing::HasSubstr("max_reprojection_error_px"));
+  Reconstruction reconstruction;
+  EXPECT_THROW(FilterPoints(&reconstruction, options), InternalError);
+}
+
+}  // namespace
+}  // namespace viosfm

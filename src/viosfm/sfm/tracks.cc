@@ -1,0 +1,317 @@
+#include "viosfm/sfm/tracks.h"
+
+#include <algorithm>
+#include <cstdint>
+#include <iterator>
+#include <numeric>
+#include <sstream>
+#include <utility>
+
+#include "viosfm/util/errors.h"
+
+namespace viosfm {
+namespace {
+
+// A keypoint as one sortable number: image id in the high, index in the low bits.
+using NodeKey = uint64_t;
+
+NodeKey MakeKey(image_t image_id, point2D_t point2D_idx) {
+  return (static_cast<uint64_t>(image_id) << 32) | static_cast<uint64_t>(point2D_idx);
+}
+image_t KeyImage(NodeKey key) {
+  return static_cast<image_t>(key >> 32);
+}
+TrackElement KeyElement(NodeKey key) {
+  return TrackElement{KeyImage(key), static_cast<point2D_t>(key & 0xffffffffu)};
+}
+
+class UnionFind {
+ public:
+  explicit UnionFind(size_t size) : parent_(size) {
+    std::iota(parent_.begin(), parent_.end(), size_t{0});
+  }
+  size_t Find(size_t x) {
+    while (parent_[x] != x) {
+      parent_[x] = parent_[parent_[x]];
+      x = parent_[x];
+    }
+    return x;
+  }
+  // Links the root `child` below the root `root`.
+  void Link(size_t child, size_t root) { parent_[child] = root; }
+
+ private:
+  std::vector<size_t> parent_;
+};
+
+// Whether two sorted vectors share an element.
+bool Intersects(const std::vector<image_t>& a, const std::vector<image_t>& b) {
+  auto ia = a.begin();
+  auto ib = b.begin();
+  while (ia != a.end() && ib != b.end()) {
+    if (*ia == *ib) return true;
+    if (*ia < *ib) {
+      ++ia;
+    } else {
+      ++ib;
+    }
+  }
+  return false;
+}
+
+size_t CountCommon(const std::vector<size_t>& a, const std::vector<size_t>& b) {
+  size_t count = 0;
+  auto ia = a.begin();
+  auto ib = b.begin();
+  while (ia != a.end() && ib != b.end()) {
+    if (*ia == *ib) {
+      ++count;
+      ++ia;
+      ++ib;
+    } else if (*ia < *ib) {
+      ++ia;
+    } else {
+      ++ib;
+    }
+  }
+  return count;
+}
+
+// Splits an inconsistent component (nodes: sorted global node indices,
+// edges: pairs of global indices u < v inside it) into consistent pieces,
+// accepting the best-supported matches first. Returns the pieces as lists of
+// global node indices (each sorted) and adds the refused matches to *refused.
+std::vector<std::vector<size_t>> SplitComponent(const std::vector<NodeKey>& keys,
+                                                const std::vector<size_t>& nodes,
+                                                const std::vector<std::pair<size_t, size_t>>& edges,
+                                                size_t* refused) {
+  const auto local = [&nodes](size_t global) {
+    return static_cast<size_t>(std::lower_bound(nodes.begin(), nodes.end(), global) -
+                               nodes.begin());
+  };
+  const size_t num_nodes = nodes.size();
+  std::vector<std::vector<size_t>> adjacency(num_nodes);
+  std::vector<std::pair<size_t, size_t>> local_edges;
+  local_edges.reserve(edges.size());
+  for (const auto& [u, v] : edges) {
+    const size_t lu = local(u);
+    const size_t lv = local(v);
+    adjacency[lu].push_back(lv);
+    adjacency[lv].push_back(lu);
+    local_edges.emplace_back(lu, lv);
+  }
+  for (std::vector<size_t>& neighbours : adjacency) std::sort(neighbours.begin(), neighbours.end());
+
+  struct RankedEdge {
+    size_t support;     // triangles closed by the match
+    size_t degree_sum;  // matches at its two ends
+    size_t u;
+    size_t v;
+  };
+  std::vector<RankedEdge> ranked;
+  ranked.reserve(local_edges.size());
+  for (const auto& [u, v] : local_edges) {
+    ranked.push_back(
+        {CountCommon(adjacency[u], adjacency[v]), adjacency[u].size() + adjacency[v].size(), u, v});
+  }
+  std::sort(ranked.begin(), ranked.end(), [](const RankedEdge& a, const RankedEdge& b) {
+    if (a.support != b.support) return a.support > b.support;
+    if (a.degree_sum != b.degree_sum) return a.degree_sum > b.degree_sum;
+    if (a.u != b.u) return a.u < b.u;
+    return a.v < b.v;
+  });
+
+  UnionFind sets(num_nodes);
+  // Sorted image ids of each set, valid at its root.
+  std::vector<std::vector<image_t>> images(num_nodes);
+  for (size_t i = 0; i < num_nodes; ++i) images[i] = {KeyImage(keys[nodes[i]])};
+  for (const RankedEdge& edge : ranked) {
+    size_t root_u = sets.Find(edge.u);
+    size_t root_v = sets.Find(edge.v);
+    if (root_u == root_v) continue;
+    if (Intersects(images[root_u], images[root_v])) {
+      ++*refused;
+      continue;
+    }
+    if (images[root_u].size() < images[root_v].size()) std::swap(root_u, root_v);
+    std::vector<image_t> merged;
+    merged.reserve(images[root_u].size() + images[root_v].size());
+    std::merge(images[root_u].begin(), images[root_u].end(), images[root_v].begin(),
+               images[root_v].end(), std::back_inserter(merged));
+    images[root_u] = std::move(merged);
+    images[root_v].clear();
+    sets.Link(root_v, root_u);
+  }
+
+  std::vector<std::vector<size_t>> pieces;
+  std::vector<size_t> piece_of_root(num_nodes, SIZE_MAX);
+  for (size_t i = 0; i < num_nodes; ++i) {
+    const size_t root = sets.Find(i);
+    if (piece_of_root[root] == SIZE_MAX) {
+      piece_of_root[root] = pieces.size();
+      pieces.emplace_back();
+    }
+    pieces[piece_of_root[root]].push_back(nodes[i]);
+  }
+  return pieces;
+}
+
+}  // namespace
+
+std::string TrackBuilderOptions::Validate() const {
+  if (min_track_length < 2) return "min_track_length must be >= 2";
+  if (conflict_policy != TrackConflictPolicy::kSplit &&
+      conflict_policy != TrackConflictPolicy::kDrop) {
+    return "conflict_policy must be kSplit or kDrop";
+  }
+  return "";
+}
+
+std::string TrackStatistics::Summary() const {
+  std::ostringstream out;
+  const double mean_length =
+      num_tracks > 0 ? static_cast<double>(num_observations) / static_cast<double>(num_tracks)
+                     : 0.0;
+  out << "tracks " << num_tracks << " (observations " << num_observations << ", mean length "
+      << mean_length << "), matches " << num_unique_matches << " distinct of " << num_input_matches
+      << ", inconsistent components " << num_inconsistent_components << " (refused matches "
+      << num_refused_matches << ", split pieces " << num_split_pieces << ", dropped "
+      << num_dropped_inconsistent << "), short dropped " << num_dropped_short;
+  return out.str();
+}
+
+TrackBuildResult BuildTracks(const std::vector<ImagePairMatches>& pair_matches,
+                             const TrackBuilderOptions& options) {
+  VIOSFM_CHECK(options.Check()) << options.Validate();
+  TrackBuildResult result;
+  TrackStatistics& stats = result.statistics;
+  stats.num_pairs = pair_matches.size();
+
+  // Matches as edges between node keys, smaller key first, sorted, unique.
+  std::vector<std::pair<NodeKey, NodeKey>> key_edges;
+  for (const ImagePairMatches& pair : pair_matches) {
+    stats.num_input_matches += pair.matches.size();
+    if (pair.image_id1 == pair.image_id2) {
+      stats.num_self_matches += pair.matches.size();
+      continue;
+    }
+    for (const FeatureMatch& match : pair.matches) {
+      const NodeKey a = MakeKey(pair.image_id1, match.point2D_idx1);
+      const NodeKey b = MakeKey(pair.image_id2, match.point2D_idx2);
+      key_edges.emplace_back(std::min(a, b), std::max(a, b));
+    }
+  }
+  std::sort(key_edges.begin(), key_edges.end());
+  key_edges.erase(std::unique(key_edges.begin(), key_edges.end()), key_edges.end());
+  stats.num_unique_matches = key_edges.size();
+
+  std::vector<NodeKey> keys;
+  keys.reserve(2 * key_edges.size());
+  for (const auto& [a, b] : key_edges) {
+    keys.push_back(a);
+    keys.push_back(b);
+  }
+  std::sort(keys.begin(), keys.end());
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  const auto index_of = [&keys](NodeKey key) {
+    return static_cast<size_t>(std::lower_bound(keys.begin(), keys.end(), key) - keys.begin());
+  };
+  std::vector<std::pair<size_t, size_t>> edges;
+  edges.reserve(key_edges.size());
+  for (const auto& [a, b] : key_edges) edges.emplace_back(index_of(a), index_of(b));
+  key_edges.clear();
+  key_edges.shrink_to_fit();
+
+  // Plain connected components.
+  UnionFind components(keys.size());
+  for (const auto& [u, v] : edges) {
+    const size_t root_u = components.Find(u);
+    const size_t root_v = components.Find(v);
+    if (root_u == root_v) continue;
+    // The smaller index becomes the root, so roots do not depend on edge order.
+    if (root_u < root_v) {
+      components.Link(root_v, root_u);
+    } else {
+      components.Link(root_u, root_v);
+    }
+  }
+  // Components in the order of their smallest node; nodes sorted within.
+  std::vector<size_t> component_of_node(keys.size());
+  std::vector<size_t> component_of_root(keys.size(), SIZE_MAX);
+  std::vector<std::vector<size_t>> component_nodes;
+  for (size_t i = 0; i < keys.size(); ++i) {
+    const size_t root = components.Find(i);
+    if (component_of_root[root] == SIZE_MAX) {
+      component_of_root[root] = component_nodes.size();
+      component_nodes.emplace_back();
+    }
+    component_of_node[i] = component_of_root[root];
+    component_nodes[component_of_root[root]].push_back(i);
+  }
+  stats.num_components = component_nodes.size();
+
+  std::vector<bool> inconsistent(component_nodes.size(), false);
+  for (size_t c = 0; c < component_nodes.size(); ++c) {
+    const std::vector<size_t>& nodes = component_nodes[c];
+    for (size_t k = 1; k < nodes.size(); ++k) {
+      if (KeyImage(keys[nodes[k]]) == KeyImage(keys[nodes[k - 1]])) {
+        inconsistent[c] = true;
+        break;
+      }
+    }
+    if (inconsistent[c]) ++stats.num_inconsistent_components;
+  }
+  // Edges of the inconsistent components (only needed for kSplit).
+  std::vector<std::vector<std::pair<size_t, size_t>>> component_edges(component_nodes.size());
+  if (options.conflict_policy == TrackConflictPolicy::kSplit) {
+    for (const auto& edge : edges) {
+      const size_t c = component_of_node[edge.first];
+      if (inconsistent[c]) component_edges[c].push_back(edge);
+    }
+  }
+
+  const auto emit = [&](const std::vector<size_t>& nodes) {
+    if (nodes.size() < static_cast<size_t>(options.min_track_length)) {
+      ++stats.num_dropped_short;
+      return;
+    }
+    Track track;
+    track.elements.reserve(nodes.size());
+    for (size_t node : nodes) track.elements.push_back(KeyElement(keys[node]));
+    result.tracks.push_back(std::move(track));
+  };
+
+  for (size_t c = 0; c < component_nodes.size(); ++c) {
+    if (!inconsistent[c]) {
+      emit(component_nodes[c]);
+      continue;
+    }
+    if (options.conflict_policy == TrackConflictPolicy::kDrop) {
+      ++stats.num_dropped_inconsistent;
+      continue;
+    }
+    const std::vector<std::vector<size_t>> pieces =
+        SplitComponent(keys, component_nodes[c], component_edges[c], &stats.num_refused_matches);
+    stats.num_split_pieces += pieces.size();
+    for (const std::vector<size_t>& piece : pieces) emit(piece);
+  }
+
+  // Nodes are sorted within each track, and tracks are disjoint, so the first
+  // element orders them.
+  std::sort(result.tracks.begin(), result.tracks.end(), [](const Track& a, const Track& b) {
+    const TrackElement& ea = a.elements.front();
+    const TrackElement& eb = b.elements.front();
+    return MakeKey(ea.image_id, ea.point2D_idx) < MakeKey(eb.image_id, eb.point2D_idx);
+  });
+  stats.num_tracks = result.tracks.size();
+  for (const Track& track : result.tracks) {
+    stats.num_observations += track.Length();
+    if (stats.length_histogram.size() <= track.Length()) {
+      stats.length_histogram.resize(track.Length() + 1, 0);
+    }
+    ++stats.length_histogram[track.Length()];
+  }
+  return result;
+}
+
+}  // namespace viosfm

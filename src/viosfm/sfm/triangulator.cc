@@ -1,0 +1,309 @@
+#include "viosfm/sfm/triangulator.h"
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <limits>
+#include <sstream>
+#include <utility>
+
+#include "viosfm/geometry/triangulation.h"
+#include "viosfm/sensor/camera_models.h"
+#include "viosfm/util/errors.h"
+
+namespace viosfm {
+namespace {
+
+constexpr double kRadToDeg = 180.0 / M_PI;
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+// Gauss-Newton stops when a step moves the point by less than this fraction
+// of its distance from the origin (plus one metre).
+constexpr double kRefineStepTolerance = 1e-12;
+
+double SquaredCost(const std::vector<TriangulationView>& views, const std::vector<size_t>& active,
+                   const Eigen::Vector3d& point) {
+  double cost = 0.0;
+  for (size_t i : active) {
+    const double error =
+        ReprojectionErrorPx(*views[i].camera, views[i].cam_from_world, point, views[i].pixel);
+    if (!std::isfinite(error)) return kInfinity;
+    cost += error * error;
+  }
+  return cost;
+}
+
+// Gauss-Newton on the sum of squared pixel reprojection errors of the active
+// views; a step is taken only if it lowers the cost.
+Eigen::Vector3d RefinePoint(const std::vector<TriangulationView>& views,
+                            const std::vector<size_t>& active, Eigen::Vector3d point,
+                            int max_iterations) {
+  double cost = SquaredCost(views, active, point);
+  if (!std::isfinite(cost)) return point;
+  for (int iteration = 0; iteration < max_iterations; ++iteration) {
+    Eigen::Matrix3d hessian = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d gradient = Eigen::Vector3d::Zero();
+    for (size_t i : active) {
+      const TriangulationView& view = views[i];
+      const Eigen::Vector3d point_in_cam = view.cam_from_world * point;
+      const std::optional<Eigen::Vector2d> projected = Project(*view.camera, point_in_cam);
+      if (!projected) return point;
+      const Eigen::Vector2d residual = *projected - view.pixel;
+      const Eigen::Matrix<double, 2, 3> jacobian =
+          ProjectJacobianWrtPoint(*view.camera, point_in_cam) *
+          view.cam_from_world.rotation.toRotationMatrix();
+      hessian += jacobian.transpose() * jacobian;
+      gradient += jacobian.transpose() * residual;
+    }
+    const Eigen::LDLT<Eigen::Matrix3d> ldlt(hessian);
+    if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) break;
+    const Eigen::Vector3d step = -ldlt.solve(gradient);
+    if (!step.allFinite()) break;
+    const Eigen::Vector3d candidate = point + step;
+    const double candidate_cost = SquaredCost(views, active, candidate);
+    if (!(candidate_cost < cost)) break;
+    point = candidate;
+    cost = candidate_cost;
+    if (step.norm() < kRefineStepTolerance * (1.0 + point.norm())) break;
+  }
+  return point;
+}
+
+}  // namespace
+
+std::string TriangulationOptions::Validate() const {
+  if (!(min_angle_deg > 0.0 && min_angle_deg < 180.0)) return "min_angle_deg must be in (0, 180)";
+  if (!(max_reprojection_error_px > 0.0) || !std::isfinite(max_reprojection_error_px)) {
+    return "max_reprojection_error_px must be > 0 and finite";
+  }
+  if (max_refine_iterations < 1) return "max_refine_iterations must be >= 1";
+  return "";
+}
+
+double ReprojectionErrorPx(const Camera& camera, const Rigid3d& cam_from_world,
+                           const Eigen::Vector3d& point_in_world, const Eigen::Vector2d& pixel) {
+  const Eigen::Vector3d point_in_cam = cam_from_world * point_in_world;
+  if (!HasPositiveDepth(cam_from_world, point_in_world)) return kInfinity;
+  const std::optional<Eigen::Vector2d> projected = Project(camera, point_in_cam);
+  if (!projected) return kInfinity;
+  return (*projected - pixel).norm();
+}
+
+double MaxTriangulationAngle(const std::vector<Eigen::Vector3d>& centers,
+                             const Eigen::Vector3d& point_in_world) {
+  // The largest angle is the smallest cosine between unit rays.
+  std::vector<Eigen::Vector3d> rays;
+  rays.reserve(centers.size());
+  for (const Eigen::Vector3d& center : centers) {
+    const Eigen::Vector3d ray = point_in_world - center;
+    const double norm = ray.norm();
+    if (norm > 0.0) rays.push_back(ray / norm);
+  }
+  if (rays.size() < 2) return 0.0;
+  size_t best_i = 0;
+  size_t best_j = 1;
+  double min_cosine = kInfinity;
+  for (size_t i = 0; i < rays.size(); ++i) {
+    for (size_t j = i + 1; j < rays.size(); ++j) {
+      const double cosine = rays[i].dot(rays[j]);
+      if (cosine < min_cosine) {
+        min_cosine = cosine;
+        best_i = i;
+        best_j = j;
+      }
+    }
+  }
+  // atan2 of the best pair is accurate also for tiny angles (acos is not).
+  return std::atan2(rays[best_i].cross(rays[best_j]).norm(), rays[best_i].dot(rays[best_j]));
+}
+
+std::optional<TrackTriangulation> TriangulateTrack(const std::vector<TriangulationView>& views,
+                                                   const TriangulationOptions& options) {
+  VIOSFM_CHECK(options.Check()) << options.Validate();
+  const size_t num_views = views.size();
+  std::vector<Eigen::Vector2d> normalized(num_views);
+  std::vector<Matrix3x4d> matrices(num_views);
+  std::vector<size_t> active;
+  active.reserve(num_views);
+  for (size_t i = 0; i < num_views; ++i) {
+    VIOSFM_CHECK(views[i].camera != nullptr) << "view " << i << " has no camera";
+    normalized[i] = ImageToCam(*views[i].camera, views[i].pixel);
+    matrices[i] = views[i].cam_from_world.ToMatrix();
+    // A fisheye pixel beyond 90 degrees has no normalised coordinates.
+    if (normalized[i].allFinite()) active.push_back(i);
+  }
+
+  std::optional<Eigen::Vector3d> accepted;
+  std::vector<double> errors;
+  while (active.size() >= 2) {
+    std::vector<Matrix3x4d> active_matrices;
+    std::vector<Eigen::Vector2d> active_normalized;
+    for (size_t i : active) {
+      active_matrices.push_back(matrices[i]);
+      active_normalized.push_back(normalized[i]);
+    }
+    const std::optional<Eigen::Vector3d> dlt = TriangulateDlt(active_matrices, active_normalized);
+    if (!dlt) return std::nullopt;
+    Eigen::Vector3d point = *dlt;
+    if (options.refine) point = RefinePoint(views, active, point, options.max_refine_iterations);
+
+    // The worst view: behind the camera (most negative depth first), else
+    // the largest reprojection error.
+    errors.assign(active.size(), 0.0);
+    size_t worst = 0;
+    double worst_depth = kInfinity;
+    double worst_error = -1.0;
+    bool all_pass = true;
+    for (size_t k = 0; k < active.size(); ++k) {
+      const TriangulationView& view = views[active[k]];
+      const double depth = (view.cam_from_world * point).z();
+      errors[k] = ReprojectionErrorPx(*view.camera, view.cam_from_world, point, view.pixel);
+      const bool in_front = std::isfinite(errors[k]);
+      if (!in_front || errors[k] > options.max_reprojection_error_px) all_pass = false;
+      const bool worse = !in_front ? (worst_error < kInfinity || depth < worst_depth)
+                                   : (worst_error < kInfinity && errors[k] > worst_error);
+      if (worse) {
+        worst = k;
+        worst_error = errors[k];
+        worst_depth = in_front ? kInfinity : depth;
+      }
+    }
+    if (all_pass) {
+      accepted = point;
+      break;
+    }
+    active.erase(active.begin() + static_cast<std::ptrdiff_t>(worst));
+  }
+  if (!accepted) return std::nullopt;
+
+  std::vector<Eigen::Vector3d> centers;
+  centers.reserve(active.size());
+  for (size_t i : active) centers.push_back(ProjectionCenter(views[i].cam_from_world));
+  const double max_angle_deg = MaxTriangulationAngle(centers, *accepted) * kRadToDeg;
+  if (!(max_angle_deg >= options.min_angle_deg)) return std::nullopt;
+
+  TrackTriangulation result;
+  result.point_in_world = *accepted;
+  result.inlier_views = active;
+  result.errors_px = errors;
+  double sum = 0.0;
+  for (double error : errors) sum += error;
+  result.mean_error_px = sum / static_cast<double>(errors.size());
+  result.max_angle_deg = max_angle_deg;
+  return result;
+}
+
+std::string TriangulationStatistics::Summary() const {
+  std::ostringstream out;
+  out << "new points " << num_points_added << " of " << num_tracks_tried << " tracks tried ("
+      << num_new_point_observations << " observations), extended points " << num_points_extended
+      << " (+" << num_extension_observations << " observations), rejected observations "
+      << num_rejected_observations;
+  return out.str();
+}
+
+TriangulationStatistics TriangulateReconstruction(Reconstruction* reconstruction,
+                                                  const std::vector<Track>& tracks,
+                                                  const std::vector<image_t>& image_ids,
+                                                  const TriangulationOptions& options) {
+  VIOSFM_CHECK(reconstruction != nullptr);
+  VIOSFM_CHECK(options.Check()) << options.Validate();
+  std::vector<image_t> allowed = image_ids;
+  std::sort(allowed.begin(), allowed.end());
+  allowed.erase(std::unique(allowed.begin(), allowed.end()), allowed.end());
+  for (image_t image_id : allowed) {
+    VIOSFM_CHECK(reconstruction->ExistsImage(image_id)) << "no image " << image_id;
+  }
+  const auto is_allowed = [&allowed](image_t image_id) {
+    return std::binary_search(allowed.begin(), allowed.end(), image_id);
+  };
+
+  TriangulationStatistics stats;
+  std::vector<TrackElement> candidates;
+  std::vector<std::pair<point3D_t, size_t>> point_counts;
+  std::vector<TriangulationView> views;
+  for (const Track& track : tracks) {
+    candidates.clear();
+    point_counts.clear();
+    for (const TrackElement& element : track.elements) {
+      if (!reconstruction->ExistsImage(element.image_id)) continue;
+      const Image& image = reconstruction->GetImage(element.image_id);
+      VIOSFM_CHECK_LT(element.point2D_idx, image.points2D.size())
+          << "track element of image " << element.image_id << " out of range";
+      const point3D_t point3D_id = image.points2D[element.point2D_idx].point3D_id;
+      if (point3D_id != kInvalidPoint3DId) {
+        auto it =
+            std::find_if(point_counts.begin(), point_counts.end(),
+                         [point3D_id](const auto& entry) { return entry.first == point3D_id; });
+        if (it == point_counts.end()) {
+          point_counts.emplace_back(point3D_id, 1);
+        } else {
+          ++it->second;
+        }
+      } else if (is_allowed(element.image_id)) {
+        candidates.push_back(element);
+      }
+    }
+
+    if (point_counts.empty()) {
+      if (candidates.size() < 2) continue;
+      ++stats.num_tracks_tried;
+      views.clear();
+      for (const TrackElement& element : candidates) {
+        const Image& image = reconstruction->GetImage(element.image_id);
+        views.push_back({&reconstruction->GetCamera(image.camera_id), image.cam_from_world,
+                         image.points2D[element.point2D_idx].xy});
+      }
+      const std::optional<TrackTriangulation> triangulation = TriangulateTrack(views, options);
+      if (!triangulation) {
+        stats.num_rejected_observations += candidates.size();
+        continue;
+      }
+      Point3D point3D;
+      point3D.xyz = triangulation->point_in_world;
+      point3D.error = triangulation->mean_error_px;
+      for (size_t i : triangulation->inlier_views) point3D.track.push_back(candidates[i]);
+      reconstruction->AddPoint3D(std::move(point3D));
+      ++stats.num_points_added;
+      stats.num_new_point_observations += triangulation->inlier_views.size();
+      stats.num_rejected_observations += candidates.size() - triangulation->inlier_views.size();
+      continue;
+    }
+
+    // Extend the point the track observes most often.
+    point3D_t point3D_id = point_counts.front().first;
+    size_t best_count = point_counts.front().second;
+    for (const auto& [id, count] : point_counts) {
+      if (count > best_count || (count == best_count && id < point3D_id)) {
+        point3D_id = id;
+        best_count = count;
+      }
+    }
+    const Eigen::Vector3d xyz = reconstruction->GetPoint3D(point3D_id).xyz;
+    size_t num_added = 0;
+    for (const TrackElement& element : candidates) {
+      const std::vector<TrackElement>& point_track = reconstruction->GetPoint3D(point3D_id).track;
+      const bool image_seen =
+          std::any_of(point_track.begin(), point_track.end(),
+                      [&element](const TrackElement& e) { return e.image_id == element.image_id; });
+      if (image_seen) continue;
+      const Image& image = reconstruction->GetImage(element.image_id);
+      const double error =
+          ReprojectionErrorPx(reconstruction->GetCamera(image.camera_id), image.cam_from_world, xyz,
+                              image.points2D[element.point2D_idx].xy);
+      if (error <= options.max_reprojection_error_px) {
+        reconstruction->AddObservation(point3D_id, element);
+        ++num_added;
+      } else {
+        ++stats.num_rejected_observations;
+      }
+    }
+    if (num_added > 0) {
+      ++stats.num_points_extended;
+      stats.num_extension_observations += num_added;
+    }
+  }
+  return stats;
+}
+
+}  // namespace viosfm
