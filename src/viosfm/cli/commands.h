@@ -10,5 +10,6 @@ namespace viosfm::cli {
 void RegisterEval(CLI::App& app);
 void RegisterSimulate(CLI::App& app);
 void RegisterFeatures(CLI::App& app);
+void RegisterMatch(CLI::App& app);
 
 }  // namespace viosfm::cli

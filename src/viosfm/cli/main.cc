@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
 
   viosfm::cli::RegisterSimulate(app);
   viosfm::cli::RegisterFeatures(app);
+  viosfm::cli::RegisterMatch(app);
   viosfm::cli::RegisterEval(app);
 
   try {

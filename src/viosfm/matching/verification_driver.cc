@@ -1,0 +1,448 @@
+#include "viosfm/matching/verification_driver.h"
+
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <map>
+#include <memory>
+#include <optional>
+#include <set>
+#include <sstream>
+#include <unordered_map>
+#include <unordered_set>
+
+#include "viosfm/features/feature_extraction.h"
+#include "viosfm/features/sift.h"
+#include "viosfm/geometry/epipolar.h"
+#include "viosfm/sensor/camera_models.h"
+#include "viosfm/util/errors.h"
+#include "viosfm/util/logging.h"
+#include "viosfm/util/parallel.h"
+#include "viosfm/util/progress.h"
+#include "viosfm/util/timer.h"
+
+namespace viosfm {
+namespace {
+
+// SplitMix64 finaliser: an independent seed per pair.
+uint64_t MixSeed64(uint64_t seed, uint64_t index) {
+  uint64_t z = seed + 0x9E3779B97F4A7C15ULL * (index + 1);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+  return z ^ (z >> 31);
+}
+
+struct ImageInfo {
+  image_t image_id = kInvalidImageId;
+  std::string name;
+  camera_t camera_id = kInvalidCameraId;
+  timestamp_ns_t timestamp_ns = 0;
+  std::optional<Rigid3d> world_from_body;  // the VIO pose, if associated
+};
+
+// Features of one image as the per-pair steps use them.
+struct ImageData {
+  std::vector<Eigen::Vector2d> points_normalized;       // undistorted x/z, y/z
+  std::vector<Eigen::Vector2d> points_px;               // undistorted pixels (guided matching)
+  std::shared_ptr<const FloatDescriptors> descriptors;  // null if not needed
+};
+
+// The pose of `trajectory` nearest in time to `stamp`, if within `tolerance`.
+std::optional<Rigid3d> NearestPose(const Trajectory& trajectory, timestamp_ns_t stamp,
+                                   timestamp_ns_t tolerance) {
+  if (trajectory.empty()) return std::nullopt;
+  const auto it = std::lower_bound(
+      trajectory.poses.begin(), trajectory.poses.end(), stamp,
+      [](const StampedPose& pose, timestamp_ns_t t) { return pose.timestamp_ns < t; });
+  const StampedPose* best = nullptr;
+  timestamp_ns_t best_gap = 0;
+  const auto consider = [&](const StampedPose& pose) {
+    const timestamp_ns_t gap =
+        pose.timestamp_ns > stamp ? pose.timestamp_ns - stamp : stamp - pose.timestamp_ns;
+    if (best == nullptr || gap < best_gap) {
+      best = &pose;
+      best_gap = gap;
+    }
+  };
+  if (it != trajectory.poses.end()) consider(*it);
+  if (it != trajectory.poses.begin()) consider(*(it - 1));
+  if (best == nullptr || best_gap > tolerance) return std::nullopt;
+  return best->world_from_frame;
+}
+
+std::string FormatDouble(double value) {
+  std::ostringstream stream;
+  stream << std::setprecision(10) << value;
+  return stream.str();
+}
+
+// The result of one pair's worker.
+struct PairWork {
+  PairDecision decision;
+  FeatureMatches matches;  // to store (new pairs only)
+  std::optional<TwoViewGeometry> geometry;
+};
+
+}  // namespace
+
+std::string VerificationOptions::Validate() const {
+  if (std::string error = pairs.Validate(); !error.empty()) return "pairs." + error;
+  if (pairs.mode == PairMode::kPairList) return "pairs.mode: pair_list is not supported here";
+  if (pairs.mode == PairMode::kTemporalRetrieval && pairs.num_retrieval_neighbors > 0) {
+    RetrievalOptions checked = retrieval;
+    checked.num_neighbors = pairs.num_retrieval_neighbors;
+    if (std::string error = checked.Validate(); !error.empty()) return "retrieval." + error;
+  }
+  if (std::string error = matching.Validate(); !error.empty()) return "matching." + error;
+  if (std::string error = prior.Validate(); !error.empty()) return "prior." + error;
+  if (!(guided_band_px > 0.0) || !std::isfinite(guided_band_px)) {
+    return "guided_band_px must be positive";
+  }
+  if (std::string error = geometry.Validate(); !error.empty()) return "geometry." + error;
+  if (max_pose_time_difference_ns < 0) return "max_pose_time_difference_ns must be >= 0";
+  if (batch_size < 1) return "batch_size must be >= 1";
+  return "";
+}
+
+std::vector<std::pair<std::string, std::string>> VerificationOptions::ToKeyValues() const {
+  return {
+      {"pairs.mode", PairModeName(pairs.mode)},
+      {"pairs.num_temporal_neighbors", std::to_string(pairs.num_temporal_neighbors)},
+      {"pairs.num_retrieval_neighbors", std::to_string(pairs.num_retrieval_neighbors)},
+      {"retrieval.vocabulary_path", retrieval.vocabulary_path},
+      {"retrieval.vocabulary.branching", std::to_string(retrieval.vocabulary.branching)},
+      {"retrieval.vocabulary.depth", std::to_string(retrieval.vocabulary.depth)},
+      {"matching.max_ratio", FormatDouble(matching.max_ratio)},
+      {"matching.max_distance", FormatDouble(matching.max_distance)},
+      {"matching.cross_check", matching.cross_check ? "true" : "false"},
+      {"use_vio_prior", use_vio_prior ? "true" : "false"},
+      {"prior.max_epipolar_error_px", FormatDouble(prior.max_epipolar_error_px)},
+      {"prior.max_outlier_ratio", FormatDouble(prior.max_outlier_ratio)},
+      {"prior.min_baseline_m", FormatDouble(prior.min_baseline_m)},
+      {"guided_matching", guided_matching ? "true" : "false"},
+      {"guided_band_px", FormatDouble(guided_band_px)},
+      {"geometry.max_error_px", FormatDouble(geometry.max_error_px)},
+      {"geometry.min_num_inliers", std::to_string(geometry.min_num_inliers)},
+      {"geometry.confidence", FormatDouble(geometry.confidence)},
+      {"geometry.min_num_trials", std::to_string(geometry.min_num_trials)},
+      {"geometry.max_num_trials", std::to_string(geometry.max_num_trials)},
+      {"geometry.local_optimization", geometry.local_optimization ? "true" : "false"},
+      {"geometry.refine_relative_pose", geometry.refine_relative_pose ? "true" : "false"},
+      {"max_pose_time_difference_ns", std::to_string(max_pose_time_difference_ns)},
+      {"num_threads", std::to_string(num_threads)},
+      {"seed", std::to_string(seed)},
+  };
+}
+
+Trajectory CameraToBodyTrajectory(const Trajectory& world_from_cam, const Rigid3d& body_from_cam) {
+  Trajectory result = world_from_cam;
+  const Rigid3d cam_from_body = body_from_cam.Inverse();
+  for (StampedPose& pose : result.poses)
+    pose.world_from_frame = pose.world_from_frame * cam_from_body;
+  return result;
+}
+
+std::string FormatVerificationSummary(const VerificationSummary& s) {
+  std::ostringstream out;
+  out << s.num_pairs << " pairs of " << s.num_images << " images (" << s.num_images_with_prior
+      << " with a VIO pose): " << s.num_accepted << " accepted, " << s.num_vio_rejected
+      << " rejected by VIO, " << s.num_ransac_rejected << " by RANSAC, " << s.num_no_matches
+      << " without matches";
+  if (s.num_pairs_without_prior > 0) out << "; " << s.num_pairs_without_prior << " RANSAC only";
+  if (s.num_resumed > 0) out << "; " << s.num_resumed << " already stored";
+  out << std::fixed << std::setprecision(2) << "; " << s.seconds_total << " s (pairs "
+      << s.seconds_pair_generation << " s, loading " << s.seconds_loading << " s, writing "
+      << s.seconds_writing << " s; thread-seconds: matching " << s.seconds_matching << ", VIO "
+      << s.seconds_vio << ", RANSAC " << s.seconds_ransac << ")";
+  return out.str();
+}
+
+VerificationResult RunVerification(const Sequence& sequence, const Trajectory& vio_world_from_body,
+                                   ColmapDatabase* database, const VerificationOptions& options) {
+  VIOSFM_CHECK(database != nullptr);
+  if (const std::string error = options.Validate(); !error.empty()) {
+    throw InputError("invalid verification options: " + error);
+  }
+  Timer total_timer;
+  VerificationResult result;
+  VerificationSummary& summary = result.summary;
+  summary.options = options.ToKeyValues();
+  const std::string database_path = database->path().string();
+
+  // Images: the database's images that belong to the sequence, in time order.
+  Timer step_timer;
+  std::unordered_map<std::string, timestamp_ns_t> stamps_by_name;
+  for (const SequenceImage& image : sequence.images) {
+    stamps_by_name.emplace(DatabaseImageName(image), image.timestamp_ns);
+  }
+  std::vector<ImageInfo> images;
+  for (const DatabaseImage& row : database->ReadAllImages()) {
+    const auto it = stamps_by_name.find(row.name);
+    if (it == stamps_by_name.end()) continue;
+    if (!database->ExistsFeatures(row.image_id)) {
+      throw InputError(database_path, 0,
+                       "image '" + row.name +
+                           "' has no keypoints/descriptors (run `viosfm "
+                           "features` first)");
+    }
+    ImageInfo info;
+    info.image_id = row.image_id;
+    info.name = row.name;
+    info.camera_id = row.camera_id;
+    info.timestamp_ns = it->second;
+    images.push_back(std::move(info));
+  }
+  std::sort(images.begin(), images.end(),
+            [](const ImageInfo& a, const ImageInfo& b) { return a.timestamp_ns < b.timestamp_ns; });
+  summary.num_images = images.size();
+  const bool use_prior = options.use_vio_prior && !vio_world_from_body.empty();
+  for (ImageInfo& info : images) {
+    if (use_prior) {
+      info.world_from_body =
+          NearestPose(vio_world_from_body, info.timestamp_ns, options.max_pose_time_difference_ns);
+    }
+    if (info.world_from_body) ++summary.num_images_with_prior;
+  }
+  if (use_prior && summary.num_images_with_prior < images.size()) {
+    VIOSFM_LOG(WARNING) << "verification: " << images.size() - summary.num_images_with_prior
+                        << " of " << images.size() << " images have no VIO pose within "
+                        << FormatNsAsSeconds(options.max_pose_time_difference_ns, 3)
+                        << " s; their pairs are verified by RANSAC only";
+  }
+  std::unordered_map<image_t, size_t> index_by_id;
+  for (size_t k = 0; k < images.size(); ++k) index_by_id[images[k].image_id] = k;
+  std::map<camera_t, Camera> cameras;
+  for (const ImageInfo& info : images) {
+    if (!cameras.count(info.camera_id)) {
+      cameras.emplace(info.camera_id, database->ReadCamera(info.camera_id));
+    }
+  }
+
+  // Pairs.
+  PairGeneratorInput input;
+  for (const ImageInfo& info : images) input.images.push_back({info.image_id, info.timestamp_ns});
+  const int n1 = options.pairs.num_temporal_neighbors;
+  const int n2 = options.pairs.num_retrieval_neighbors;
+  std::set<ImagePair> temporal_pairs;
+  if (options.pairs.mode == PairMode::kTemporalRetrieval) {
+    std::vector<std::vector<image_t>> exclude(images.size());
+    for (size_t k = 0; k < images.size(); ++k) {
+      for (const size_t j : TemporalNeighbors(input.images, k, n1)) {
+        exclude[k].push_back(images[j].image_id);
+        temporal_pairs.insert(ImagePair::Ordered(images[k].image_id, images[j].image_id));
+      }
+    }
+    // Retrieval only if some image has candidates beyond its temporal neighbours.
+    if (n2 > 0 && images.size() > static_cast<size_t>(n1) + 1) {
+      RetrievalOptions retrieval = options.retrieval;
+      retrieval.num_neighbors = n2;
+      retrieval.num_threads = options.num_threads;
+      retrieval.vocabulary.num_threads = options.num_threads;
+      retrieval.vocabulary.seed = options.seed;
+      std::vector<image_t> ids;
+      for (const ImageInfo& info : images) ids.push_back(info.image_id);
+      const DescriptorLoader load = [&](size_t index) {
+        return database->ReadDescriptors(ids[index]);
+      };
+      input.retrieval = RetrieveSimilarImages(ids, load, exclude, retrieval);
+    }
+  }
+  const std::vector<ImagePair> pairs = GeneratePairs(input, options.pairs);
+  summary.seconds_pair_generation = step_timer.ElapsedSeconds();
+  summary.num_pairs = pairs.size();
+  VIOSFM_LOG(INFO) << "verification: " << pairs.size() << " pairs of " << images.size()
+                   << " images (" << PairModeName(options.pairs.mode) << ", "
+                   << (use_prior ? "VIO prior + RANSAC" : "RANSAC only") << ")";
+
+  std::vector<bool> stored(pairs.size());
+  for (size_t i = 0; i < pairs.size(); ++i) {
+    stored[i] = database->ExistsMatches(pairs[i].image_id1, pairs[i].image_id2);
+  }
+
+  const int num_workers =
+      NumThreadsFor(std::max<int64_t>(1, options.batch_size), options.num_threads);
+  std::vector<double> matching_seconds(num_workers), vio_seconds(num_workers),
+      ransac_seconds(num_workers);
+  DescriptorMatchingOptions matching = options.matching;
+  matching.num_threads = 1;
+  GuidedMatchingOptions guided;
+  guided.matching = matching;
+  guided.max_epipolar_distance_px = options.guided_band_px;
+  const Rigid3d& body_from_cam = sequence.rig.body_from_cam;
+
+  ProgressBar progress(
+      "verifying pairs", static_cast<int64_t>(pairs.size()),
+      options.show_progress ? ProgressBar::Mode::kAuto : ProgressBar::Mode::kNever);
+  std::unordered_map<image_t, ImageData> cache;
+  result.decisions.reserve(pairs.size());
+  for (size_t begin = 0; begin < pairs.size(); begin += options.batch_size) {
+    const size_t end = std::min(pairs.size(), begin + static_cast<size_t>(options.batch_size));
+
+    // Load the batch's features (kept from the previous batch where needed again).
+    step_timer.Start();
+    std::unordered_map<image_t, bool> needed;  // image -> descriptors needed
+    for (size_t i = begin; i < end; ++i) {
+      needed[pairs[i].image_id1] |= !stored[i];
+      needed[pairs[i].image_id2] |= !stored[i];
+    }
+    for (auto it = cache.begin(); it != cache.end();) {
+      it = needed.count(it->first) ? std::next(it) : cache.erase(it);
+    }
+    for (const auto& [image_id, need_descriptors] : needed) {
+      ImageData& data = cache[image_id];
+      const Camera& camera = cameras.at(images[index_by_id.at(image_id)].camera_id);
+      if (data.points_normalized.empty()) {
+        data.points_normalized = UndistortKeypoints(camera, database->ReadKeypoints(image_id));
+        if (options.guided_matching) {
+          const Eigen::Matrix3d K = CalibrationMatrix(camera);
+          data.points_px.reserve(data.points_normalized.size());
+          for (const Eigen::Vector2d& x : data.points_normalized) {
+            data.points_px.push_back((K * x.homogeneous()).hnormalized());
+          }
+        }
+      }
+      if (need_descriptors && !data.descriptors) {
+        data.descriptors = std::make_shared<const FloatDescriptors>(
+            NormalizeDescriptors(database->ReadDescriptors(image_id)));
+      }
+    }
+    std::vector<PairWork> work(end - begin);
+    for (size_t i = begin; i < end; ++i) {
+      PairDecision& decision = work[i - begin].decision;
+      const ImageInfo& info1 = images[index_by_id.at(pairs[i].image_id1)];
+      const ImageInfo& info2 = images[index_by_id.at(pairs[i].image_id2)];
+      decision.image_id1 = info1.image_id;
+      decision.image_id2 = info2.image_id;
+      decision.name1 = info1.name;
+      decision.name2 = info2.name;
+      decision.source = options.pairs.mode == PairMode::kTemporalRetrieval
+                            ? (temporal_pairs.count(pairs[i]) ? "temporal" : "retrieval")
+                            : PairModeName(options.pairs.mode);
+      decision.has_vio_prior = info1.world_from_body && info2.world_from_body;
+      if (stored[i]) {
+        decision.resumed = true;
+        work[i - begin].matches = database->ReadMatches(info1.image_id, info2.image_id);
+        if (database->ExistsTwoViewGeometry(info1.image_id, info2.image_id)) {
+          decision.num_inliers = static_cast<int>(
+              database->ReadTwoViewGeometry(info1.image_id, info2.image_id).inlier_matches.size());
+          decision.accepted = decision.num_inliers > 0;
+        }
+      }
+    }
+    summary.seconds_loading += step_timer.ElapsedSeconds();
+
+    // Match and verify, in parallel over the batch's pairs.
+    ParallelFor(static_cast<int64_t>(end - begin), options.num_threads, [&](int64_t k, int thread) {
+      PairWork& pair_work = work[k];
+      PairDecision& decision = pair_work.decision;
+      const ImageInfo& info1 = images[index_by_id.at(decision.image_id1)];
+      const ImageInfo& info2 = images[index_by_id.at(decision.image_id2)];
+      const ImageData& data1 = cache.at(decision.image_id1);
+      const ImageData& data2 = cache.at(decision.image_id2);
+      const Camera& camera1 = cameras.at(info1.camera_id);
+      const Camera& camera2 = cameras.at(info2.camera_id);
+      Timer timer;
+      if (!decision.resumed) {
+        if (options.guided_matching && decision.has_vio_prior) {
+          const Rigid3d cam2_from_cam1 = RelativePoseFromVio(
+              *info1.world_from_body, *info2.world_from_body, body_from_cam, body_from_cam);
+          const Eigen::Matrix3d fundamental = FundamentalFromRelativePose(
+              cam2_from_cam1, CalibrationMatrix(camera1), CalibrationMatrix(camera2));
+          pair_work.matches =
+              MatchDescriptorsGuided(*data1.descriptors, *data2.descriptors, data1.points_px,
+                                     data2.points_px, fundamental, guided);
+        } else {
+          pair_work.matches = MatchDescriptors(*data1.descriptors, *data2.descriptors, matching);
+        }
+        matching_seconds[thread] += timer.ElapsedSeconds();
+      }
+      const FeatureMatches& matches = pair_work.matches;
+      decision.num_matches = static_cast<int>(matches.size());
+
+      // Step 1: the VIO prior.
+      if (decision.has_vio_prior && !matches.empty()) {
+        timer.Start();
+        const PriorVerificationResult check = VerifyPairWithVioPoses(
+            camera1, camera2, *info1.world_from_body, *info2.world_from_body, body_from_cam,
+            data1.points_normalized, data2.points_normalized, matches, options.prior);
+        decision.vio_outlier_ratio = check.outlier_ratio;
+        decision.vio_rotation_only = check.rotation_only;
+        decision.vio_rejected = !check.accepted;
+        vio_seconds[thread] += timer.ElapsedSeconds();
+      }
+      if (decision.resumed) {
+        // The stored geometry is the decision; the reason is reconstructed.
+        decision.vio_rejected = decision.vio_rejected && !decision.accepted;
+        decision.reason = decision.accepted       ? kPairAccepted
+                          : matches.empty()       ? kPairNoMatches
+                          : decision.vio_rejected ? kPairVioOutlierRatio
+                                                  : kPairTooFewInliers;
+        return;
+      }
+      if (matches.empty()) {
+        decision.reason = kPairNoMatches;
+        return;
+      }
+      if (decision.vio_rejected) {
+        decision.reason = kPairVioOutlierRatio;
+        return;
+      }
+
+      // Step 2: RANSAC.
+      timer.Start();
+      TwoViewGeometryOptions geometry = options.geometry;
+      geometry.seed =
+          MixSeed64(options.seed, ImagePairToPairId(decision.image_id1, decision.image_id2));
+      const TwoViewGeometryResult estimate = EstimateCalibratedTwoViewGeometry(
+          data1.points_normalized, data2.points_normalized, matches, camera1, camera2, geometry);
+      ransac_seconds[thread] += timer.ElapsedSeconds();
+      decision.num_inliers = estimate.num_inliers();
+      decision.accepted = estimate.accepted();
+      decision.reason = decision.accepted ? kPairAccepted : kPairTooFewInliers;
+      if (decision.accepted) pair_work.geometry = estimate.ToTwoViewGeometry();
+    });
+
+    // Store: matches and geometry of a pair together.
+    step_timer.Start();
+    for (PairWork& pair_work : work) {
+      const PairDecision& decision = pair_work.decision;
+      if (!decision.resumed) {
+        ColmapDatabase::Transaction transaction(*database);
+        database->WriteMatches(decision.image_id1, decision.image_id2, pair_work.matches);
+        if (pair_work.geometry) {
+          database->WriteTwoViewGeometry(decision.image_id1, decision.image_id2,
+                                         *pair_work.geometry);
+        }
+        transaction.Commit();
+      }
+      result.decisions.push_back(std::move(pair_work.decision));
+    }
+    summary.seconds_writing += step_timer.ElapsedSeconds();
+    progress.Update(static_cast<int64_t>(end - begin));
+  }
+  progress.Finish();
+
+  for (const PairDecision& decision : result.decisions) {
+    if (!decision.has_vio_prior) ++summary.num_pairs_without_prior;
+    if (decision.resumed) ++summary.num_resumed;
+    if (decision.accepted) {
+      ++summary.num_accepted;
+    } else if (decision.reason == kPairNoMatches) {
+      ++summary.num_no_matches;
+    } else if (decision.vio_rejected) {
+      ++summary.num_vio_rejected;
+    } else {
+      ++summary.num_ransac_rejected;
+    }
+  }
+  for (int t = 0; t < num_workers; ++t) {
+    summary.seconds_matching += matching_seconds[t];
+    summary.seconds_vio += vio_seconds[t];
+    summary.seconds_ransac += ransac_seconds[t];
+  }
+  summary.seconds_total = total_timer.ElapsedSeconds();
+  VIOSFM_LOG(INFO) << "verification: " << FormatVerificationSummary(summary);
+  return result;
+}
+
+}  // namespace viosfm

@@ -1,0 +1,113 @@
+// The paper's two-step VIO-aided geometric verification over a whole
+// sequence (its section "VIO-Aided Geometric Verification"):
+//  1. pairs: N1 temporal + N2 retrieval neighbours (or sequential /
+//     exhaustive), pair_generator.h and retrieval/image_retrieval.h;
+//  2. tentative matches: descriptor nearest neighbours with ratio and
+//     mutual checks (descriptor_matcher.h), in parallel over pairs;
+//  3. step 1, VIO prior: the pair's relative pose from the VIO trajectory
+//     gives a fundamental matrix; the pair is rejected when more than
+//     max_outlier_ratio of its matches lie farther than T_EE from their
+//     epipolar lines (estimators/prior_verification.h);
+//  4. step 2, RANSAC: essential-matrix RANSAC on the survivors; kept with at
+//     least min_num_inliers inliers (estimators/two_view_geometry.h).
+//
+// Input: a database whose images already have features (`viosfm features`,
+// features/feature_extraction.h: images are named by file name). Each
+// database image is tied to its sequence image by name, and to the VIO pose
+// nearest to that image's stamp within max_pose_time_difference_ns; an image
+// without such a pose has no prior, and its pairs are verified by RANSAC only
+// (PairDecision::has_vio_prior = false). Database images not in the sequence
+// are ignored.
+//
+// Output: per pair, the raw matches (matches table) and, for accepted pairs
+// only, the verified geometry (two_view_geometries, COLMAP's config
+// CALIBRATED), so `colmap mapper` can use the database; both written in one
+// transaction per pair, batch by batch, so an interrupted run keeps every
+// finished pair. A re-run skips the pairs whose matches are stored (resume):
+// their record says resumed, accepted iff a geometry is stored, and the VIO
+// check is recomputed from the stored matches for the report.
+#pragma once
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "viosfm/estimators/prior_verification.h"
+#include "viosfm/estimators/two_view_geometry.h"
+#include "viosfm/io/colmap_database.h"
+#include "viosfm/io/sequence.h"
+#include "viosfm/matching/descriptor_matcher.h"
+#include "viosfm/matching/pair_generator.h"
+#include "viosfm/retrieval/image_retrieval.h"
+#include "viosfm/scene/pair_decision.h"
+#include "viosfm/scene/trajectory.h"
+
+namespace viosfm {
+
+struct VerificationOptions {
+  // Pair generation: mode (default temporal_retrieval), N1 = 40, N2 = 30.
+  // kPairList is not supported here (use a pair list with COLMAP instead).
+  PairGeneratorOptions pairs;
+  // Retrieval for the N2 neighbours (num_neighbors is set from pairs; the
+  // vocabulary is trained on the sequence unless vocabulary_path is set).
+  RetrievalOptions retrieval;
+  // Descriptor matching (ratio 0.8, distance 0.7, mutual check);
+  // num_threads is ignored (the driver parallelises over pairs).
+  DescriptorMatchingOptions matching;
+  // Step 1: the VIO-prior check. Default true. false: RANSAC only (COLMAP's
+  // verification, the paper's baseline).
+  bool use_vio_prior = true;
+  // T_EE 20 px, outlier ratio 0.5 (the paper's), min baseline 0.01 m.
+  PriorVerificationOptions prior;
+  // Match inside the band of the VIO epipolar lines instead of by brute force
+  // (pairs with a prior only). Default false. With it the matches agree with
+  // the prior by construction, so step 1 rejects nothing and only RANSAC
+  // decides.
+  bool guided_matching = false;
+  // Half width of the guided-matching band, pixels. Default 20 (T_EE).
+  double guided_band_px = 20.0;
+  // Step 2: RANSAC (Sampson error 4 px, >= 15 inliers, confidence 0.999).
+  TwoViewGeometryOptions geometry;
+  // Largest gap between an image's stamp and the VIO pose used for it,
+  // nanoseconds. Default 5 ms (a quarter of a 20 Hz frame period).
+  timestamp_ns_t max_pose_time_difference_ns = 5'000'000;
+  // Pairs matched and verified per batch (memory: the features of the
+  // batch's images). Default 2000.
+  int batch_size = 2000;
+  // Worker threads over pairs (and retrieval); <= 0: all. Default 2.
+  int num_threads = 2;
+  // Seeds the RANSAC sampler (mixed with the pair id) and the vocabulary
+  // training (replacing retrieval.vocabulary.seed). Default 0.
+  uint64_t seed = 0;
+  // Draw progress bars. Default true.
+  bool show_progress = true;
+
+  std::string Validate() const;  // empty if valid, else names the bad field
+  bool Check() const { return Validate().empty(); }
+  // Every option as (name, value) text, for the report.
+  std::vector<std::pair<std::string, std::string>> ToKeyValues() const;
+};
+
+struct VerificationResult {
+  VerificationSummary summary;
+  // One per generated pair, in the pair generator's (sorted) order.
+  std::vector<PairDecision> decisions;
+};
+
+// Verifies the pairs of the sequence's images held in `database` (see the
+// top of this file). `vio_world_from_body` is the VIO trajectory as
+// world_from_body poses (the sequence's rig.body_from_cam gives the camera
+// poses); empty, or options.use_vio_prior false: RANSAC only. Throws
+// InputError for invalid options, a database image without features or a
+// camera model that cannot project.
+VerificationResult RunVerification(const Sequence& sequence, const Trajectory& vio_world_from_body,
+                                   ColmapDatabase* database, const VerificationOptions& options);
+
+// "120 pairs: 80 accepted, 30 rejected by VIO, 10 by RANSAC, ... ; 3.2 s"
+std::string FormatVerificationSummary(const VerificationSummary& summary);
+
+// A world_from_cam trajectory as world_from_body: each pose times
+// body_from_cam^-1 (for VIO that reports camera poses).
+Trajectory CameraToBodyTrajectory(const Trajectory& world_from_cam, const Rigid3d& body_from_cam);
+
+}  // namespace viosfm

@@ -1,0 +1,315 @@
+#include "viosfm/matching/verification_driver.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <set>
+
+#include "viosfm/features/feature_extraction.h"
+#include "viosfm/io/euroc.h"
+#include "viosfm/io/verification_report.h"
+#include "viosfm/sensor/camera_models.h"
+#include "viosfm/sim/sequence_simulator.h"
+#include "viosfm/util/errors.h"
+#include "viosfm/util/file_util.h"
+#include "viosfm/util/string_util.h"
+#include "viosfm/util/testing.h"
+
+namespace viosfm {
+namespace {
+namespace fs = std::filesystem;
+
+// A 1.2 s walk in the simulated room at 10 Hz (13 frames), rendered at half
+// the EuRoC resolution, with features extracted into `features.db`.
+struct Fixture {
+  fs::path folder;
+  Sequence sequence;
+  Trajectory vio_body;
+  fs::path features_db;
+};
+
+const Fixture& SharedFixture() {
+  static const Fixture fixture = [] {
+    Fixture f;
+    f.folder = testing::MakeScratchFolder("verification_driver");
+    SimulationOptions options;
+    options.scenario = "room";
+    options.duration_s = 1.2;
+    options.static_start_s = 0.0;
+    options.camera_rate_hz = 10.0;
+    options.texels_per_metre = 64.0;
+    options.seed = 3;
+    Camera camera = SimulationOptions::DefaultCamera();
+    camera.width /= 2;
+    camera.height /= 2;
+    for (int i = 0; i < 4; ++i)
+      camera.params[i] = i < 2 ? camera.params[i] / 2 : (camera.params[i] + 0.5) / 2 - 0.5;
+    options.camera = camera;
+    const SimulatedSequence simulated = SimulateSequence(options);
+    WriteSimulatedSequence(f.folder / "dataset", simulated, options);
+    f.sequence = ReadEurocDataset(f.folder / "dataset");
+    f.vio_body = simulated.vio_body;
+    f.features_db = f.folder / "features.db";
+    {
+      ColmapDatabase database = ColmapDatabase::Open(f.features_db);
+      SiftOptions sift;
+      sift.max_num_features = 1000;
+      ExtractFeatures(f.sequence, sift, &database, /*show_progress=*/false);
+    }
+    return f;
+  }();
+  return fixture;
+}
+
+// A fresh database holding only the features.
+fs::path CopyFeatures(const Fixture& f, const std::string& name) {
+  const fs::path path = f.folder / name;
+  fs::remove(path);
+  fs::copy_file(f.features_db, path);
+  return path;
+}
+
+VerificationOptions SmallOptions() {
+  VerificationOptions options;
+  options.pairs.num_temporal_neighbors = 2;
+  options.pairs.num_retrieval_neighbors = 2;
+  // 512 words: a vocabulary so small that every image holds every word
+  // would give every word zero IDF weight and retrieve nothing.
+  options.retrieval.vocabulary.branching = 8;
+  options.retrieval.vocabulary.depth = 3;
+  options.show_progress = false;
+  return options;
+}
+
+// The VIO trajectory with the pose of the image at `index` moved 3 m up and
+// turned 30 degrees about the vertical: a pose from somewhere else.
+Trajectory CorruptPose(const Trajectory& vio, size_t index) {
+  Trajectory corrupted = vio;
+  Rigid3d& pose = corrupted.poses.at(index).world_from_frame;
+  pose.rotation =
+      Eigen::Quaterniond(Eigen::AngleAxisd(30.0 * M_PI / 180.0, Eigen::Vector3d::UnitZ())) *
+      pose.rotation;
+  pose.translation += Eigen::Vector3d(0.0, 0.0, 3.0);
+  return corrupted;
+}
+
+const PairDecision* FindPair(const VerificationResult& result, const std::string& name1,
+                             const std::string& name2) {
+  for (const PairDecision& d : result.decisions) {
+    if ((d.name1 == name1 && d.name2 == name2) || (d.name1 == name2 && d.name2 == name1)) return &d;
+  }
+  return nullptr;
+}
+
+std::set<image_pair_t> AcceptedPairIds(const VerificationResult& result) {
+  std::set<image_pair_t> ids;
+  for (const PairDecision& d : result.decisions) {
+    if (d.accepted) ids.insert(ImagePairToPairId(d.image_id1, d.image_id2));
+  }
+  return ids;
+}
+
+std::set<image_pair_t> StoredGeometryPairIds(const ColmapDatabase& database) {
+  std::set<image_pair_t> ids;
+  for (const auto& [pair_id, geometry] : database.ReadAllTwoViewGeometries()) {
+    EXPECT_EQ(geometry.config, TwoViewGeometryConfig::kCalibrated);
+    ids.insert(pair_id);
+  }
+  return ids;
+}
+
+TEST(VerificationDriver, OptionsValidate) {
+  VerificationOptions options;
+  EXPECT_TRUE(options.Check());
+  EXPECT_EQ(options.pairs.num_temporal_neighbors, 40);
+  EXPECT_EQ(options.pairs.num_retrieval_neighbors, 30);
+  EXPECT_EQ(options.prior.max_epipolar_error_px, 20.0);
+  EXPECT_EQ(options.prior.max_outlier_ratio, 0.5);
+  options.prior.max_outlier_ratio = 1.5;
+  EXPECT_NE(options.Validate().find("prior."), std::string::npos);
+  options = VerificationOptions();
+  options.pairs.mode = PairMode::kPairList;
+  EXPECT_NE(options.Validate().find("pairs.mode"), std::string::npos);
+  options = VerificationOptions();
+  options.batch_size = 0;
+  EXPECT_NE(options.Validate().find("batch_size"), std::string::npos);
+}
+
+TEST(VerificationDriver, CameraToBodyTrajectoryInvertsTheExtrinsics) {
+  Trajectory body;
+  body.poses.push_back(
+      {5, Rigid3d(Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitY())),
+                  Eigen::Vector3d(1, 2, 3))});
+  const Rigid3d body_from_cam = SimulationOptions::DefaultBodyFromCam();
+  Trajectory cam = body;
+  cam.poses[0].world_from_frame = body.poses[0].world_from_frame * body_from_cam;
+  const Trajectory back = CameraToBodyTrajectory(cam, body_from_cam);
+  ASSERT_EQ(back.size(), 1u);
+  EXPECT_EQ(back.poses[0].timestamp_ns, 5);
+  EXPECT_LT((back.poses[0].world_from_frame.translation - Eigen::Vector3d(1, 2, 3)).norm(), 1e-12);
+  EXPECT_LT(back.poses[0].world_from_frame.rotation.angularDistance(
+                body.poses[0].world_from_frame.rotation),
+            1e-12);
+}
+
+TEST(VerificationDriver, VioPriorRejectsACorruptedPoseThatRansacAccepts) {
+  const Fixture& f = SharedFixture();
+  const size_t num_images = f.sequence.images.size();
+  ASSERT_GE(num_images, 12u);
+  ASSERT_EQ(f.vio_body.size(), num_images);
+  const size_t bad = 6;
+  const Trajectory corrupted = CorruptPose(f.vio_body, bad);
+  const auto name = [&](size_t k) { return DatabaseImageName(f.sequence.images[k]); };
+
+  // VIO prior + RANSAC.
+  const fs::path vio_db_path = CopyFeatures(f, "vio.db");
+  VerificationResult vio;
+  {
+    ColmapDatabase database = ColmapDatabase::Open(vio_db_path);
+    vio = RunVerification(f.sequence, corrupted, &database, SmallOptions());
+    EXPECT_EQ(vio.summary.num_images, num_images);
+    EXPECT_EQ(vio.summary.num_images_with_prior, num_images);
+    EXPECT_EQ(vio.summary.num_pairs, vio.decisions.size());
+    EXPECT_EQ(vio.summary.num_pairs_without_prior, 0u);
+    EXPECT_EQ(vio.summary.num_resumed, 0u);
+    EXPECT_EQ(vio.summary.num_accepted + vio.summary.num_vio_rejected +
+                  vio.summary.num_ransac_rejected + vio.summary.num_no_matches,
+              vio.summary.num_pairs);
+    // The database holds exactly the accepted pairs' geometries, and every
+    // pair's matches.
+    EXPECT_EQ(StoredGeometryPairIds(database), AcceptedPairIds(vio));
+    EXPECT_EQ(database.NumMatchedImagePairs(), vio.decisions.size());
+    for (const PairDecision& d : vio.decisions) {
+      EXPECT_EQ(database.ReadMatches(d.image_id1, d.image_id2).size(),
+                static_cast<size_t>(d.num_matches));
+      if (d.accepted) {
+        EXPECT_EQ(database.ReadTwoViewGeometry(d.image_id1, d.image_id2).inlier_matches.size(),
+                  static_cast<size_t>(d.num_inliers));
+      }
+    }
+  }
+  // Neighbouring frames (not involving the corrupted one) are accepted by
+  // both steps, with many inliers.
+  for (size_t k = 0; k + 1 < num_images; ++k) {
+    const PairDecision* d = FindPair(vio, name(k), name(k + 1));
+    ASSERT_NE(d, nullptr) << k;
+    EXPECT_EQ(d->source, "temporal");
+    if (k == bad - 1 || k == bad) {
+      // The corrupted pose's pairs: rejected by the VIO step.
+      EXPECT_TRUE(d->vio_rejected) << k;
+      EXPECT_GT(d->vio_outlier_ratio, 0.5) << k;
+      EXPECT_FALSE(d->accepted) << k;
+      EXPECT_EQ(d->reason, kPairVioOutlierRatio);
+      continue;
+    }
+    EXPECT_TRUE(d->accepted) << k;
+    EXPECT_TRUE(d->has_vio_prior) << k;
+    EXPECT_LT(d->vio_outlier_ratio, 0.2) << k;
+    EXPECT_GT(d->num_inliers, 100) << k;
+  }
+  EXPECT_GE(vio.summary.num_vio_rejected, 2u);
+  // Exactly the pairs with the corrupted image are rejected by the VIO step.
+  for (const PairDecision& d : vio.decisions) {
+    const bool involves_bad = d.name1 == name(bad) || d.name2 == name(bad);
+    EXPECT_EQ(d.vio_rejected, involves_bad) << d.name1 << " " << d.name2;
+    EXPECT_EQ(d.accepted, !involves_bad) << d.name1 << " " << d.name2;
+  }
+  // Retrieval adds pairs beyond the N1 = 2 temporal neighbours.
+  size_t num_retrieval = 0;
+  for (const PairDecision& d : vio.decisions) num_retrieval += d.source == "retrieval";
+  EXPECT_GT(num_retrieval, 0u);
+
+  // RANSAC only: the same pairs are accepted.
+  const fs::path ransac_db_path = CopyFeatures(f, "ransac.db");
+  VerificationOptions ransac_options = SmallOptions();
+  ransac_options.use_vio_prior = false;
+  ColmapDatabase ransac_db = ColmapDatabase::Open(ransac_db_path);
+  const VerificationResult ransac =
+      RunVerification(f.sequence, corrupted, &ransac_db, ransac_options);
+  EXPECT_EQ(ransac.summary.num_images_with_prior, 0u);
+  EXPECT_EQ(ransac.summary.num_vio_rejected, 0u);
+  for (const size_t k : {bad - 1, bad}) {
+    const PairDecision* d = FindPair(ransac, name(k), name(k + 1));
+    ASSERT_NE(d, nullptr);
+    EXPECT_TRUE(std::isnan(d->vio_outlier_ratio));
+    EXPECT_FALSE(d->has_vio_prior);
+    EXPECT_TRUE(d->accepted) << k;
+    EXPECT_GT(d->num_inliers, 100) << k;
+  }
+  EXPECT_EQ(StoredGeometryPairIds(ransac_db), AcceptedPairIds(ransac));
+  // Same pairs, same matches: VIO-aided accepts a subset of RANSAC-only.
+  ASSERT_EQ(ransac.decisions.size(), vio.decisions.size());
+  for (size_t i = 0; i < vio.decisions.size(); ++i) {
+    EXPECT_EQ(vio.decisions[i].num_matches, ransac.decisions[i].num_matches) << i;
+    if (vio.decisions[i].accepted) {
+      EXPECT_TRUE(ransac.decisions[i].accepted) << i;
+    }
+  }
+
+  // Resume: a second run skips every stored pair and reports the same.
+  {
+    ColmapDatabase database = ColmapDatabase::Open(vio_db_path);
+    const VerificationResult again =
+        RunVerification(f.sequence, corrupted, &database, SmallOptions());
+    EXPECT_EQ(again.summary.num_resumed, vio.decisions.size());
+    ASSERT_EQ(again.decisions.size(), vio.decisions.size());
+    for (size_t i = 0; i < vio.decisions.size(); ++i) {
+      const PairDecision& a = again.decisions[i];
+      const PairDecision& b = vio.decisions[i];
+      EXPECT_TRUE(a.resumed);
+      EXPECT_EQ(a.image_id1, b.image_id1);
+      EXPECT_EQ(a.image_id2, b.image_id2);
+      EXPECT_EQ(a.accepted, b.accepted) << i;
+      EXPECT_EQ(a.num_matches, b.num_matches) << i;
+      EXPECT_EQ(a.num_inliers, b.num_inliers) << i;
+      EXPECT_EQ(a.vio_rejected, b.vio_rejected) << i;
+      EXPECT_EQ(a.reason, b.reason) << i;
+    }
+    EXPECT_EQ(again.summary.num_accepted, vio.summary.num_accepted);
+    EXPECT_EQ(again.summary.num_vio_rejected, vio.summary.num_vio_rejected);
+    EXPECT_EQ(StoredGeometryPairIds(database), AcceptedPairIds(vio));
+  }
+
+  // Reports parse back.
+  const fs::path csv = f.folder / "pairs.csv";
+  const fs::path json_path = f.folder / "verification.json";
+  WritePairDecisionsCsv(csv, vio.decisions);
+  WriteVerificationJson(json_path, vio.summary, vio.decisions);
+  EXPECT_EQ(Split(ReadTextFile(csv), "\n", true).size(), vio.decisions.size() + 1);
+  const nlohmann::json json = nlohmann::json::parse(ReadTextFile(json_path));
+  EXPECT_EQ(json.at("summary").at("num_pairs").get<size_t>(), vio.decisions.size());
+  EXPECT_EQ(json.at("summary").at("num_vio_rejected").get<size_t>(), vio.summary.num_vio_rejected);
+  EXPECT_EQ(json.at("options").at("prior.max_epipolar_error_px").get<std::string>(), "20");
+  EXPECT_EQ(json.at("pairs").size(), vio.decisions.size());
+}
+
+TEST(VerificationDriver, ImagesWithoutVioPoseFallBackToRansac) {
+  const Fixture& f = SharedFixture();
+  // A trajectory without the last pose: the last image has no prior.
+  Trajectory partial = f.vio_body;
+  partial.poses.pop_back();
+  const fs::path path = CopyFeatures(f, "partial.db");
+  ColmapDatabase database = ColmapDatabase::Open(path);
+  VerificationOptions options = SmallOptions();
+  options.pairs.mode = PairMode::kSequential;
+  options.pairs.num_temporal_neighbors = 1;
+  const VerificationResult result = RunVerification(f.sequence, partial, &database, options);
+  const size_t n = f.sequence.images.size();
+  EXPECT_EQ(result.summary.num_images_with_prior, n - 1);
+  ASSERT_EQ(result.decisions.size(), n - 1);  // sequential with overlap 1
+  EXPECT_EQ(result.summary.num_pairs_without_prior, 1u);
+  const PairDecision& last = result.decisions.back();
+  EXPECT_EQ(last.source, "sequential");
+  EXPECT_FALSE(last.has_vio_prior);
+  EXPECT_TRUE(std::isnan(last.vio_outlier_ratio));
+  EXPECT_TRUE(last.accepted);
+  for (size_t i = 0; i + 1 < result.decisions.size(); ++i) {
+    EXPECT_TRUE(result.decisions[i].has_vio_prior);
+    EXPECT_TRUE(result.decisions[i].accepted) << i;
+  }
+}
+
+}  // namespace
+}  // namespace viosfm

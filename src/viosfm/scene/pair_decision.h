@@ -1,0 +1,73 @@
+// The verification record of one image pair (matching/verification_driver.h
+// fills it, io/verification_report.h writes it): which pair, where it came
+// from, how many tentative matches it had, what the VIO-prior check and the
+// RANSAC check said, and the final decision.
+#pragma once
+
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "viosfm/util/types.h"
+
+namespace viosfm {
+
+struct PairDecision {
+  image_t image_id1 = kInvalidImageId;  // image_id1 < image_id2 (COLMAP's order)
+  image_t image_id2 = kInvalidImageId;
+  std::string name1;  // database image names
+  std::string name2;
+  // How the pair was proposed: "temporal", "retrieval", "sequential",
+  // "exhaustive" or "pair_list".
+  std::string source;
+  int num_matches = 0;  // tentative (descriptor) matches
+  // Both images have a VIO pose, so the VIO-prior check ran.
+  bool has_vio_prior = false;
+  // Outliers / matches under the VIO relative pose (the paper's EE test);
+  // NaN when the check did not run.
+  double vio_outlier_ratio = std::numeric_limits<double>::quiet_NaN();
+  // The VIO baseline was below the minimum: transfer errors were used.
+  bool vio_rotation_only = false;
+  bool vio_rejected = false;  // step 1 rejected the pair
+  int num_inliers = 0;        // RANSAC inliers (0 if RANSAC did not run)
+  bool accepted = false;      // the pair's geometry is stored
+  // The matches were already in the database: the pair was not matched or
+  // verified again (accepted and num_inliers come from the stored geometry).
+  bool resumed = false;
+  // "accepted", "no_matches", "vio_outlier_ratio", "too_few_inliers".
+  std::string reason;
+};
+
+// Reasons, as written in PairDecision::reason.
+inline constexpr const char* kPairAccepted = "accepted";
+inline constexpr const char* kPairNoMatches = "no_matches";
+inline constexpr const char* kPairVioOutlierRatio = "vio_outlier_ratio";
+inline constexpr const char* kPairTooFewInliers = "too_few_inliers";
+
+// What a verification run did, over all pairs.
+struct VerificationSummary {
+  size_t num_images = 0;               // images verified (in the database and the sequence)
+  size_t num_images_with_prior = 0;    // images with a VIO pose
+  size_t num_pairs = 0;                // pairs generated
+  size_t num_pairs_without_prior = 0;  // pairs checked by RANSAC only (an image without pose)
+  size_t num_resumed = 0;              // pairs whose matches were already stored
+  size_t num_no_matches = 0;           // rejected: no tentative match
+  size_t num_vio_rejected = 0;         // rejected by step 1 (VIO prior)
+  size_t num_ransac_rejected = 0;      // rejected by step 2 (too few RANSAC inliers)
+  size_t num_accepted = 0;             // accepted (geometry stored)
+  // Wall-clock seconds of the whole run and of its sequential parts.
+  double seconds_total = 0.0;
+  double seconds_pair_generation = 0.0;  // retrieval and pair generation
+  double seconds_loading = 0.0;          // reading and undistorting features
+  double seconds_writing = 0.0;          // database writes
+  // Thread-seconds (summed over worker threads) of the per-pair steps.
+  double seconds_matching = 0.0;
+  double seconds_vio = 0.0;
+  double seconds_ransac = 0.0;
+  // The options used, as (name, value) text, written next to the results.
+  std::vector<std::pair<std::string, std::string>> options;
+};
+
+}  // namespace viosfm
