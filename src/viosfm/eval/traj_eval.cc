@@ -214,15 +214,6 @@ ErrorStatistics ComputeErrorStatistics(const std::vector<double>& errors) {
   return stats;
 }
 
-Trajectory CameraToBodyTrajectory(const Trajectory& world_from_cam, const Rigid3d& body_from_cam) {
-  const Rigid3d cam_from_body = body_from_cam.Inverse();
-  Trajectory world_from_body = world_from_cam;
-  for (StampedPose& pose : world_from_body.poses) {
-    pose.world_from_frame = pose.world_from_frame * cam_from_body;
-  }
-  return world_from_body;
-}
-
 EvaluationResult EvaluateTrajectories(const Trajectory& est_input, const Trajectory& ref_input,
                                       const EvaluationOptions& options) {
   if (const std::string error = options.Validate(); !error.empty()) {

@@ -111,8 +111,7 @@ struct EvaluationResult {
   std::optional<RelativePoseErrors> rpe_distance;
 };
 
-// Converts camera poses to body poses (see EvaluationOptions::*_body_from_cam).
-Trajectory CameraToBodyTrajectory(const Trajectory& world_from_cam, const Rigid3d& body_from_cam);
+
 
 // Evaluates `est` against `ref`. Throws InputError if the options are
 // invalid, no pose could be associated, the association needs stamps that a

@@ -27,13 +27,7 @@ Trajectory GroundTruthBodyTrajectory(const Sequence& sequence) {
 }
 
 Trajectory GroundTruthCameraTrajectory(const Sequence& sequence) {
-  Trajectory trajectory;
-  trajectory.poses.reserve(sequence.ground_truth.size());
-  for (const GroundTruthState& state : sequence.ground_truth) {
-    trajectory.poses.push_back(
-        {state.timestamp_ns, state.world_from_body * sequence.rig.body_from_cam});
-  }
-  return trajectory;
+  return BodyToCameraTrajectory(GroundTruthBodyTrajectory(sequence), sequence.rig.body_from_cam);
 }
 
 }  // namespace viosfm

@@ -134,14 +134,6 @@ std::vector<std::pair<std::string, std::string>> VerificationOptions::ToKeyValue
   };
 }
 
-Trajectory CameraToBodyTrajectory(const Trajectory& world_from_cam, const Rigid3d& body_from_cam) {
-  Trajectory result = world_from_cam;
-  const Rigid3d cam_from_body = body_from_cam.Inverse();
-  for (StampedPose& pose : result.poses)
-    pose.world_from_frame = pose.world_from_frame * cam_from_body;
-  return result;
-}
-
 std::string FormatVerificationSummary(const VerificationSummary& s) {
   std::ostringstream out;
   out << s.num_pairs << " pairs of " << s.num_images << " images (" << s.num_images_with_prior

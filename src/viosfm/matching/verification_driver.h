@@ -106,8 +106,6 @@ VerificationResult RunVerification(const Sequence& sequence, const Trajectory& v
 // "120 pairs: 80 accepted, 30 rejected by VIO, 10 by RANSAC, ... ; 3.2 s"
 std::string FormatVerificationSummary(const VerificationSummary& summary);
 
-// A world_from_cam trajectory as world_from_body: each pose times
-// body_from_cam^-1 (for VIO that reports camera poses).
-Trajectory CameraToBodyTrajectory(const Trajectory& world_from_cam, const Rigid3d& body_from_cam);
+
 
 }  // namespace viosfm

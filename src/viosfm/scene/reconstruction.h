@@ -28,8 +28,9 @@ namespace viosfm {
 
 using Vector3ub = Eigen::Matrix<uint8_t, 3, 1>;
 
-// A keypoint of an image, in pixels (COLMAP convention: the centre of the
-// upper-left pixel is (0.5, 0.5)), and the 3D point it observes, if any.
+// A keypoint of an image, in pixels (viosfm's convention: the centre of the
+// top-left pixel is (0, 0); io/ converts COLMAP's (0.5, 0.5) on reading and
+// writing), and the 3D point it observes, if any.
 struct Point2D {
   Eigen::Vector2d xy = Eigen::Vector2d::Zero();
   point3D_t point3D_id = kInvalidPoint3DId;

@@ -25,4 +25,9 @@ struct Trajectory {
   bool empty() const { return poses.empty(); }
 };
 
+// Changes the moving frame of a trajectory through the camera-body
+// extrinsics: world_from_body = world_from_cam * cam_from_body, and back.
+Trajectory CameraToBodyTrajectory(const Trajectory& world_from_cam, const Rigid3d& body_from_cam);
+Trajectory BodyToCameraTrajectory(const Trajectory& world_from_body, const Rigid3d& body_from_cam);
+
 }  // namespace viosfm
