@@ -1,0 +1,268 @@
+#include "viosfm/ba/bundle_adjustment.h"
+
+#include <ceres/ceres.h>
+
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <limits>
+#include <memory>
+#include <sstream>
+#include <unordered_set>
+
+#include "viosfm/ba/cost_functions.h"
+#include "viosfm/sensor/camera_models.h"
+#include "viosfm/util/errors.h"
+#include "viosfm/util/logging.h"
+#include "viosfm/util/timer.h"
+
+namespace viosfm {
+namespace {
+
+// Reprojection error of one observation, px; nullopt if the point is behind
+// the camera.
+std::optional<double> ObservationError(const Reconstruction& reconstruction, const Image& image,
+                                       const Point2D& point2D, const Point3D& point3D) {
+  const Camera& camera = reconstruction.GetCamera(image.camera_id);
+  const std::optional<Eigen::Vector2d> projected =
+      Project(camera, image.cam_from_world * point3D.xyz);
+  if (!projected.has_value()) return std::nullopt;
+  return (*projected - point2D.xy).norm();
+}
+
+// Parameter indices of `camera` held constant when intrinsics are refined.
+std::vector<int> ConstantIntrinsicIndices(const Camera& camera,
+                                          const BundleAdjustmentOptions& options) {
+  if (options.refine_principal_point) return {};
+  return PrincipalPointIndices(camera);
+}
+
+}  // namespace
+
+std::string BundleAdjustmentOptions::Validate() const {
+  if (!(loss_scale_px >= 0.0)) return "loss_scale_px must be >= 0";
+  if (!(prior_alpha >= 0.0)) return "prior_alpha must be >= 0";
+  if (!(prior_beta >= 0.0)) return "prior_beta must be >= 0";
+  if (!(prior_rotation_sigma_rad > 0.0)) return "prior_rotation_sigma_rad must be > 0";
+  if (!(prior_translation_sigma_m > 0.0)) return "prior_translation_sigma_m must be > 0";
+  if (max_num_iterations < 0) return "max_num_iterations must be >= 0";
+  if (num_threads < 1) return "num_threads must be >= 1";
+  if (max_images_for_sparse_schur < 0) return "max_images_for_sparse_schur must be >= 0";
+  if (!(function_tolerance >= 0.0)) return "function_tolerance must be >= 0";
+  if (!(gradient_tolerance >= 0.0)) return "gradient_tolerance must be >= 0";
+  if (!(parameter_tolerance >= 0.0)) return "parameter_tolerance must be >= 0";
+  return "";
+}
+
+std::string BundleAdjustmentSummary::ToString() const {
+  std::ostringstream out;
+  out << std::fixed << std::setprecision(3) << "bundle adjustment: " << num_images << " images, "
+      << num_points << " points, " << num_observations << " observations, " << num_priors
+      << " relative-pose priors; reprojection error " << mean_reprojection_error_before_px << " -> "
+      << mean_reprojection_error_after_px << " px; cost " << std::setprecision(6) << initial_cost
+      << " -> " << final_cost << "; " << num_iterations << " iterations, " << std::setprecision(3)
+      << time_s << " s; " << termination;
+  return out.str();
+}
+
+double UpdateReprojectionErrors(Reconstruction* reconstruction) {
+  VIOSFM_CHECK(reconstruction != nullptr);
+  double sum = 0.0;
+  size_t count = 0;
+  for (const point3D_t point3D_id : reconstruction->Point3DIds()) {
+    Point3D& point3D = reconstruction->GetPoint3D(point3D_id);
+    double point_sum = 0.0;
+    size_t point_count = 0;
+    bool behind = false;
+    for (const TrackElement& element : point3D.track) {
+      const Image& image = reconstruction->GetImage(element.image_id);
+      if (!image.registered) continue;
+      const std::optional<double> error =
+          ObservationError(*reconstruction, image, image.points2D.at(element.point2D_idx), point3D);
+      if (!error.has_value()) {
+        behind = true;
+        continue;
+      }
+      point_sum += *error;
+      ++point_count;
+    }
+    sum += point_sum;
+    count += point_count;
+    if (behind) {
+      point3D.error = std::numeric_limits<double>::infinity();
+    } else if (point_count == 0) {
+      point3D.error = -1.0;
+    } else {
+      point3D.error = point_sum / static_cast<double>(point_count);
+    }
+  }
+  return count == 0 ? 0.0 : sum / static_cast<double>(count);
+}
+
+double MeanReprojectionError(const Reconstruction& reconstruction) {
+  double sum = 0.0;
+  size_t count = 0;
+  for (const auto& [point3D_id, point3D] : reconstruction.Points3D()) {
+    for (const TrackElement& element : point3D.track) {
+      const Image& image = reconstruction.GetImage(element.image_id);
+      if (!image.registered) continue;
+      const std::optional<double> error =
+          ObservationError(reconstruction, image, image.points2D.at(element.point2D_idx), point3D);
+      if (!error.has_value()) continue;
+      sum += *error;
+      ++count;
+    }
+  }
+  return count == 0 ? 0.0 : sum / static_cast<double>(count);
+}
+
+BundleAdjustmentSummary BundleAdjust(Reconstruction* reconstruction,
+                                     const std::vector<RelativePosePrior>& priors,
+                                     const std::vector<image_t>& constant_poses,
+                                     const BundleAdjustmentOptions& options) {
+  VIOSFM_CHECK(reconstruction != nullptr);
+  VIOSFM_CHECK(options.Check()) << options.Validate();
+  const Timer timer;
+  BundleAdjustmentSummary summary;
+
+  const std::unordered_set<image_t> constant(constant_poses.begin(), constant_poses.end());
+  for (const image_t image_id : constant) {
+    VIOSFM_CHECK(reconstruction->ExistsImage(image_id))
+        << "constant pose of unknown image " << image_id;
+    VIOSFM_CHECK(reconstruction->GetImage(image_id).registered)
+        << "constant pose of unregistered image " << image_id;
+  }
+  for (const image_t image_id : reconstruction->RegImageIds()) {
+    reconstruction->GetImage(image_id).cam_from_world.rotation.normalize();
+  }
+  summary.mean_reprojection_error_before_px = MeanReprojectionError(*reconstruction);
+
+  ceres::Problem::Options problem_options;
+  // Cost functions, the shared loss and the manifolds are owned by the problem.
+  ceres::Problem problem(problem_options);
+  ceres::LossFunction* loss =
+      options.loss_scale_px > 0.0 ? new ceres::CauchyLoss(options.loss_scale_px) : nullptr;
+  bool loss_used = false;
+
+  std::unordered_set<image_t> images_in_problem;
+  std::unordered_set<camera_t> cameras_in_problem;
+  for (const point3D_t point3D_id : reconstruction->Point3DIds()) {
+    Point3D& point3D = reconstruction->GetPoint3D(point3D_id);
+    bool point_used = false;
+    for (const TrackElement& element : point3D.track) {
+      Image& image = reconstruction->GetImage(element.image_id);
+      if (!image.registered) continue;
+      Camera& camera = reconstruction->GetCamera(image.camera_id);
+      const Point2D& point2D = image.points2D.at(element.point2D_idx);
+      problem.AddResidualBlock(CreateReprojectionCost(camera.model_id, point2D.xy), loss,
+                               image.cam_from_world.rotation.coeffs().data(),
+                               image.cam_from_world.translation.data(), point3D.xyz.data(),
+                               camera.params.data());
+      loss_used = true;
+      point_used = true;
+      images_in_problem.insert(image.image_id);
+      cameras_in_problem.insert(camera.camera_id);
+      ++summary.num_observations;
+    }
+    if (point_used) ++summary.num_points;
+  }
+  if (loss != nullptr && !loss_used) delete loss;
+
+  if (options.use_relative_pose_priors) {
+    for (const RelativePosePrior& prior : priors) {
+      if (!reconstruction->ExistsImage(prior.image_id1) ||
+          !reconstruction->ExistsImage(prior.image_id2)) {
+        continue;
+      }
+      Image& image1 = reconstruction->GetImage(prior.image_id1);
+      Image& image2 = reconstruction->GetImage(prior.image_id2);
+      if (!image1.registered || !image2.registered) continue;
+      if (constant.count(prior.image_id1) > 0 && constant.count(prior.image_id2) > 0) continue;
+      const double weight =
+          RelativePoseWeight(prior.num_verified_matches, options.prior_alpha, options.prior_beta);
+      problem.AddResidualBlock(
+          RelativePoseError::Create(
+              prior.cam2_from_cam1,
+              RelativePoseSqrtInformation(weight, options.prior_rotation_sigma_rad,
+                                          options.prior_translation_sigma_m)),
+          nullptr, image1.cam_from_world.rotation.coeffs().data(),
+          image1.cam_from_world.translation.data(), image2.cam_from_world.rotation.coeffs().data(),
+          image2.cam_from_world.translation.data());
+      images_in_problem.insert(prior.image_id1);
+      images_in_problem.insert(prior.image_id2);
+      ++summary.num_priors;
+    }
+  }
+  summary.num_images = static_cast<int>(images_in_problem.size());
+
+  for (const image_t image_id : images_in_problem) {
+    Image& image = reconstruction->GetImage(image_id);
+    double* rotation = image.cam_from_world.rotation.coeffs().data();
+    double* translation = image.cam_from_world.translation.data();
+    problem.SetManifold(rotation, new ceres::EigenQuaternionManifold());
+    if (constant.count(image_id) > 0) {
+      problem.SetParameterBlockConstant(rotation);
+      problem.SetParameterBlockConstant(translation);
+    }
+  }
+  for (const camera_t camera_id : cameras_in_problem) {
+    Camera& camera = reconstruction->GetCamera(camera_id);
+    if (!options.refine_intrinsics) {
+      problem.SetParameterBlockConstant(camera.params.data());
+      continue;
+    }
+    const std::vector<int> held = ConstantIntrinsicIndices(camera, options);
+    if (!held.empty()) {
+      problem.SetManifold(camera.params.data(),
+                          new ceres::SubsetManifold(static_cast<int>(camera.params.size()), held));
+    }
+  }
+
+  if (problem.NumResidualBlocks() == 0) {
+    summary.termination = "nothing to adjust";
+    summary.mean_reprojection_error_after_px = UpdateReprojectionErrors(reconstruction);
+    summary.time_s = timer.ElapsedSeconds();
+    return summary;
+  }
+
+  ceres::Solver::Options solver_options;
+  solver_options.max_num_iterations = options.max_num_iterations;
+  solver_options.num_threads = options.num_threads;
+  solver_options.function_tolerance = options.function_tolerance;
+  solver_options.gradient_tolerance = options.gradient_tolerance;
+  solver_options.parameter_tolerance = options.parameter_tolerance;
+  solver_options.minimizer_progress_to_stdout = options.print_progress;
+  solver_options.logging_type =
+      options.print_progress ? ceres::PER_MINIMIZER_ITERATION : ceres::SILENT;
+  if (summary.num_images > options.max_images_for_sparse_schur) {
+    solver_options.linear_solver_type = ceres::ITERATIVE_SCHUR;
+    solver_options.preconditioner_type = ceres::SCHUR_JACOBI;
+  } else if (ceres::IsSparseLinearAlgebraLibraryTypeAvailable(ceres::SUITE_SPARSE) ||
+             ceres::IsSparseLinearAlgebraLibraryTypeAvailable(ceres::EIGEN_SPARSE)) {
+    solver_options.linear_solver_type = ceres::SPARSE_SCHUR;
+  } else {
+    solver_options.linear_solver_type = ceres::DENSE_SCHUR;
+  }
+  std::string error;
+  VIOSFM_CHECK(solver_options.IsValid(&error)) << error;
+
+  ceres::Solver::Summary ceres_summary;
+  ceres::Solve(solver_options, &problem, &ceres_summary);
+
+  for (const image_t image_id : images_in_problem) {
+    reconstruction->GetImage(image_id).cam_from_world.rotation.normalize();
+  }
+  summary.initial_cost = ceres_summary.initial_cost;
+  summary.final_cost = ceres_summary.final_cost;
+  summary.num_iterations = std::max(0, static_cast<int>(ceres_summary.iterations.size()) - 1);
+  summary.termination =
+      std::string(ceres::TerminationTypeToString(ceres_summary.termination_type)) + ": " +
+      ceres_summary.message;
+  summary.usable = ceres_summary.IsSolutionUsable();
+  summary.mean_reprojection_error_after_px = UpdateReprojectionErrors(reconstruction);
+  summary.time_s = timer.ElapsedSeconds();
+  VIOSFM_LOG(DEBUG) << summary.ToString();
+  return summary;
+}
+
+}  // namespace viosfm

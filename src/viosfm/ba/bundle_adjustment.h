@@ -1,0 +1,121 @@
+// Bundle adjustment of a Reconstruction with the paper's joint objective
+// (section "Bundle Adjustment with Relative Pose Constraints"):
+//
+//   sum_ij rho(|z_ij - pi(p_i, X_j, K)|^2) + sum_i w_i,i+1 E_r(p_i, p_i+1 | p_hat_i,i+1)
+//
+// rho is the Cauchy loss, E_r the relative-pose error of RelativePoseError
+// (cost_functions.h) and w = alpha exp(-beta c). The cameras' poses
+// (cam_from_world), the 3D points and optionally the intrinsics are refined
+// in place; per-point reprojection errors are written to Point3D::error.
+//
+// Gauge: the caller holds poses constant (e.g. the first image's, from VIO)
+// through `constant_poses`. With relative-pose priors the scale is that of
+// the priors (metric for VIO); without priors and with only one pose held the
+// scale is free (the solver keeps it near its starting value).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "viosfm/geometry/rigid3.h"
+#include "viosfm/scene/reconstruction.h"
+#include "viosfm/util/types.h"
+
+namespace viosfm {
+
+struct BundleAdjustmentOptions {
+  // Cauchy loss scale on the reprojection error, pixels (default 1.0): an
+  // observation r px off costs s^2 log(1 + r^2 / s^2) / 2. 0 = plain squares.
+  double loss_scale_px = 1.0;
+  // Refine the focal length(s) and distortion parameters of the cameras
+  // (default false); the principal point too if refine_principal_point
+  // (default false; weakly observable, usually best kept).
+  bool refine_intrinsics = false;
+  bool refine_principal_point = false;
+
+  // The paper's relative-pose constraints (default true); false is the
+  // paper's "w/o RPC" ablation (plain bundle adjustment).
+  bool use_relative_pose_priors = true;
+  // w = alpha exp(-beta c), c = verified matches between the two frames
+  // (the paper's alpha = 1e3 and beta = 0.003, dimensionless and per match).
+  double prior_alpha = 1e3;
+  double prior_beta = 0.003;
+  // The units of E_r: its residual is [Log R_E / rotation_sigma; t_E /
+  // translation_sigma] (defaults 0.005 rad and 0.01 m, i.e. 1 m of relative
+  // translation error counts as 0.5 rad of rotation error). Why this ratio:
+  // (1) an error of d rad moves image points by f*d px, one of d m by f*d/Z
+  // px, so at indoor depths Z ~ 2-3 m equal image effect means
+  // sigma_rot ~ sigma_trans / Z; (2) a VIO's frame-to-frame errors are of
+  // that ratio too (our emulated VIO: ~4 mm and ~3 mrad between frames).
+  // With alpha = 1e3 the effective per-frame sigmas at c = 0 are
+  // sigma / sqrt(w) ~ 0.3 mm and 0.16 mrad (a frame without matches follows
+  // the VIO), and ~1.4 mm / 0.7 mrad at c = 1000.
+  double prior_rotation_sigma_rad = 0.005;
+  double prior_translation_sigma_m = 0.01;
+
+  // Solver.
+  int max_num_iterations = 50;  // Levenberg-Marquardt iterations (default 50)
+  int num_threads = 2;          // Jacobian evaluation and linear solver threads (default 2)
+  // Above this number of registered images ITERATIVE_SCHUR (with the
+  // SCHUR_JACOBI preconditioner) replaces SPARSE_SCHUR (default 1000).
+  int max_images_for_sparse_schur = 1000;
+  double function_tolerance = 1e-6;   // relative cost change to stop (default 1e-6)
+  double gradient_tolerance = 1e-10;  // (default 1e-10)
+  double parameter_tolerance = 1e-8;  // relative step size to stop (default 1e-8)
+  bool print_progress = false;        // Ceres' per-iteration lines to stdout (default false)
+
+  std::string Validate() const;  // empty if valid, else names the bad field
+  bool Check() const { return Validate().empty(); }
+};
+
+// The VIO's relative pose between two (normally consecutive) frames.
+struct RelativePosePrior {
+  image_t image_id1 = kInvalidImageId;
+  image_t image_id2 = kInvalidImageId;
+  Rigid3d cam2_from_cam1;
+  int num_verified_matches = 0;  // c in w = alpha exp(-beta c)
+};
+
+struct BundleAdjustmentSummary {
+  // Ceres' cost (half the sum of squared, robustified residuals).
+  double initial_cost = 0.0;
+  double final_cost = 0.0;
+  // Mean reprojection error over all observations in registered images, px.
+  double mean_reprojection_error_before_px = 0.0;
+  double mean_reprojection_error_after_px = 0.0;
+  int num_iterations = 0;
+  double time_s = 0.0;
+  std::string termination;  // Ceres' termination type and message
+  // Whether Ceres returned a usable solution (converged or hit the
+  // iteration limit); the reconstruction is updated either way.
+  bool usable = false;
+  // Problem size.
+  int num_images = 0;
+  int num_points = 0;
+  int num_observations = 0;
+  int num_priors = 0;  // relative-pose terms added
+
+  std::string ToString() const;  // one summary line
+};
+
+// Refines `reconstruction` in place (see the top of this file). Priors whose
+// images are not both registered, or both constant, are skipped; every id in
+// `constant_poses` must be a registered image (CHECK). Observations of
+// unregistered images are ignored.
+BundleAdjustmentSummary BundleAdjust(Reconstruction* reconstruction,
+                                     const std::vector<RelativePosePrior>& priors,
+                                     const std::vector<image_t>& constant_poses,
+                                     const BundleAdjustmentOptions& options);
+
+// Mean reprojection error (px) over all observations of 3D points in
+// registered images; observations behind their camera are not counted.
+// 0 without observations.
+double MeanReprojectionError(const Reconstruction& reconstruction);
+
+// Writes each point's mean reprojection error (px, over its observations in
+// registered images) to Point3D::error: +infinity if the point is behind a
+// camera that observes it, -1 if it has no observation in a registered image.
+// Returns MeanReprojectionError.
+double UpdateReprojectionErrors(Reconstruction* reconstruction);
+
+}  // namespace viosfm

@@ -1,0 +1,410 @@
+#include "viosfm/ba/bundle_adjustment.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <iostream>
+#include <vector>
+
+#include "viosfm/geometry/lie.h"
+#include "viosfm/sensor/camera_models.h"
+#include "viosfm/util/random.h"
+
+namespace viosfm {
+namespace {
+
+constexpr int kNumCameras = 20;
+constexpr int kNumPoints = 300;
+constexpr double kPixelNoise = 0.5;  // px, std per coordinate
+
+// Camera i moves along x in [-1.9, 1.9] m, up and down by up to 0.6 m and
+// back and forth by 0.3 m, looking at points near the centre (0, 0, 5) of a
+// box of points (x in [-2.5, 2.5], y in [-1.5, 1.5], z in [3.5, 7] m): the
+// viewing directions differ by up to ~40 degrees in yaw and ~14 in pitch
+// (without pitch changes and vertical motion, stretching the scene
+// vertically would trade against fy).
+// PINHOLE 752 x 480, f = 450 px. Every point visible in a camera is observed
+// with Gaussian pixel noise.
+struct Scene {
+  Reconstruction truth;
+  Reconstruction noisy;  // the same, poses (but the first and last) and points perturbed
+  std::vector<image_t> image_ids;
+  std::vector<RelativePosePrior> priors;  // consecutive cameras, from the truth + noise
+};
+
+Rigid3d LookAt(const Eigen::Vector3d& center, const Eigen::Vector3d& target) {
+  const Eigen::Vector3d z = (target - center).normalized();
+  const Eigen::Vector3d x = Eigen::Vector3d::UnitY().cross(z).normalized() * -1.0;
+  const Eigen::Vector3d y = z.cross(x);
+  Eigen::Matrix3d cam_from_world_rotation;
+  cam_from_world_rotation.row(0) = x.transpose();
+  cam_from_world_rotation.row(1) = y.transpose();
+  cam_from_world_rotation.row(2) = z.transpose();
+  return Rigid3d(Eigen::Quaterniond(cam_from_world_rotation), -(cam_from_world_rotation * center));
+}
+
+struct SceneOptions {
+  double pose_angle_noise_rad = 0.003;
+  double pose_position_noise_m = 0.02;
+  double point_noise_m = 0.02;
+  double prior_angle_noise_rad = 5e-4;
+  double prior_position_noise_m = 1e-3;
+  uint64_t seed = 7;
+};
+
+Scene MakeScene(const SceneOptions& options = SceneOptions()) {
+  Random random(options.seed);
+  Scene scene;
+  const Camera camera = MakeCamera(CameraModelId::kPinhole, 752, 480, {450, 450, 376, 240});
+  Camera camera_with_id = camera;
+  camera_with_id.camera_id = 1;
+  scene.truth.AddCamera(camera_with_id);
+
+  std::vector<Eigen::Vector3d> points;
+  for (int j = 0; j < kNumPoints; ++j) {
+    points.emplace_back(random.Uniform(-2.5, 2.5), random.Uniform(-1.5, 1.5),
+                        random.Uniform(3.5, 7.0));
+  }
+  std::vector<std::vector<std::pair<int, point2D_t>>> tracks(kNumPoints);
+  for (int i = 0; i < kNumCameras; ++i) {
+    Image image;
+    image.image_id = static_cast<image_t>(i + 1);
+    image.camera_id = 1;
+    image.name = "image" + std::to_string(i) + ".png";
+    image.registered = true;
+    const Eigen::Vector3d center(-1.9 + 0.2 * i, 0.6 * std::sin(0.7 * i), 0.3 * std::cos(0.5 * i));
+    const Eigen::Vector3d target(0.3 * std::sin(0.4 * i), 0.3 * std::cos(0.6 * i), 5.0);
+    image.cam_from_world = LookAt(center, target);
+    for (int j = 0; j < kNumPoints; ++j) {
+      const std::optional<Eigen::Vector2d> pixel =
+          Project(camera, image.cam_from_world * points[j]);
+      if (!pixel.has_value() || pixel->x() < 0 || pixel->y() < 0 || pixel->x() > 751 ||
+          pixel->y() > 479) {
+        continue;
+      }
+      Point2D point2D;
+      point2D.xy =
+          *pixel + Eigen::Vector2d(random.Normal(0, kPixelNoise), random.Normal(0, kPixelNoise));
+      tracks[j].emplace_back(i, static_cast<point2D_t>(image.points2D.size()));
+      image.points2D.push_back(point2D);
+    }
+    scene.image_ids.push_back(image.image_id);
+    scene.truth.AddImage(std::move(image));
+  }
+  for (int j = 0; j < kNumPoints; ++j) {
+    if (tracks[j].size() < 2) continue;
+    Point3D point3D;
+    point3D.xyz = points[j];
+    for (const auto& [i, idx] : tracks[j]) point3D.track.push_back({scene.image_ids[i], idx});
+    scene.truth.AddPoint3D(point3D);
+  }
+  for (int i = 0; i + 1 < kNumCameras; ++i) {
+    const Rigid3d& cam1_from_world = scene.truth.GetImage(scene.image_ids[i]).cam_from_world;
+    const Rigid3d& cam2_from_world = scene.truth.GetImage(scene.image_ids[i + 1]).cam_from_world;
+    const Eigen::Vector3d omega(random.Normal(0, options.prior_angle_noise_rad),
+                                random.Normal(0, options.prior_angle_noise_rad),
+                                random.Normal(0, options.prior_angle_noise_rad));
+    const Eigen::Vector3d offset(random.Normal(0, options.prior_position_noise_m),
+                                 random.Normal(0, options.prior_position_noise_m),
+                                 random.Normal(0, options.prior_position_noise_m));
+    RelativePosePrior prior;
+    prior.image_id1 = scene.image_ids[i];
+    prior.image_id2 = scene.image_ids[i + 1];
+    prior.cam2_from_cam1 =
+        Rigid3d(So3Exp(omega), offset) * cam2_from_world * cam1_from_world.Inverse();
+    prior.num_verified_matches = 200;
+    scene.priors.push_back(prior);
+  }
+
+  scene.noisy = scene.truth;
+  for (const image_t image_id : scene.image_ids) {
+    // The first and last poses stay at the truth: tests hold them constant
+    // to fix the gauge.
+    if (image_id == scene.image_ids.front() || image_id == scene.image_ids.back()) continue;
+    Rigid3d& cam_from_world = scene.noisy.GetImage(image_id).cam_from_world;
+    const Eigen::Vector3d omega(random.Normal(0, options.pose_angle_noise_rad),
+                                random.Normal(0, options.pose_angle_noise_rad),
+                                random.Normal(0, options.pose_angle_noise_rad));
+    const Eigen::Vector3d offset(random.Normal(0, options.pose_position_noise_m),
+                                 random.Normal(0, options.pose_position_noise_m),
+                                 random.Normal(0, options.pose_position_noise_m));
+    cam_from_world = Rigid3d(So3Exp(omega), offset) * cam_from_world;
+  }
+  for (const point3D_t point3D_id : scene.noisy.Point3DIds()) {
+    scene.noisy.GetPoint3D(point3D_id).xyz += Eigen::Vector3d(
+        random.Normal(0, options.point_noise_m), random.Normal(0, options.point_noise_m),
+        random.Normal(0, options.point_noise_m));
+  }
+  return scene;
+}
+
+double CenterError(const Reconstruction& estimate, const Reconstruction& truth, image_t image_id) {
+  return (estimate.GetImage(image_id).ProjectionCenter() -
+          truth.GetImage(image_id).ProjectionCenter())
+      .norm();
+}
+
+double RotationError(const Reconstruction& estimate, const Reconstruction& truth,
+                     image_t image_id) {
+  return So3Log(estimate.GetImage(image_id).cam_from_world.rotation *
+                truth.GetImage(image_id).cam_from_world.rotation.inverse())
+      .norm();
+}
+
+double MaxCenterError(const Reconstruction& estimate, const Reconstruction& truth,
+                      const std::vector<image_t>& image_ids) {
+  double worst = 0.0;
+  for (const image_t image_id : image_ids) {
+    worst = std::max(worst, CenterError(estimate, truth, image_id));
+  }
+  return worst;
+}
+
+TEST(BundleAdjustmentOptions, ValidateNamesTheBadField) {
+  BundleAdjustmentOptions options;
+  EXPECT_TRUE(options.Check());
+  options.loss_scale_px = -1.0;
+  EXPECT_NE(options.Validate().find("loss_scale_px"), std::string::npos);
+  options = BundleAdjustmentOptions();
+  options.prior_translation_sigma_m = 0.0;
+  EXPECT_NE(options.Validate().find("prior_translation_sigma_m"), std::string::npos);
+  options = BundleAdjustmentOptions();
+  options.num_threads = 0;
+  EXPECT_NE(options.Validate().find("num_threads"), std::string::npos);
+}
+
+TEST(MeanReprojectionError, ZeroForNoiseFreeObservationsAndWritesPointErrors) {
+  Scene scene = MakeScene();
+  // Replace the observations by exact projections.
+  for (const auto& [point3D_id, point3D] : scene.truth.Points3D()) {
+    for (const TrackElement& element : point3D.track) {
+      Image& image = scene.truth.GetImage(element.image_id);
+      image.points2D[element.point2D_idx].xy =
+          *Project(scene.truth.GetCamera(1), image.cam_from_world * point3D.xyz);
+    }
+  }
+  EXPECT_LT(MeanReprojectionError(scene.truth), 1e-9);
+  // 3 px off in one observation of one point.
+  const point3D_t point3D_id = scene.truth.Point3DIds().front();
+  const TrackElement element = scene.truth.GetPoint3D(point3D_id).track.front();
+  scene.truth.GetImage(element.image_id).points2D[element.point2D_idx].xy.x() += 3.0;
+  const size_t track_length = scene.truth.GetPoint3D(point3D_id).track.size();
+  const double mean = UpdateReprojectionErrors(&scene.truth);
+  EXPECT_NEAR(mean, 3.0 / static_cast<double>(scene.truth.ComputeNumObservations()), 1e-9);
+  EXPECT_NEAR(scene.truth.GetPoint3D(point3D_id).error, 3.0 / track_length, 1e-9);
+}
+
+// Poses perturbed by ~5 cm / 0.01 rad, points by 5 cm, 0.5 px pixel noise.
+// Plain bundle adjustment (first and last poses held at the truth to fix the
+// gauge and scale) brings the mean reprojection error to the noise level
+// (E|n| = 0.5 sqrt(pi/2) = 0.63 px for 2-D Gaussian noise) and the cameras
+// within 1 cm / 2 mrad of the truth (measured: 7 mm, 1.1 mrad).
+TEST(BundleAdjust, RecoversPerturbedCamerasAndPoints) {
+  Scene scene = MakeScene();
+  BundleAdjustmentOptions options;
+  options.use_relative_pose_priors = false;
+  const BundleAdjustmentSummary summary =
+      BundleAdjust(&scene.noisy, {}, {scene.image_ids.front(), scene.image_ids.back()}, options);
+  std::cout << summary.ToString() << "\n";
+  EXPECT_TRUE(summary.usable);
+  EXPECT_EQ(summary.num_images, kNumCameras);
+  EXPECT_EQ(summary.num_priors, 0);
+  EXPECT_GT(summary.mean_reprojection_error_before_px, 2.0);
+  EXPECT_LT(summary.mean_reprojection_error_after_px, 0.7);
+  EXPECT_GT(summary.mean_reprojection_error_after_px, 0.45);
+  EXPECT_LT(summary.final_cost, summary.initial_cost);
+  double max_rotation_error = 0.0;
+  for (const image_t image_id : scene.image_ids) {
+    max_rotation_error =
+        std::max(max_rotation_error, RotationError(scene.noisy, scene.truth, image_id));
+  }
+  const double max_center_error = MaxCenterError(scene.noisy, scene.truth, scene.image_ids);
+  std::cout << "max camera error: " << max_center_error << " m, " << max_rotation_error << " rad\n";
+  EXPECT_LT(max_center_error, 0.01);
+  EXPECT_LT(max_rotation_error, 2e-3);
+  // Per-point errors written.
+  for (const auto& [point3D_id, point3D] : scene.noisy.Points3D()) {
+    ASSERT_GE(point3D.error, 0.0);
+    ASSERT_LT(point3D.error, 3.0);
+  }
+}
+
+// With the relative-pose priors only the first pose needs to be held: the
+// priors fix the scale. The start is scaled by 0.8 (poses and points); plain
+// bundle adjustment with the same gauge keeps a wrong scale, the priors
+// restore the metric one (measured: scale 1.001 with priors, 0.800 without).
+TEST(BundleAdjust, RelativePosePriorsKeepTheMetricScale) {
+  auto run = [](bool use_priors) {
+    Scene scene = MakeScene();
+    for (const image_t image_id : scene.image_ids) {
+      if (image_id == scene.image_ids.front()) continue;
+      Rigid3d& cam_from_world = scene.noisy.GetImage(image_id).cam_from_world;
+      // Scale about the first camera's centre (held constant).
+      const Eigen::Vector3d first_center =
+          scene.truth.GetImage(scene.image_ids.front()).ProjectionCenter();
+      const Eigen::Vector3d center =
+          first_center + 0.8 * (ProjectionCenter(cam_from_world) - first_center);
+      cam_from_world.translation = -(cam_from_world.rotation * center);
+    }
+    const Eigen::Vector3d first_center =
+        scene.truth.GetImage(scene.image_ids.front()).ProjectionCenter();
+    for (const point3D_t point3D_id : scene.noisy.Point3DIds()) {
+      Eigen::Vector3d& xyz = scene.noisy.GetPoint3D(point3D_id).xyz;
+      xyz = first_center + 0.8 * (xyz - first_center);
+    }
+    BundleAdjustmentOptions options;
+    options.use_relative_pose_priors = use_priors;
+    const BundleAdjustmentSummary summary =
+        BundleAdjust(&scene.noisy, scene.priors, {scene.image_ids.front()}, options);
+    EXPECT_TRUE(summary.usable);
+    const double length =
+        (scene.noisy.GetImage(scene.image_ids.back()).ProjectionCenter() - first_center).norm();
+    const double true_length =
+        (scene.truth.GetImage(scene.image_ids.back()).ProjectionCenter() - first_center).norm();
+    return std::make_pair(length / true_length,
+                          MaxCenterError(scene.noisy, scene.truth, scene.image_ids));
+  };
+  const auto [scale_with, error_with] = run(true);
+  const auto [scale_without, error_without] = run(false);
+  std::cout << "scale of the result (1 = metric): with priors " << scale_with
+            << " (max camera error " << error_with << " m), without " << scale_without
+            << " (max camera error " << error_without << " m)\n";
+  EXPECT_NEAR(scale_with, 1.0, 0.005);
+  EXPECT_LT(error_with, 0.01);
+  EXPECT_LT(scale_without, 0.9);
+}
+
+// A texture-less stretch: cameras 8-12 keep only 2 observations each (a pose
+// has 6 degrees of freedom), and start 10 cm / 0.03 rad off. The first and
+// last poses are held at the truth in both runs. With the priors those
+// cameras end within 1 cm of the truth; without, they stay far off
+// (measured: 4.6 mm with priors, 23 cm without).
+TEST(BundleAdjust, RelativePosePriorsBridgeATexturelessGap) {
+  auto run = [](bool use_priors) {
+    SceneOptions scene_options;
+    Scene scene = MakeScene(scene_options);
+    Random random(11);
+    std::vector<image_t> gap;
+    for (int i = 8; i <= 12; ++i) gap.push_back(scene.image_ids[i]);
+    for (const image_t image_id : gap) {
+      // Remove all but two observations.
+      const Image& image = scene.noisy.GetImage(image_id);
+      std::vector<point2D_t> observed;
+      for (point2D_t idx = 0; idx < image.points2D.size(); ++idx) {
+        if (image.points2D[idx].HasPoint3D()) observed.push_back(idx);
+      }
+      for (size_t k = 2; k < observed.size(); ++k) {
+        scene.noisy.DeleteObservation(image_id, observed[k]);
+      }
+      Rigid3d& cam_from_world = scene.noisy.GetImage(image_id).cam_from_world;
+      cam_from_world =
+          Rigid3d(So3Exp(Eigen::Vector3d(random.Normal(0, 0.03), random.Normal(0, 0.03),
+                                         random.Normal(0, 0.03))),
+                  Eigen::Vector3d(random.Normal(0, 0.1), random.Normal(0, 0.1),
+                                  random.Normal(0, 0.1))) *
+          scene.truth.GetImage(image_id).cam_from_world;
+    }
+    BundleAdjustmentOptions options;
+    options.use_relative_pose_priors = use_priors;
+    // Few verified matches across the gap: the priors weigh more there.
+    for (RelativePosePrior& prior : scene.priors) {
+      if (prior.image_id2 >= gap.front() && prior.image_id1 <= gap.back()) {
+        prior.num_verified_matches = 2;
+      }
+    }
+    const BundleAdjustmentSummary summary = BundleAdjust(
+        &scene.noisy, scene.priors, {scene.image_ids.front(), scene.image_ids.back()}, options);
+    std::cout << summary.ToString() << "\n";
+    return std::make_pair(MaxCenterError(scene.noisy, scene.truth, gap),
+                          summary.mean_reprojection_error_after_px);
+  };
+  const auto [gap_error_with, reprojection_with] = run(true);
+  const auto [gap_error_without, reprojection_without] = run(false);
+  std::cout << "max camera error in the gap: with priors " << gap_error_with << " m, without "
+            << gap_error_without << " m\n";
+  EXPECT_LT(gap_error_with, 0.01);
+  EXPECT_GT(gap_error_without, 0.05);
+  EXPECT_LT(reprojection_with, 0.7);
+}
+
+// The focal length starts 3 % off (463.5 instead of 450 px); refining the
+// intrinsics (principal point held; priors and the first pose fix the
+// gauge) brings it within 1.5 px (0.33 %; measured fx 450.1, fy 449.0),
+// i.e. removes about 90 % of the error.
+TEST(BundleAdjust, RefinesAPerturbedFocalLength) {
+  Scene scene = MakeScene();
+  scene.noisy.GetCamera(1).params[0] = 463.5;
+  scene.noisy.GetCamera(1).params[1] = 463.5;
+  BundleAdjustmentOptions options;
+  options.refine_intrinsics = true;
+  const BundleAdjustmentSummary summary =
+      BundleAdjust(&scene.noisy, scene.priors, {scene.image_ids.front()}, options);
+  std::cout << summary.ToString() << "\n";
+  const std::vector<double>& params = scene.noisy.GetCamera(1).params;
+  std::cout << "refined fx, fy: " << params[0] << ", " << params[1] << " (true 450)\n";
+  EXPECT_NEAR(params[0], 450.0, 1.5);
+  EXPECT_NEAR(params[1], 450.0, 1.5);
+  EXPECT_DOUBLE_EQ(params[2], 376.0);
+  EXPECT_DOUBLE_EQ(params[3], 240.0);
+  EXPECT_LT(summary.mean_reprojection_error_after_px, 0.7);
+
+  // Without refinement the intrinsics are untouched.
+  Scene fixed = MakeScene();
+  fixed.noisy.GetCamera(1).params[0] = 463.5;
+  options.refine_intrinsics = false;
+  BundleAdjust(&fixed.noisy, fixed.priors, {fixed.image_ids.front()}, options);
+  EXPECT_EQ(fixed.noisy.GetCamera(1).params[0], 463.5);
+}
+
+// 5 % of the observations are gross outliers (20-60 px off). With the Cauchy
+// loss (1 px) the cameras end within 1 cm of the truth; with plain squares
+// they are pulled several times further (measured: 7 mm and 8.8 cm).
+TEST(BundleAdjust, CauchyLossLimitsGrossOutliers) {
+  auto run = [](double loss_scale_px) {
+    Scene scene = MakeScene();
+    Random random(21);
+    int num_outliers = 0;
+    for (const image_t image_id : scene.image_ids) {
+      Image& image = scene.noisy.GetImage(image_id);
+      for (Point2D& point2D : image.points2D) {
+        if (!point2D.HasPoint3D() || random.Uniform() >= 0.05) continue;
+        const double angle = random.Uniform(0, 2 * M_PI);
+        point2D.xy += random.Uniform(20, 60) * Eigen::Vector2d(std::cos(angle), std::sin(angle));
+        ++num_outliers;
+      }
+    }
+    BundleAdjustmentOptions options;
+    options.use_relative_pose_priors = false;
+    options.loss_scale_px = loss_scale_px;
+    const BundleAdjustmentSummary summary =
+        BundleAdjust(&scene.noisy, {}, {scene.image_ids.front(), scene.image_ids.back()}, options);
+    std::cout << "loss scale " << loss_scale_px << ": " << num_outliers << " outliers; "
+              << summary.ToString() << "\n";
+    return MaxCenterError(scene.noisy, scene.truth, scene.image_ids);
+  };
+  const double error_cauchy = run(1.0);
+  const double error_squares = run(0.0);
+  std::cout << "max camera error: Cauchy " << error_cauchy << " m, squares " << error_squares
+            << " m\n";
+  EXPECT_LT(error_cauchy, 0.01);
+  EXPECT_GT(error_squares, 3.0 * error_cauchy);
+}
+
+TEST(BundleAdjust, SkipsPriorsOfUnregisteredImagesAndHandlesAnEmptyProblem) {
+  Scene scene = MakeScene();
+  scene.noisy.GetImage(scene.image_ids[5]).registered = false;
+  BundleAdjustmentOptions options;
+  options.max_num_iterations = 2;
+  const BundleAdjustmentSummary summary =
+      BundleAdjust(&scene.noisy, scene.priors, {scene.image_ids.front()}, options);
+  EXPECT_EQ(summary.num_priors, kNumCameras - 1 - 2);
+  EXPECT_EQ(summary.num_images, kNumCameras - 1);
+
+  Reconstruction empty;
+  const BundleAdjustmentSummary empty_summary = BundleAdjust(&empty, {}, {}, options);
+  EXPECT_EQ(empty_summary.num_observations, 0);
+  EXPECT_EQ(empty_summary.termination, "nothing to adjust");
+}
+
+}  // namespace
+}  // namespace viosfm
