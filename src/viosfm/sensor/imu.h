@@ -9,6 +9,10 @@
 
 namespace viosfm {
 
+// Gravity magnitude (m/s^2). viosfm's world frames are z up, gravity along -z:
+// the world gravity vector is (0, 0, -kStandardGravity).
+inline constexpr double kStandardGravity = 9.81;
+
 // One IMU reading, in the IMU (body) frame.
 struct ImuSample {
   timestamp_ns_t timestamp_ns = 0;

@@ -12,12 +12,12 @@
 
 #include "viosfm/geometry/rigid3.h"
 #include "viosfm/scene/trajectory.h"
+#include "viosfm/sensor/imu.h"
 #include "viosfm/sim/spline.h"
 #include "viosfm/util/timestamp.h"
 
 namespace viosfm {
 
-inline constexpr double kStandardGravity = 9.81;  // m/s^2, along -z of the world
 
 class BodyTrajectory {
  public:

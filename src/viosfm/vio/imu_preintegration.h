@@ -7,7 +7,7 @@
 //  - The body frame is the IMU frame. A state is world_from_body (R, p), the
 //    velocity v of the body origin in the world frame and the gyro / accel
 //    biases bg, ba (measurement = truth + bias + noise).
-//  - The world is z up; gravity is g = (0, 0, -kGravityMagnitude).
+//  - The world is z up; gravity is g = (0, 0, -kStandardGravity).
 //  - The preintegrated deltas between stamps i and j, computed with the
 //    linearisation biases (bg0, ba0), relate the states by
 //      R_j = R_i * dR
@@ -41,11 +41,8 @@
 
 namespace viosfm {
 
-// m/s^2; the world gravity vector is (0, 0, -kGravityMagnitude) (z up).
-// Same value as the simulator's kStandardGravity.
-inline constexpr double kGravityMagnitude = 9.81;
 inline Eigen::Vector3d GravityInWorld() {
-  return Eigen::Vector3d(0.0, 0.0, -kGravityMagnitude);
+  return Eigen::Vector3d(0.0, 0.0, -kStandardGravity);
 }
 
 using Vector9d = Eigen::Matrix<double, 9, 1>;

@@ -53,8 +53,25 @@ TrueDeltas ComputeTrueDeltas(const BodyTrajectory& trajectory, timestamp_ns_t t_
   return truth;
 }
 
-TEST(ImuPreintegration, GravityMatchesSimulator) {
-  EXPECT_EQ(kGravityMagnitude, kStandardGravity);
+// At rest the simulator's accelerometer reads -g in the body frame and the
+// preintegration's gravity vector cancels it: a static second predicts no motion.
+TEST(ImuPreintegration, StaticImuPredictsNoMotion) {
+  WalkOptions walk;
+  walk.duration_s = 3.0;
+  walk.static_start_s = 2.5;
+  const BodyTrajectory trajectory = GenerateWalk(walk);
+  ImuSynthesisOptions options;
+  options.add_noise = false;
+  const SynthesizedImu imu = SynthesizeImu(trajectory, trajectory.start_ns(),
+                                           trajectory.start_ns() + SecondsToNs(2.0), options);
+  ImuPreintegration preintegration(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), ImuNoise());
+  ASSERT_TRUE(preintegration.IntegrateRange(imu.samples, trajectory.start_ns(),
+                                            trajectory.start_ns() + SecondsToNs(1.0)));
+  const Eigen::Vector3d g = GravityInWorld();
+  const Eigen::Matrix3d R = trajectory.WorldFromBody(trajectory.start_ns()).rotation.toRotationMatrix();
+  // delta_v = R^T (v_j - v_i - g dt) = -R^T g dt for a body at rest.
+  EXPECT_LT((preintegration.delta_v() + R.transpose() * g * 1.0).norm(), 1e-9);
+  EXPECT_LT(So3Log(preintegration.delta_R()).norm(), 1e-12);
 }
 
 TEST(ImuPreintegration, NoiseFreeReproducesGroundTruthMotion) {
