@@ -45,6 +45,7 @@ SimulatedSequence Simulate(double static_start_s, double duration_s) {
   options.static_start_s = static_start_s;
   options.camera_rate_hz = 20.0;
   options.seed = 4;
+  options.render_images = false;  // motion and IMU only: no textures to build
   return SimulateSequence(options);
 }
 
