@@ -12,9 +12,9 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", "viosfm 0.1.0");
   app.require_subcommand(1);
   std::string log_level = "info";
-  app.add_option("--log-level", log_level, "debug, info, warning or error")
-      ->capture_default_str();
-  app.parse_complete_callback([&log_level] { viosfm::SetLogLevel(viosfm::ParseLogLevel(log_level)); });
+  app.add_option("--log-level", log_level, "debug, info, warning or error")->capture_default_str();
+  app.parse_complete_callback(
+      [&log_level] { viosfm::SetLogLevel(viosfm::ParseLogLevel(log_level)); });
 
   viosfm::cli::RegisterSimulate(app);
   viosfm::cli::RegisterFeatures(app);

@@ -34,126 +34,101 @@ struct MatchArguments {
 };
 
 void RunMatch(MatchArguments args) {
-  VerificationOptions &options = args.options;
+  VerificationOptions& options = args.options;
   options.pairs.mode = ParsePairMode(args.pairs_mode);
   options.use_vio_prior = !args.no_vio_prior;
-  options.max_pose_time_difference_ns =
-      SecondsToNs(args.max_pose_time_difference_s);
+  options.max_pose_time_difference_ns = SecondsToNs(args.max_pose_time_difference_s);
   options.retrieval.num_threads = options.num_threads;
   if (const std::string error = options.Validate(); !error.empty()) {
     throw InputError("invalid match options: " + error);
   }
   const std::string frame = ToLower(args.vio_frame);
   if (frame != "body" && frame != "cam") {
-    throw InputError("--vio-frame '" + args.vio_frame +
-                     "': expected 'body' or 'cam'");
+    throw InputError("--vio-frame '" + args.vio_frame + "': expected 'body' or 'cam'");
   }
   if (options.use_vio_prior && args.vio_trajectory.empty()) {
-    throw InputError(
-        "--vio-trajectory is required unless --no-vio-prior is given");
+    throw InputError("--vio-trajectory is required unless --no-vio-prior is given");
   }
 
   const fs::path root = args.dataset;
-  if (!fs::is_directory(root))
-    throw InputError(args.dataset, 0, "dataset folder not found");
+  if (!fs::is_directory(root)) throw InputError(args.dataset, 0, "dataset folder not found");
   EurocReadOptions read_options;
-  read_options.require_imu =
-      false; // matching needs the camera and its extrinsics
+  read_options.require_imu = false;  // matching needs the camera and its extrinsics
   const Sequence sequence = ReadEurocDataset(root, read_options);
 
   Trajectory vio;
   if (options.use_vio_prior) {
-    vio = ReadTrajectory(args.vio_trajectory,
-                         GuessTrajectoryFormat(args.vio_trajectory));
+    vio = ReadTrajectory(args.vio_trajectory, GuessTrajectoryFormat(args.vio_trajectory));
     if (!vio.has_timestamps) {
-      throw InputError(args.vio_trajectory, 0,
-                       "the VIO trajectory needs timestamps");
+      throw InputError(args.vio_trajectory, 0, "the VIO trajectory needs timestamps");
     }
-    if (frame == "cam")
-      vio = CameraToBodyTrajectory(vio, sequence.rig.body_from_cam);
+    if (frame == "cam") vio = CameraToBodyTrajectory(vio, sequence.rig.body_from_cam);
   }
 
   const fs::path database_path = args.database;
   if (!fs::exists(database_path)) {
-    throw InputError(args.database, 0,
-                     "database not found (run `viosfm features` first)");
+    throw InputError(args.database, 0, "database not found (run `viosfm features` first)");
   }
   ColmapDatabase database = ColmapDatabase::Open(database_path);
-  VIOSFM_LOG(INFO)
-      << "match: " << sequence.images.size() << " images of " << args.dataset
-      << ", pairs " << PairModeName(options.pairs.mode) << " (N1 "
-      << options.pairs.num_temporal_neighbors << ", N2 "
-      << options.pairs.num_retrieval_neighbors << "), "
-      << (options.use_vio_prior
-              ? "VIO prior (T_EE " +
-                    std::to_string(options.prior.max_epipolar_error_px) +
-                    " px, outlier ratio " +
-                    std::to_string(options.prior.max_outlier_ratio) +
-                    ") + RANSAC"
-              : std::string("RANSAC only"));
-  const VerificationResult result =
-      RunVerification(sequence, vio, &database, options);
-  VIOSFM_LOG(INFO) << "match: " << FormatVerificationSummary(result.summary)
-                   << "; database holds " << database.NumMatchedImagePairs()
-                   << " matched and " << database.NumVerifiedImagePairs()
-                   << " verified pairs";
+  VIOSFM_LOG(INFO) << "match: " << sequence.images.size() << " images of " << args.dataset
+                   << ", pairs " << PairModeName(options.pairs.mode) << " (N1 "
+                   << options.pairs.num_temporal_neighbors << ", N2 "
+                   << options.pairs.num_retrieval_neighbors << "), "
+                   << (options.use_vio_prior
+                           ? "VIO prior (T_EE " +
+                                 std::to_string(options.prior.max_epipolar_error_px) +
+                                 " px, outlier ratio " +
+                                 std::to_string(options.prior.max_outlier_ratio) + ") + RANSAC"
+                           : std::string("RANSAC only"));
+  const VerificationResult result = RunVerification(sequence, vio, &database, options);
+  VIOSFM_LOG(INFO) << "match: " << FormatVerificationSummary(result.summary) << "; database holds "
+                   << database.NumMatchedImagePairs() << " matched and "
+                   << database.NumVerifiedImagePairs() << " verified pairs";
 
   if (!args.report.empty()) {
     const fs::path report = args.report;
     fs::create_directories(report);
     WritePairDecisionsCsv(report / "pairs.csv", result.decisions);
-    WriteVerificationJson(report / "verification.json", result.summary,
-                          result.decisions);
-    VIOSFM_LOG(INFO) << "match: report in " << report.string()
-                     << " (pairs.csv, verification.json)";
+    WriteVerificationJson(report / "verification.json", result.summary, result.decisions);
+    VIOSFM_LOG(INFO) << "match: report in " << report.string() << " (pairs.csv, verification.json)";
   }
 }
 
-} // namespace
+}  // namespace
 
-void RegisterMatch(CLI::App &app) {
+void RegisterMatch(CLI::App& app) {
   auto args = std::make_shared<MatchArguments>();
-  CLI::App *command = app.add_subcommand(
-      "match", "Generate image pairs, match descriptors and verify each pair: "
-               "the VIO-prior epipolar "
-               "check (step 1), then RANSAC (step 2); writes matches and "
-               "verified geometries to the "
-               "database; a re-run skips the pairs already stored");
-  command
-      ->add_option("dataset", args->dataset,
-                   "EuRoC dataset (folder containing mav0/)")
+  CLI::App* command =
+      app.add_subcommand("match",
+                         "Generate image pairs, match descriptors and verify each pair: "
+                         "the VIO-prior epipolar "
+                         "check (step 1), then RANSAC (step 2); writes matches and "
+                         "verified geometries to the "
+                         "database; a re-run skips the pairs already stored");
+  command->add_option("dataset", args->dataset, "EuRoC dataset (folder containing mav0/)")
       ->required();
-  command
-      ->add_option("--database", args->database,
-                   "COLMAP database with features")
-      ->required();
-  command->add_option(
-      "--vio-trajectory", args->vio_trajectory,
-      "VIO trajectory (TUM, EuRoC or KITTI-with-stamps file), world_from_body "
-      "unless --vio-frame cam");
-  command
-      ->add_option("--vio-frame", args->vio_frame,
-                   "Frame of the VIO poses: body or cam")
+  command->add_option("--database", args->database, "COLMAP database with features")->required();
+  command->add_option("--vio-trajectory", args->vio_trajectory,
+                      "VIO trajectory (TUM, EuRoC or KITTI-with-stamps file), world_from_body "
+                      "unless --vio-frame cam");
+  command->add_option("--vio-frame", args->vio_frame, "Frame of the VIO poses: body or cam")
       ->capture_default_str();
   command->add_flag("--no-vio-prior", args->no_vio_prior,
                     "RANSAC-only verification (COLMAP's; the baseline)");
   command
-      ->add_option(
-          "--n1", args->options.pairs.num_temporal_neighbors,
-          "Temporal neighbours per image (sequential mode: next images)")
+      ->add_option("--n1", args->options.pairs.num_temporal_neighbors,
+                   "Temporal neighbours per image (sequential mode: next images)")
       ->capture_default_str();
   command
       ->add_option("--n2", args->options.pairs.num_retrieval_neighbors,
                    "Retrieval neighbours per image")
       ->capture_default_str();
   command
-      ->add_option("--pairs-mode", args->pairs_mode,
-                   "temporal_retrieval, sequential or exhaustive")
+      ->add_option("--pairs-mode", args->pairs_mode, "temporal_retrieval, sequential or exhaustive")
       ->capture_default_str();
   command
-      ->add_option(
-          "--max-epipolar-error", args->options.prior.max_epipolar_error_px,
-          "T_EE: a match farther from its VIO epipolar line is an outlier (px)")
+      ->add_option("--max-epipolar-error", args->options.prior.max_epipolar_error_px,
+                   "T_EE: a match farther from its VIO epipolar line is an outlier (px)")
       ->capture_default_str();
   command
       ->add_option("--max-outlier-ratio", args->options.prior.max_outlier_ratio,
@@ -168,26 +143,20 @@ void RegisterMatch(CLI::App &app) {
                    "RANSAC inlier threshold (Sampson error, px)")
       ->capture_default_str();
   command
-      ->add_option("--max-pose-time-difference",
-                   args->max_pose_time_difference_s,
+      ->add_option("--max-pose-time-difference", args->max_pose_time_difference_s,
                    "Largest gap between an image stamp and its VIO pose (s)")
       ->capture_default_str();
-  command->add_flag(
-      "--guided-matching", args->options.guided_matching,
-      "Match inside the VIO epipolar band instead of by brute force");
-  command->add_option(
-      "--vocabulary", args->options.retrieval.vocabulary_path,
-      "Vocabulary tree file for retrieval (default: trained on the images)");
+  command->add_flag("--guided-matching", args->options.guided_matching,
+                    "Match inside the VIO epipolar band instead of by brute force");
+  command->add_option("--vocabulary", args->options.retrieval.vocabulary_path,
+                      "Vocabulary tree file for retrieval (default: trained on the images)");
   command->add_option("--threads", args->options.num_threads, "Worker threads")
       ->capture_default_str();
-  command
-      ->add_option("--seed", args->options.seed,
-                   "Seed of RANSAC and of the vocabulary training")
+  command->add_option("--seed", args->options.seed, "Seed of RANSAC and of the vocabulary training")
       ->capture_default_str();
-  command->add_option(
-      "--report", args->report,
-      "Folder for pairs.csv and verification.json (one record per pair)");
+  command->add_option("--report", args->report,
+                      "Folder for pairs.csv and verification.json (one record per pair)");
   command->callback([args] { RunMatch(*args); });
 }
 
-} // namespace viosfm::cli
+}  // namespace viosfm::cli

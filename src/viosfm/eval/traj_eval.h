@@ -111,8 +111,6 @@ struct EvaluationResult {
   std::optional<RelativePoseErrors> rpe_distance;
 };
 
-
-
 // Evaluates `est` against `ref`. Throws InputError if the options are
 // invalid, no pose could be associated, the association needs stamps that a
 // trajectory lacks, or the alignment is degenerate (too few or collinear

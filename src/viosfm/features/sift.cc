@@ -111,8 +111,7 @@ ImageFeatures ExtractSift(const GreyImage& image, const SiftOptions& options) {
     const float orientation = k.angle * static_cast<float>(std::numbers::pi / 180.0);
     features.keypoints.push_back(FeatureKeypoint::FromScaleOrientation(
         static_cast<float>(k.pt.x - kOpenCvSiftPositionBias),
-        static_cast<float>(k.pt.y - kOpenCvSiftPositionBias), scale,
-        orientation));
+        static_cast<float>(k.pt.y - kOpenCvSiftPositionBias), scale, orientation));
     const float* row = cv_descriptors.ptr<float>(order[i]);
     std::copy(row, row + num_cols, raw.row(static_cast<Eigen::Index>(i)).data());
   }

@@ -245,8 +245,7 @@ TEST(Sift, ProjectedPointsUndistortToTheirNormalisedCoordinates) {
   std::vector<double> pixel_errors;
   std::vector<double> normalized_errors;
   for (size_t i = 0; i < points.size(); ++i) {
-    const auto [index, distance] =
-        Nearest(features.keypoints, pixels[i]);
+    const auto [index, distance] = Nearest(features.keypoints, pixels[i]);
     ASSERT_LT(distance, 0.2) << "blob " << i << " at " << pixels[i].transpose();
     pixel_errors.push_back(distance);
     const Eigen::Vector2d expected = points[i].hnormalized();

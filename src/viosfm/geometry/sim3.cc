@@ -19,7 +19,8 @@ Rigid3d Sim3d::TransformPose(const Rigid3d& a_from_frame) const {
 }
 
 Sim3d operator*(const Sim3d& c_from_b, const Sim3d& b_from_a) {
-  return Sim3d(c_from_b.scale * b_from_a.scale, (c_from_b.rotation * b_from_a.rotation).normalized(),
+  return Sim3d(c_from_b.scale * b_from_a.scale,
+               (c_from_b.rotation * b_from_a.rotation).normalized(),
                c_from_b.scale * (c_from_b.rotation * b_from_a.translation) + c_from_b.translation);
 }
 

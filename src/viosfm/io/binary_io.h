@@ -77,7 +77,8 @@ class LittleEndianWriter {
     } else {
       bits = static_cast<std::make_unsigned_t<T>>(value);
     }
-    for (size_t i = 0; i < sizeof(T); ++i) data_.push_back(static_cast<char>((bits >> (8 * i)) & 0xff));
+    for (size_t i = 0; i < sizeof(T); ++i)
+      data_.push_back(static_cast<char>((bits >> (8 * i)) & 0xff));
   }
   void WriteBytes(std::string_view bytes) { data_ += bytes; }
   void WriteNullTerminated(const std::string& text) {

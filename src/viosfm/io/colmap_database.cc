@@ -541,7 +541,10 @@ void ColmapDatabase::WriteKeypoints(image_t image_id, const FeatureKeypoints& ke
     // Positions in COLMAP's pixel convention.
     const float row[kCols] = {k.x + static_cast<float>(kColmapPixelOffset),
                               k.y + static_cast<float>(kColmapPixelOffset),
-                              k.a11, k.a12, k.a21, k.a22};
+                              k.a11,
+                              k.a12,
+                              k.a21,
+                              k.a22};
     std::copy(row, row + kCols, blob.begin() + kCols * i);
   }
   Query query(*impl_,

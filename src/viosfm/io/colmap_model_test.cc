@@ -161,9 +161,8 @@ TEST(ColmapModelTest, ReadsOpenCvAndPinholeCameras) {
   const Reconstruction reconstruction = ReadColmapModel(TestData("colmap_multicam_bin"));
   ASSERT_EQ(reconstruction.NumCameras(), 2u);
   EXPECT_EQ(reconstruction.GetCamera(1).model_id, CameraModelId::kOpenCV);
-  EXPECT_EQ(
-      reconstruction.GetCamera(1).params,
-      (std::vector<double>{2750.5, 2752.25, 1535, 1023, -0.0107, 0.0021, 0.0001, -0.0002}))
+  EXPECT_EQ(reconstruction.GetCamera(1).params,
+            (std::vector<double>{2750.5, 2752.25, 1535, 1023, -0.0107, 0.0021, 0.0001, -0.0002}))
       << "principal point in viosfm's convention: COLMAP's minus 0.5";
   EXPECT_EQ(reconstruction.GetCamera(2).model_id, CameraModelId::kPinhole);
   EXPECT_EQ(reconstruction.GetCamera(2).params,

@@ -24,9 +24,8 @@ namespace {
 // file: blank lines and lines starting with '#' are skipped, fields trimmed.
 void ForEachCsvRow(const fs::path& path, const std::string& what,
                    const std::function<void(int64_t, const std::vector<std::string_view>&)>& row) {
-  ForEachDataLine(path, what, [&](int64_t line, std::string_view text) {
-    row(line, SplitFields(text, ","));
-  });
+  ForEachDataLine(path, what,
+                  [&](int64_t line, std::string_view text) { row(line, SplitFields(text, ",")); });
 }
 
 std::string Quoted(std::string_view text) {

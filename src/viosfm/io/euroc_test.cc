@@ -15,8 +15,8 @@ namespace viosfm {
 namespace {
 
 namespace fs = std::filesystem;
-using ::testing::HasSubstr;
 using testing::ExpectInputError;
+using ::testing::HasSubstr;
 using testing::InputErrorMessage;
 using testing::WriteTextFile;
 
@@ -26,11 +26,11 @@ TEST(ReadEurocGroundTruth, ReadsFullAndPoseOnlyRows) {
   const fs::path folder = testing::MakeScratchFolder("gt_ok");
   const fs::path csv = folder / "data.csv";
   WriteTextFile(csv,
-            "#timestamp [ns], p_RS_R_x [m], p_RS_R_y [m], p_RS_R_z [m], q_RS_w [], q_RS_x [], "
-            "q_RS_y [], q_RS_z []\n"
-            "\n"
-            "100,1,2,3,1,0,0,0,0.1,0.2,0.3,0.01,0.02,0.03,-0.1,-0.2,-0.3\r\n"
-            "200, 4, 5, 6, 0, 0, 0, 1.0005\n");
+                "#timestamp [ns], p_RS_R_x [m], p_RS_R_y [m], p_RS_R_z [m], q_RS_w [], q_RS_x [], "
+                "q_RS_y [], q_RS_z []\n"
+                "\n"
+                "100,1,2,3,1,0,0,0,0.1,0.2,0.3,0.01,0.02,0.03,-0.1,-0.2,-0.3\r\n"
+                "200, 4, 5, 6, 0, 0, 0, 1.0005\n");
   const std::vector<GroundTruthState> states = ReadEurocGroundTruth(csv);
   ASSERT_EQ(states.size(), 2u);
   EXPECT_EQ(states[0].timestamp_ns, 100);
@@ -315,16 +315,16 @@ fs::path MakeSyntheticEuroc(const std::string& name, const std::string& cam_yaml
   WriteTextFile(root / "mav0/cam0/data/a.png", "x");
   WriteTextFile(root / "mav0/cam0/data/b.png", "x");
   WriteTextFile(root / "mav0/cam0/sensor.yaml",
-            "%YAML:1.0\n"
-            "T_BS:\n  cols: 4\n  rows: 4\n"
-            "  data: [1, 0, 0, 0.1, 0, 1, 0, 0.2, 0, 0, 1, 0.3, 0, 0, 0, 1]\n"
-            "rate_hz: 10\nresolution: [640, 480]\ncamera_model: pinhole\n"
-            "intrinsics: [500, 501, 320, 240]\n" +
-                cam_yaml_tail);
+                "%YAML:1.0\n"
+                "T_BS:\n  cols: 4\n  rows: 4\n"
+                "  data: [1, 0, 0, 0.1, 0, 1, 0, 0.2, 0, 0, 1, 0.3, 0, 0, 0, 1]\n"
+                "rate_hz: 10\nresolution: [640, 480]\ncamera_model: pinhole\n"
+                "intrinsics: [500, 501, 320, 240]\n" +
+                    cam_yaml_tail);
   WriteTextFile(root / "mav0/imu0/sensor.yaml",
-            "%YAML:1.0\nrate_hz: 1000\ngyroscope_noise_density: 1e-4\n"
-            "gyroscope_random_walk: 2e-5\naccelerometer_noise_density: 3e-3\n"
-            "accelerometer_random_walk: 4e-3\n");
+                "%YAML:1.0\nrate_hz: 1000\ngyroscope_noise_density: 1e-4\n"
+                "gyroscope_random_walk: 2e-5\naccelerometer_noise_density: 3e-3\n"
+                "accelerometer_random_walk: 4e-3\n");
   std::ostringstream imu;
   imu << "#timestamp [ns],w_x,w_y,w_z,a_x,a_y,a_z\n";
   for (timestamp_ns_t t = imu_first; t <= imu_last; t += 100) imu << t << ",0,0,0,0,0,9.81\n";

@@ -31,7 +31,9 @@ void WriteTransformYaml(std::ostream& out, const Rigid3d& transform) {
   out << "0.0, 0.0, 0.0, 1.0]\n";
 }
 
-void FullPrecision(std::ostream& out) { out << std::setprecision(17); }
+void FullPrecision(std::ostream& out) {
+  out << std::setprecision(17);
+}
 
 }  // namespace
 
@@ -132,8 +134,8 @@ void WriteEurocDataset(const fs::path& root, const Sequence& sequence) {
   const fs::path mav0 = root / "mav0";
   if (!sequence.images.empty()) {
     WriteEurocImageList(mav0 / "cam0" / "data.csv", sequence.images);
-    WriteEurocCameraYaml(mav0 / "cam0" / "sensor.yaml", sequence.rig.camera, sequence.rig.body_from_cam,
-                         sequence.rig.camera_rate_hz);
+    WriteEurocCameraYaml(mav0 / "cam0" / "sensor.yaml", sequence.rig.camera,
+                         sequence.rig.body_from_cam, sequence.rig.camera_rate_hz);
   }
   if (sequence.has_imu()) {
     WriteEurocImu(mav0 / "imu0" / "data.csv", sequence.imu);

@@ -10,7 +10,8 @@
 
 namespace viosfm {
 
-void WriteEurocImageList(const std::filesystem::path& csv, const std::vector<SequenceImage>& images);
+void WriteEurocImageList(const std::filesystem::path& csv,
+                         const std::vector<SequenceImage>& images);
 void WriteEurocImu(const std::filesystem::path& csv, const std::vector<ImuSample>& samples);
 void WriteEurocGroundTruth(const std::filesystem::path& csv,
                            const std::vector<GroundTruthState>& states);

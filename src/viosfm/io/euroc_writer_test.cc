@@ -30,7 +30,8 @@ TEST(EurocWriter, RoundTripsTheRealDatasetExactly) {
   EXPECT_EQ(copy.rig.camera.params, original.rig.camera.params);
   EXPECT_EQ(copy.rig.camera.width, original.rig.camera.width);
   EXPECT_EQ(copy.rig.body_from_cam.translation, original.rig.body_from_cam.translation);
-  EXPECT_LT(copy.rig.body_from_cam.rotation.angularDistance(original.rig.body_from_cam.rotation), 1e-15);
+  EXPECT_LT(copy.rig.body_from_cam.rotation.angularDistance(original.rig.body_from_cam.rotation),
+            1e-15);
   EXPECT_EQ(copy.rig.camera_rate_hz, original.rig.camera_rate_hz);
   EXPECT_EQ(copy.rig.imu_noise.gyro_noise_density, original.rig.imu_noise.gyro_noise_density);
   EXPECT_EQ(copy.rig.imu_noise.accel_random_walk, original.rig.imu_noise.accel_random_walk);

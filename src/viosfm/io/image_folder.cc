@@ -161,8 +161,8 @@ Sequence ReadImageFolder(const fs::path& folder, const ImageFolderOptions& optio
   }
 
   VIOSFM_LOG(INFO) << "image folder " << folder.string() << ": " << sequence.images.size()
-                   << " images (" << sequence.rig.camera.ModelName() << " " << sequence.rig.camera.width
-                   << "x" << sequence.rig.camera.height << "), no IMU";
+                   << " images (" << sequence.rig.camera.ModelName() << " "
+                   << sequence.rig.camera.width << "x" << sequence.rig.camera.height << "), no IMU";
   return sequence;
 }
 

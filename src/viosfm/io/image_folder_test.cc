@@ -15,8 +15,8 @@ namespace viosfm {
 namespace {
 
 namespace fs = std::filesystem;
-using ::testing::HasSubstr;
 using testing::ExpectInputError;
+using ::testing::HasSubstr;
 using testing::InputErrorMessage;
 using testing::WriteTextFile;
 
@@ -61,11 +61,11 @@ TEST(ReadImageFolder, StampsFromTimestampsFile) {
     WriteTextFile(folder / name, "x");
   const fs::path stamps = folder / "times.txt";
   WriteTextFile(stamps,
-            "# filename timestamp\n"
-            "b.png   1403715273.5\n"
-            "a.png\t1403715273262142976\r\n"
-            "\n"
-            "c.jpg,12\n");
+                "# filename timestamp\n"
+                "b.png   1403715273.5\n"
+                "a.png\t1403715273262142976\r\n"
+                "\n"
+                "c.jpg,12\n");
   ImageFolderOptions options = PinholeOptions();
   options.timestamps_file = stamps;
   const Sequence sequence = ReadImageFolder(folder, options);
@@ -82,13 +82,13 @@ TEST(ReadImageFolder, CameraFromSensorYaml) {
   const fs::path folder = testing::MakeScratchFolder("images_yaml");
   WriteTextFile(folder / "5.png", "x");
   WriteTextFile(folder / "sensor.yaml",
-            "%YAML:1.0\n"
-            "T_BS:\n  cols: 4\n  rows: 4\n"
-            "  data: [1, 0, 0, 0.1, 0, 1, 0, 0.2, 0, 0, 1, 0.3, 0, 0, 0, 1]\n"
-            "rate_hz: 15\nresolution: [640, 480]\ncamera_model: pinhole\n"
-            "intrinsics: [500, 501, 320, 240]\n"
-            "distortion_model: radial-tangential\n"
-            "distortion_coefficients: [-0.1, 0.01, 0.001, 0.002]\n");
+                "%YAML:1.0\n"
+                "T_BS:\n  cols: 4\n  rows: 4\n"
+                "  data: [1, 0, 0, 0.1, 0, 1, 0, 0.2, 0, 0, 1, 0.3, 0, 0, 0, 1]\n"
+                "rate_hz: 15\nresolution: [640, 480]\ncamera_model: pinhole\n"
+                "intrinsics: [500, 501, 320, 240]\n"
+                "distortion_model: radial-tangential\n"
+                "distortion_coefficients: [-0.1, 0.01, 0.001, 0.002]\n");
   ImageFolderOptions options;
   options.camera_yaml = folder / "sensor.yaml";
   const Sequence sequence = ReadImageFolder(folder, options);
@@ -189,7 +189,8 @@ namespace {
 TEST(ImageFolder, EstimatesTheFrameRateFromStamps) {
   const std::filesystem::path folder = testing::MakeScratchFolder("image_folder_rate");
   for (int i = 0; i < 6; ++i) {
-    std::ofstream(folder / (std::to_string(1000000000 + i * 100000000 + (i == 3 ? 7 : 0)) + ".png")) << "x";
+    std::ofstream(folder / (std::to_string(1000000000 + i * 100000000 + (i == 3 ? 7 : 0)) + ".png"))
+        << "x";
   }
   ImageFolderOptions options;
   options.camera = MakeCamera(CameraModelId::kPinhole, 64, 48, {50, 50, 32, 24});

@@ -16,7 +16,6 @@ double EstimateFrameRateHz(const std::vector<SequenceImage>& images) {
   return median > 0 ? 1e9 / static_cast<double>(median) : 0.0;
 }
 
-
 Trajectory GroundTruthBodyTrajectory(const Sequence& sequence) {
   Trajectory trajectory;
   trajectory.poses.reserve(sequence.ground_truth.size());

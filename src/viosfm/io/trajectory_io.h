@@ -62,5 +62,4 @@ void WriteTrajectory(const std::filesystem::path& path, const Trajectory& trajec
 // the InputError thrown on a malformed text (e.g. "--body-from-cam").
 Rigid3d ParsePoseTxyzQxyzw(std::string_view text, const std::string& what);
 
-
 }  // namespace viosfm

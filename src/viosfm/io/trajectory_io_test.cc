@@ -1,4 +1,3 @@
-#include "viosfm/io/euroc.h"
 #include "viosfm/io/trajectory_io.h"
 
 #include <gmock/gmock.h>
@@ -8,6 +7,7 @@
 #include <random>
 #include <string>
 
+#include "viosfm/io/euroc.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/file_util.h"
 #include "viosfm/util/testing.h"
@@ -16,8 +16,8 @@ namespace viosfm {
 namespace {
 
 namespace fs = std::filesystem;
-using ::testing::HasSubstr;
 using testing::ExpectInputError;
+using ::testing::HasSubstr;
 using testing::InputErrorMessage;
 using testing::WriteTextFile;
 
@@ -74,11 +74,11 @@ TEST(TumTrajectory, WriteReadIsLosslessAndStable) {
 TEST(TumTrajectory, ParsesCommentsBlankLinesAndStampsDigitExactly) {
   const fs::path folder = testing::MakeScratchFolder("tum_parse");
   WriteTextFile(folder / "t.txt",
-            "# ground truth trajectory\n"
-            "\n"
-            "1311868164.363181 1 2 3 0 0 0 1\n"
-            "  1311868164.3632\t-1e-3 2.5 3 0 0 0.7071067811865476 0.7071067811865476  \n"
-            "1311868164.4 0 0 0 0 0 0 2\n");
+                "# ground truth trajectory\n"
+                "\n"
+                "1311868164.363181 1 2 3 0 0 0 1\n"
+                "  1311868164.3632\t-1e-3 2.5 3 0 0 0.7071067811865476 0.7071067811865476  \n"
+                "1311868164.4 0 0 0 0 0 0 2\n");
   const Trajectory trajectory = ReadTumTrajectory(folder / "t.txt");
   ASSERT_EQ(trajectory.size(), 3u);
   EXPECT_EQ(trajectory.poses[0].timestamp_ns, 1311868164363181000);
@@ -173,12 +173,12 @@ TEST(EurocTrajectory, RoundTripAndFullStateFile) {
   EXPECT_EQ(GuessTrajectoryFormat(folder / "e.csv"), TrajectoryFormat::kEuroc);
 
   WriteTextFile(folder / "full.csv",
-            "#timestamp [ns],p_RS_R_x [m],p_RS_R_y [m],p_RS_R_z [m],q_RS_w [],q_RS_x [],"
-            "q_RS_y [],q_RS_z [],v_RS_R_x [m s^-1],v_RS_R_y,v_RS_R_z,b_w_RS_S_x,b_w_RS_S_y,"
-            "b_w_RS_S_z,b_a_RS_S_x,b_a_RS_S_y,b_a_RS_S_z\n"
-            "1403715273262142976,0.878612,2.142470,0.947262,0.060514,-0.828459,-0.058956,"
-            "-0.553641,0.009474,-0.014009,-0.002145,-0.002229,0.020700,0.076350,-0.012492,"
-            "0.547666,0.069073\n");
+                "#timestamp [ns],p_RS_R_x [m],p_RS_R_y [m],p_RS_R_z [m],q_RS_w [],q_RS_x [],"
+                "q_RS_y [],q_RS_z [],v_RS_R_x [m s^-1],v_RS_R_y,v_RS_R_z,b_w_RS_S_x,b_w_RS_S_y,"
+                "b_w_RS_S_z,b_a_RS_S_x,b_a_RS_S_y,b_a_RS_S_z\n"
+                "1403715273262142976,0.878612,2.142470,0.947262,0.060514,-0.828459,-0.058956,"
+                "-0.553641,0.009474,-0.014009,-0.002145,-0.002229,0.020700,0.076350,-0.012492,"
+                "0.547666,0.069073\n");
   const Trajectory full = ReadEurocTrajectory(folder / "full.csv");
   ASSERT_EQ(full.size(), 1u);
   EXPECT_EQ(full.poses[0].timestamp_ns, 1403715273262142976);
@@ -236,15 +236,15 @@ TEST(ParsePoseTxyzQxyzw, ParsesAndRejects) {
 TEST(SensorYaml, ReadsTbsOfEurocCamera) {
   const fs::path folder = testing::MakeScratchFolder("sensor_yaml");
   WriteTextFile(folder / "sensor.yaml",
-            "%YAML:1.0\n"
-            "sensor_type: camera\n"
-            "T_BS:\n"
-            "  cols: 4\n"
-            "  rows: 4\n"
-            "  data: [0.0148655429818, -0.999880929698, 0.00414029679422, -0.0216401454975,\n"
-            "         0.999557249008, 0.0149672133247, 0.025715529948, -0.064676986768,\n"
-            "        -0.0257744366974, 0.00375618835797, 0.999660727178, 0.00981073058949,\n"
-            "         0.0, 0.0, 0.0, 1.0]\n");
+                "%YAML:1.0\n"
+                "sensor_type: camera\n"
+                "T_BS:\n"
+                "  cols: 4\n"
+                "  rows: 4\n"
+                "  data: [0.0148655429818, -0.999880929698, 0.00414029679422, -0.0216401454975,\n"
+                "         0.999557249008, 0.0149672133247, 0.025715529948, -0.064676986768,\n"
+                "        -0.0257744366974, 0.00375618835797, 0.999660727178, 0.00981073058949,\n"
+                "         0.0, 0.0, 0.0, 1.0]\n");
   const Rigid3d body_from_cam = ReadEurocSensorTransform(folder / "sensor.yaml");
   EXPECT_NEAR((body_from_cam.translation -
                Eigen::Vector3d(-0.0216401454975, -0.064676986768, 0.00981073058949))
@@ -271,13 +271,14 @@ TEST(ColmapTrajectory, RegisteredImagesSortedByNameStamp) {
   const fs::path folder = testing::MakeScratchFolder("colmap_trajectory");
   WriteTextFile(folder / "cameras.txt", "1 PINHOLE 640 480 500 500 320 240\n");
   // cam_from_world of image 1: rotation 90 deg about z, t = (1, 2, 3).
-  WriteTextFile(folder / "images.txt",
-            "1 0.70710678118654757 0 0 0.70710678118654757 1 2 3 1 cam0/1403715273312142976.png\n"
-            "\n"
-            "2 1 0 0 0 0 0 0 1 cam0/1403715273262142976.png\n"
-            "\n"
-            "3 1 0 0 0 5 5 5 1 cam1/1403715273262142976.png\n"
-            "\n");
+  WriteTextFile(
+      folder / "images.txt",
+      "1 0.70710678118654757 0 0 0.70710678118654757 1 2 3 1 cam0/1403715273312142976.png\n"
+      "\n"
+      "2 1 0 0 0 0 0 0 1 cam0/1403715273262142976.png\n"
+      "\n"
+      "3 1 0 0 0 5 5 5 1 cam1/1403715273262142976.png\n"
+      "\n");
   WriteTextFile(folder / "points3D.txt", "");
   EXPECT_EQ(GuessTrajectoryFormat(folder), TrajectoryFormat::kColmap);
   const Trajectory trajectory = ReadColmapTrajectory(folder, "cam0/");

@@ -5,13 +5,12 @@
 #include <limits>
 
 #include "viosfm/geometry/epipolar.h"
-#include "viosfm/util/parallel.h"
 #include "viosfm/util/errors.h"
+#include "viosfm/util/parallel.h"
 #include "viosfm/util/progress.h"
 
 namespace viosfm {
 namespace {
-
 
 // The largest and second-largest dot product seen for one descriptor, and
 // the index of the largest. `second` starts at 0: a second neighbour beyond

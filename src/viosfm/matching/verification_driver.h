@@ -106,6 +106,4 @@ VerificationResult RunVerification(const Sequence& sequence, const Trajectory& v
 // "120 pairs: 80 accepted, 30 rejected by VIO, 10 by RANSAC, ... ; 3.2 s"
 std::string FormatVerificationSummary(const VerificationSummary& summary);
 
-
-
 }  // namespace viosfm

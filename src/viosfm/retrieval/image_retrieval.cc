@@ -3,9 +3,9 @@
 #include <algorithm>
 #include <unordered_set>
 
-#include "viosfm/util/parallel.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/logging.h"
+#include "viosfm/util/parallel.h"
 #include "viosfm/util/progress.h"
 #include "viosfm/util/timer.h"
 
@@ -67,16 +67,16 @@ std::vector<std::vector<ImageScore>> RetrieveSimilarImageScores(
   std::vector<std::vector<ImageScore>> results(image_ids.size());
   {
     ProgressBar progress("Retrieving similar images", static_cast<int64_t>(image_ids.size()));
-    ParallelForChunks(
-        static_cast<int64_t>(image_ids.size()), options.num_threads, 8,
-        [&](int64_t begin, int64_t end) {
-          for (int64_t i = begin; i < end; ++i) {
-            std::unordered_set<image_t> excluded;
-            if (!exclude.empty()) excluded.insert(exclude[i].begin(), exclude[i].end());
-            results[i] = index.Query(image_ids[i], options.num_neighbors, excluded);
-            progress.Update();
-          }
-        });
+    ParallelForChunks(static_cast<int64_t>(image_ids.size()), options.num_threads, 8,
+                      [&](int64_t begin, int64_t end) {
+                        for (int64_t i = begin; i < end; ++i) {
+                          std::unordered_set<image_t> excluded;
+                          if (!exclude.empty())
+                            excluded.insert(exclude[i].begin(), exclude[i].end());
+                          results[i] = index.Query(image_ids[i], options.num_neighbors, excluded);
+                          progress.Update();
+                        }
+                      });
   }
   int64_t num_retrieved = 0;
   for (const std::vector<ImageScore>& result : results) num_retrieved += result.size();

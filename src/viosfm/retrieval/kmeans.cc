@@ -4,8 +4,8 @@
 #include <cmath>
 #include <limits>
 
-#include "viosfm/util/parallel.h"
 #include "viosfm/util/errors.h"
+#include "viosfm/util/parallel.h"
 #include "viosfm/util/random.h"
 
 namespace viosfm {
@@ -87,8 +87,7 @@ int64_t Assign(const FloatDescriptors& points, const std::vector<int32_t>& rows,
   const int k = static_cast<int>(centers.rows());
   const int dim = static_cast<int>(points.cols());
   const Eigen::VectorXf center_norms = centers.rowwise().squaredNorm();
-  const int threads =
-      n * k * dim >= kMinParallelWork ? ResolveNumThreads(num_threads) : 1;
+  const int threads = n * k * dim >= kMinParallelWork ? ResolveNumThreads(num_threads) : 1;
   std::vector<int64_t> changed_per_chunk((n + kAssignChunk - 1) / kAssignChunk, 0);
   ParallelForChunks(n, threads, kAssignChunk, [&](int64_t begin, int64_t end) {
     FloatDescriptors block(end - begin, dim);

@@ -8,9 +8,9 @@
 #include <numeric>
 
 #include "viosfm/io/vocabulary_io.h"
-#include "viosfm/util/parallel.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/logging.h"
+#include "viosfm/util/parallel.h"
 #include "viosfm/util/progress.h"
 #include "viosfm/util/random.h"
 #include "viosfm/util/timer.h"
@@ -148,10 +148,10 @@ std::vector<int32_t> VocabularyTree::Quantize(const FloatDescriptors& descriptor
   VIOSFM_CHECK_EQ(descriptors.cols(), data_.descriptor_dim);
   std::vector<int32_t> words(descriptors.rows());
   ParallelForChunks(descriptors.rows(), num_threads, kQuantizeChunk,
-                                        [&](int64_t begin, int64_t end) {
-                                          for (int64_t i = begin; i < end; ++i)
-                                            words[i] = Quantize(descriptors.row(i).data());
-                                        });
+                    [&](int64_t begin, int64_t end) {
+                      for (int64_t i = begin; i < end; ++i)
+                        words[i] = Quantize(descriptors.row(i).data());
+                    });
   return words;
 }
 

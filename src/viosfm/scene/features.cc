@@ -22,7 +22,9 @@ float FeatureKeypoint::Scale() const {
   return 0.5f * (std::sqrt(a11 * a11 + a21 * a21) + std::sqrt(a12 * a12 + a22 * a22));
 }
 
-float FeatureKeypoint::Orientation() const { return std::atan2(a21, a11); }
+float FeatureKeypoint::Orientation() const {
+  return std::atan2(a21, a11);
+}
 
 image_pair_t ImagePairToPairId(image_t image_id1, image_t image_id2) {
   if (SwapImagePair(image_id1, image_id2)) std::swap(image_id1, image_id2);

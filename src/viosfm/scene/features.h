@@ -44,6 +44,8 @@ inline constexpr uint64_t kMaxNumImages = 2147483647;
 image_pair_t ImagePairToPairId(image_t image_id1, image_t image_id2);
 std::pair<image_t, image_t> PairIdToImagePair(image_pair_t pair_id);
 // Whether (image_id1, image_id2) must be swapped to be in pair-id order.
-inline bool SwapImagePair(image_t image_id1, image_t image_id2) { return image_id1 > image_id2; }
+inline bool SwapImagePair(image_t image_id1, image_t image_id2) {
+  return image_id1 > image_id2;
+}
 
 }  // namespace viosfm

@@ -6,8 +6,9 @@ namespace viosfm {
 namespace {
 
 TEST(Trajectory, CameraAndBodyFramesConvertBothWays) {
-  const Rigid3d body_from_cam(Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized())),
-                              Eigen::Vector3d(0.05, -0.02, 0.01));
+  const Rigid3d body_from_cam(
+      Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized())),
+      Eigen::Vector3d(0.05, -0.02, 0.01));
   Trajectory world_from_body;
   world_from_body.poses.push_back(
       {7, Rigid3d(Eigen::Quaterniond(Eigen::AngleAxisd(1.0, Eigen::Vector3d::UnitZ())),

@@ -15,17 +15,17 @@ namespace viosfm {
 // COLMAP 3.8 model ids. Those viosfm can project with are marked (*).
 enum class CameraModelId : int {
   kInvalid = -1,
-  kSimplePinhole = 0,    // (*) f, cx, cy
-  kPinhole = 1,          // (*) fx, fy, cx, cy
-  kSimpleRadial = 2,     // (*) f, cx, cy, k
-  kRadial = 3,           // (*) f, cx, cy, k1, k2
-  kOpenCV = 4,           // (*) fx, fy, cx, cy, k1, k2, p1, p2 (radial-tangential)
-  kOpenCVFisheye = 5,    // (*) fx, fy, cx, cy, k1, k2, k3, k4 (equidistant)
-  kFullOpenCV = 6,       //     fx, fy, cx, cy, k1, k2, p1, p2, k3, k4, k5, k6
-  kFOV = 7,              //     fx, fy, cx, cy, omega
+  kSimplePinhole = 0,        // (*) f, cx, cy
+  kPinhole = 1,              // (*) fx, fy, cx, cy
+  kSimpleRadial = 2,         // (*) f, cx, cy, k
+  kRadial = 3,               // (*) f, cx, cy, k1, k2
+  kOpenCV = 4,               // (*) fx, fy, cx, cy, k1, k2, p1, p2 (radial-tangential)
+  kOpenCVFisheye = 5,        // (*) fx, fy, cx, cy, k1, k2, k3, k4 (equidistant)
+  kFullOpenCV = 6,           //     fx, fy, cx, cy, k1, k2, p1, p2, k3, k4, k5, k6
+  kFOV = 7,                  //     fx, fy, cx, cy, omega
   kSimpleRadialFisheye = 8,  // f, cx, cy, k
-  kRadialFisheye = 9,    //     f, cx, cy, k1, k2
-  kThinPrismFisheye = 10,  //   fx, fy, cx, cy, k1, k2, p1, p2, k3, k4, sx1, sy1
+  kRadialFisheye = 9,        //     f, cx, cy, k1, k2
+  kThinPrismFisheye = 10,    //   fx, fy, cx, cy, k1, k2, p1, p2, k3, k4, sx1, sy1
 };
 
 // "PINHOLE", "OPENCV", ...; empty for an unknown id.

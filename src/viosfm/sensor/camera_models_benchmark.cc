@@ -15,9 +15,9 @@ namespace {
 constexpr int kNumKeypoints = 2250;
 
 Camera EurocCamera() {
-  return MakeCamera(CameraModelId::kOpenCV, 752, 480,
-                    {458.654, 457.296, 367.215, 248.375, -0.28340811, 0.07395907, 0.00019359,
-                     1.76187114e-05});
+  return MakeCamera(
+      CameraModelId::kOpenCV, 752, 480,
+      {458.654, 457.296, 367.215, 248.375, -0.28340811, 0.07395907, 0.00019359, 1.76187114e-05});
 }
 
 std::vector<Eigen::Vector2d> RandomPixels() {

@@ -4,10 +4,18 @@
 
 namespace viosfm {
 
-double ImuNoise::GyroSampleStddev() const { return gyro_noise_density * std::sqrt(rate_hz); }
-double ImuNoise::AccelSampleStddev() const { return accel_noise_density * std::sqrt(rate_hz); }
-double ImuNoise::GyroBiasStepStddev() const { return gyro_random_walk / std::sqrt(rate_hz); }
-double ImuNoise::AccelBiasStepStddev() const { return accel_random_walk / std::sqrt(rate_hz); }
+double ImuNoise::GyroSampleStddev() const {
+  return gyro_noise_density * std::sqrt(rate_hz);
+}
+double ImuNoise::AccelSampleStddev() const {
+  return accel_noise_density * std::sqrt(rate_hz);
+}
+double ImuNoise::GyroBiasStepStddev() const {
+  return gyro_random_walk / std::sqrt(rate_hz);
+}
+double ImuNoise::AccelBiasStepStddev() const {
+  return accel_random_walk / std::sqrt(rate_hz);
+}
 
 std::string ImuNoise::Validate() const {
   if (!(gyro_noise_density >= 0)) return "gyro_noise_density must be >= 0";

@@ -23,11 +23,11 @@ struct ImuSample {
 // Continuous-time noise parameters, as Kalibr/EuRoC imu0/sensor.yaml states
 // them. Defaults: EuRoC's ADIS16448 figures.
 struct ImuNoise {
-  double gyro_noise_density = 1.6968e-4;   // rad / s / sqrt(Hz)
-  double gyro_random_walk = 1.9393e-5;     // rad / s^2 / sqrt(Hz)
-  double accel_noise_density = 2.0e-3;     // m / s^2 / sqrt(Hz)
-  double accel_random_walk = 3.0e-3;       // m / s^3 / sqrt(Hz)
-  double rate_hz = 200.0;                  // sampling rate, Hz
+  double gyro_noise_density = 1.6968e-4;  // rad / s / sqrt(Hz)
+  double gyro_random_walk = 1.9393e-5;    // rad / s^2 / sqrt(Hz)
+  double accel_noise_density = 2.0e-3;    // m / s^2 / sqrt(Hz)
+  double accel_random_walk = 3.0e-3;      // m / s^3 / sqrt(Hz)
+  double rate_hz = 200.0;                 // sampling rate, Hz
 
   // Standard deviation of one discrete sample's white noise: density * sqrt(rate).
   double GyroSampleStddev() const;

@@ -20,7 +20,9 @@ CheckFailure::CheckFailure(const char* file, int line, const char* expression) {
   stream_ << "Check failed at " << file << ":" << line << ": " << expression << " ";
 }
 
-CheckFailure::~CheckFailure() noexcept(false) { throw InternalError(stream_.str()); }
+CheckFailure::~CheckFailure() noexcept(false) {
+  throw InternalError(stream_.str());
+}
 
 }  // namespace internal
 }  // namespace viosfm

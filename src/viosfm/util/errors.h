@@ -66,8 +66,7 @@ class CheckFailure {
   } else                        \
     ::viosfm::internal::CheckFailure(__FILE__, __LINE__, #condition)
 
-#define VIOSFM_CHECK_OP(op, a, b) \
-  VIOSFM_CHECK((a)op(b)) << "(" << (a) << " vs " << (b) << ") "
+#define VIOSFM_CHECK_OP(op, a, b) VIOSFM_CHECK((a)op(b)) << "(" << (a) << " vs " << (b) << ") "
 #define VIOSFM_CHECK_EQ(a, b) VIOSFM_CHECK_OP(==, a, b)
 #define VIOSFM_CHECK_NE(a, b) VIOSFM_CHECK_OP(!=, a, b)
 #define VIOSFM_CHECK_LT(a, b) VIOSFM_CHECK_OP(<, a, b)

@@ -66,7 +66,8 @@ void WriteFolderAtomically(const fs::path& path,
 
 void RequireFile(const fs::path& path, const std::string& what) {
   if (!fs::exists(path)) throw InputError(path.string(), 0, what + " does not exist");
-  if (!fs::is_regular_file(path)) throw InputError(path.string(), 0, what + " is not a regular file");
+  if (!fs::is_regular_file(path))
+    throw InputError(path.string(), 0, what + " is not a regular file");
 }
 
 void RequireFolder(const fs::path& path, const std::string& what) {

@@ -32,7 +32,9 @@ ProgressBar::ProgressBar(std::string label, int64_t total, Mode mode)
   }
 }
 
-ProgressBar::~ProgressBar() { Finish(); }
+ProgressBar::~ProgressBar() {
+  Finish();
+}
 
 void ProgressBar::Update(int64_t count) {
   done_ += count;

@@ -53,9 +53,9 @@ fs::path MakeScratchFolder(const std::string& name) {
     g_scratch_folders = new std::vector<fs::path>();
     std::atexit(RemoveScratchFolders);
   }
-  const fs::path folder = fs::temp_directory_path() /
-                          ("viosfm_test_" + std::to_string(getpid()) + "_" +
-                           std::to_string(g_scratch_folders->size()) + "_" + name);
+  const fs::path folder =
+      fs::temp_directory_path() / ("viosfm_test_" + std::to_string(getpid()) + "_" +
+                                   std::to_string(g_scratch_folders->size()) + "_" + name);
   fs::remove_all(folder);
   fs::create_directories(folder);
   g_scratch_folders->push_back(folder);

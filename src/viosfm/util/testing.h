@@ -44,9 +44,9 @@ std::string InputErrorMessage(Function function) {
 }  // namespace viosfm::testing
 
 // Skips the current test (GoogleTest) when a dataset folder is absent.
-#define VIOSFM_REQUIRE_DATASET(path_var, name)                                           \
-  const std::filesystem::path path_var = ::viosfm::testing::FindDataset(name);           \
-  if (path_var.empty()) {                                                                \
-    GTEST_SKIP() << "dataset '" << name << "' not found in "                            \
-                 << ::viosfm::testing::DataDir() << " (set VIOSFM_DATA_DIR); skipping"; \
+#define VIOSFM_REQUIRE_DATASET(path_var, name)                                               \
+  const std::filesystem::path path_var = ::viosfm::testing::FindDataset(name);               \
+  if (path_var.empty()) {                                                                    \
+    GTEST_SKIP() << "dataset '" << name << "' not found in " << ::viosfm::testing::DataDir() \
+                 << " (set VIOSFM_DATA_DIR); skipping";                                      \
   }

@@ -7,7 +7,9 @@
 
 namespace viosfm {
 
-timestamp_ns_t SecondsToNs(double seconds) { return std::llround(seconds * 1e9); }
+timestamp_ns_t SecondsToNs(double seconds) {
+  return std::llround(seconds * 1e9);
+}
 
 std::optional<timestamp_ns_t> ParseNs(std::string_view text) {
   int64_t value = 0;
@@ -26,7 +28,8 @@ std::optional<timestamp_ns_t> ParseSecondsToNs(std::string_view text) {
     i = 1;
   }
   const size_t dot = text.find('.', i);
-  const std::string_view int_part = text.substr(i, dot == std::string_view::npos ? text.npos : dot - i);
+  const std::string_view int_part =
+      text.substr(i, dot == std::string_view::npos ? text.npos : dot - i);
   const std::string_view frac_part =
       dot == std::string_view::npos ? std::string_view() : text.substr(dot + 1);
   if (int_part.empty() && frac_part.empty()) return std::nullopt;

@@ -13,7 +13,9 @@ using timestamp_ns_t = int64_t;
 
 inline constexpr int64_t kNanosecondsPerSecond = 1'000'000'000;
 
-inline double NsToSeconds(timestamp_ns_t ns) { return static_cast<double>(ns) * 1e-9; }
+inline double NsToSeconds(timestamp_ns_t ns) {
+  return static_cast<double>(ns) * 1e-9;
+}
 // Rounds to the nearest nanosecond.
 timestamp_ns_t SecondsToNs(double seconds);
 

@@ -68,7 +68,8 @@ TEST(ImuPreintegration, StaticImuPredictsNoMotion) {
   ASSERT_TRUE(preintegration.IntegrateRange(imu.samples, trajectory.start_ns(),
                                             trajectory.start_ns() + SecondsToNs(1.0)));
   const Eigen::Vector3d g = GravityInWorld();
-  const Eigen::Matrix3d R = trajectory.WorldFromBody(trajectory.start_ns()).rotation.toRotationMatrix();
+  const Eigen::Matrix3d R =
+      trajectory.WorldFromBody(trajectory.start_ns()).rotation.toRotationMatrix();
   // delta_v = R^T (v_j - v_i - g dt) = -R^T g dt for a body at rest.
   EXPECT_LT((preintegration.delta_v() + R.transpose() * g * 1.0).norm(), 1e-9);
   EXPECT_LT(So3Log(preintegration.delta_R()).norm(), 1e-12);
