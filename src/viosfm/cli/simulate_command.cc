@@ -93,6 +93,15 @@ void RegisterSimulate(CLI::App& app) {
                    "Shutter time in s for motion blur (negative: the scenario's own, dark "
                    "0.02 s, others 0 = sharp)")
       ->capture_default_str();
+  command
+      ->add_option("--texture-folder", args->options.texture_folder,
+                   "Folder of photos (.png/.jpg/...) textured onto the scene instead of the "
+                   "procedural textures, in file-name order (default: procedural)")
+      ->check(CLI::ExistingDirectory);
+  command
+      ->add_option("--photo-texture-size", args->options.photo_texture_size,
+                   "Side in texels (a power of two) each photo is resampled to")
+      ->capture_default_str();
   command->add_flag("--no-images", args->no_images,
                     "Write motion, IMU and ground truth only (no rendering)");
   command->add_option("--threads", args->options.num_threads, "Rendering threads")

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 #include "viosfm/util/errors.h"
 
@@ -36,12 +37,19 @@ Texture WeakTexture(double size_u, double size_v, double texels_per_metre, uint6
 // Adds quads sharing textures; keeps a running seed counter.
 class SceneBuilder {
  public:
-  SceneBuilder(Scene* scene, uint64_t seed) : scene_(scene), seed_(seed) {}
+  SceneBuilder(Scene* scene, uint64_t seed, PhotoTextures photos)
+      : scene_(scene), seed_(seed), photos_(std::move(photos)) {}
 
   uint64_t NextSeed() { return MixSeed(seed_, counter_++); }
 
+  // A richly textured surface's texture (a photo if the scenario has them).
+  Texture SurfaceTexture(double size_u, double size_v, double tpm,
+                         const ProceduralTextureOptions& style) {
+    return MakeSurfaceTextureFrom(photos_, photo_surface_++, size_u, size_v, tpm, NextSeed(),
+                                  style);
+  }
   int RichTexture(double size_u, double size_v, double tpm) {
-    return scene_->AddTexture(MakeSurfaceTexture(size_u, size_v, tpm, NextSeed(), RichStyle()));
+    return scene_->AddTexture(SurfaceTexture(size_u, size_v, tpm, RichStyle()));
   }
   int WeakTextureId(double size_u, double size_v, double tpm, float mean, float contrast) {
     return scene_->AddTexture(WeakTexture(size_u, size_v, tpm, NextSeed(), mean, contrast));
@@ -84,7 +92,9 @@ class SceneBuilder {
  private:
   Scene* scene_;
   uint64_t seed_;
+  PhotoTextures photos_;
   uint64_t counter_ = 0;
+  int photo_surface_ = 0;  // richly textured surfaces so far
 };
 
 Eigen::AlignedBox3d Box(const Vector3d& min, const Vector3d& max) {
@@ -98,6 +108,7 @@ Scenario MakeRoom(const ScenarioOptions& options) {
   RoomSceneOptions room;
   room.texels_per_metre = options.texels_per_metre;
   room.seed = options.seed;
+  room.photos = options.photos;
   scenario.scene = MakeRoomScene(room);
   scenario.regions.push_back({"room", 0, Box(room.room_min, room.room_max)});
   return scenario;
@@ -124,7 +135,7 @@ constexpr int kNumSteps = 14;
 Scenario MakeTwoFloors(const ScenarioOptions& options) {
   Scenario scenario;
   scenario.storey_height_m = kStoreyHeight;
-  SceneBuilder builder(&scenario.scene, options.seed);
+  SceneBuilder builder(&scenario.scene, options.seed, options.photos);
   const double tpm = options.texels_per_metre;
   const double weak_tpm = std::min(24.0, tpm);
 
@@ -253,7 +264,7 @@ constexpr double kOuterX = 12, kOuterY = 8, kInnerX = 10, kInnerY = 6, kCorridor
 
 Scenario MakeCorridor(const ScenarioOptions& options) {
   Scenario scenario;
-  SceneBuilder builder(&scenario.scene, options.seed);
+  SceneBuilder builder(&scenario.scene, options.seed, options.photos);
   const double tpm = options.texels_per_metre;
   const double floor_tpm = 0.5 * tpm;
   // Walls: a plain painted look (mild texture); floor and ceiling textured.
@@ -263,8 +274,7 @@ Scenario MakeCorridor(const ScenarioOptions& options) {
   wall_style.text_blocks_per_megatexel = 15;
   const auto wall = [&](const Vector3d& origin, const Vector3d& axis_u) {
     const int texture = builder.scene().AddTexture(WithContrast(
-        MakeSurfaceTexture(axis_u.norm(), kCorridorHeight, tpm, builder.NextSeed(), wall_style),
-        0.6f, 0.6f));
+        builder.SurfaceTexture(axis_u.norm(), kCorridorHeight, tpm, wall_style), 0.6f, 0.6f));
     builder.Quad(origin, axis_u, {0, 0, kCorridorHeight}, texture, tpm);
   };
   wall({-kOuterX, -kOuterY, 0}, {2 * kOuterX, 0, 0});
@@ -334,7 +344,7 @@ constexpr double kTunnelX = 12, kTunnelY = 1.5, kTunnelHeight = 3, kBlankX = 3;
 
 Scenario MakeDark(const ScenarioOptions& options) {
   Scenario scenario;
-  SceneBuilder builder(&scenario.scene, options.seed);
+  SceneBuilder builder(&scenario.scene, options.seed, options.photos);
   const double tpm = options.texels_per_metre;
   const double blank_tpm = std::min(16.0, tpm);
   const double width = 2 * kTunnelY;
@@ -423,6 +433,25 @@ Scenario MakeScenario(const ScenarioOptions& options) {
   }
   scenario.name = options.name;
   return scenario;
+}
+
+SceneStructure ScenarioStructure(const Scenario& scenario) {
+  SceneStructure structure;
+  const std::vector<TexturedQuad>& quads = scenario.scene.quads();
+  for (size_t k = 0; k < quads.size(); ++k) {
+    const TexturedQuad& quad = quads[k];
+    SceneStructureQuad out;
+    out.id = static_cast<int>(k);
+    const int region = scenario.RegionIndex(quad.origin + 0.5 * (quad.axis_u + quad.axis_v));
+    out.region = region >= 0 ? scenario.regions[region].name : "none";
+    out.floor = region >= 0 ? scenario.regions[region].floor : -1;
+    out.texture_id = quad.texture_id;
+    out.origin = quad.origin;
+    out.axis_u = quad.axis_u;
+    out.axis_v = quad.axis_v;
+    structure.push_back(std::move(out));
+  }
+  return structure;
 }
 
 BodyTrajectory GenerateScenarioMotion(const Scenario& scenario,

@@ -22,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "viosfm/scene/scene_structure.h"
 #include "viosfm/sim/renderer.h"
 #include "viosfm/sim/scene_model.h"
 #include "viosfm/sim/trajectory.h"
@@ -59,6 +60,12 @@ struct ScenarioOptions {
   std::string name = "room";        // one of AvailableScenarios()
   double texels_per_metre = 128.0;  // texture resolution of the richly textured surfaces
   uint64_t seed = 0;                // texture seeds derive from it
+  // Non-empty: the richly textured surfaces (and corridor walls) show these
+  // photos instead of procedural textures, surface k photo k mod count;
+  // weakly textured ones (stairwell, dark's blank stretch) and the corridor
+  // doors stay procedural. Textures shared by design stay shared (both
+  // floors of two_floors, every corridor door). Default: none.
+  PhotoTextures photos;
 
   std::string Validate() const;  // empty if valid, else names the bad field
   bool Check() const { return Validate().empty(); }
@@ -68,6 +75,10 @@ std::vector<std::string> AvailableScenarios();
 
 // Throws InputError for an unknown name.
 Scenario MakeScenario(const ScenarioOptions& options);
+
+// The scenario's quads in scene order, each with the region containing its
+// centre ("none", floor -1 if no region does).
+SceneStructure ScenarioStructure(const Scenario& scenario);
 
 // The body motion of a scenario: its route walked in `walk`'s duration with
 // its static start (or, without a route, `walk` inside the scenario's box).

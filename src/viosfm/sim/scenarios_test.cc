@@ -187,10 +187,11 @@ INSTANTIATE_TEST_SUITE_P(Scenarios, EveryScenario,
 
 // two_floors, the repeated-structure trap: a floor-1 view and the same view
 // 3.5 m higher on floor 2 look the same; a view 1 m aside does not.
-TEST(TwoFloors, FloorTwoRepeatsFloorOne) {
+void ExpectFloorTwoRepeatsFloorOne(const PhotoTextures& photos) {
   ScenarioOptions scenario_options;
   scenario_options.name = "two_floors";
   scenario_options.texels_per_metre = 64.0;
+  scenario_options.photos = photos;
   const Scenario scenario = MakeScenario(scenario_options);
   const RayTable rays(SmallCamera());
   RenderOptions render = scenario.render;
@@ -222,6 +223,23 @@ TEST(TwoFloors, FloorTwoRepeatsFloorOne) {
   std::cout << "NCC floor 1 vs floor 2: " << ncc_floors << ", vs 1 m aside: " << ncc_aside << "\n";
   EXPECT_GT(ncc_floors, 0.9);
   EXPECT_LT(ncc_aside, 0.5);
+}
+
+TEST(TwoFloors, FloorTwoRepeatsFloorOne) {
+  ExpectFloorTwoRepeatsFloorOne(nullptr);
+}
+
+// With photo textures (three 256 x 256 stand-ins) the floors still share
+// every texture.
+TEST(TwoFloors, FloorTwoRepeatsFloorOneWithPhotoTextures) {
+  auto photos = std::make_shared<std::vector<Texture>>();
+  for (uint64_t seed = 0; seed < 3; ++seed) {
+    ProceduralTextureOptions options;
+    options.width = options.height = 256;
+    options.seed = 100 + seed;
+    photos->push_back(MakeProceduralTexture(options));
+  }
+  ExpectFloorTwoRepeatsFloorOne(photos);
 }
 
 // corridor: two different doors seen from the same relative pose look the

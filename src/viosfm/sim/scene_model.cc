@@ -6,7 +6,9 @@
 #include <limits>
 #include <utility>
 
+#include "viosfm/io/image_io.h"
 #include "viosfm/util/errors.h"
+#include "viosfm/util/string_util.h"
 
 namespace viosfm {
 
@@ -28,18 +30,69 @@ Texture MakeSurfaceTexture(double size_u, double size_v, double texels_per_metre
   return MakeProceduralTexture(options);
 }
 
+std::vector<Texture> LoadPhotoTextures(const std::filesystem::path& folder, int size) {
+  std::error_code error;
+  if (!std::filesystem::is_directory(folder, error)) {
+    throw InputError(folder.string(), 0, "texture folder not found (expected a folder of images)");
+  }
+  const std::vector<std::string> extensions = {".png", ".jpg",  ".jpeg", ".bmp",
+                                               ".tif", ".tiff", ".pgm",  ".ppm"};
+  std::vector<std::filesystem::path> files;
+  for (const auto& entry : std::filesystem::directory_iterator(folder)) {
+    if (!entry.is_regular_file()) continue;
+    const std::string extension = ToLower(entry.path().extension().string());
+    if (std::find(extensions.begin(), extensions.end(), extension) != extensions.end()) {
+      files.push_back(entry.path());
+    }
+  }
+  if (files.empty()) {
+    throw InputError(folder.string(), 0,
+                     "texture folder holds no image (expected .png, .jpg, .jpeg, .bmp, .tif, "
+                     ".tiff, .pgm or .ppm files)");
+  }
+  std::sort(files.begin(), files.end(), [](const auto& a, const auto& b) {
+    return a.filename().string() < b.filename().string();
+  });
+  std::vector<Texture> textures;
+  for (const std::filesystem::path& file : files) {
+    textures.push_back(TextureFromImage(ReadGreyImage(file), size));
+  }
+  return textures;
+}
+
+Texture MakeSurfaceTextureFrom(const PhotoTextures& photos, int surface_index, double size_u,
+                               double size_v, double texels_per_metre, uint64_t seed,
+                               const ProceduralTextureOptions& style) {
+  if (photos == nullptr || photos->empty()) {
+    return MakeSurfaceTexture(size_u, size_v, texels_per_metre, seed, style);
+  }
+  VIOSFM_CHECK_GE(surface_index, 0);
+  const Texture& photo = (*photos)[static_cast<size_t>(surface_index) % photos->size()];
+  const int width =
+      std::min(photo.width(),
+               NextPowerOfTwo(std::max(1, static_cast<int>(std::ceil(size_u * texels_per_metre)))));
+  const int height =
+      std::min(photo.height(),
+               NextPowerOfTwo(std::max(1, static_cast<int>(std::ceil(size_v * texels_per_metre)))));
+  const uint64_t offset = MixSeed(seed, 0x70686f746fULL);
+  const int i0 = static_cast<int>(offset % static_cast<uint64_t>(photo.width()));
+  const int j0 = static_cast<int>((offset >> 32) % static_cast<uint64_t>(photo.height()));
+  return CropTexture(photo, i0, j0, width, height);
+}
+
 namespace {
 
-// Adds a quad with its own texture.
+// Adds a quad with its own texture (surface number surface_index of the scene).
 void AddTexturedQuad(Scene& scene, const Eigen::Vector3d& origin, const Eigen::Vector3d& axis_u,
-                     const Eigen::Vector3d& axis_v, double texels_per_metre, uint64_t seed) {
+                     const Eigen::Vector3d& axis_v, double texels_per_metre, uint64_t seed,
+                     const PhotoTextures& photos = nullptr, int surface_index = 0) {
   TexturedQuad quad;
   quad.origin = origin;
   quad.axis_u = axis_u;
   quad.axis_v = axis_v;
   quad.texels_per_metre = texels_per_metre;
-  quad.texture_id =
-      scene.AddTexture(MakeSurfaceTexture(axis_u.norm(), axis_v.norm(), texels_per_metre, seed));
+  quad.texture_id = scene.AddTexture(MakeSurfaceTextureFrom(photos, surface_index, axis_u.norm(),
+                                                            axis_v.norm(), texels_per_metre, seed));
   scene.AddQuad(quad);
 }
 
@@ -70,18 +123,23 @@ int Scene::AddQuad(const TexturedQuad& quad) {
 }
 
 void Scene::AddBox(const Eigen::Vector3d& min, const Eigen::Vector3d& max, double texels_per_metre,
-                   uint64_t seed) {
+                   uint64_t seed, const PhotoTextures& photos, int first_surface) {
   const Eigen::Vector3d size = max - min;
   VIOSFM_CHECK((size.array() > 0.0).all()) << "box with an empty extent";
   const Eigen::Vector3d dx(size.x(), 0, 0);
   const Eigen::Vector3d dy(0, size.y(), 0);
   const Eigen::Vector3d dz(0, 0, size.z());
   // Sides: u horizontal, v vertical; then the top.
-  AddTexturedQuad(*this, min, dx, dz, texels_per_metre, MixSeed(seed, 0));
-  AddTexturedQuad(*this, min + dy, dx, dz, texels_per_metre, MixSeed(seed, 1));
-  AddTexturedQuad(*this, min, dy, dz, texels_per_metre, MixSeed(seed, 2));
-  AddTexturedQuad(*this, min + dx, dy, dz, texels_per_metre, MixSeed(seed, 3));
-  AddTexturedQuad(*this, min + dz, dx, dy, texels_per_metre, MixSeed(seed, 4));
+  AddTexturedQuad(*this, min, dx, dz, texels_per_metre, MixSeed(seed, 0), photos,
+                  first_surface + 0);
+  AddTexturedQuad(*this, min + dy, dx, dz, texels_per_metre, MixSeed(seed, 1), photos,
+                  first_surface + 1);
+  AddTexturedQuad(*this, min, dy, dz, texels_per_metre, MixSeed(seed, 2), photos,
+                  first_surface + 2);
+  AddTexturedQuad(*this, min + dx, dy, dz, texels_per_metre, MixSeed(seed, 3), photos,
+                  first_surface + 3);
+  AddTexturedQuad(*this, min + dz, dx, dy, texels_per_metre, MixSeed(seed, 4), photos,
+                  first_surface + 4);
 }
 
 int Scene::AddSurfaceWithOpenings(const Eigen::Vector3d& origin, const Eigen::Vector3d& axis_u,
@@ -203,13 +261,19 @@ Scene MakeRoomScene(const RoomSceneOptions& options) {
   const Eigen::Vector3d dz(0, 0, size.z());
   uint64_t surface = 0;
   const auto next_seed = [&]() { return MixSeed(options.seed, surface++); };
+  int photo_surface = 0;  // surfaces textured so far
 
-  AddTexturedQuad(scene, lo, dx, dy, tpm, next_seed());       // floor
-  AddTexturedQuad(scene, lo + dz, dx, dy, tpm, next_seed());  // ceiling
-  AddTexturedQuad(scene, lo, dx, dz, tpm, next_seed());       // wall y = min
-  AddTexturedQuad(scene, lo + dy, dx, dz, tpm, next_seed());  // wall y = max
-  AddTexturedQuad(scene, lo, dy, dz, tpm, next_seed());       // wall x = min
-  AddTexturedQuad(scene, lo + dx, dy, dz, tpm, next_seed());  // wall x = max
+  AddTexturedQuad(scene, lo, dx, dy, tpm, next_seed(), options.photos, photo_surface++);  // floor
+  AddTexturedQuad(scene, lo + dz, dx, dy, tpm, next_seed(), options.photos,
+                  photo_surface++);  // ceiling
+  AddTexturedQuad(scene, lo, dx, dz, tpm, next_seed(), options.photos,
+                  photo_surface++);  // wall y = min
+  AddTexturedQuad(scene, lo + dy, dx, dz, tpm, next_seed(), options.photos,
+                  photo_surface++);  // wall y = max
+  AddTexturedQuad(scene, lo, dy, dz, tpm, next_seed(), options.photos,
+                  photo_surface++);  // wall x = min
+  AddTexturedQuad(scene, lo + dx, dy, dz, tpm, next_seed(), options.photos,
+                  photo_surface++);  // wall x = max
 
   if (options.furniture) {
     // Boxes in a strip at most 0.7 m deep along the walls: (wall, depth,
@@ -258,7 +322,8 @@ Scene MakeRoomScene(const RoomSceneOptions& options) {
           max.x() = lo.x() + item.to * size.x();
           break;
       }
-      scene.AddBox(min, max, tpm, next_seed());
+      scene.AddBox(min, max, tpm, next_seed(), options.photos, photo_surface);
+      photo_surface += 5;
     }
   }
   return scene;

@@ -4,6 +4,8 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <filesystem>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -11,6 +13,10 @@
 #include "viosfm/sim/texture.h"
 
 namespace viosfm {
+
+// Textures made from photos (TextureFromImage), shared read-only by the
+// scenes built from them; null or empty: procedural textures.
+using PhotoTextures = std::shared_ptr<const std::vector<Texture>>;
 
 // A rectangle origin + a * axis_u + b * axis_v, a, b in [0, 1]. axis_u and
 // axis_v are its edges (metres) and must be orthogonal. Surface coordinates
@@ -53,8 +59,9 @@ class Scene {
   int AddQuad(const TexturedQuad& quad);
   // Adds the five faces (no bottom) of the axis-aligned box [min, max], each
   // with its own procedural texture of the given seed base and resolution.
+  // With photos, face k shows MakeSurfaceTextureFrom(photos, first_surface + k, ...).
   void AddBox(const Eigen::Vector3d& min, const Eigen::Vector3d& max, double texels_per_metre,
-              uint64_t seed);
+              uint64_t seed, const PhotoTextures& photos = nullptr, int first_surface = 0);
   // Adds the rectangle origin + [0, 1] axis_u + [0, 1] axis_v with the
   // `openings` (surface coordinates, metres; they must not overlap) left
   // out: it is cut into pieces that share texture_id with continuous texture
@@ -106,12 +113,30 @@ uint64_t MixSeed(uint64_t seed, uint64_t index);
 Texture MakeSurfaceTexture(double size_u, double size_v, double texels_per_metre, uint64_t seed,
                            const ProceduralTextureOptions& style = {});
 
+// Every image (.png, .jpg, .jpeg, .bmp, .tif, .tiff, .pgm, .ppm, any case) of
+// `folder`, sorted by file name, as size x size textures (size a power of
+// two). Throws InputError naming the folder if it is not a folder or holds
+// no image, and naming the file if one cannot be read.
+std::vector<Texture> LoadPhotoTextures(const std::filesystem::path& folder, int size);
+
+// The texture of surface number `surface_index` of a scene, covering
+// size_u x size_v metres at texels_per_metre. With photos: a window of photo
+// (surface_index mod count), as large as the surface needs (powers of two,
+// at most the photo; larger surfaces tile the photo), starting at a texel
+// offset drawn from `seed`, so surfaces sharing a photo show different parts
+// of it. Without: MakeSurfaceTexture(size_u, size_v, texels_per_metre, seed,
+// style).
+Texture MakeSurfaceTextureFrom(const PhotoTextures& photos, int surface_index, double size_u,
+                               double size_v, double texels_per_metre, uint64_t seed,
+                               const ProceduralTextureOptions& style = {});
+
 struct RoomSceneOptions {
   Eigen::Vector3d room_min{-4.0, -4.0, 0.0};  // m, inside of the walls (floor at z = 0)
   Eigen::Vector3d room_max{4.0, 4.0, 3.0};    // m
   double texels_per_metre = 128.0;            // texture resolution on every surface
   bool furniture = true;                      // boxes along the walls (outside [-3.2, 3.2]^2)
   uint64_t seed = 0;                          // textures are derived from it
+  PhotoTextures photos;  // non-empty: surface k shows photo k mod count (default: procedural)
 
   std::string Validate() const;  // empty if valid, else names the bad field
   bool Check() const { return Validate().empty(); }

@@ -9,6 +9,7 @@
 
 #include "viosfm/io/euroc_writer.h"
 #include "viosfm/io/image_io.h"
+#include "viosfm/io/scene_structure_io.h"
 #include "viosfm/io/trajectory_io.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/file_util.h"
@@ -43,6 +44,10 @@ std::string SimulationOptions::Validate() const {
   scenario_options.name = scenario;
   scenario_options.texels_per_metre = texels_per_metre;
   if (const std::string error = scenario_options.Validate(); !error.empty()) return error;
+  if (photo_texture_size < 16 || photo_texture_size > 8192 ||
+      (photo_texture_size & (photo_texture_size - 1)) != 0) {
+    return "photo_texture_size must be a power of two in [16, 8192]";
+  }
   if (!(route_speed_mps >= 0)) return "route_speed_mps must be >= 0";
   if (num_threads < 1) return "num_threads must be >= 1";
   if (!(duration_s > 0)) return "duration_s must be > 0";
@@ -65,6 +70,10 @@ SimulatedSequence SimulateSequence(const SimulationOptions& options) {
   // Without images the textures are never sampled: build the geometry only.
   scenario_options.texels_per_metre = options.render_images ? options.texels_per_metre : 8.0;
   scenario_options.seed = options.seed;
+  if (options.render_images && !options.texture_folder.empty()) {
+    scenario_options.photos = std::make_shared<const std::vector<Texture>>(
+        LoadPhotoTextures(options.texture_folder, options.photo_texture_size));
+  }
   ScenarioMotionOptions motion;
   motion.duration_s = options.duration_s;
   motion.static_start_s = options.static_start_s;
@@ -219,6 +228,7 @@ void WriteSimulatedSequence(const fs::path& out, const SimulatedSequence& simula
       stream << image.timestamp_ns << '\n';
   });
   WriteTumTrajectory(out / "vio_emulated.tum", simulated.vio_body);
+  WriteSceneStructure(out / "scene.csv", ScenarioStructure(*simulated.scenario));
   WriteFileAtomically(out / "simulation.yaml", [&](std::ostream& stream) {
     stream << std::setprecision(17) << "# viosfm simulate: the options of this sequence\n"
            << "scenario: " << options.scenario << "\n"
@@ -228,6 +238,8 @@ void WriteSimulatedSequence(const fs::path& out, const SimulatedSequence& simula
            << "seed: " << options.seed << "\n"
            << "route_speed_mps: " << options.route_speed_mps << "\n"
            << "texels_per_metre: " << options.texels_per_metre << "\n"
+           << "texture_folder: \"" << options.texture_folder << "\"\n"
+           << "photo_texture_size: " << options.photo_texture_size << "\n"
            << "render_images: " << (options.render_images ? "true" : "false") << "\n"
            << "exposure_time_s: "
            << (options.exposure_time_s >= 0.0 ? options.exposure_time_s

@@ -29,7 +29,13 @@ struct SimulationOptions {
   // (default) fits the scenario's whole route into the duration.
   double route_speed_mps = 0.0;
   double texels_per_metre = 128.0;  // texture resolution of the textured surfaces
-  bool render_images = true;        // false: motion, IMU and ground truth only (fast)
+  // Folder of photos (any of .png/.jpg/.jpeg/.bmp/.tif/.tiff/.pgm/.ppm, used
+  // in file-name order) textured onto the richly textured surfaces instead of
+  // procedural textures (see ScenarioOptions::photos); empty (default):
+  // procedural textures.
+  std::string texture_folder;
+  int photo_texture_size = 1024;  // texels, side of each photo's square texture (power of two)
+  bool render_images = true;      // false: motion, IMU and ground truth only (fast)
   // s, shutter time for motion blur; < 0 (default): the scenario's own (dark:
   // 0.02 s, others 0 = sharp).
   double exposure_time_s = -1.0;
@@ -85,8 +91,10 @@ void RenderSimulatedImages(const std::filesystem::path& folder, const SimulatedS
 // Writes <out>/mav0/{cam0/{data.csv, data/*.png, sensor.yaml}, imu0,
 // state_groundtruth_estimate0}, <out>/frames.csv (per frame: stamp, region,
 // floor, camera centre), <out>/vio_emulated.tum (world_from_body at the
-// camera stamps), <out>/camera_stamps.txt and <out>/simulation.yaml (the
-// options used). Without options.render_images, cam0 has sensor.yaml only.
+// camera stamps), <out>/scene.csv (every textured quad with its region,
+// floor, texture id and world geometry: io/scene_structure_io.h),
+// <out>/camera_stamps.txt and <out>/simulation.yaml (the options used). Without
+// options.render_images, cam0 has sensor.yaml only.
 void WriteSimulatedSequence(const std::filesystem::path& out, const SimulatedSequence& simulated,
                             const SimulationOptions& options);
 

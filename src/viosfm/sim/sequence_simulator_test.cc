@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "viosfm/io/euroc.h"
+#include "viosfm/io/scene_structure_io.h"
 #include "viosfm/io/trajectory_io.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/testing.h"
@@ -57,6 +58,34 @@ TEST(SequenceSimulator, WritesAReadableDataset) {
              simulated.vio_body.poses[7].world_from_frame.translation)
                 .norm(),
             1e-9);
+}
+
+TEST(SequenceSimulator, WritesTheSceneStructure) {
+  SimulationOptions options = ShortOptions();
+  options.scenario = "two_floors";
+  options.duration_s = 2.0;
+  const SimulatedSequence simulated = SimulateSequence(options);
+  const fs::path out = testing::MakeScratchFolder("simulate_structure");
+  WriteSimulatedSequence(out, simulated, options);
+  const SceneStructure read = ReadSceneStructure(out / "scene.csv");
+  const Scene& scene = simulated.scenario->scene;
+  ASSERT_EQ(read.size(), scene.quads().size());
+  int per_floor[2] = {0, 0};
+  for (size_t k = 0; k < read.size(); ++k) {
+    const TexturedQuad& quad = scene.quads()[k];
+    EXPECT_EQ(read[k].id, static_cast<int>(k));
+    EXPECT_EQ(read[k].texture_id, quad.texture_id);
+    EXPECT_EQ(read[k].origin, quad.origin);
+    EXPECT_EQ(read[k].axis_u, quad.axis_u);
+    EXPECT_EQ(read[k].axis_v, quad.axis_v);
+    const Eigen::Vector3d center = quad.origin + 0.5 * (quad.axis_u + quad.axis_v);
+    const int region = simulated.scenario->RegionIndex(center);
+    EXPECT_EQ(read[k].region, region >= 0 ? simulated.scenario->regions[region].name : "none");
+    if (read[k].floor >= 0) ++per_floor[read[k].floor];
+  }
+  // The two floors have the same layout: as many quads each.
+  EXPECT_GT(per_floor[0], 40);
+  EXPECT_EQ(per_floor[0], per_floor[1]);
 }
 
 TEST(SequenceSimulator, IsReproducibleAndRejectsUnknownScenarios) {

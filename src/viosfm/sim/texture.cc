@@ -181,6 +181,69 @@ void AddTextBlock(Canvas& canvas, Random& random) {
 
 }  // namespace
 
+Texture TextureFromImage(const GreyImage& image, int size) {
+  VIOSFM_CHECK(IsPowerOfTwo(size)) << size;
+  VIOSFM_CHECK(image.width > 0 && image.height > 0);
+  const int side = std::min(image.width, image.height);
+  const int x0 = (image.width - side) / 2;
+  const int y0 = (image.height - side) / 2;
+  const double scale = static_cast<double>(side) / size;  // source pixels per texel
+  const auto pixel = [&](int x, int y) {
+    return image.at(x0 + std::clamp(x, 0, side - 1), y0 + std::clamp(y, 0, side - 1)) / 255.0;
+  };
+  std::vector<float> texels(static_cast<size_t>(size) * size);
+  if (scale >= 1.0) {
+    // Box filter: the average of the source over the texel's footprint
+    // [i * scale, (i + 1) * scale), pixels weighted by their overlap.
+    std::vector<std::vector<std::pair<int, double>>> weights(size);
+    for (int i = 0; i < size; ++i) {
+      const double a = i * scale;
+      const double b = (i + 1) * scale;
+      for (int x = static_cast<int>(std::floor(a)); x < static_cast<int>(std::ceil(b)); ++x) {
+        const double overlap = std::min<double>(x + 1, b) - std::max<double>(x, a);
+        if (overlap > 1e-12) weights[i].emplace_back(x, overlap / scale);
+      }
+    }
+    for (int j = 0; j < size; ++j) {
+      for (int i = 0; i < size; ++i) {
+        double sum = 0.0;
+        for (const auto& [y, wy] : weights[j]) {
+          for (const auto& [x, wx] : weights[i]) sum += wx * wy * pixel(x, y);
+        }
+        texels[static_cast<size_t>(size - 1 - j) * size + i] = static_cast<float>(sum);
+      }
+    }
+  } else {
+    // Bilinear between the source pixel centres (edges clamped).
+    for (int j = 0; j < size; ++j) {
+      const double y = (j + 0.5) * scale - 0.5;
+      const int y_floor = static_cast<int>(std::floor(y));
+      const double fy = y - y_floor;
+      for (int i = 0; i < size; ++i) {
+        const double x = (i + 0.5) * scale - 0.5;
+        const int x_floor = static_cast<int>(std::floor(x));
+        const double fx = x - x_floor;
+        const double value =
+            (1 - fy) * ((1 - fx) * pixel(x_floor, y_floor) + fx * pixel(x_floor + 1, y_floor)) +
+            fy * ((1 - fx) * pixel(x_floor, y_floor + 1) + fx * pixel(x_floor + 1, y_floor + 1));
+        texels[static_cast<size_t>(size - 1 - j) * size + i] = static_cast<float>(value);
+      }
+    }
+  }
+  return Texture(size, size, std::move(texels));
+}
+
+Texture CropTexture(const Texture& texture, int i0, int j0, int width, int height) {
+  VIOSFM_CHECK(IsPowerOfTwo(width) && IsPowerOfTwo(height)) << width << " x " << height;
+  std::vector<float> texels(static_cast<size_t>(width) * height);
+  for (int j = 0; j < height; ++j) {
+    for (int i = 0; i < width; ++i) {
+      texels[static_cast<size_t>(j) * width + i] = texture.Texel(0, i0 + i, j0 + j);
+    }
+  }
+  return Texture(width, height, std::move(texels));
+}
+
 int NextPowerOfTwo(int value) {
   VIOSFM_CHECK_GE(value, 1);
   int power = 1;

@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include "viosfm/sensor/grey_image.h"
+
 namespace viosfm {
 
 class Texture {
@@ -74,6 +76,20 @@ Texture MakeCheckerboardTexture(int width, int height, int square, float dark = 
 // The texture with its level-0 values remapped to mean + contrast * (value -
 // 0.5), clamped to [0, 1] (e.g. contrast 0.1 for a weakly textured surface).
 Texture WithContrast(const Texture& texture, float mean, float contrast);
+
+// A size x size texture (size a power of two) of a grey image: the centred
+// square of side min(width, height) resampled to size x size texels, by the
+// area-weighted box filter when shrinking and bilinearly when enlarging;
+// texel = grey / 255. Rows are flipped (texel row 0 is the image's bottom
+// row), so on a surface whose v axis points up the photo stands upright. A
+// size x size image is copied exactly.
+Texture TextureFromImage(const GreyImage& image, int size);
+
+// The width x height window (powers of two) of `texture`'s level 0 starting
+// at texel (i0, j0), wrapping around: texel (i, j) of the result is texel
+// (i0 + i, j0 + j) of `texture`. A window as large as the texture is a
+// cyclic shift of it, which still tiles seamlessly.
+Texture CropTexture(const Texture& texture, int i0, int j0, int width, int height);
 
 // Smallest power of two >= value (value >= 1).
 int NextPowerOfTwo(int value);

@@ -134,3 +134,54 @@ TEST(Texture, OptionsValidation) {
 
 }  // namespace
 }  // namespace viosfm
+
+namespace viosfm {
+namespace {
+
+TEST(TextureFromImage, CopiesBoxFiltersAndEnlarges) {
+  GreyImage image(96, 64);
+  for (int y = 0; y < 64; ++y) {
+    for (int x = 0; x < 96; ++x) image.at(x, y) = static_cast<uint8_t>((7 * x + 13 * y) % 256);
+  }
+  // The centred 64 x 64 square starts at column 16.
+  const Texture same = TextureFromImage(image, 64);
+  ASSERT_EQ(same.width(), 64);
+  for (int j : {0, 5, 63}) {
+    for (int i : {0, 17, 63})
+      EXPECT_FLOAT_EQ(same.Texel(0, i, j), image.at(16 + i, 63 - j) / 255.0f);
+  }
+  const Texture half = TextureFromImage(image, 32);
+  for (int j : {0, 9, 31}) {
+    for (int i : {0, 20, 31}) {
+      const int x = 16 + 2 * i;
+      const int y = 2 * (31 - j);  // rows flipped
+      const double mean =
+          (image.at(x, y) + image.at(x + 1, y) + image.at(x, y + 1) + image.at(x + 1, y + 1)) /
+          (4 * 255.0);
+      EXPECT_NEAR(half.Texel(0, i, j), mean, 1e-6);
+    }
+  }
+  GreyImage ramp(4, 4);
+  for (int y = 0; y < 4; ++y) {
+    for (int x = 0; x < 4; ++x) ramp.at(x, y) = static_cast<uint8_t>(50 * x);
+  }
+  const Texture large = TextureFromImage(ramp, 8);
+  // Texel 3's centre is at source x = (3.5) / 2 - 0.5 = 1.25.
+  EXPECT_NEAR(large.Texel(0, 3, 2), 1.25 * 50 / 255.0, 1e-6);
+  EXPECT_NEAR(large.Texel(0, 0, 2), 0.0, 1e-6);  // clamped at the edge
+}
+
+TEST(CropTexture, WrapsAround) {
+  const Texture texture = MakeProceduralTexture(SmallOptions(3));
+  const Texture window = CropTexture(texture, 250, 100, 16, 64);
+  ASSERT_EQ(window.width(), 16);
+  ASSERT_EQ(window.height(), 64);
+  for (int j : {0, 27, 28, 63}) {
+    for (int i : {0, 5, 6, 15}) {
+      EXPECT_EQ(window.Texel(0, i, j), texture.Texel(0, (250 + i) % 256, (100 + j) % 128));
+    }
+  }
+}
+
+}  // namespace
+}  // namespace viosfm

@@ -18,7 +18,6 @@
 
 namespace viosfm {
 
-
 class BodyTrajectory {
  public:
   BodyTrajectory() = default;
