@@ -69,7 +69,9 @@ std::string FormatNsAsSeconds(timestamp_ns_t ns, int decimals) {
   out += std::to_string(magnitude / scale);
   if (decimals > 0) {
     std::string frac = std::to_string(magnitude % scale);
-    out += "." + std::string(decimals - frac.size(), '0') + frac;
+    out.push_back('.');
+    out.append(decimals - frac.size(), '0');
+    out.append(frac);
   }
   return out;
 }
