@@ -14,6 +14,7 @@ struct SimulateArgs {
   SimulationOptions options;
   std::string out;
   double drift_factor = 1.0;
+  double scale_error = 0.0;
   bool no_imu_noise = false;
   bool no_images = false;
   bool row_parallel = false;
@@ -22,6 +23,7 @@ struct SimulateArgs {
 void RunSimulate(const SimulateArgs& args) {
   SimulationOptions options = args.options;
   options.vio_drift = options.vio_drift.Scaled(args.drift_factor);
+  options.vio_drift.scale_error = args.scale_error;
   options.imu.add_noise = !args.no_imu_noise;
   options.render_images = !args.no_images;
   options.threads_over_frames = !args.row_parallel;
@@ -77,6 +79,10 @@ void RegisterSimulate(CLI::App& app) {
   command
       ->add_option("--vio-drift", args->drift_factor,
                    "Multiplier of the emulated VIO's drift and noise (0: perfect VIO)")
+      ->capture_default_str();
+  command
+      ->add_option("--vio-scale-error", args->scale_error,
+                   "Metric scale error of the emulated VIO (0.02: its displacements 2 % too long)")
       ->capture_default_str();
   command->add_flag("--no-imu-noise", args->no_imu_noise, "Exact IMU measurements");
   command
