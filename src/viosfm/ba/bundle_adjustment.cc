@@ -19,17 +19,6 @@
 namespace viosfm {
 namespace {
 
-// Reprojection error of one observation, px; nullopt if the point is behind
-// the camera.
-std::optional<double> ObservationError(const Reconstruction& reconstruction, const Image& image,
-                                       const Point2D& point2D, const Point3D& point3D) {
-  const Camera& camera = reconstruction.GetCamera(image.camera_id);
-  const std::optional<Eigen::Vector2d> projected =
-      Project(camera, image.cam_from_world * point3D.xyz);
-  if (!projected.has_value()) return std::nullopt;
-  return (*projected - point2D.xy).norm();
-}
-
 // Parameter indices of `camera` held constant when intrinsics are refined.
 std::vector<int> ConstantIntrinsicIndices(const Camera& camera,
                                           const BundleAdjustmentOptions& options) {
@@ -63,57 +52,6 @@ std::string BundleAdjustmentSummary::ToString() const {
       << " -> " << final_cost << "; " << num_iterations << " iterations, " << std::setprecision(3)
       << time_s << " s; " << termination;
   return out.str();
-}
-
-double UpdateReprojectionErrors(Reconstruction* reconstruction) {
-  VIOSFM_CHECK(reconstruction != nullptr);
-  double sum = 0.0;
-  size_t count = 0;
-  for (const point3D_t point3D_id : reconstruction->Point3DIds()) {
-    Point3D& point3D = reconstruction->GetPoint3D(point3D_id);
-    double point_sum = 0.0;
-    size_t point_count = 0;
-    bool behind = false;
-    for (const TrackElement& element : point3D.track) {
-      const Image& image = reconstruction->GetImage(element.image_id);
-      if (!image.registered) continue;
-      const std::optional<double> error =
-          ObservationError(*reconstruction, image, image.points2D.at(element.point2D_idx), point3D);
-      if (!error.has_value()) {
-        behind = true;
-        continue;
-      }
-      point_sum += *error;
-      ++point_count;
-    }
-    sum += point_sum;
-    count += point_count;
-    if (behind) {
-      point3D.error = std::numeric_limits<double>::infinity();
-    } else if (point_count == 0) {
-      point3D.error = -1.0;
-    } else {
-      point3D.error = point_sum / static_cast<double>(point_count);
-    }
-  }
-  return count == 0 ? 0.0 : sum / static_cast<double>(count);
-}
-
-double MeanReprojectionError(const Reconstruction& reconstruction) {
-  double sum = 0.0;
-  size_t count = 0;
-  for (const auto& [point3D_id, point3D] : reconstruction.Points3D()) {
-    for (const TrackElement& element : point3D.track) {
-      const Image& image = reconstruction.GetImage(element.image_id);
-      if (!image.registered) continue;
-      const std::optional<double> error =
-          ObservationError(reconstruction, image, image.points2D.at(element.point2D_idx), point3D);
-      if (!error.has_value()) continue;
-      sum += *error;
-      ++count;
-    }
-  }
-  return count == 0 ? 0.0 : sum / static_cast<double>(count);
 }
 
 BundleAdjustmentSummary BundleAdjust(Reconstruction* reconstruction,

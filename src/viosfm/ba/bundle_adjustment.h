@@ -19,6 +19,7 @@
 
 #include "viosfm/geometry/rigid3.h"
 #include "viosfm/scene/reconstruction.h"
+#include "viosfm/scene/reprojection.h"
 #include "viosfm/util/types.h"
 
 namespace viosfm {
@@ -106,16 +107,5 @@ BundleAdjustmentSummary BundleAdjust(Reconstruction* reconstruction,
                                      const std::vector<RelativePosePrior>& priors,
                                      const std::vector<image_t>& constant_poses,
                                      const BundleAdjustmentOptions& options);
-
-// Mean reprojection error (px) over all observations of 3D points in
-// registered images; observations behind their camera are not counted.
-// 0 without observations.
-double MeanReprojectionError(const Reconstruction& reconstruction);
-
-// Writes each point's mean reprojection error (px, over its observations in
-// registered images) to Point3D::error: +infinity if the point is behind a
-// camera that observes it, -1 if it has no observation in a registered image.
-// Returns MeanReprojectionError.
-double UpdateReprojectionErrors(Reconstruction* reconstruction);
 
 }  // namespace viosfm

@@ -4,6 +4,7 @@
 #include <sstream>
 #include <vector>
 
+#include "viosfm/scene/reprojection.h"
 #include "viosfm/sfm/triangulator.h"
 #include "viosfm/util/errors.h"
 
@@ -107,19 +108,7 @@ PointFilterStatistics FilterPoints(Reconstruction* reconstruction,
   stats.num_points_removed_small_angle =
       FilterPointsWithSmallTriangulationAngle(reconstruction, options.min_triangulation_angle_deg);
 
-  for (const point3D_t point3D_id : reconstruction->Point3DIds()) {
-    Point3D& point3D = reconstruction->GetPoint3D(point3D_id);
-    double sum = 0.0;
-    size_t count = 0;
-    for (const TrackElement& element : point3D.track) {
-      const Image& image = reconstruction->GetImage(element.image_id);
-      if (!image.registered) continue;
-      sum += ReprojectionErrorPx(reconstruction->GetCamera(image.camera_id), image.cam_from_world,
-                                 point3D.xyz, image.points2D.at(element.point2D_idx).xy);
-      ++count;
-    }
-    point3D.error = count > 0 ? sum / static_cast<double>(count) : -1.0;
-  }
+  UpdateReprojectionErrors(reconstruction);
   stats.num_points_after = reconstruction->NumPoints3D();
   return stats;
 }

@@ -80,15 +80,6 @@ std::string TriangulationOptions::Validate() const {
   return "";
 }
 
-double ReprojectionErrorPx(const Camera& camera, const Rigid3d& cam_from_world,
-                           const Eigen::Vector3d& point_in_world, const Eigen::Vector2d& pixel) {
-  const Eigen::Vector3d point_in_cam = cam_from_world * point_in_world;
-  if (!HasPositiveDepth(cam_from_world, point_in_world)) return kInfinity;
-  const std::optional<Eigen::Vector2d> projected = Project(camera, point_in_cam);
-  if (!projected) return kInfinity;
-  return (*projected - pixel).norm();
-}
-
 double MaxTriangulationAngle(const std::vector<Eigen::Vector3d>& centers,
                              const Eigen::Vector3d& point_in_world) {
   // The largest angle is the smallest cosine between unit rays.

@@ -11,6 +11,7 @@
 
 #include "viosfm/geometry/rigid3.h"
 #include "viosfm/scene/reconstruction.h"
+#include "viosfm/scene/reprojection.h"
 #include "viosfm/sensor/camera.h"
 #include "viosfm/sfm/tracks.h"
 #include "viosfm/util/types.h"
@@ -70,11 +71,6 @@ std::optional<TrackTriangulation> TriangulateTrack(const std::vector<Triangulati
 // given camera centres; 0 for fewer than two.
 double MaxTriangulationAngle(const std::vector<Eigen::Vector3d>& centers,
                              const Eigen::Vector3d& point_in_world);
-
-// Reprojection error of a point in a view, pixels; infinity if the point is
-// not in front of the camera.
-double ReprojectionErrorPx(const Camera& camera, const Rigid3d& cam_from_world,
-                           const Eigen::Vector3d& point_in_world, const Eigen::Vector2d& pixel);
 
 struct TriangulationStatistics {
   // Tracks with at least two free observations in the given images and no
