@@ -11,5 +11,9 @@ void RegisterEval(CLI::App& app);
 void RegisterSimulate(CLI::App& app);
 void RegisterFeatures(CLI::App& app);
 void RegisterMatch(CLI::App& app);
+void RegisterCheckPairs(CLI::App& app);
+void RegisterVio(CLI::App& app);
+void RegisterRun(CLI::App& app);
+void RegisterReport(CLI::App& app);
 
 }  // namespace viosfm::cli

@@ -19,6 +19,10 @@ int main(int argc, char** argv) {
   viosfm::cli::RegisterSimulate(app);
   viosfm::cli::RegisterFeatures(app);
   viosfm::cli::RegisterMatch(app);
+  viosfm::cli::RegisterCheckPairs(app);
+  viosfm::cli::RegisterVio(app);
+  viosfm::cli::RegisterRun(app);
+  viosfm::cli::RegisterReport(app);
   viosfm::cli::RegisterEval(app);
 
   try {
