@@ -9,10 +9,11 @@ packages=(
   libeigen3-dev libceres-dev libopencv-dev libsqlite3-dev libcli11-dev
   libyaml-cpp-dev nlohmann-json3-dev libtbb-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  chromium  # headless, for the test that opens `viosfm report` pages
 )
 # The baseline the benchmarks compare against (not needed to build or test).
 if [[ "${VIOSFM_WITH_COLMAP:-0}" == "1" ]]; then
-  packages+=(colmap)
+  packages+=(colmap sqlite3 time)
 fi
 
 missing=()

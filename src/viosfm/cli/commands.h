@@ -15,5 +15,6 @@ void RegisterCheckPairs(CLI::App& app);
 void RegisterVio(CLI::App& app);
 void RegisterRun(CLI::App& app);
 void RegisterReport(CLI::App& app);
+void RegisterBenchReport(CLI::App& app);
 
 }  // namespace viosfm::cli

@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
   viosfm::cli::RegisterVio(app);
   viosfm::cli::RegisterRun(app);
   viosfm::cli::RegisterReport(app);
+  viosfm::cli::RegisterBenchReport(app);
   viosfm::cli::RegisterEval(app);
 
   try {

@@ -1,0 +1,348 @@
+#include "viosfm/report/bench_report.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "viosfm/io/euroc.h"
+#include "viosfm/io/trajectory_io.h"
+#include "viosfm/report/json_file.h"
+#include "viosfm/report/run_plots.h"
+#include "viosfm/report/svg_plot.h"
+#include "viosfm/scene/trajectory.h"
+#include "viosfm/util/errors.h"
+#include "viosfm/util/file_util.h"
+#include "viosfm/util/string_util.h"
+
+namespace viosfm {
+namespace {
+
+namespace fs = std::filesystem;
+using Json = nlohmann::json;
+
+// The order methods are listed in, and their table names.
+const std::vector<std::pair<std::string, std::string>>& MethodNames() {
+  static const std::vector<std::pair<std::string, std::string>> names = {
+      {"vio", "input VIO"},
+      {"viosfm", "viosfm"},
+      {"viosfm_no_vio_check", "viosfm w/o VIO-aided verification"},
+      {"viosfm_no_rpc", "viosfm w/o relative-pose term"},
+      {"colmap_same_pairs", "COLMAP 3.8, viosfm's pairs"},
+      {"colmap_sequential", "COLMAP 3.8, sequential matcher"},
+  };
+  return names;
+}
+
+std::string MethodName(const std::string& method) {
+  for (const auto& [key, name] : MethodNames()) {
+    if (key == method) return name;
+  }
+  return method;
+}
+
+int MethodRank(const std::string& method) {
+  const auto& names = MethodNames();
+  for (size_t i = 0; i < names.size(); ++i) {
+    if (names[i].first == method) return static_cast<int>(i);
+  }
+  return static_cast<int>(names.size());
+}
+
+std::optional<double> NumberAt(const Json& json, std::initializer_list<const char*> keys) {
+  const Json* node = &json;
+  for (const char* key : keys) {
+    if (!node->is_object() || !node->contains(key)) return std::nullopt;
+    node = &(*node)[key];
+  }
+  if (!node->is_number()) return std::nullopt;
+  return node->get<double>();
+}
+
+int CountImages(const fs::path& sequence) {
+  const fs::path csv = sequence / "mav0" / "cam0" / "data.csv";
+  if (!fs::is_regular_file(csv)) return 0;
+  std::ifstream in(csv);
+  std::string line;
+  int count = 0;
+  while (std::getline(in, line)) {
+    if (!Trim(line).empty() && line[0] != '#') ++count;
+  }
+  return count;
+}
+
+// Reads one run folder (see the header for its files).
+BenchRun ReadRun(const fs::path& folder, const std::string& sequence, const std::string& method,
+                 int frames_in) {
+  BenchRun run;
+  run.sequence = sequence;
+  run.method = method;
+  run.folder = folder;
+  run.frames_in = frames_in;
+  run.failed = fs::exists(folder / "failed");
+  const fs::path time_path = folder / "time.txt";
+  if (fs::is_regular_file(time_path)) {
+    std::istringstream in(ReadTextFile(time_path));
+    double seconds = 0.0;
+    double kib = 0.0;
+    if (!(in >> seconds >> kib)) {
+      throw InputError(time_path.string(), 1,
+                       "expected 'seconds peak_kib' (/usr/bin/time -f '%e %M')");
+    }
+    run.seconds = seconds;
+    run.peak_memory_mb = kib / 1024.0;
+  }
+  const fs::path eval_path = folder / "eval.json";
+  if (fs::is_regular_file(eval_path)) {
+    const Json eval = ReadJsonFile(eval_path);
+    run.ate_rmse_m = NumberAt(eval, {"ate", "translation_m", "rmse"});
+    run.ate_median_m = NumberAt(eval, {"ate", "translation_m", "median"});
+    if (const auto n = NumberAt(eval, {"num_pairs"})) run.frames_registered = static_cast<int>(*n);
+  }
+  const fs::path summary_path = folder / "run" / "summary.json";
+  if (fs::is_regular_file(summary_path)) {
+    const Json summary = ReadJsonFile(summary_path);
+    if (const auto n = NumberAt(summary, {"frames", "in"})) run.frames_in = static_cast<int>(*n);
+    if (const auto n = NumberAt(summary, {"frames", "registered"})) {
+      run.frames_registered = static_cast<int>(*n);
+    }
+    if (summary.contains("stages") && summary["stages"].is_array()) {
+      for (const Json& stage : summary["stages"]) {
+        if (stage.value("name", "") == "mapping" && stage.contains("seconds")) {
+          run.mapping_seconds = stage["seconds"].get<double>();
+        }
+      }
+    }
+  }
+  const fs::path models = folder / "num_models.txt";
+  if (fs::is_regular_file(models)) {
+    std::istringstream in(ReadTextFile(models));
+    in >> run.num_models;
+  }
+  return run;
+}
+
+std::vector<fs::path> SortedSubfolders(const fs::path& folder) {
+  std::vector<fs::path> result;
+  if (!fs::is_directory(folder)) return result;
+  for (const auto& entry : fs::directory_iterator(folder)) {
+    if (entry.is_directory()) result.push_back(entry.path());
+  }
+  std::sort(result.begin(), result.end());
+  return result;
+}
+
+// Numeric subfolders (batch sizes, lengths) as runs, sorted by number.
+std::vector<BenchRun> ReadSweep(const fs::path& folder, const std::string& sequence) {
+  std::vector<std::pair<int, BenchRun>> runs;
+  for (const fs::path& sub : SortedSubfolders(folder)) {
+    const std::string name = sub.filename().string();
+    if (name.empty() || !std::all_of(name.begin(), name.end(), ::isdigit)) continue;
+    runs.emplace_back(std::stoi(name), ReadRun(sub, sequence, name, CountImages(sub / "sequence")));
+  }
+  std::sort(runs.begin(), runs.end(),
+            [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::vector<BenchRun> result;
+  for (auto& [n, run] : runs) result.push_back(std::move(run));
+  return result;
+}
+
+std::string Fixed(const std::optional<double>& value, int decimals) {
+  if (!value) return "n/a";
+  char buffer[64];
+  std::snprintf(buffer, sizeof(buffer), "%.*f", decimals, *value);
+  return buffer;
+}
+
+std::string Registered(const BenchRun& run) {
+  if (run.failed && run.frames_registered == 0) return "failed";
+  std::string text = std::to_string(run.frames_registered);
+  if (run.frames_in > 0) text += " / " + std::to_string(run.frames_in);
+  if (run.num_models > 1) text += " (" + std::to_string(run.num_models) + " models)";
+  return text;
+}
+
+const BenchRun* FindRun(const BenchResults& results, const std::string& sequence,
+                        const std::string& method) {
+  for (const BenchRun& run : results.runs) {
+    if (run.sequence == sequence && run.method == method) return &run;
+  }
+  return nullptr;
+}
+
+// The estimated body trajectory of a run folder: viosfm's
+// run/trajectory_body.tum, or COLMAP's largest model converted to body poses.
+std::optional<Trajectory> RunTrajectory(const BenchRun& run, const fs::path& sequence) {
+  const fs::path tum = run.folder / "run" / "trajectory_body.tum";
+  if (fs::is_regular_file(tum)) return ReadTumTrajectory(tum);
+  Trajectory best;
+  for (const fs::path& model : SortedSubfolders(run.folder / "sparse")) {
+    if (!fs::is_regular_file(model / "images.bin")) continue;
+    Trajectory cams = ReadColmapTrajectory(model);
+    if (cams.size() > best.size()) best = std::move(cams);
+  }
+  if (best.empty()) return std::nullopt;
+  const Rigid3d body_from_cam =
+      ReadEurocSensorTransform(sequence / "mav0" / "cam0" / "sensor.yaml");
+  return CameraToBodyTrajectory(best, body_from_cam);
+}
+
+}  // namespace
+
+BenchResults ReadBenchResults(const fs::path& root) {
+  if (!fs::is_directory(root)) {
+    throw InputError(root.string(), 0, "expected a benchmark folder (written by bench/run.sh)");
+  }
+  BenchResults results;
+  results.root = root;
+  const fs::path meta = root / "meta.txt";
+  if (fs::is_regular_file(meta)) {
+    std::istringstream in(ReadTextFile(meta));
+    std::string line;
+    while (std::getline(in, line)) {
+      const size_t colon = line.find(':');
+      if (colon == std::string::npos) continue;
+      results.meta.emplace_back(Trim(line.substr(0, colon)), Trim(line.substr(colon + 1)));
+    }
+  }
+  for (const fs::path& folder : SortedSubfolders(root)) {
+    const std::string name = folder.filename().string();
+    if (name == "batch_size" || name == "length") continue;
+    if (!fs::is_directory(folder / "runs")) continue;
+    const int frames_in = CountImages(folder / "sequence");
+    std::vector<BenchRun> runs;
+    for (const fs::path& method : SortedSubfolders(folder / "runs")) {
+      runs.push_back(ReadRun(method, name, method.filename().string(), frames_in));
+    }
+    std::stable_sort(runs.begin(), runs.end(), [](const BenchRun& a, const BenchRun& b) {
+      return MethodRank(a.method) < MethodRank(b.method);
+    });
+    results.runs.insert(results.runs.end(), runs.begin(), runs.end());
+  }
+  results.batch_size = ReadSweep(root / "batch_size", "batch_size");
+  results.length = ReadSweep(root / "length", "length");
+  return results;
+}
+
+std::string FormatBenchMarkdown(const BenchResults& results,
+                                const std::string& figures_relative_path) {
+  std::ostringstream md;
+  md << "# Benchmark suite results\n\n"
+     << "Written by `bench/run.sh` and `viosfm bench-report` (docs/benchmarks.md explains the "
+        "methods and how to reproduce them). Every number below was measured in the one run "
+        "described here:\n\n";
+  for (const auto& [key, value] : results.meta) md << "- " << key << ": " << value << "\n";
+  md << "\nATE: Sim(3)-aligned absolute trajectory error of the body trajectory against the "
+        "ground truth, over the frames each method registered. Time and memory: wall clock "
+        "and peak resident memory of the whole run (COLMAP: feature extraction, matching and "
+        "mapping; viosfm: every stage of `viosfm run`).\n";
+
+  std::vector<std::string> sequences;
+  for (const BenchRun& run : results.runs) {
+    if (std::find(sequences.begin(), sequences.end(), run.sequence) == sequences.end()) {
+      sequences.push_back(run.sequence);
+    }
+  }
+  for (const std::string& sequence : sequences) {
+    md << "\n## " << sequence << "\n\n"
+       << "| method | registered / frames | ATE RMSE (m) | ATE median (m) | time (s) | peak "
+          "memory (MiB) |\n|---|---|---|---|---|---|\n";
+    for (const BenchRun& run : results.runs) {
+      if (run.sequence != sequence) continue;
+      const bool is_vio = run.method == "vio";
+      md << "| " << MethodName(run.method) << " | " << (is_vio ? "-" : Registered(run)) << " | "
+         << Fixed(run.ate_rmse_m, 3) << " | " << Fixed(run.ate_median_m, 3) << " | "
+         << (is_vio ? "-" : Fixed(run.seconds, 1)) << " | "
+         << (is_vio ? "-" : Fixed(run.peak_memory_mb, 0)) << " |\n";
+    }
+    for (const char* method : {"viosfm", "colmap_same_pairs", "colmap_sequential"}) {
+      if (FindRun(results, sequence, method) == nullptr) continue;
+      const std::string stem = "bench_" + sequence + "_" + method;
+      md << "\n"
+         << MethodName(method) << ": ![top](" << figures_relative_path << "/" << stem
+         << "_top.svg) ![side](" << figures_relative_path << "/" << stem << "_side.svg)\n";
+    }
+  }
+  if (!results.batch_size.empty()) {
+    md << "\n## Batch size (the paper's Fig. 6)\n\n"
+       << "| batch size | registered / frames | ATE RMSE (m) | time (s) | mapping (s) |\n"
+       << "|---|---|---|---|---|\n";
+    for (const BenchRun& run : results.batch_size) {
+      md << "| " << run.method << " | " << Registered(run) << " | " << Fixed(run.ate_rmse_m, 3)
+         << " | " << Fixed(run.seconds, 1) << " | " << Fixed(run.mapping_seconds, 1) << " |\n";
+    }
+    md << "\n![ATE against batch size](" << figures_relative_path
+       << "/bench_batch_size_ate.svg) ![time against batch size](" << figures_relative_path
+       << "/bench_batch_size_time.svg)\n";
+  }
+  if (!results.length.empty()) {
+    md << "\n## Sequence length\n\n"
+       << "| frames | registered / frames | ATE RMSE (m) | time (s) | mapping (s) | peak memory "
+          "(MiB) |\n|---|---|---|---|---|---|\n";
+    for (const BenchRun& run : results.length) {
+      md << "| " << run.method << " | " << Registered(run) << " | " << Fixed(run.ate_rmse_m, 3)
+         << " | " << Fixed(run.seconds, 1) << " | " << Fixed(run.mapping_seconds, 1) << " | "
+         << Fixed(run.peak_memory_mb, 0) << " |\n";
+    }
+  }
+  return md.str();
+}
+
+void WriteBenchReport(const BenchResults& results, const fs::path& markdown_path,
+                      const fs::path& figures_folder) {
+  fs::create_directories(figures_folder);
+  // Trajectory views.
+  for (const BenchRun& run : results.runs) {
+    if (run.method != "viosfm" && run.method != "colmap_same_pairs" &&
+        run.method != "colmap_sequential") {
+      continue;
+    }
+    const fs::path sequence = results.root / run.sequence / "sequence";
+    const fs::path gt_csv = sequence / "mav0" / "state_groundtruth_estimate0" / "data.csv";
+    const std::optional<Trajectory> estimate = RunTrajectory(run, sequence);
+    if (!estimate || estimate->size() < 3 || !fs::is_regular_file(gt_csv)) continue;
+    const Trajectory ground_truth = ReadEurocTrajectory(gt_csv);
+    TrajectoryFigures figures = MakeTrajectoryFigures(*estimate, ground_truth, Trajectory{});
+    const std::string stem = "bench_" + run.sequence + "_" + run.method;
+    figures.top_view.title = run.sequence + ": " + MethodName(run.method) + " (top view)";
+    figures.side_view.title = run.sequence + ": " + MethodName(run.method) + " (side view)";
+    WriteSvg(figures_folder / (stem + "_top.svg"), figures.top_view);
+    WriteSvg(figures_folder / (stem + "_side.svg"), figures.side_view);
+  }
+  // Batch-size sweep with the first sequence's COLMAP runs as references.
+  if (!results.batch_size.empty()) {
+    BatchSizeSweep sweep;
+    BatchSizeCurve curve;
+    curve.label = "viosfm";
+    for (const BenchRun& run : results.batch_size) {
+      if (!run.ate_rmse_m || !run.seconds) continue;
+      curve.batch_sizes.push_back(std::stod(run.method));
+      curve.ate_rmse_m.push_back(*run.ate_rmse_m);
+      curve.seconds.push_back(*run.seconds);
+    }
+    sweep.curves.push_back(curve);
+    sweep.log_x = true;
+    if (!results.runs.empty()) {
+      const std::string first = results.runs.front().sequence;
+      for (const char* method : {"colmap_same_pairs", "colmap_sequential", "vio"}) {
+        const BenchRun* run = FindRun(results, first, method);
+        if (run == nullptr) continue;
+        if (run->ate_rmse_m) sweep.ate_references.push_back({MethodName(method), *run->ate_rmse_m});
+        if (run->seconds && std::string(method) != "vio") {
+          sweep.time_references.push_back({MethodName(method), *run->seconds});
+        }
+      }
+    }
+    if (!curve.batch_sizes.empty()) {
+      const BatchSizeFigures figures = MakeBatchSizeFigures(sweep);
+      WriteSvg(figures_folder / "bench_batch_size_ate.svg", figures.ate);
+      WriteSvg(figures_folder / "bench_batch_size_time.svg", figures.time);
+    }
+  }
+  const fs::path relative = fs::relative(figures_folder, fs::absolute(markdown_path).parent_path());
+  const std::string markdown = FormatBenchMarkdown(results, relative.generic_string());
+  WriteFileAtomically(markdown_path, [&](std::ostream& out) { out << markdown; });
+}
+
+}  // namespace viosfm

@@ -1,0 +1,63 @@
+// Tables and figures of a benchmark-suite folder (bench/run.sh): for every
+// sequence the methods side by side (frames registered, Sim(3) ATE RMSE and
+// median, time, peak memory), as the paper's Table I; the ablations; ATE and
+// time against batch size (the paper's Fig. 6); time and memory against
+// sequence length; trajectory views of viosfm and COLMAP.
+//
+// Folder layout (what bench/run.sh writes):
+//   ROOT/meta.txt                      "key: value" lines (date, machine, settings)
+//   ROOT/<sequence>/sequence/          the dataset (EuRoC layout; ground truth)
+//   ROOT/<sequence>/runs/<method>/     one run: time.txt ("seconds peak_kib"),
+//       eval.json (`viosfm eval --json`), failed (present if the run failed),
+//       run/ (a `viosfm run` output folder) or sparse/N/ (COLMAP models)
+//   ROOT/batch_size/<k>/               a `viosfm run` with batch size k
+//   ROOT/length/<frames>/              a `viosfm run` on a sequence of that length
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace viosfm {
+
+// One run of one method.
+struct BenchRun {
+  std::string sequence;  // e.g. "two_floors"
+  std::string method;    // e.g. "viosfm", "colmap_same_pairs", "batch 25"
+  std::filesystem::path folder;
+  bool failed = false;
+  int frames_in = 0;          // images of the sequence
+  int frames_registered = 0;  // poses evaluated (0 without eval.json)
+  int num_models = 0;         // COLMAP: models written (0 for others)
+  std::optional<double> ate_rmse_m;
+  std::optional<double> ate_median_m;
+  std::optional<double> seconds;          // wall clock of the whole run
+  std::optional<double> peak_memory_mb;   // MiB
+  std::optional<double> mapping_seconds;  // viosfm: the mapper stage
+};
+
+struct BenchResults {
+  std::filesystem::path root;
+  std::vector<std::pair<std::string, std::string>> meta;  // meta.txt
+  std::vector<BenchRun> runs;                             // <sequence>/runs/<method>
+  std::vector<BenchRun> batch_size;                       // method = the batch size
+  std::vector<BenchRun> length;                           // method = the number of frames
+};
+
+// Reads a benchmark folder. Throws InputError for a missing folder or a
+// malformed eval.json / summary.json / time.txt (naming the file).
+BenchResults ReadBenchResults(const std::filesystem::path& root);
+
+// The Markdown page: settings, the Table-I-style table per sequence, the
+// ablation rows, the sweeps, links to the figures (relative to the page).
+std::string FormatBenchMarkdown(const BenchResults& results,
+                                const std::string& figures_relative_path);
+
+// Writes the Markdown page (atomically) and the figures (SVG) into
+// figures_folder: bench_batch_size_ate.svg, bench_batch_size_time.svg,
+// bench_<sequence>_<method>_{top,side}.svg for viosfm and COLMAP.
+void WriteBenchReport(const BenchResults& results, const std::filesystem::path& markdown_path,
+                      const std::filesystem::path& figures_folder);
+
+}  // namespace viosfm

@@ -1,0 +1,108 @@
+#include "viosfm/report/bench_report.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "viosfm/util/errors.h"
+#include "viosfm/util/file_util.h"
+#include "viosfm/util/testing.h"
+
+namespace viosfm {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+
+std::string EvalJson(double rmse, double median, int pairs) {
+  return "{\"num_pairs\": " + std::to_string(pairs) +
+         ", \"ate\": {\"translation_m\": {\"rmse\": " + std::to_string(rmse) +
+         ", \"median\": " + std::to_string(median) + "}}}";
+}
+
+void Write(const fs::path& path, const std::string& text) {
+  fs::create_directories(path.parent_path());
+  testing::WriteTextFile(path, text);
+}
+
+// A results folder as bench/run.sh writes it: one sequence of 4 frames, two
+// methods and a batch-size sweep of two runs.
+fs::path MakeFixture() {
+  const fs::path root = testing::MakeScratchFolder("bench_report");
+  Write(root / "meta.txt", "date: 2026-01-01\nmode: quick\n");
+  Write(root / "room/sequence/mav0/cam0/data.csv",
+        "#timestamp [ns],filename\n1,1.png\n2,2.png\n3,3.png\n4,4.png\n");
+  const fs::path runs = root / "room/runs";
+  Write(runs / "viosfm/time.txt", "12.5 204800\n");
+  Write(runs / "viosfm/eval.json", EvalJson(0.0123, 0.0101, 4));
+  Write(runs / "viosfm/run/summary.json",
+        "{\"frames\": {\"in\": 4, \"selected\": 4, \"registered\": 4},"
+        " \"stages\": [{\"name\": \"mapping\", \"seconds\": 3.25}]}");
+  Write(runs / "colmap_sequential/time.txt", "30.0 102400\n");
+  Write(runs / "colmap_sequential/eval.json", EvalJson(0.5, 0.25, 3));
+  Write(runs / "colmap_sequential/num_models.txt", "2\n");
+  Write(runs / "vio/eval.json", EvalJson(0.2, 0.15, 4));
+  Write(root / "batch_size/10/time.txt", "8.0 1024\n");
+  Write(root / "batch_size/10/eval.json", EvalJson(0.02, 0.01, 4));
+  Write(root / "batch_size/5/time.txt", "9.0 1024\n");
+  Write(root / "batch_size/5/eval.json", EvalJson(0.03, 0.01, 4));
+  Write(root / "batch_size/5/failed", "");
+  return root;
+}
+
+TEST(BenchReport, ReadsRunsInMethodOrder) {
+  const BenchResults results = ReadBenchResults(MakeFixture());
+  ASSERT_EQ(results.runs.size(), 3u);
+  EXPECT_EQ(results.runs[0].method, "vio");
+  EXPECT_EQ(results.runs[1].method, "viosfm");
+  EXPECT_EQ(results.runs[2].method, "colmap_sequential");
+  const BenchRun& viosfm = results.runs[1];
+  EXPECT_EQ(viosfm.frames_in, 4);
+  EXPECT_EQ(viosfm.frames_registered, 4);
+  EXPECT_NEAR(*viosfm.ate_rmse_m, 0.0123, 1e-9);
+  EXPECT_NEAR(*viosfm.seconds, 12.5, 1e-9);
+  EXPECT_NEAR(*viosfm.peak_memory_mb, 200.0, 1e-9);
+  EXPECT_NEAR(*viosfm.mapping_seconds, 3.25, 1e-9);
+  const BenchRun& colmap = results.runs[2];
+  EXPECT_EQ(colmap.frames_registered, 3);
+  EXPECT_EQ(colmap.num_models, 2);
+  // Sweeps are sorted by number, not by name.
+  ASSERT_EQ(results.batch_size.size(), 2u);
+  EXPECT_EQ(results.batch_size[0].method, "5");
+  EXPECT_TRUE(results.batch_size[0].failed);
+  EXPECT_EQ(results.batch_size[1].method, "10");
+}
+
+TEST(BenchReport, MarkdownHasTheNumbers) {
+  const std::string md = FormatBenchMarkdown(ReadBenchResults(MakeFixture()), "images");
+  EXPECT_THAT(md, HasSubstr("- mode: quick"));
+  EXPECT_THAT(md, HasSubstr("| viosfm | 4 / 4 | 0.012 | 0.010 | 12.5 | 200 |"));
+  EXPECT_THAT(md,
+              HasSubstr("| COLMAP 3.8, sequential matcher | 3 / 4 (2 models) | 0.500 | 0.250 |"));
+  EXPECT_THAT(md, HasSubstr("| input VIO | - | 0.200 | 0.150 | - | - |"));
+  EXPECT_THAT(md, HasSubstr("| 10 | 4 | 0.020 | 8.0 |"));
+}
+
+TEST(BenchReport, WritesPageAndBatchSizeFigures) {
+  const fs::path root = MakeFixture();
+  const BenchResults results = ReadBenchResults(root);
+  WriteBenchReport(results, root / "docs/bench.md", root / "docs/images");
+  EXPECT_THAT(ReadTextFile(root / "docs/bench.md"),
+              HasSubstr("](images/bench_batch_size_ate.svg)"));
+  EXPECT_THAT(ReadTextFile(root / "docs/images/bench_batch_size_ate.svg"), HasSubstr("<svg"));
+}
+
+TEST(BenchReport, BadInputNamesTheFile) {
+  const fs::path root = MakeFixture();
+  Write(root / "room/runs/viosfm/eval.json", "{\"ate\": ");
+  EXPECT_THAT(testing::InputErrorMessage([&] { ReadBenchResults(root); }),
+              HasSubstr("room/runs/viosfm/eval.json"));
+  Write(root / "room/runs/viosfm/eval.json", "{}");
+  Write(root / "room/runs/viosfm/time.txt", "twelve\n");
+  EXPECT_THAT(testing::InputErrorMessage([&] { ReadBenchResults(root); }), HasSubstr("time.txt"));
+  EXPECT_THROW(ReadBenchResults(root / "missing"), InputError);
+}
+
+}  // namespace
+}  // namespace viosfm
