@@ -1,6 +1,128 @@
+// `viosfm run`: the whole VIO-aided reconstruction of a dataset into an
+// output folder (see pipeline/pipeline.h).
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <string>
+
 #include "viosfm/cli/commands.h"
+#include "viosfm/io/trajectory_io.h"
+#include "viosfm/pipeline/pipeline.h"
+#include "viosfm/util/errors.h"
+#include "viosfm/util/logging.h"
+#include "viosfm/util/timestamp.h"
+
 namespace viosfm::cli {
-void RegisterRun(CLI::App& app) {
-  (void)app;
+namespace {
+
+struct RunArguments {
+  std::string dataset;
+  std::string out;
+  std::string vio_trajectory;
+  std::string vio_format = "tum";
+  std::string vio_frame = "body";
+  double max_vio_time_difference_s = 0.005;
+  std::string camera_yaml;
+  std::string timestamps;
+  bool no_trim_static = false;
+  bool no_vio_prior = false;
+  bool no_rpc = false;
+  bool no_progress = false;
+  PipelineOptions options;
+};
+
+void RunRun(RunArguments args) {
+  PipelineOptions& options = args.options;
+  options.dataset = args.dataset;
+  options.output_folder = args.out;
+  options.vio_trajectory = args.vio_trajectory;
+  options.vio_format = ParseTrajectoryFormat(args.vio_format);
+  options.vio_frame = ParseVioFrame(args.vio_frame);
+  options.max_vio_time_difference_ns = SecondsToNs(args.max_vio_time_difference_s);
+  options.image_folder.camera_yaml = args.camera_yaml;
+  options.image_folder.timestamps_file = args.timestamps;
+  options.frame_selection.trim_static = !args.no_trim_static;
+  options.verification.use_vio_prior = !args.no_vio_prior;
+  options.mapper.ba.use_relative_pose_priors = !args.no_rpc;
+  options.show_progress = !args.no_progress;
+  if (const std::string error = options.Validate(); !error.empty()) {
+    throw InputError("invalid run options: " + error);
+  }
+  VIOSFM_LOG(INFO) << "run: " << args.dataset << " -> " << args.out << " (N1 "
+                   << options.verification.pairs.num_temporal_neighbors << ", N2 "
+                   << options.verification.pairs.num_retrieval_neighbors << ", "
+                   << options.frame_selection.target_rate_hz << " Hz, batch size "
+                   << options.mapper.batch_size << ", max " << options.sift.max_num_features
+                   << " features, "
+                   << (options.verification.use_vio_prior ? "VIO prior" : "RANSAC only") << ", "
+                   << (options.mapper.ba.use_relative_pose_priors ? "RPC" : "no RPC") << ")";
+  const PipelineSummary summary = RunPipeline(options);
+  std::cout << summary.ToString() << "\n";
 }
+
+}  // namespace
+
+void RegisterRun(CLI::App& app) {
+  auto args = std::make_shared<RunArguments>();
+  CLI::App* command = app.add_subcommand(
+      "run",
+      "Reconstruct a dataset end to end: frame selection, features, VIO-aided verification, "
+      "batched mapping with relative-pose constraints, evaluation against ground truth; writes "
+      "model/, model_txt/, points.ply, trajectories, eval.json and summary.json to --out; a "
+      "re-run on the same folder reuses the stored features and matches");
+  command
+      ->add_option("dataset", args->dataset,
+                   "EuRoC dataset (folder containing mav0/) or a folder of images")
+      ->required();
+  command->add_option("--out", args->out, "Output folder (created if missing)")->required();
+  command->add_option("--vio-trajectory", args->vio_trajectory,
+                      "VIO trajectory (TUM by default), world_from_body unless --vio-frame cam");
+  command->add_option("--vio-format", args->vio_format, "Its format: tum, euroc or kitti")
+      ->capture_default_str();
+  command->add_option("--vio-frame", args->vio_frame, "Frame of the VIO poses: body or cam")
+      ->capture_default_str();
+  command
+      ->add_option("--max-vio-time-difference", args->max_vio_time_difference_s,
+                   "Largest gap between an image stamp and its VIO pose (s)")
+      ->capture_default_str();
+  command
+      ->add_option("--rate", args->options.frame_selection.target_rate_hz,
+                   "Downsample to this frame rate (Hz); 0 keeps every frame")
+      ->capture_default_str();
+  command->add_flag("--no-trim-static", args->no_trim_static,
+                    "Keep the static frames at the start and the end");
+  command
+      ->add_option("--max-features", args->options.sift.max_num_features,
+                   "SIFT features kept per image")
+      ->capture_default_str();
+  command
+      ->add_option("--n1", args->options.verification.pairs.num_temporal_neighbors,
+                   "Temporal neighbours per image")
+      ->capture_default_str();
+  command
+      ->add_option("--n2", args->options.verification.pairs.num_retrieval_neighbors,
+                   "Retrieval neighbours per image")
+      ->capture_default_str();
+  command
+      ->add_option("--batch-size", args->options.mapper.batch_size,
+                   "Frames registered per batch (k)")
+      ->capture_default_str();
+  command->add_flag("--no-vio-prior", args->no_vio_prior,
+                    "RANSAC-only verification (COLMAP's; the baseline)");
+  command->add_flag("--no-rpc", args->no_rpc,
+                    "Bundle adjustment without the relative-pose constraints (ablation)");
+  command->add_flag("--guided-matching", args->options.verification.guided_matching,
+                    "Match inside the VIO epipolar band instead of by brute force");
+  command->add_option("--camera-yaml", args->camera_yaml,
+                      "Image folder: Kalibr/EuRoC camera sensor.yaml");
+  command->add_option("--timestamps", args->timestamps,
+                      "Image folder: file of 'filename timestamp' lines");
+  command->add_option("--threads", args->options.num_threads, "Worker threads of every stage")
+      ->capture_default_str();
+  command->add_option("--seed", args->options.seed, "Seed of every random choice")
+      ->capture_default_str();
+  command->add_flag("--no-progress", args->no_progress, "No progress bars");
+  command->callback([args] { RunRun(*args); });
+}
+
 }  // namespace viosfm::cli

@@ -18,7 +18,7 @@
 //  5. filtering (large reprojection error, small triangulation angle) and
 //     re-triangulation of the tracks left without a point;
 //  6. after the last batch a final global bundle adjustment, filtering and
-//     re-triangulation.
+//     re-triangulation (it replaces the last batch's own bundle adjustment).
 #pragma once
 
 #include <string>
@@ -73,6 +73,15 @@ struct BatchedMapperOptions {
   bool ba_after_each_batch = true;
   // Final global bundle adjustment after the last batch. Default true.
   bool final_global_ba = true;
+  // Local window of the per-batch bundle adjustment, in batches, >= 0. 0 (the
+  // paper, default): every registered image but the first is refined after
+  // every batch, so the cost of the run grows quadratically with the number
+  // of batches. N > 0: only the images of the last N batches are refined;
+  // older images that observe the same points (and the image just before the
+  // window, for its relative-pose term) are held constant and points seen
+  // only by older images are left out. The final global bundle adjustment
+  // refines everything either way.
+  int ba_window_batches = 0;
   // Worker threads (BA, triangulation); default 2.
   int num_threads = 2;
   bool show_progress = true;
@@ -83,13 +92,17 @@ struct BatchedMapperOptions {
 
 struct MapperBatchStatistics {
   int batch_index = 0;
-  int num_images = 0;                       // images in the batch
-  int num_registered_total = 0;             // registered images after the batch
-  int num_points_total = 0;                 // points after the batch (after filtering)
-  double mean_reprojection_error_px = 0.0;  // after the batch's BA
+  int num_images = 0;            // images in the batch
+  int num_registered_total = 0;  // registered images after the batch
+  int num_points_total = 0;      // points after the batch (after filtering)
+  // Mean over all observations after the batch (BA, filtering and
+  // re-triangulation), px.
+  double mean_reprojection_error_px = 0.0;
   double seconds_triangulation = 0.0;
   double seconds_ba = 0.0;
   double seconds_filtering = 0.0;
+  int num_ba_free_images = 0;  // images whose pose the batch's BA refined
+  double seconds_total = 0.0;  // the whole batch
 };
 
 struct BatchedMapperSummary {
@@ -106,6 +119,19 @@ struct BatchedMapperSummary {
   double seconds_total = 0.0;
   std::string ToString() const;  // a few lines for the log
 };
+
+// Throws InputError naming the first problem of `input`: no images, a camera
+// with an invalid or duplicate id or parameters, a duplicate image id or
+// name, an empty name, an unknown camera id, images not in strictly
+// increasing time order, a non-finite VIO pose, a pair naming an unknown
+// image, or a match indexing a keypoint that does not exist.
+void ValidateBatchedMapperInput(const BatchedMapperInput& input);
+
+// The relative-pose priors between consecutive frames (time order):
+// cam2_from_cam1 from their VIO poses, num_verified_matches the number of
+// verified matches of the pair (0 if the pair was not verified; the largest
+// count if it is listed more than once).
+std::vector<RelativePosePrior> MakeConsecutiveRelativePosePriors(const BatchedMapperInput& input);
 
 // Runs the batched reconstruction (see the top of this file). Throws
 // InputError for invalid options, images not in time order, an unknown

@@ -1,0 +1,753 @@
+#include "viosfm/pipeline/pipeline.h"
+
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <ctime>
+#include <iomanip>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <unordered_map>
+
+#include "viosfm/eval/report.h"
+#include "viosfm/eval/traj_eval.h"
+#include "viosfm/io/colmap_database.h"
+#include "viosfm/io/colmap_model.h"
+#include "viosfm/io/euroc.h"
+#include "viosfm/io/image_io.h"
+#include "viosfm/io/ply.h"
+#include "viosfm/io/verification_report.h"
+#include "viosfm/scene/reprojection.h"
+#include "viosfm/util/errors.h"
+#include "viosfm/util/file_util.h"
+#include "viosfm/util/logging.h"
+#include "viosfm/util/progress.h"
+#include "viosfm/util/string_util.h"
+#include "viosfm/util/timer.h"
+
+#ifndef VIOSFM_VERSION
+#define VIOSFM_VERSION "unknown"
+#endif
+
+namespace viosfm {
+namespace {
+
+namespace fs = std::filesystem;
+using ordered_json = nlohmann::ordered_json;
+
+// Ground truth is interpolated between two states at most this far apart (ns).
+constexpr timestamp_ns_t kMaxGroundTruthGapNs = 50'000'000;
+
+// The stage names, in order (summary.json "stages").
+constexpr const char* kStageNames[] = {"read_dataset", "vio",          "select_frames", "features",
+                                       "verification", "load_matches", "mapper",        "colors",
+                                       "evaluation",   "write_outputs"};
+constexpr int kNumStages = static_cast<int>(std::size(kStageNames));
+
+std::string Text(double value) {
+  std::ostringstream stream;
+  stream << std::setprecision(10) << value;
+  return stream.str();
+}
+std::string Text(bool value) {
+  return value ? "true" : "false";
+}
+std::string Text(int value) {
+  return std::to_string(value);
+}
+std::string Text(int64_t value) {
+  return std::to_string(value);
+}
+std::string Text(uint64_t value) {
+  return std::to_string(value);
+}
+
+std::string UtcNow() {
+  const std::time_t now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
+  std::tm tm{};
+  gmtime_r(&now, &tm);
+  char buffer[32];
+  std::strftime(buffer, sizeof(buffer), "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buffer;
+}
+
+double PeakMemoryMb() {
+  rusage usage{};
+  if (getrusage(RUSAGE_SELF, &usage) != 0) return 0.0;
+  return static_cast<double>(usage.ru_maxrss) / 1024.0;  // Linux: kilobytes
+}
+
+bool IsEurocDataset(const fs::path& root) {
+  return fs::is_directory(root / "mav0") ||
+         (root.filename() == "mav0" && fs::is_directory(root / "cam0"));
+}
+
+// Index of the pose nearest to `t` within max_dt, or -1.
+int64_t NearestPoseIndex(const Trajectory& trajectory, timestamp_ns_t t, timestamp_ns_t max_dt) {
+  const auto& poses = trajectory.poses;
+  const auto it = std::lower_bound(
+      poses.begin(), poses.end(), t,
+      [](const StampedPose& pose, timestamp_ns_t stamp) { return pose.timestamp_ns < stamp; });
+  int64_t best = -1;
+  timestamp_ns_t best_dt = max_dt;
+  const auto consider = [&](std::vector<StampedPose>::const_iterator candidate) {
+    const timestamp_ns_t dt = std::abs(candidate->timestamp_ns - t);
+    if (dt <= best_dt) {
+      best_dt = dt;
+      best = candidate - poses.begin();
+    }
+  };
+  if (it != poses.begin()) consider(std::prev(it));
+  if (it != poses.end()) consider(it);
+  return best;
+}
+
+// The pose at `t`, interpolated (linear position, slerp rotation) between
+// the two poses around it when they are at most max_gap apart.
+std::optional<Rigid3d> InterpolatePose(const Trajectory& trajectory, timestamp_ns_t t,
+                                       timestamp_ns_t max_gap) {
+  const auto& poses = trajectory.poses;
+  const auto it = std::lower_bound(
+      poses.begin(), poses.end(), t,
+      [](const StampedPose& pose, timestamp_ns_t stamp) { return pose.timestamp_ns < stamp; });
+  if (it != poses.end() && it->timestamp_ns == t) return it->world_from_frame;
+  if (it == poses.begin() || it == poses.end()) return std::nullopt;
+  const StampedPose& before = *std::prev(it);
+  const StampedPose& after = *it;
+  if (after.timestamp_ns - before.timestamp_ns > max_gap) return std::nullopt;
+  const double s = static_cast<double>(t - before.timestamp_ns) /
+                   static_cast<double>(after.timestamp_ns - before.timestamp_ns);
+  Rigid3d pose;
+  pose.rotation = before.world_from_frame.rotation.slerp(s, after.world_from_frame.rotation);
+  pose.translation =
+      (1.0 - s) * before.world_from_frame.translation + s * after.world_from_frame.translation;
+  return pose;
+}
+
+std::string SpanText(timestamp_ns_t first, timestamp_ns_t last) {
+  std::ostringstream text;
+  text << '[' << FormatNsAsSeconds(first, 3) << ", " << FormatNsAsSeconds(last, 3) << "] s";
+  return text.str();
+}
+
+// Records each stage's wall-clock time and logs a heading for it.
+class StageClock {
+ public:
+  explicit StageClock(std::vector<PipelineStageTime>* stages) : stages_(stages) {}
+  void Begin(const std::string& name) {
+    name_ = name;
+    ++index_;
+    VIOSFM_LOG(INFO) << "run [" << index_ << "/" << kNumStages << "] " << name;
+    timer_.Start();
+  }
+  void End() {
+    const double seconds = timer_.ElapsedSeconds();
+    stages_->push_back({name_, seconds});
+    VIOSFM_LOG(INFO) << "run [" << index_ << "/" << kNumStages << "] " << name_ << ": "
+                     << std::fixed << std::setprecision(2) << seconds << " s";
+  }
+
+ private:
+  std::vector<PipelineStageTime>* stages_;
+  std::string name_;
+  int index_ = 0;
+  Timer timer_;
+};
+
+// The option keys whose values decide what the database holds: a resumed
+// run must agree with the stored options on them.
+bool AffectsDatabase(const std::string& key) {
+  if (key == "sift.num_threads" || key == "verification.num_threads") return false;
+  return key.rfind("sift.", 0) == 0 || key.rfind("verification.", 0) == 0;
+}
+
+// Throws InputError if OUT/database.db was made with other feature or
+// verification options than `options` (as OUT/options.json records them).
+void CheckResumable(const fs::path& output_folder,
+                    const std::vector<std::pair<std::string, std::string>>& options) {
+  const fs::path database = output_folder / "database.db";
+  const fs::path options_file = output_folder / "options.json";
+  if (!fs::exists(database) || !fs::exists(options_file)) return;
+  ordered_json stored;
+  try {
+    stored = ordered_json::parse(ReadTextFile(options_file));
+  } catch (const nlohmann::json::exception& error) {
+    throw InputError(options_file.string(), 0,
+                     std::string("expected the JSON options of a previous run: ") + error.what());
+  }
+  for (const auto& [key, value] : options) {
+    if (!AffectsDatabase(key) || !stored.contains(key) || !stored[key].is_string()) continue;
+    const std::string previous = stored[key].get<std::string>();
+    if (previous != value) {
+      throw InputError(options_file.string(), 0,
+                       "the database " + database.string() + " was made with " + key + " = " +
+                           previous + " but this run asks for " + value +
+                           "; use another output folder or delete the database to start afresh");
+    }
+  }
+}
+
+void WriteJsonFile(const fs::path& path, const std::string& text) {
+  WriteFileAtomically(path, [&text](std::ostream& stream) { stream << text << "\n"; });
+}
+
+ordered_json StatsJson(const PipelineEvaluation& e) {
+  ordered_json json;
+  json["alignment"] = "sim3";
+  json["ate_rmse_m"] = e.ate_rmse_m;
+  json["ate_median_m"] = e.ate_median_m;
+  json["ate_mean_m"] = e.ate_mean_m;
+  json["ate_max_m"] = e.ate_max_m;
+  json["vio_ate_rmse_m"] = e.vio_ate_rmse_m;
+  json["vio_ate_median_m"] = e.vio_ate_median_m;
+  json["num_poses"] = e.num_poses;
+  return json;
+}
+
+// Mean grey value of each point over its observations in registered images.
+void ColorPoints(const std::unordered_map<image_t, fs::path>& image_paths, bool show_progress,
+                 Reconstruction* reconstruction) {
+  std::unordered_map<point3D_t, std::pair<double, int>> sums;
+  const std::vector<image_t> image_ids = reconstruction->RegImageIds();
+  ProgressBar progress("colors", static_cast<int64_t>(image_ids.size()),
+                       show_progress ? ProgressBar::Mode::kAuto : ProgressBar::Mode::kNever);
+  for (const image_t image_id : image_ids) {
+    const Image& image = reconstruction->GetImage(image_id);
+    const auto path = image_paths.find(image_id);
+    VIOSFM_CHECK(path != image_paths.end()) << "image " << image_id << " has no file";
+    const GreyImage pixels = ReadGreyImage(path->second);
+    for (const Point2D& point2D : image.points2D) {
+      if (!point2D.HasPoint3D()) continue;
+      // viosfm's pixel convention: pixel (x, y) has its centre at (x, y).
+      const int x = std::clamp(static_cast<int>(std::lround(point2D.xy.x())), 0, pixels.width - 1);
+      const int y = std::clamp(static_cast<int>(std::lround(point2D.xy.y())), 0, pixels.height - 1);
+      auto& [sum, count] = sums[point2D.point3D_id];
+      sum += pixels.at(x, y);
+      ++count;
+    }
+    progress.Update();
+  }
+  progress.Finish();
+  for (const point3D_t point3D_id : reconstruction->Point3DIds()) {
+    const auto it = sums.find(point3D_id);
+    if (it == sums.end() || it->second.second == 0) continue;
+    const auto value = static_cast<uint8_t>(
+        std::clamp(std::lround(it->second.first / it->second.second), 0L, 255L));
+    reconstruction->GetPoint3D(point3D_id).color = Vector3ub::Constant(value);
+  }
+}
+
+}  // namespace
+
+std::string ViosfmVersion() {
+  return VIOSFM_VERSION;
+}
+
+VioFrame ParseVioFrame(const std::string& name) {
+  const std::string lower = ToLower(name);
+  if (lower == "body") return VioFrame::kBody;
+  if (lower == "cam") return VioFrame::kCam;
+  throw InputError("VIO frame '" + name + "': expected 'body' or 'cam'");
+}
+
+std::string VioFrameName(VioFrame frame) {
+  return frame == VioFrame::kBody ? "body" : "cam";
+}
+
+std::string PipelineOptions::Validate() const {
+  if (dataset.empty()) return "dataset: a dataset folder is required";
+  if (output_folder.empty()) return "output_folder: an output folder is required";
+  if (max_vio_time_difference_ns <= 0) return "max_vio_time_difference_ns must be positive";
+  if (num_threads < 1) return "num_threads must be >= 1";
+  if (const std::string error = frame_selection.Validate(); !error.empty()) {
+    return "frame_selection." + error;
+  }
+  if (const std::string error = EffectiveSiftOptions().Validate(); !error.empty()) {
+    return "sift." + error;
+  }
+  if (const std::string error = EffectiveVerificationOptions().Validate(); !error.empty()) {
+    return "verification." + error;
+  }
+  if (const std::string error = EffectiveMapperOptions().Validate(); !error.empty()) {
+    return "mapper." + error;
+  }
+  return "";
+}
+
+SiftOptions PipelineOptions::EffectiveSiftOptions() const {
+  SiftOptions options = sift;
+  options.num_threads = num_threads;
+  return options;
+}
+
+VerificationOptions PipelineOptions::EffectiveVerificationOptions() const {
+  VerificationOptions options = verification;
+  options.num_threads = num_threads;
+  options.retrieval.num_threads = num_threads;
+  options.seed = seed;
+  options.show_progress = show_progress;
+  options.max_pose_time_difference_ns = max_vio_time_difference_ns;
+  return options;
+}
+
+BatchedMapperOptions PipelineOptions::EffectiveMapperOptions() const {
+  BatchedMapperOptions options = mapper;
+  options.num_threads = num_threads;
+  options.ba.num_threads = num_threads;
+  options.show_progress = show_progress;
+  return options;
+}
+
+std::vector<std::pair<std::string, std::string>> PipelineOptions::ToKeyValues() const {
+  std::vector<std::pair<std::string, std::string>> values = {
+      {"dataset", dataset.string()},
+      {"image_folder.timestamps_file", image_folder.timestamps_file.string()},
+      {"image_folder.camera_yaml", image_folder.camera_yaml.string()},
+      {"output_folder", output_folder.string()},
+      {"vio.source", vio_source ? "function" : "file"},
+      {"vio.trajectory", vio_trajectory.string()},
+      {"vio.format", TrajectoryFormatName(vio_format)},
+      {"vio.frame", VioFrameName(vio_frame)},
+      {"vio.max_time_difference_ns", Text(int64_t{max_vio_time_difference_ns})},
+      {"frame_selection.trim_static", Text(frame_selection.trim_static)},
+      {"frame_selection.static_source", StaticSourceName(frame_selection.static_source)},
+      {"frame_selection.static_window_s", Text(frame_selection.static_window_s)},
+      {"frame_selection.imu_lowpass_s", Text(frame_selection.imu_lowpass_s)},
+      {"frame_selection.max_static_gyro_stddev_rad_s",
+       Text(frame_selection.max_static_gyro_stddev_rad_s)},
+      {"frame_selection.max_static_gyro_mean_rad_s",
+       Text(frame_selection.max_static_gyro_mean_rad_s)},
+      {"frame_selection.max_static_accel_stddev_m_s2",
+       Text(frame_selection.max_static_accel_stddev_m_s2)},
+      {"frame_selection.max_static_translation_m", Text(frame_selection.max_static_translation_m)},
+      {"frame_selection.max_static_rotation_rad", Text(frame_selection.max_static_rotation_rad)},
+      {"frame_selection.target_rate_hz", Text(frame_selection.target_rate_hz)},
+  };
+  const SiftOptions s = EffectiveSiftOptions();
+  values.insert(values.end(), {
+                                  {"sift.max_num_features", Text(s.max_num_features)},
+                                  {"sift.root_sift", Text(s.root_sift)},
+                                  {"sift.peak_threshold", Text(s.peak_threshold)},
+                                  {"sift.edge_threshold", Text(s.edge_threshold)},
+                                  {"sift.num_octave_layers", Text(s.num_octave_layers)},
+                                  {"sift.num_threads", Text(s.num_threads)},
+                              });
+  for (const auto& [key, value] : EffectiveVerificationOptions().ToKeyValues()) {
+    values.emplace_back("verification." + key, value);
+  }
+  const BatchedMapperOptions m = EffectiveMapperOptions();
+  values.insert(
+      values.end(),
+      {
+          {"mapper.batch_size", Text(m.batch_size)},
+          {"mapper.tracks.min_track_length", Text(m.tracks.min_track_length)},
+          {"mapper.tracks.conflict_policy",
+           m.tracks.conflict_policy == TrackConflictPolicy::kSplit ? "split" : "drop"},
+          {"mapper.triangulation.min_angle_deg", Text(m.triangulation.min_angle_deg)},
+          {"mapper.triangulation.max_reprojection_error_px",
+           Text(m.triangulation.max_reprojection_error_px)},
+          {"mapper.triangulation.refine", Text(m.triangulation.refine)},
+          {"mapper.triangulation.max_refine_iterations",
+           Text(m.triangulation.max_refine_iterations)},
+          {"mapper.ba.loss_scale_px", Text(m.ba.loss_scale_px)},
+          {"mapper.ba.refine_intrinsics", Text(m.ba.refine_intrinsics)},
+          {"mapper.ba.refine_principal_point", Text(m.ba.refine_principal_point)},
+          {"mapper.ba.use_relative_pose_priors", Text(m.ba.use_relative_pose_priors)},
+          {"mapper.ba.prior_alpha", Text(m.ba.prior_alpha)},
+          {"mapper.ba.prior_beta", Text(m.ba.prior_beta)},
+          {"mapper.ba.prior_rotation_sigma_rad", Text(m.ba.prior_rotation_sigma_rad)},
+          {"mapper.ba.prior_translation_sigma_m", Text(m.ba.prior_translation_sigma_m)},
+          {"mapper.ba.max_num_iterations", Text(m.ba.max_num_iterations)},
+          {"mapper.ba.num_threads", Text(m.ba.num_threads)},
+          {"mapper.ba.max_images_for_sparse_schur", Text(m.ba.max_images_for_sparse_schur)},
+          {"mapper.ba.function_tolerance", Text(m.ba.function_tolerance)},
+          {"mapper.ba.gradient_tolerance", Text(m.ba.gradient_tolerance)},
+          {"mapper.ba.parameter_tolerance", Text(m.ba.parameter_tolerance)},
+          {"mapper.filter.max_reprojection_error_px", Text(m.filter.max_reprojection_error_px)},
+          {"mapper.filter.min_triangulation_angle_deg", Text(m.filter.min_triangulation_angle_deg)},
+          {"mapper.retriangulate", Text(m.retriangulate)},
+          {"mapper.ba_after_each_batch", Text(m.ba_after_each_batch)},
+          {"mapper.final_global_ba", Text(m.final_global_ba)},
+          {"mapper.num_threads", Text(m.num_threads)},
+          {"num_threads", Text(num_threads)},
+          {"seed", Text(seed)},
+          {"show_progress", Text(show_progress)},
+      });
+  return values;
+}
+
+std::string PipelineSummary::ToString() const {
+  std::ostringstream out;
+  out << std::fixed << std::setprecision(3);
+  out << "frames: " << num_frames_in << " in, " << num_frames_selected << " selected, "
+      << num_frames_registered << " registered\n";
+  out << "pairs: " << verification.num_pairs << " candidates, " << verification.num_accepted
+      << " accepted, " << verification.num_vio_rejected << " rejected by VIO, "
+      << verification.num_ransac_rejected << " by RANSAC, " << verification.num_no_matches
+      << " without matches\n";
+  out << "points: " << num_points << ", observations " << num_observations << ", mean track length "
+      << mean_track_length << ", mean reprojection error " << mean_reprojection_error_px << " px\n";
+  if (evaluation) {
+    out << "ATE (Sim(3), " << evaluation->num_poses << " poses): RMSE " << evaluation->ate_rmse_m
+        << " m, median " << evaluation->ate_median_m << " m; input VIO RMSE "
+        << evaluation->vio_ate_rmse_m << " m, median " << evaluation->vio_ate_median_m << " m\n";
+  } else {
+    out << "ATE: no ground truth\n";
+  }
+  out << std::setprecision(1) << "time: " << total_seconds << " s (";
+  for (size_t i = 0; i < stages.size(); ++i) {
+    out << (i > 0 ? ", " : "") << stages[i].name << " " << stages[i].seconds;
+  }
+  out << "), peak memory " << peak_memory_mb << " MB\n";
+  out << "output: " << output_folder.string()
+      << " (model/, model_txt/, points.ply, trajectory_body.tum, summary.json)";
+  return out.str();
+}
+
+std::string PipelineSummaryToJson(const PipelineSummary& s) {
+  ordered_json json;
+  json["viosfm_version"] = ViosfmVersion();
+  json["dataset"] = s.dataset;
+  json["started_utc"] = s.started_utc;
+  json["frames"] = {{"in", s.num_frames_in},
+                    {"selected", s.num_frames_selected},
+                    {"registered", s.num_frames_registered}};
+  json["pairs"] = {{"candidates", s.verification.num_pairs},
+                   {"accepted", s.verification.num_accepted},
+                   {"vio_rejected", s.verification.num_vio_rejected},
+                   {"ransac_rejected", s.verification.num_ransac_rejected},
+                   {"no_matches", s.verification.num_no_matches}};
+  json["points"] = s.num_points;
+  json["observations"] = s.num_observations;
+  json["mean_track_length"] = s.mean_track_length;
+  json["mean_reprojection_error_px"] = s.mean_reprojection_error_px;
+  ordered_json batches = ordered_json::array();
+  for (const MapperBatchStatistics& batch : s.mapper.batches) {
+    batches.push_back({{"index", batch.batch_index},
+                       {"images", batch.num_images},
+                       {"registered_total", batch.num_registered_total},
+                       {"points_total", batch.num_points_total},
+                       {"mean_reprojection_error_px", batch.mean_reprojection_error_px},
+                       {"seconds_ba", batch.seconds_ba}});
+  }
+  json["batches"] = batches;
+  ordered_json stages = ordered_json::array();
+  for (const PipelineStageTime& stage : s.stages) {
+    stages.push_back({{"name", stage.name}, {"seconds", stage.seconds}});
+  }
+  json["stages"] = stages;
+  json["total_seconds"] = s.total_seconds;
+  json["peak_memory_mb"] = s.peak_memory_mb;
+  if (s.evaluation) json["eval"] = StatsJson(*s.evaluation);
+  json["options_file"] = "options.json";
+  return json.dump(2);
+}
+
+Sequence ReadPipelineDataset(const fs::path& dataset, const ImageFolderOptions& image_folder) {
+  if (!fs::is_directory(dataset)) {
+    throw InputError(dataset.string(), 0, "dataset folder not found");
+  }
+  Sequence sequence;
+  if (IsEurocDataset(dataset)) {
+    EurocReadOptions options;
+    options.require_imu = false;  // the IMU only helps frame selection
+    sequence = ReadEurocDataset(dataset, options);
+  } else {
+    if (const std::string error = image_folder.Validate(); !error.empty()) {
+      throw InputError(dataset.string(), 0,
+                       "not a EuRoC dataset (no mav0/), so read as an image folder: " + error +
+                           " (give the camera)");
+    }
+    sequence = ReadImageFolder(dataset, image_folder);
+  }
+  if (sequence.images.empty()) {
+    throw InputError(dataset.string(), 0, "the dataset has no images");
+  }
+  return sequence;
+}
+
+Trajectory LoadVioTrajectory(const Sequence& sequence, const PipelineOptions& options) {
+  if (options.vio_source) {
+    Trajectory vio = options.vio_source(sequence);
+    if (vio.empty()) throw InputError("the VIO gave no poses for " + sequence.root.string());
+    return vio;
+  }
+  if (options.vio_trajectory.empty()) {
+    throw InputError(
+        "no VIO poses: pass --vio-trajectory FILE (a TUM trajectory from any VIO); viosfm's own "
+        "VIO is not wired in yet");
+  }
+  const std::string path = options.vio_trajectory.string();
+  if (!fs::is_regular_file(options.vio_trajectory)) {
+    throw InputError(path, 0, "VIO trajectory file not found");
+  }
+  Trajectory vio = ReadTrajectory(options.vio_trajectory, options.vio_format);
+  if (!vio.has_timestamps) throw InputError(path, 0, "the VIO trajectory needs timestamps");
+  if (vio.empty()) throw InputError(path, 0, "the VIO trajectory has no poses");
+  if (options.vio_frame == VioFrame::kCam) {
+    vio = CameraToBodyTrajectory(vio, sequence.rig.body_from_cam);
+  }
+  return vio;
+}
+
+PipelineSummary RunPipeline(const PipelineOptions& options) {
+  if (const std::string error = options.Validate(); !error.empty()) {
+    throw InputError("invalid run options: " + error);
+  }
+  Timer total_timer;
+  PipelineSummary summary;
+  summary.started_utc = UtcNow();
+  summary.dataset = options.dataset.string();
+  summary.output_folder = options.output_folder;
+  StageClock clock(&summary.stages);
+  const fs::path out = options.output_folder;
+  const std::string vio_name =
+      options.vio_source ? std::string("the VIO") : options.vio_trajectory.string();
+
+  // 1. Dataset.
+  clock.Begin("read_dataset");
+  const Sequence sequence = ReadPipelineDataset(options.dataset, options.image_folder);
+  summary.num_frames_in = sequence.images.size();
+  VIOSFM_LOG(INFO) << "run: " << sequence.images.size() << " images"
+                   << (sequence.has_imu() ? ", IMU" : "")
+                   << (sequence.has_ground_truth() ? ", ground truth" : "") << " in "
+                   << options.dataset.string();
+  clock.End();
+
+  // 2. VIO trajectory of the whole sequence.
+  clock.Begin("vio");
+  const Trajectory vio = LoadVioTrajectory(sequence, options);
+  VIOSFM_LOG(INFO) << "run: " << vio.size() << " VIO poses over "
+                   << SpanText(vio.poses.front().timestamp_ns, vio.poses.back().timestamp_ns);
+  clock.End();
+
+  // 3. Frames: static trimming, downsampling, and a VIO pose for each.
+  clock.Begin("select_frames");
+  summary.frame_selection = SelectFrames(sequence, options.frame_selection, &vio);
+  if (!summary.frame_selection.ok()) {
+    throw InputError(options.dataset.string(), 0,
+                     "no frames to reconstruct: " + summary.frame_selection.message);
+  }
+  Sequence selected = sequence;
+  selected.images.clear();
+  Trajectory vio_at_frames;  // world_from_body at the selected frames' stamps
+  size_t num_without_pose = 0;
+  for (const size_t index : summary.frame_selection.kept) {
+    const SequenceImage& image = sequence.images[index];
+    const int64_t pose_index =
+        NearestPoseIndex(vio, image.timestamp_ns, options.max_vio_time_difference_ns);
+    if (pose_index < 0) {
+      ++num_without_pose;
+      continue;
+    }
+    selected.images.push_back(image);
+    vio_at_frames.poses.push_back(
+        {image.timestamp_ns, vio.poses[static_cast<size_t>(pose_index)].world_from_frame});
+  }
+  if (selected.images.size() < 2) {
+    throw InputError(
+        vio_name, 0,
+        "the VIO poses " + SpanText(vio.poses.front().timestamp_ns, vio.poses.back().timestamp_ns) +
+            " do not overlap the selected images " +
+            SpanText(sequence.images.front().timestamp_ns, sequence.images.back().timestamp_ns) +
+            " in time: " + std::to_string(selected.images.size()) + " of " +
+            std::to_string(summary.frame_selection.kept.size()) + " images have a pose within " +
+            FormatNsAsSeconds(options.max_vio_time_difference_ns, 3) +
+            " s (at least 2 are needed)");
+  }
+  if (num_without_pose > 0) {
+    VIOSFM_LOG(WARNING) << "run: " << num_without_pose
+                        << " selected frames have no VIO pose within "
+                        << FormatNsAsSeconds(options.max_vio_time_difference_ns, 3)
+                        << " s and are left out";
+  }
+  summary.num_frames_selected = selected.images.size();
+  VIOSFM_LOG(INFO) << "run: " << summary.frame_selection.message << "; " << selected.images.size()
+                   << " frames with a VIO pose";
+  clock.End();
+
+  // 4. Features into OUT/database.db (resumable).
+  clock.Begin("features");
+  fs::create_directories(out);
+  const std::vector<std::pair<std::string, std::string>> key_values = options.ToKeyValues();
+  CheckResumable(out, key_values);
+  // A summary.json from an earlier run would mark this unfinished folder complete.
+  fs::remove(out / "summary.json");
+  {
+    ordered_json json = ordered_json::object();
+    for (const auto& [key, value] : key_values) json[key] = value;
+    WriteJsonFile(out / "options.json", json.dump(2));
+  }
+  ColmapDatabase database = ColmapDatabase::Open(out / "database.db");
+  summary.features =
+      ExtractFeatures(selected, options.EffectiveSiftOptions(), &database, options.show_progress);
+  VIOSFM_LOG(INFO) << "run: features " << summary.features.ToString();
+  clock.End();
+
+  // 5. Pairs and the two-step verification (resumable).
+  clock.Begin("verification");
+  const VerificationResult verification =
+      RunVerification(selected, vio, &database, options.EffectiveVerificationOptions());
+  summary.verification = verification.summary;
+  VIOSFM_LOG(INFO) << "run: verification " << FormatVerificationSummary(verification.summary);
+  clock.End();
+
+  // 6. Mapper input: images, keypoints, VIO camera poses, inlier matches.
+  clock.Begin("load_matches");
+  BatchedMapperInput input;
+  std::unordered_map<image_t, fs::path> image_paths;
+  std::unordered_map<image_t, timestamp_ns_t> image_stamps;
+  std::map<camera_t, bool> camera_ids;
+  for (size_t i = 0; i < selected.images.size(); ++i) {
+    const SequenceImage& image = selected.images[i];
+    const std::string name = DatabaseImageName(image);
+    const std::optional<DatabaseImage> row = database.ReadImageWithName(name);
+    VIOSFM_CHECK(row.has_value()) << "image " << name << " missing after feature extraction";
+    MapperImage mapper_image;
+    mapper_image.image_id = row->image_id;
+    mapper_image.camera_id = row->camera_id;
+    mapper_image.name = name;
+    mapper_image.timestamp_ns = image.timestamp_ns;
+    mapper_image.keypoints = database.ReadKeypoints(row->image_id);
+    mapper_image.vio_cam_from_world =
+        (vio_at_frames.poses[i].world_from_frame * selected.rig.body_from_cam).Inverse();
+    image_paths.emplace(row->image_id, image.path);
+    image_stamps.emplace(row->image_id, image.timestamp_ns);
+    camera_ids[row->camera_id] = true;
+    input.images.push_back(std::move(mapper_image));
+  }
+  for (const auto& [camera_id, unused] : camera_ids) {
+    input.cameras.push_back(database.ReadCamera(camera_id));
+  }
+  size_t num_inlier_matches = 0;
+  for (const PairDecision& decision : verification.decisions) {
+    if (!decision.accepted) continue;
+    ImagePairMatches pair;
+    pair.image_id1 = decision.image_id1;
+    pair.image_id2 = decision.image_id2;
+    pair.matches =
+        database.ReadTwoViewGeometry(decision.image_id1, decision.image_id2).inlier_matches;
+    num_inlier_matches += pair.matches.size();
+    input.verified_pairs.push_back(std::move(pair));
+  }
+  VIOSFM_LOG(INFO) << "run: " << input.verified_pairs.size() << " accepted pairs, "
+                   << num_inlier_matches << " inlier matches";
+  clock.End();
+
+  // 7. Batched incremental mapping.
+  clock.Begin("mapper");
+  Reconstruction reconstruction =
+      RunBatchedMapper(input, options.EffectiveMapperOptions(), &summary.mapper);
+  VIOSFM_LOG(INFO) << "run: mapper " << summary.mapper.ToString();
+  summary.num_frames_registered = reconstruction.NumRegImages();
+  summary.num_points = reconstruction.NumPoints3D();
+  summary.num_observations = reconstruction.ComputeNumObservations();
+  summary.mean_track_length = reconstruction.ComputeMeanTrackLength();
+  summary.mean_reprojection_error_px = UpdateReprojectionErrors(&reconstruction);
+  clock.End();
+
+  // 8. Point colours.
+  clock.Begin("colors");
+  ColorPoints(image_paths, options.show_progress, &reconstruction);
+  clock.End();
+
+  // 9. Trajectories and evaluation.
+  clock.Begin("evaluation");
+  Trajectory estimated_cam;   // world_from_cam of the registered frames
+  Trajectory estimated_body;  // world_from_body
+  Trajectory vio_registered;  // the input VIO at the registered frames
+  const Rigid3d cam_from_body = selected.rig.body_from_cam.Inverse();
+  for (size_t i = 0; i < input.images.size(); ++i) {
+    const image_t image_id = input.images[i].image_id;
+    if (!reconstruction.ExistsImage(image_id)) continue;
+    const Image& image = reconstruction.GetImage(image_id);
+    if (!image.registered) continue;
+    const timestamp_ns_t stamp = image_stamps.at(image_id);
+    const Rigid3d world_from_cam = image.cam_from_world.Inverse();
+    estimated_cam.poses.push_back({stamp, world_from_cam});
+    estimated_body.poses.push_back({stamp, world_from_cam * cam_from_body});
+    vio_registered.poses.push_back(vio_at_frames.poses[i]);
+  }
+  Trajectory ground_truth_at_frames;
+  std::optional<EvaluationResult> evaluation;
+  std::optional<EvaluationResult> evaluation_vio;
+  EvaluationOptions eval_options;
+  eval_options.alignment = AlignmentMode::kSim3;
+  eval_options.association = AssociationMethod::kNearest;
+  if (sequence.has_ground_truth()) {
+    const Trajectory ground_truth = GroundTruthBodyTrajectory(sequence);
+    for (const SequenceImage& image : selected.images) {
+      if (const std::optional<Rigid3d> pose =
+              InterpolatePose(ground_truth, image.timestamp_ns, kMaxGroundTruthGapNs)) {
+        ground_truth_at_frames.poses.push_back({image.timestamp_ns, *pose});
+      }
+    }
+    if (ground_truth_at_frames.size() >= 3 && estimated_body.size() >= 3) {
+      try {
+        evaluation = EvaluateTrajectories(estimated_body, ground_truth_at_frames, eval_options);
+        evaluation_vio = EvaluateTrajectories(vio_registered, ground_truth_at_frames, eval_options);
+      } catch (const InputError& error) {
+        // A degenerate alignment (e.g. frames on a line) on valid input.
+        VIOSFM_LOG(WARNING) << "run: no evaluation: " << error.what();
+        evaluation.reset();
+        evaluation_vio.reset();
+      }
+    } else {
+      VIOSFM_LOG(WARNING) << "run: no evaluation: " << ground_truth_at_frames.size()
+                          << " frames with ground truth, " << estimated_body.size()
+                          << " registered (3 of each needed)";
+    }
+  }
+  if (evaluation && evaluation_vio) {
+    PipelineEvaluation e;
+    e.ate_rmse_m = evaluation->ate_translation_m.rmse;
+    e.ate_median_m = evaluation->ate_translation_m.median;
+    e.ate_mean_m = evaluation->ate_translation_m.mean;
+    e.ate_max_m = evaluation->ate_translation_m.max;
+    e.vio_ate_rmse_m = evaluation_vio->ate_translation_m.rmse;
+    e.vio_ate_median_m = evaluation_vio->ate_translation_m.median;
+    e.num_poses = evaluation->pairs.size();
+    summary.evaluation = e;
+  }
+  clock.End();
+
+  // 10. Outputs; summary.json last.
+  clock.Begin("write_outputs");
+  const fs::path verification_folder = out / "verification";
+  fs::create_directories(verification_folder);
+  WritePairDecisionsCsv(verification_folder / "pairs.csv", verification.decisions);
+  WriteVerificationJson(verification_folder / "verification.json", verification.summary,
+                        verification.decisions);
+  WriteColmapModelFolder(out / "model", reconstruction, ColmapModelFormat::kBinary);
+  WriteColmapModelFolder(out / "model_txt", reconstruction, ColmapModelFormat::kText);
+  WritePly(out / "points.ply", reconstruction);
+  WriteTumTrajectory(out / "trajectory_cam.tum", estimated_cam);
+  WriteTumTrajectory(out / "trajectory_body.tum", estimated_body);
+  WriteTumTrajectory(out / "vio_body.tum", vio_at_frames);
+  if (!ground_truth_at_frames.empty()) {
+    WriteTumTrajectory(out / "groundtruth_body.tum", ground_truth_at_frames);
+  } else {
+    fs::remove(out / "groundtruth_body.tum");
+  }
+  if (evaluation && evaluation_vio) {
+    const std::string gt_path = (out / "groundtruth_body.tum").string();
+    WriteEvaluationJson(out / "eval.json", *evaluation, eval_options,
+                        {(out / "trajectory_body.tum").string(), "tum", gt_path, "tum"});
+    WriteEvaluationJson(out / "eval_vio.json", *evaluation_vio, eval_options,
+                        {(out / "vio_body.tum").string(), "tum", gt_path, "tum"});
+  } else {
+    fs::remove(out / "eval.json");
+    fs::remove(out / "eval_vio.json");
+  }
+  clock.End();
+
+  summary.total_seconds = total_timer.ElapsedSeconds();
+  summary.peak_memory_mb = PeakMemoryMb();
+  WriteJsonFile(out / "summary.json", PipelineSummaryToJson(summary));
+  return summary;
+}
+
+}  // namespace viosfm

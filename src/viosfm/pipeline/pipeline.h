@@ -1,0 +1,188 @@
+// The end-to-end VIO-aided reconstruction of one sequence (`viosfm run`),
+// the paper's pipeline (its Fig. "overview"): VIO poses, frame selection,
+// features, two-step VIO-aided verification, batched incremental mapping with
+// relative-pose-constrained bundle adjustment, then evaluation and outputs.
+//
+// Stages (each timed, reported in summary.json "stages"):
+//  1. read_dataset   EuRoC ASL folder (mav0/) or an image folder;
+//  2. vio            the VIO trajectory (world_from_body) of the sequence,
+//                    from PipelineOptions::vio_source if set, else from the
+//                    file vio_trajectory (see LoadVioTrajectory);
+//  3. select_frames  static start/end trimming and downsampling to
+//                    target_rate_hz (matching/frame_selection.h); frames
+//                    without a VIO pose within max_vio_time_difference_ns are
+//                    dropped;
+//  4. features       SIFT into OUT/database.db (resumable);
+//  5. verification   pairs, matching, VIO check and RANSAC (resumable);
+//  6. load_matches   the inlier matches of the accepted pairs;
+//  7. mapper         sfm/batched_mapper.h;
+//  8. colors         each point's colour: the mean over its observations of
+//                    the image value at the keypoint (grey images give grey);
+//  9. evaluation     with ground truth only: Sim(3) ATE of the estimated body
+//                    trajectory and of the input VIO on the same frames;
+// 10. write_outputs  the files below.
+//
+// Output folder (every file written atomically; summary.json last, so a
+// folder holding summary.json is complete):
+//   OUT/options.json                 every option, name -> value text
+//   OUT/database.db                  COLMAP database (features, matches, geometries)
+//   OUT/verification/pairs.csv, verification.json
+//   OUT/model/                       COLMAP binary model (cameras, images, points3D .bin)
+//   OUT/model_txt/                   the same as COLMAP text
+//   OUT/points.ply                   coloured points
+//   OUT/trajectory_cam.tum           estimated world_from_cam of the registered frames
+//   OUT/trajectory_body.tum          estimated world_from_body of the registered frames
+//   OUT/vio_body.tum                 the input VIO world_from_body of the selected frames
+//   OUT/groundtruth_body.tum         ground truth at the selected frames (if present)
+//   OUT/eval.json, OUT/eval_vio.json eval/report.h JSON (if ground truth)
+//   OUT/summary.json                 see PipelineSummaryToJson
+//
+// Resume: a re-run on the same folder reuses the stored features and pair
+// verifications. options.json records the options of the run that filled
+// the database; a re-run whose feature or verification options differ is an
+// InputError (the stored results would not match the options).
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "viosfm/features/feature_extraction.h"
+#include "viosfm/features/sift.h"
+#include "viosfm/io/image_folder.h"
+#include "viosfm/io/sequence.h"
+#include "viosfm/io/trajectory_io.h"
+#include "viosfm/matching/frame_selection.h"
+#include "viosfm/matching/verification_driver.h"
+#include "viosfm/scene/trajectory.h"
+#include "viosfm/sfm/batched_mapper.h"
+#include "viosfm/util/timestamp.h"
+
+namespace viosfm {
+
+// The version written to summary.json.
+std::string ViosfmVersion();
+
+// Which moving frame a VIO trajectory file gives.
+enum class VioFrame { kBody, kCam };
+// "body", "cam" (case-insensitive); InputError otherwise.
+VioFrame ParseVioFrame(const std::string& name);
+std::string VioFrameName(VioFrame frame);
+
+// A VIO run over a whole sequence, returning world_from_body poses with
+// stamps (the hook for viosfm's own VIO).
+using VioSource = std::function<Trajectory(const Sequence& sequence)>;
+
+struct PipelineOptions {
+  // EuRoC dataset (the folder containing mav0/, or mav0 itself) or a folder
+  // of images (then image_folder must give the camera). Required.
+  std::filesystem::path dataset;
+  // Used only when `dataset` is not a EuRoC folder.
+  ImageFolderOptions image_folder;
+  // The output folder (created if missing). Required.
+  std::filesystem::path output_folder;
+
+  // VIO poses. When vio_source is set it is called on the sequence and the
+  // file options are ignored; otherwise the file vio_trajectory is read.
+  VioSource vio_source;
+  std::filesystem::path vio_trajectory;                  // trajectory file; default none
+  TrajectoryFormat vio_format = TrajectoryFormat::kTum;  // default TUM
+  // The frame of the file's poses; kCam poses are converted with the
+  // sequence's body_from_cam. Default kBody.
+  VioFrame vio_frame = VioFrame::kBody;
+  // Largest gap between an image stamp and the VIO pose used for it (ns).
+  // Default 5 ms.
+  timestamp_ns_t max_vio_time_difference_ns = 5'000'000;
+
+  // Static trimming and downsampling (default: trimmed, 10 Hz, the paper).
+  FrameSelectionOptions frame_selection;
+  // SIFT (default 8192 features, RootSIFT).
+  SiftOptions sift;
+  // Pairs (N1 40, N2 30), VIO prior (T_EE 20 px, ratio 0.5), RANSAC.
+  VerificationOptions verification;
+  // Batched mapper (k = 50, relative-pose priors on).
+  BatchedMapperOptions mapper;
+
+  // Worker threads of every stage (replaces the stages' own num_threads),
+  // >= 1. Default 2.
+  int num_threads = 2;
+  // Seed of every random choice (RANSAC, vocabulary training). Default 0.
+  uint64_t seed = 0;
+  // Progress bars. Default true.
+  bool show_progress = true;
+
+  std::string Validate() const;  // empty if valid, else names the bad field
+  bool Check() const { return Validate().empty(); }
+  // Every option as (name, value) text, in a fixed order (options.json). The
+  // stage options carry the thread count, seed and progress set here.
+  std::vector<std::pair<std::string, std::string>> ToKeyValues() const;
+  // The stage options with num_threads, seed, show_progress and the VIO
+  // time difference applied.
+  SiftOptions EffectiveSiftOptions() const;
+  VerificationOptions EffectiveVerificationOptions() const;
+  BatchedMapperOptions EffectiveMapperOptions() const;
+};
+
+struct PipelineStageTime {
+  std::string name;
+  double seconds = 0.0;
+};
+
+// Sim(3)-aligned ATE against the ground truth (metres).
+struct PipelineEvaluation {
+  double ate_rmse_m = 0.0;
+  double ate_median_m = 0.0;
+  double ate_mean_m = 0.0;
+  double ate_max_m = 0.0;
+  double vio_ate_rmse_m = 0.0;  // the input VIO on the same frames
+  double vio_ate_median_m = 0.0;
+  size_t num_poses = 0;  // associated poses
+};
+
+struct PipelineSummary {
+  std::string dataset;
+  std::filesystem::path output_folder;
+  std::string started_utc;  // "2026-11-21T07:38:16Z"
+  size_t num_frames_in = 0;
+  size_t num_frames_selected = 0;  // selected and with a VIO pose
+  size_t num_frames_registered = 0;
+  FrameSelection frame_selection;
+  FeatureExtractionSummary features;
+  VerificationSummary verification;
+  BatchedMapperSummary mapper;
+  size_t num_points = 0;
+  size_t num_observations = 0;
+  double mean_track_length = 0.0;
+  double mean_reprojection_error_px = 0.0;
+  std::optional<PipelineEvaluation> evaluation;  // with ground truth only
+  std::vector<PipelineStageTime> stages;
+  double total_seconds = 0.0;
+  double peak_memory_mb = 0.0;  // getrusage ru_maxrss
+
+  // A few lines for the terminal.
+  std::string ToString() const;
+};
+
+// summary.json's document (see the top of this file for the keys).
+std::string PipelineSummaryToJson(const PipelineSummary& summary);
+
+// The VIO trajectory (world_from_body, stamped) of the sequence, as the
+// options say: vio_source, else the file. Throws InputError naming the file
+// when none is given, it cannot be read, has no stamps or no poses.
+Trajectory LoadVioTrajectory(const Sequence& sequence, const PipelineOptions& options);
+
+// Reads a dataset folder: EuRoC if it holds mav0/ (or is mav0), else an
+// image folder read with `image_folder`. Throws InputError naming the folder.
+Sequence ReadPipelineDataset(const std::filesystem::path& dataset,
+                             const ImageFolderOptions& image_folder);
+
+// Runs the pipeline (see the top of this file). Throws InputError for invalid
+// options, unreadable or empty input, a VIO trajectory that does not overlap
+// the images in time, a sequence without moving frames, or options that
+// differ from those of the database being resumed.
+PipelineSummary RunPipeline(const PipelineOptions& options);
+
+}  // namespace viosfm

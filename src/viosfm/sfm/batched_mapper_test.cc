@@ -1,0 +1,477 @@
+#include "viosfm/sfm/batched_mapper.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "viosfm/geometry/alignment.h"
+#include "viosfm/sfm/synthetic_test_scene.h"
+#include "viosfm/util/errors.h"
+
+namespace viosfm {
+namespace {
+
+using testing::ApplyVioDrift;
+using testing::CenterRmse;
+using ::testing::HasSubstr;
+using testing::MakeSyntheticSequence;
+using testing::SyntheticSequence;
+using testing::SyntheticSequenceOptions;
+
+BatchedMapperOptions QuietOptions(int batch_size) {
+  BatchedMapperOptions options;
+  options.batch_size = batch_size;
+  options.show_progress = false;
+  return options;
+}
+
+// A short corridor sequence: ~150 keypoints a frame, 0.5 px noise.
+SyntheticSequenceOptions SmallSequenceOptions(int num_frames, uint64_t seed) {
+  SyntheticSequenceOptions options;
+  options.num_frames = num_frames;
+  options.points_per_m = 25.0;
+  options.seed = seed;
+  return options;
+}
+
+// Poses of images 1..n; CHECKs that all are registered.
+std::vector<Rigid3d> RegisteredPoses(const Reconstruction& reconstruction, size_t n) {
+  std::vector<Rigid3d> poses;
+  for (size_t i = 0; i < n; ++i) {
+    const Image& image = reconstruction.GetImage(static_cast<image_t>(i + 1));
+    VIOSFM_CHECK(image.registered) << "image " << i + 1 << " not registered";
+    poses.push_back(image.cam_from_world);
+  }
+  return poses;
+}
+
+std::vector<Rigid3d> VioPoses(const BatchedMapperInput& input) {
+  std::vector<Rigid3d> poses;
+  for (const MapperImage& image : input.images) poses.push_back(image.vio_cam_from_world);
+  return poses;
+}
+
+double MaxCenterError(const std::vector<Rigid3d>& truth, const std::vector<Rigid3d>& poses) {
+  double max_error = 0.0;
+  for (size_t i = 0; i < truth.size(); ++i) {
+    max_error =
+        std::max(max_error, (ProjectionCenter(truth[i]) - ProjectionCenter(poses[i])).norm());
+  }
+  return max_error;
+}
+
+double MaxRotationErrorRad(const std::vector<Rigid3d>& truth, const std::vector<Rigid3d>& poses) {
+  double max_error = 0.0;
+  for (size_t i = 0; i < truth.size(); ++i) {
+    max_error = std::max(max_error, truth[i].rotation.angularDistance(poses[i].rotation));
+  }
+  return max_error;
+}
+
+// The camera-centre RMSE after the Sim(3) (Umeyama) that best maps the
+// estimated centres onto the true ones, and the scale of the estimate
+// relative to the truth (1 / that Sim(3)'s scale; 1 = metric).
+struct Sim3Comparison {
+  double rmse_m = 0.0;
+  double scale = 0.0;
+};
+
+Sim3Comparison CompareSim3(const std::vector<Rigid3d>& truth, const std::vector<Rigid3d>& poses) {
+  std::vector<Eigen::Vector3d> estimated;
+  std::vector<Eigen::Vector3d> reference;
+  for (size_t i = 0; i < truth.size(); ++i) {
+    estimated.push_back(ProjectionCenter(poses[i]));
+    reference.push_back(ProjectionCenter(truth[i]));
+  }
+  const std::optional<Sim3d> reference_from_estimated =
+      AlignPointsUmeyama(estimated, reference, true);
+  VIOSFM_CHECK(reference_from_estimated.has_value());
+  double sum = 0.0;
+  for (size_t i = 0; i < truth.size(); ++i) {
+    const Eigen::Vector3d aligned =
+        reference_from_estimated->scale * (reference_from_estimated->rotation * estimated[i]) +
+        reference_from_estimated->translation;
+    sum += (aligned - reference[i]).squaredNorm();
+  }
+  return {std::sqrt(sum / static_cast<double>(truth.size())),
+          1.0 / reference_from_estimated->scale};
+}
+
+// The index of the true point of a keypoint.
+int TruePoint(const SyntheticSequence& sequence, const TrackElement& element) {
+  return sequence.point_of_keypoint[element.image_id - 1][element.point2D_idx];
+}
+
+// Mean distance (m) of the points to the true point of their first
+// observation.
+double MeanPointError(const Reconstruction& reconstruction, const SyntheticSequence& sequence) {
+  double sum = 0.0;
+  for (const auto& [point3D_id, point3D] : reconstruction.Points3D()) {
+    sum += (point3D.xyz - sequence.points[TruePoint(sequence, point3D.track.front())]).norm();
+  }
+  return sum / static_cast<double>(std::max<size_t>(1, reconstruction.NumPoints3D()));
+}
+
+// Observations whose true point differs from that of their point's first
+// observation.
+size_t NumMixedObservations(const Reconstruction& reconstruction,
+                            const SyntheticSequence& sequence) {
+  size_t mixed = 0;
+  for (const auto& [point3D_id, point3D] : reconstruction.Points3D()) {
+    const int first = TruePoint(sequence, point3D.track.front());
+    for (const TrackElement& element : point3D.track) {
+      if (TruePoint(sequence, element) != first) ++mixed;
+    }
+  }
+  return mixed;
+}
+
+// Exact VIO poses, 0.5 px keypoint noise, 60 frames in batches of 20. The
+// poses can only be as wrong as the noise makes them: a 0.5 px error at
+// f = 500 px is 1 mrad, i.e. ~4 mm at the points' 3-6 m; each camera sees
+// ~150 points, so its pose error is a few tenths of a millimetre. Bounds:
+// centre RMSE < 2 mm and every centre within 5 mm, rotations within 1 mrad;
+// the mean reprojection error is that of 2-D Gaussian noise of sigma 0.5
+// (mean length 0.5 sqrt(pi / 2) = 0.63 px) less what BA absorbs: in
+// [0.45, 0.7] px. Points: a track spans at most 20 frames (1 m), so a point
+// 6 m away seen over 0.5 m has a depth sigma of 6^2 / (500 * 0.5) * 0.5 /
+// sqrt(n) ~ 3 cm; the mean point error is below 6 cm.
+TEST(BatchedMapperTest, ExactVioAndNoisyKeypointsGiveTinyErrors) {
+  const SyntheticSequence sequence = MakeSyntheticSequence(SmallSequenceOptions(60, 1));
+  BatchedMapperSummary summary;
+  const Reconstruction reconstruction =
+      RunBatchedMapper(sequence.input, QuietOptions(20), &summary);
+  ASSERT_EQ(summary.num_registered, 60);
+  ASSERT_EQ(summary.batches.size(), 3u);
+  EXPECT_EQ(summary.batches[0].num_registered_total, 20);
+  EXPECT_EQ(summary.batches[2].num_registered_total, 60);
+  EXPECT_EQ(summary.batches[2].num_ba_free_images, 60);
+  const std::vector<Rigid3d> poses = RegisteredPoses(reconstruction, 60);
+  // Measured: 3.7 mm RMSE, 1.9 mrad worst rotation (the relative-pose terms
+  // have the default sigmas, sized for a VIO with mm-level frame-to-frame
+  // noise, so the images share the say with the exact VIO here).
+  EXPECT_LT(CenterRmse(sequence.cams_from_world, poses), 0.005);
+  EXPECT_LT(MaxCenterError(sequence.cams_from_world, poses), 0.01);
+  EXPECT_LT(MaxRotationErrorRad(sequence.cams_from_world, poses), 3e-3);
+  // The first image is the gauge: held at its VIO (here true) pose.
+  EXPECT_LT((poses[0].translation - sequence.cams_from_world[0].translation).norm(), 1e-12);
+  EXPECT_GT(summary.mean_reprojection_error_px, 0.45);
+  EXPECT_LT(summary.mean_reprojection_error_px, 0.7);
+  EXPECT_LT(MeanPointError(reconstruction, sequence), 0.06);
+  EXPECT_EQ(NumMixedObservations(reconstruction, sequence), 0u);
+  // Most tracks became points (all have >= 2 views; a few are too short in
+  // angle or filtered).
+  EXPECT_GT(summary.num_points, static_cast<int>(0.9 * summary.tracks.num_tracks));
+  EXPECT_EQ(summary.num_observations, static_cast<int>(reconstruction.ComputeNumObservations()));
+  EXPECT_TRUE(summary.final_ba.usable);
+  EXPECT_EQ(summary.final_ba.num_priors, 59);
+}
+
+// A drifting VIO and correct matches: 80 frames 10 cm apart (7.9 m) in
+// batches of 20; the VIO's position and yaw drift as random walks (1 mm and
+// 5 mrad a frame; the yaw error turns all later motion), ~2% of the distance
+// at the end (RMSE ~4.7 cm). The BA's default prior sigmas (0.1 m,
+// 0.1 rad) at this scene's ~150 matches a pair (w = 1e3 exp(-0.003 * 150)
+// ~ 640) allow about 4 mm and 4 mrad a frame. (With sigmas of 0.01 m and
+// 0.005 rad, the priors are ~25 times stiffer than the VIO's noise and the
+// result stays within ~10% of the VIO's error.) The camera-centre RMSE is taken
+// plain (no alignment: the first pose is the common gauge) and after a
+// Sim(3) alignment, and compared with the VIO's.
+struct DriftCase {
+  SyntheticSequence sequence;
+  double vio_rmse = 0.0;
+  Sim3Comparison vio_sim3;
+};
+
+const DriftCase& Drift() {
+  static const DriftCase drift = [] {
+    DriftCase result;
+    SyntheticSequenceOptions options = SmallSequenceOptions(80, 2);
+    options.step_m = 0.1;
+    result.sequence = MakeSyntheticSequence(options);
+    testing::VioDriftOptions drift_options;
+    drift_options.position_sigma_m = 0.001;
+    drift_options.yaw_sigma_rad = 0.005;
+    drift_options.seed = 7;
+    ApplyVioDrift(result.sequence.cams_from_world, drift_options, &result.sequence.input);
+    const std::vector<Rigid3d> vio = VioPoses(result.sequence.input);
+    result.vio_rmse = CenterRmse(result.sequence.cams_from_world, vio);
+    result.vio_sim3 = CompareSim3(result.sequence.cams_from_world, vio);
+    return result;
+  }();
+  return drift;
+}
+
+BatchedMapperOptions DriftOptions() {
+  // The BA's default prior sigmas (0.1 m, 0.1 rad).
+  return QuietOptions(20);
+}
+
+TEST(BatchedMapperTest, CorrectsVioDrift) {
+  const DriftCase& drift = Drift();
+  const std::vector<Rigid3d>& truth = drift.sequence.cams_from_world;
+  // The drift is real: several centimetres (4.7 cm).
+  ASSERT_GT(drift.vio_rmse, 0.04);
+  BatchedMapperSummary summary;
+  const Reconstruction reconstruction =
+      RunBatchedMapper(drift.sequence.input, DriftOptions(), &summary);
+  ASSERT_EQ(summary.num_registered, 80);
+  const std::vector<Rigid3d> poses = RegisteredPoses(reconstruction, 80);
+  const double rmse = CenterRmse(truth, poses);
+  const Sim3Comparison sim3 = CompareSim3(truth, poses);
+  RecordProperty("vio_rmse_m", std::to_string(drift.vio_rmse));
+  RecordProperty("vio_sim3_rmse_m", std::to_string(drift.vio_sim3.rmse_m));
+  RecordProperty("rmse_m", std::to_string(rmse));
+  RecordProperty("sim3_rmse_m", std::to_string(sim3.rmse_m));
+  RecordProperty("scale", std::to_string(sim3.scale));
+  // Plain error at most a third of the VIO's (measured: 1.2 vs 4.7 cm).
+  EXPECT_LT(rmse, drift.vio_rmse / 3.0);
+  // Shape after Sim(3): at most a fifth of the VIO's (0.22 vs 1.7 cm).
+  EXPECT_LT(sim3.rmse_m, drift.vio_sim3.rmse_m / 5.0);
+  // Metric scale, from the priors alone (measured 0.9978): the VIO's 1 mm
+  // per-frame noise on 10 cm steps averages to ~0.1% over 80 frames, its
+  // yaw noise does not change step lengths. Within 1%.
+  EXPECT_NEAR(sim3.scale, 1.0, 0.01);
+  EXPECT_LT(summary.mean_reprojection_error_px, 0.7);
+  EXPECT_EQ(NumMixedObservations(reconstruction, drift.sequence), 0u);
+}
+
+// The paper's "w/o RPC" ablation: still registers every frame (each batch is
+// placed by the VIO) and the shape is as good, but nothing holds the metric
+// scale beyond the first batch's VIO placement: it drifts by ~1.4% (measured
+// 1.0143) and the plain error (6.3 cm) exceeds the VIO's own.
+TEST(BatchedMapperTest, WithoutRelativePosePriorsStillRegistersAll) {
+  const DriftCase& drift = Drift();
+  const std::vector<Rigid3d>& truth = drift.sequence.cams_from_world;
+  BatchedMapperOptions options = DriftOptions();
+  options.ba.use_relative_pose_priors = false;
+  BatchedMapperSummary summary;
+  const Reconstruction reconstruction = RunBatchedMapper(drift.sequence.input, options, &summary);
+  ASSERT_EQ(summary.num_registered, 80);
+  EXPECT_EQ(summary.final_ba.num_priors, 0);
+  const std::vector<Rigid3d> poses = RegisteredPoses(reconstruction, 80);
+  const double rmse = CenterRmse(truth, poses);
+  const Sim3Comparison sim3 = CompareSim3(truth, poses);
+  RecordProperty("rmse_m", std::to_string(rmse));
+  RecordProperty("sim3_rmse_m", std::to_string(sim3.rmse_m));
+  RecordProperty("scale", std::to_string(sim3.scale));
+  EXPECT_LT(sim3.rmse_m, drift.vio_sim3.rmse_m / 3.0);
+  EXPECT_NEAR(sim3.scale, 1.0, 0.05);
+  EXPECT_GT(std::abs(sim3.scale - 1.0), 0.005);
+  EXPECT_GT(rmse, drift.vio_rmse / 3.0);
+  EXPECT_LT(summary.mean_reprojection_error_px, 0.7);
+}
+
+// Wrong matches: (a) in 10 consecutive pairs, 3 matches each linking two
+// different points seen in both frames (the tracks conflict and are split);
+// (b) a pair between frames 5 and 45, which see different parts of the
+// corridor, with 30 random matches (merged tracks that triangulation and
+// filtering take apart). Poses and points must stay as in the clean run and
+// no point may mix observations of two true points.
+TEST(BatchedMapperTest, WrongMatchesDoNotCorruptTheResult) {
+  SyntheticSequence sequence = MakeSyntheticSequence(SmallSequenceOptions(60, 3));
+  Random random(11);
+  size_t num_wrong = 0;
+  for (ImagePairMatches& pair : sequence.input.verified_pairs) {
+    if (pair.image_id2 != pair.image_id1 + 1 || pair.image_id1 % 5 != 0) continue;
+    for (int m = 0; m < 3; ++m) {
+      const FeatureMatch a = pair.matches[random.UniformInt(0, pair.matches.size() - 1)];
+      const FeatureMatch b = pair.matches[random.UniformInt(0, pair.matches.size() - 1)];
+      if (a.point2D_idx1 == b.point2D_idx1) continue;
+      pair.matches.push_back({a.point2D_idx1, b.point2D_idx2});
+      ++num_wrong;
+    }
+  }
+  ASSERT_GE(num_wrong, 25u);
+  ImagePairMatches far_pair;
+  far_pair.image_id1 = 6;
+  far_pair.image_id2 = 46;
+  const size_t n1 = sequence.input.images[5].keypoints.size();
+  const size_t n2 = sequence.input.images[45].keypoints.size();
+  for (int m = 0; m < 30; ++m) {
+    far_pair.matches.push_back({static_cast<point2D_t>(random.UniformInt(0, n1 - 1)),
+                                static_cast<point2D_t>(random.UniformInt(0, n2 - 1))});
+  }
+  sequence.input.verified_pairs.push_back(far_pair);
+
+  BatchedMapperSummary summary;
+  const Reconstruction reconstruction =
+      RunBatchedMapper(sequence.input, QuietOptions(20), &summary);
+  ASSERT_EQ(summary.num_registered, 60);
+  EXPECT_GT(summary.tracks.num_refused_matches, 0u);
+  EXPECT_EQ(NumMixedObservations(reconstruction, sequence), 0u);
+  const std::vector<Rigid3d> poses = RegisteredPoses(reconstruction, 60);
+  EXPECT_LT(CenterRmse(sequence.cams_from_world, poses), 0.005);
+  EXPECT_LT(MaxCenterError(sequence.cams_from_world, poses), 0.01);
+  EXPECT_LT(MeanPointError(reconstruction, sequence), 0.06);
+  EXPECT_LT(summary.mean_reprojection_error_px, 0.7);
+  EXPECT_GT(summary.num_points, static_cast<int>(0.85 * summary.tracks.num_tracks));
+}
+
+// Every batch size registers everything: 1 (a BA after every frame), 7
+// (the last batch shorter) and more than the sequence (one batch).
+TEST(BatchedMapperTest, AnyBatchSizeWorks) {
+  const SyntheticSequence sequence = MakeSyntheticSequence(SmallSequenceOptions(15, 4));
+  for (const auto& [batch_size, num_batches] :
+       std::vector<std::pair<int, size_t>>{{1, 15}, {7, 3}, {100, 1}}) {
+    SCOPED_TRACE("batch size " + std::to_string(batch_size));
+    BatchedMapperSummary summary;
+    const Reconstruction reconstruction =
+        RunBatchedMapper(sequence.input, QuietOptions(batch_size), &summary);
+    ASSERT_EQ(summary.num_registered, 15);
+    EXPECT_EQ(summary.batches.size(), num_batches);
+    const std::vector<Rigid3d> poses = RegisteredPoses(reconstruction, 15);
+    EXPECT_LT(CenterRmse(sequence.cams_from_world, poses), 0.005);
+    EXPECT_LT(summary.mean_reprojection_error_px, 0.7);
+    EXPECT_GT(summary.num_points, static_cast<int>(0.8 * summary.tracks.num_tracks));
+  }
+}
+
+// The windowed bundle adjustment (the last 2 batches of 10 frames free)
+// registers everything as accurately on exact VIO poses, refines only the
+// window after each batch, and everything in the final global BA.
+TEST(BatchedMapperTest, WindowedBundleAdjustment) {
+  const SyntheticSequence sequence = MakeSyntheticSequence(SmallSequenceOptions(50, 5));
+  BatchedMapperOptions options = QuietOptions(10);
+  options.ba_window_batches = 2;
+  BatchedMapperSummary summary;
+  const Reconstruction reconstruction = RunBatchedMapper(sequence.input, options, &summary);
+  ASSERT_EQ(summary.num_registered, 50);
+  ASSERT_EQ(summary.batches.size(), 5u);
+  EXPECT_EQ(summary.batches[0].num_ba_free_images, 10);
+  EXPECT_EQ(summary.batches[1].num_ba_free_images, 20);
+  EXPECT_EQ(summary.batches[2].num_ba_free_images, 20);
+  EXPECT_EQ(summary.batches[3].num_ba_free_images, 20);
+  EXPECT_EQ(summary.batches[4].num_ba_free_images, 50);
+  EXPECT_EQ(summary.final_ba.num_images, 50);
+  const std::vector<Rigid3d> poses = RegisteredPoses(reconstruction, 50);
+  EXPECT_LT(CenterRmse(sequence.cams_from_world, poses), 0.005);
+  EXPECT_LT((poses[0].translation - sequence.cams_from_world[0].translation).norm(), 1e-12);
+  EXPECT_LT(summary.mean_reprojection_error_px, 0.7);
+  EXPECT_EQ(NumMixedObservations(reconstruction, sequence), 0u);
+}
+
+// A frame without any keypoint (and so without verified matches) is placed
+// by its relative-pose priors alone (c = 0, the largest weight).
+TEST(BatchedMapperTest, FrameWithoutFeaturesFollowsTheVio) {
+  SyntheticSequence sequence = MakeSyntheticSequence(SmallSequenceOptions(40, 6));
+  const image_t blind = 25;
+  sequence.input.images[blind - 1].keypoints.clear();
+  std::vector<ImagePairMatches> pairs;
+  for (ImagePairMatches& pair : sequence.input.verified_pairs) {
+    if (pair.image_id1 != blind && pair.image_id2 != blind) pairs.push_back(std::move(pair));
+  }
+  sequence.input.verified_pairs = std::move(pairs);
+  const std::vector<RelativePosePrior> priors = MakeConsecutiveRelativePosePriors(sequence.input);
+  EXPECT_EQ(priors[blind - 2].num_verified_matches, 0);
+  EXPECT_EQ(priors[blind - 1].num_verified_matches, 0);
+  BatchedMapperSummary summary;
+  const Reconstruction reconstruction =
+      RunBatchedMapper(sequence.input, QuietOptions(10), &summary);
+  ASSERT_EQ(summary.num_registered, 40);
+  const std::vector<Rigid3d> poses = RegisteredPoses(reconstruction, 40);
+  EXPECT_LT(
+      (ProjectionCenter(poses[blind - 1]) - ProjectionCenter(sequence.cams_from_world[blind - 1]))
+          .norm(),
+      0.005);
+  EXPECT_LT(MaxCenterError(sequence.cams_from_world, poses), 0.01);
+}
+
+TEST(BatchedMapperTest, ConsecutivePriors) {
+  const SyntheticSequence sequence = MakeSyntheticSequence(SmallSequenceOptions(6, 7));
+  BatchedMapperInput input = sequence.input;
+  // Frames 3 and 4 not verified; pair (2, 1) listed a second time, reversed
+  // and with fewer matches.
+  std::vector<ImagePairMatches> pairs;
+  for (const ImagePairMatches& pair : input.verified_pairs) {
+    if (!(pair.image_id1 == 3 && pair.image_id2 == 4)) pairs.push_back(pair);
+  }
+  ImagePairMatches reversed{2, 1, {{0, 0}}};
+  pairs.push_back(reversed);
+  input.verified_pairs = pairs;
+  const std::vector<RelativePosePrior> priors = MakeConsecutiveRelativePosePriors(input);
+  ASSERT_EQ(priors.size(), 5u);
+  const auto matches_of = [&](image_t id1, image_t id2) {
+    for (const ImagePairMatches& pair : sequence.input.verified_pairs) {
+      if (pair.image_id1 == id1 && pair.image_id2 == id2) {
+        return static_cast<int>(pair.matches.size());
+      }
+    }
+    return -1;
+  };
+  for (size_t i = 0; i < priors.size(); ++i) {
+    const image_t id1 = static_cast<image_t>(i + 1);
+    EXPECT_EQ(priors[i].image_id1, id1);
+    EXPECT_EQ(priors[i].image_id2, id1 + 1);
+    EXPECT_EQ(priors[i].num_verified_matches, id1 == 3 ? 0 : matches_of(id1, id1 + 1));
+    const Rigid3d expected =
+        sequence.cams_from_world[i + 1] * sequence.cams_from_world[i].Inverse();
+    EXPECT_LT(priors[i].cam2_from_cam1.rotation.angularDistance(expected.rotation), 1e-12);
+    EXPECT_LT((priors[i].cam2_from_cam1.translation - expected.translation).norm(), 1e-12);
+  }
+  EXPECT_GT(priors[0].num_verified_matches, 100);
+}
+
+void ExpectInputError(const BatchedMapperInput& input, const BatchedMapperOptions& options,
+                      const std::string& expected) {
+  try {
+    RunBatchedMapper(input, options);
+    ADD_FAILURE() << "no InputError, expected one containing '" << expected << "'";
+  } catch (const InputError& error) {
+    EXPECT_THAT(error.what(), HasSubstr(expected));
+  }
+}
+
+TEST(BatchedMapperTest, BadInputRaisesInputError) {
+  const SyntheticSequence sequence = MakeSyntheticSequence(SmallSequenceOptions(5, 8));
+  const BatchedMapperOptions options = QuietOptions(2);
+  std::vector<std::pair<std::function<void(BatchedMapperInput*)>, std::string>> cases = {
+      {[](BatchedMapperInput* input) { input->images.clear(); }, "no images"},
+      {[](BatchedMapperInput* input) {
+         input->images[3].timestamp_ns = input->images[2].timestamp_ns;
+       },
+       "images not in strictly increasing time order: image 4 (frame4.png)"},
+      {[](BatchedMapperInput* input) { std::swap(input->images[1], input->images[2]); },
+       "strictly increasing time order"},
+      {[](BatchedMapperInput* input) { input->images[2].camera_id = 9; },
+       "image 3 (frame3.png) refers to unknown camera id 9"},
+      {[](BatchedMapperInput* input) { input->images[4].image_id = 2; }, "duplicate image id 2"},
+      {[](BatchedMapperInput* input) { input->images[4].name = "frame1.png"; },
+       "duplicate image name 'frame1.png'"},
+      {[](BatchedMapperInput* input) { input->images[1].name.clear(); }, "empty name"},
+      {[](BatchedMapperInput* input) { input->verified_pairs[0].matches[3].point2D_idx2 = 100000; },
+       "match 3 indexes keypoint 100000 of image 2"},
+      {[](BatchedMapperInput* input) { input->verified_pairs[1].image_id1 = 77; },
+       "refers to unknown image id 77"},
+      {[](BatchedMapperInput* input) { input->cameras.push_back(input->cameras[0]); },
+       "duplicate camera id 1"},
+      {[](BatchedMapperInput* input) {
+         input->images[1].vio_cam_from_world.translation.x() = std::nan("");
+       },
+       "non-finite"},
+  };
+  for (const auto& [corrupt, expected] : cases) {
+    SCOPED_TRACE(expected);
+    BatchedMapperInput input = sequence.input;
+    corrupt(&input);
+    ExpectInputError(input, options, expected);
+  }
+  BatchedMapperOptions bad_options = options;
+  bad_options.batch_size = 0;
+  ExpectInputError(sequence.input, bad_options, "batch_size");
+  bad_options = options;
+  bad_options.ba_window_batches = -1;
+  ExpectInputError(sequence.input, bad_options, "ba_window_batches");
+  bad_options = options;
+  bad_options.filter.max_reprojection_error_px = 0.0;
+  ExpectInputError(sequence.input, bad_options, "filter.");
+}
+
+}  // namespace
+}  // namespace viosfm
