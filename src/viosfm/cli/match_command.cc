@@ -27,6 +27,7 @@ struct MatchArguments {
   std::string vio_trajectory;
   std::string vio_frame = "body";
   bool no_vio_prior = false;
+  bool no_depth_check = false;
   std::string pairs_mode = "temporal_retrieval";
   double max_pose_time_difference_s = 0.005;
   std::string report;
@@ -37,6 +38,7 @@ void RunMatch(MatchArguments args) {
   VerificationOptions& options = args.options;
   options.pairs.mode = ParsePairMode(args.pairs_mode);
   options.use_vio_prior = !args.no_vio_prior;
+  options.prior.check_depth = !args.no_depth_check;
   options.max_pose_time_difference_ns = SecondsToNs(args.max_pose_time_difference_s);
   options.retrieval.num_threads = options.num_threads;
   if (const std::string error = options.Validate(); !error.empty()) {
@@ -78,7 +80,12 @@ void RunMatch(MatchArguments args) {
                            ? "VIO prior (T_EE " +
                                  std::to_string(options.prior.max_epipolar_error_px) +
                                  " px, outlier ratio " +
-                                 std::to_string(options.prior.max_outlier_ratio) + ") + RANSAC"
+                                 std::to_string(options.prior.max_outlier_ratio) +
+                                 (options.prior.check_depth
+                                      ? ", depth check to " +
+                                            std::to_string(options.prior.max_scene_depth_m) + " m"
+                                      : std::string(", no depth check")) +
+                                 ") + RANSAC"
                            : std::string("RANSAC only"));
   const VerificationResult result = RunVerification(sequence, vio, &database, options);
   VIOSFM_LOG(INFO) << "match: " << FormatVerificationSummary(result.summary) << "; database holds "
@@ -134,6 +141,22 @@ void RegisterMatch(CLI::App& app) {
       ->add_option("--max-outlier-ratio", args->options.prior.max_outlier_ratio,
                    "Reject a pair when its VIO outlier ratio exceeds this")
       ->capture_default_str();
+  command->add_flag("--no-depth-check", args->no_depth_check,
+                    "VIO step: the paper's epipolar test only, without the depth-consistency "
+                    "check (matches must show the parallax the metric VIO baseline implies)");
+  command
+      ->add_option("--max-scene-depth", args->options.prior.max_scene_depth_m,
+                   "Depth check: farthest scene point expected (m)")
+      ->capture_default_str();
+  command
+      ->add_option("--depth-tolerance", args->options.prior.depth_tolerance_px,
+                   "Depth check: parallax tolerance (px)")
+      ->capture_default_str();
+  command
+      ->add_option("--min-depth-parallax", args->options.prior.min_depth_parallax_px,
+                   "Depth check: a match is scored when a point at the max scene depth would "
+                   "show at least this parallax (px)")
+      ->capture_default_str();
   command
       ->add_option("--min-inliers", args->options.geometry.min_num_inliers,
                    "RANSAC inliers needed to keep a pair")
@@ -146,6 +169,9 @@ void RegisterMatch(CLI::App& app) {
       ->add_option("--max-pose-time-difference", args->max_pose_time_difference_s,
                    "Largest gap between an image stamp and its VIO pose (s)")
       ->capture_default_str();
+  command->add_flag("--reverify", args->options.reverify_stored_matches,
+                    "Verify again the pairs whose matches are stored (instead of skipping them), "
+                    "replacing their stored geometry");
   command->add_flag("--guided-matching", args->options.guided_matching,
                     "Match inside the VIO epipolar band instead of by brute force");
   command->add_option("--vocabulary", args->options.retrieval.vocabulary_path,

@@ -19,9 +19,47 @@
 // points at infinity; a point at depth d adds at most f |t| / d pixels of
 // parallax). The same substitution is used for a single match whose epipolar
 // line is undefined (x1 at the epipole).
+//
+// Depth consistency (not in the paper; on by default, check_depth = false
+// gives the paper's test alone). The EE test only asks a match to lie on its
+// epipolar line, and the point where the line passes through the match's
+// infinite-depth position H x1 (H = K2 R K1^-1) always does. Two identical
+// views stacked one above the other (identical floors) have matches with no
+// image motion at all; the VIO baseline is large and vertical, so every
+// epipolar line passes through its keypoint, EE ~ 0 and the pair passes.
+// The VIO baseline is metric, though: a point at depth d moves along its
+// epipolar line from H x1 towards the epipole by a parallax that grows as
+// 1/d. For each match that passed EE, let p_D be the parallax, in pixels,
+// that a point at max_scene_depth_m on the match's ray in image 1 would show
+// in image 2; every point nearer than that shows at least p_D (the
+// projection moves monotonically along the line as the inverse depth
+// grows). The match is scored when p_D >= min_depth_parallax_px (far from
+// the epipole and a large enough baseline: the bound is then clearly above
+// the noise), and it is depth-inconsistent when its own parallax, measured
+// along the line from H x1, is below p_D - depth_tolerance_px: its point
+// would have to be farther than max_scene_depth_m, at infinity, or behind
+// camera 1. Such a match is impossible under the VIO pose and counts as an
+// outlier of the paper's ratio: the pair is rejected (reason "vio_depth")
+// when (EE outliers + depth-inconsistent) / matches exceeds
+// max_outlier_ratio while EE alone would accept it. Small baselines, pure
+// rotation (rotation_only) and matches near the epipole are never scored, so
+// the check leaves them to the EE test.
+//
+// Which matches it judges matters: tentative matches of a correct pair can
+// include wrong ones that pass EE (on repeated structure seen along the
+// baseline, e.g. identical doors along a corridor walked forwards, a door
+// matched to the next one shows almost no motion, which lies on its radial
+// epipolar line, and also on that of the true geometry, so RANSAC keeps it),
+// and in a narrow corridor the correct far matches lie near the epipole and
+// are not scored: the inconsistent ratio of such a correct pair is near 1.
+// That is why the inconsistent matches count against all matches (most of
+// them must be impossible to reject the pair) and not against the scored
+// ones; the verification driver also removes them before RANSAC
+// (matching/verification_driver.h).
 #pragma once
 
 #include <Eigen/Core>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -43,6 +81,23 @@ struct PriorVerificationOptions {
   // pixels, 18 px at f = 460, below T_EE).
   double min_baseline_m = 0.01;
 
+  // Depth consistency with the metric VIO baseline (see the top of the
+  // file; not in the paper). Default true; false: the paper's EE test only.
+  bool check_depth = true;
+  // Farthest scene point expected, metres. Default 20 (rooms, halls,
+  // corridors and a drone in an indoor hall such as EuRoC's machine hall:
+  // farther structure is rare and mostly near the epipole of a
+  // forward-moving camera, where matches are not scored).
+  double max_scene_depth_m = 20.0;
+  // Parallax tolerance for the VIO relative pose error and keypoint noise,
+  // pixels. Default 20 (T_EE: the same allowance as the EE test).
+  double depth_tolerance_px = 20.0;
+  // A match is scored only if a point at max_scene_depth_m would show at
+  // least this parallax, pixels. Default 40 (twice depth_tolerance_px, so a
+  // zero-parallax match is at least one tolerance below the bound: at f =
+  // 460 px a baseline of at least 1.7 m across the ray at 20 m).
+  double min_depth_parallax_px = 40.0;
+
   std::string Validate() const;  // empty if valid, else names the bad field
   bool Check() const { return Validate().empty(); }
 };
@@ -59,6 +114,21 @@ struct PriorVerificationResult {
   // Per match, in the input order: EE (or the transfer error), pixels;
   // infinity when undefined (a point that rotates behind camera 2).
   std::vector<double> errors_px;
+  // The paper's verdict (EE test alone); accepted additionally requires the
+  // depth check not to reject.
+  bool accepted_epipolar = false;
+  // The depth check scored at least one match.
+  bool depth_applied = false;
+  // EE accepted the pair, and EE outliers + depth-inconsistent matches
+  // exceed max_outlier_ratio of the matches.
+  bool depth_rejected = false;
+  int num_depth_scored = 0;        // matches passing EE whose parallax bound is informative
+  int num_depth_inconsistent = 0;  // of those, the depth-inconsistent ones
+  // num_depth_inconsistent / num_depth_scored; NaN when not applied.
+  double depth_inconsistent_ratio = std::numeric_limits<double>::quiet_NaN();
+  // Per match, in the input order: depth-inconsistent (empty without the
+  // check).
+  std::vector<bool> depth_inconsistent;
 };
 
 // cam2_from_cam1 from the VIO body poses and the camera extrinsics:
@@ -76,6 +146,24 @@ PriorVerificationResult VerifyPairWithPrior(const Camera& camera1, const Camera&
                                             const std::vector<Eigen::Vector2d>& points2_normalized,
                                             const FeatureMatches& matches,
                                             const PriorVerificationOptions& options);
+
+// The depth-consistency check alone (see the top of the file) on `matches`:
+// those within T_EE of their epipolar lines are scored. Nothing is scored
+// below min_baseline_m.
+struct DepthConsistencyResult {
+  int num_scored = 0;
+  int num_inconsistent = 0;
+  // num_inconsistent / num_scored; NaN when none is scored.
+  double inconsistent_ratio = std::numeric_limits<double>::quiet_NaN();
+  // Per input match: scored and depth-inconsistent.
+  std::vector<bool> inconsistent;
+};
+DepthConsistencyResult CheckDepthConsistency(const Camera& camera1, const Camera& camera2,
+                                             const Rigid3d& cam2_from_cam1,
+                                             const std::vector<Eigen::Vector2d>& points1_normalized,
+                                             const std::vector<Eigen::Vector2d>& points2_normalized,
+                                             const FeatureMatches& matches,
+                                             const PriorVerificationOptions& options);
 
 // The same from the VIO poses of the two frames and one camera rig
 // (body_from_cam shared by both images).

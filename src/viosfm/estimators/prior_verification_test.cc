@@ -252,6 +252,8 @@ TEST(PriorVerification, PureRotationUsesInfiniteHomography) {
       camera, camera, cam2_from_cam1, data.points1, data.points2, data.matches, {});
   EXPECT_TRUE(exact.rotation_only);
   EXPECT_TRUE(exact.accepted);
+  EXPECT_FALSE(exact.depth_applied);
+  EXPECT_TRUE(std::isnan(exact.depth_inconsistent_ratio));
   EXPECT_EQ(exact.outlier_ratio, 0.0);
   for (const double error : exact.errors_px) EXPECT_LT(error, 1e-8);
 
@@ -282,10 +284,137 @@ TEST(PriorVerification, SmallBaselineFallsBackToRotation) {
       camera, camera, cam2_from_cam1, data.points1, data.points2, data.matches, {});
   EXPECT_TRUE(result.rotation_only);
   EXPECT_TRUE(result.accepted);
+  EXPECT_FALSE(result.depth_applied);
+  EXPECT_EQ(result.num_depth_scored, 0);
   // Points at depth >= 1.5 m within ~40 degrees of the axis: parallax below
   // f |t| sqrt(1 + |x|^2) / z = 460 * 0.005 * 1.3 / 1.5 = 2 px.
   EXPECT_LT(*std::max_element(result.errors_px.begin(), result.errors_px.end()), 2.0);
   EXPECT_GT(*std::max_element(result.errors_px.begin(), result.errors_px.end()), 0.0);
+}
+
+// Wall points (with 0.1 m relief) on the plane y = `distance`, x in
+// [-4, 4], z in [z_min, z_max].
+std::vector<Eigen::Vector3d> WallScene(Random& random, double distance, double z_min,
+                                       double z_max) {
+  std::vector<Eigen::Vector3d> points;
+  for (int i = 0; i < 400; ++i) {
+    points.emplace_back(random.Uniform(-4, 4), distance + random.Uniform(-0.1, 0.1),
+                        random.Uniform(z_min, z_max));
+  }
+  return points;
+}
+
+// Identical floors 3.65 m apart, camera 2 placed on its floor exactly (or
+// almost) as camera 1 on its own: every match has (almost) no image motion,
+// so it lies on its epipolar line of the vertical VIO baseline and the
+// paper's EE test accepts the pair. No point nearer than 20 m can show so
+// little parallax over a 3.65 m baseline (at least 460 * 3.65 / 20 = 84 px),
+// so the depth check rejects it.
+TEST(PriorVerification, IdenticalViewsOnStackedFloorsFailDepthCheck) {
+  const Camera camera = TestCamera();
+  const Rigid3d body_from_cam = TestBodyFromCam();
+  const Eigen::Vector3d floor_offset(0, 0, 3.65);
+  struct Placement {
+    Eigen::Vector3d shift;  // of camera 2 within its floor, m
+    double yaw_deg;
+  };
+  const std::vector<Placement> placements = {
+      {{0.0, 0.0, 0.0}, 0.0}, {{0.03, -0.02, 0.0}, 0.5}, {{-0.05, 0.04, 0.0}, -1.0}};
+  Random random(6);
+  const std::vector<Eigen::Vector3d> scene = FloorScene(random);
+  for (const Placement& placement : placements) {
+    const Rigid3d world_from_cam1 = LevelCamera(Eigen::Vector3d(0, 0, 1.5), 0.0);
+    const Rigid3d world_from_cam2 = LevelCamera(
+        Eigen::Vector3d(0, 0, 1.5) + placement.shift + floor_offset, placement.yaw_deg * kDegToRad);
+    const PairData data =
+        MakeMatches(camera, scene, world_from_cam1, world_from_cam2, floor_offset, 0.5, random);
+    ASSERT_GE(data.matches.size(), 100u);
+    const Rigid3d world_from_body1 = world_from_cam1 * body_from_cam.Inverse();
+    const Rigid3d world_from_body2 = world_from_cam2 * body_from_cam.Inverse();
+
+    PriorVerificationOptions paper;
+    paper.check_depth = false;
+    const PriorVerificationResult epipolar_only =
+        VerifyPairWithVioPoses(camera, camera, world_from_body1, world_from_body2, body_from_cam,
+                               data.points1, data.points2, data.matches, paper);
+    EXPECT_TRUE(epipolar_only.accepted);
+    EXPECT_LT(epipolar_only.outlier_ratio, 0.1);
+    EXPECT_FALSE(epipolar_only.depth_applied);
+
+    const PriorVerificationResult result = VerifyPairWithVioPoses(
+        camera, camera, world_from_body1, world_from_body2, body_from_cam, data.points1,
+        data.points2, data.matches, PriorVerificationOptions());
+    EXPECT_TRUE(result.accepted_epipolar);
+    EXPECT_EQ(result.outlier_ratio, epipolar_only.outlier_ratio);
+    EXPECT_TRUE(result.depth_applied);
+    EXPECT_GE(result.num_depth_scored, static_cast<int>(0.9 * data.matches.size()));
+    EXPECT_GT(result.depth_inconsistent_ratio, 0.95);
+    EXPECT_TRUE(result.depth_rejected);
+    EXPECT_FALSE(result.accepted);
+  }
+}
+
+// The same 3.65 m baselines (vertical, and horizontal) between two views of
+// one wall 3 m away: the parallax is several hundred pixels, far above the
+// bound, and the pair passes, also with VIO errors of 0.1 m and 1 degree.
+TEST(PriorVerification, LargeBaselineOnNearSceneKeepsPair) {
+  const Camera camera = TestCamera();
+  const Rigid3d body_from_cam = TestBodyFromCam();
+  Random random(7);
+  struct Views {
+    Rigid3d world_from_cam1;
+    Rigid3d world_from_cam2;
+  };
+  const std::vector<Views> views = {
+      // Vertical: camera 1 pitched up, camera 2 3.65 m higher pitched down.
+      {LevelCamera(Eigen::Vector3d(0, 0, 1.5), 0.0, -30.0 * kDegToRad),
+       LevelCamera(Eigen::Vector3d(0, 0, 5.15), 0.0, 30.0 * kDegToRad)},
+      // Horizontal, toed in.
+      {LevelCamera(Eigen::Vector3d(0, 0, 1.5), -25.0 * kDegToRad),
+       LevelCamera(Eigen::Vector3d(3.65, 0, 1.5), 25.0 * kDegToRad)}};
+  const std::vector<Eigen::Vector3d> scene = WallScene(random, 3.0, 0.0, 7.0);
+  for (const Views& view : views) {
+    const PairData data = MakeMatches(camera, scene, view.world_from_cam1, view.world_from_cam2,
+                                      Eigen::Vector3d::Zero(), 0.5, random);
+    ASSERT_GE(data.matches.size(), 50u);
+    const Rigid3d world_from_body1 = view.world_from_cam1 * body_from_cam.Inverse();
+    const Rigid3d world_from_body2 = view.world_from_cam2 * body_from_cam.Inverse();
+    for (int draw = 0; draw < 10; ++draw) {
+      const Rigid3d vio_error = draw == 0
+                                    ? Rigid3d()
+                                    : Rigid3d(So3Exp(RandomUnitVector(random) * (1.0 * kDegToRad)),
+                                              RandomUnitVector(random) * 0.1);
+      const PriorVerificationResult result = VerifyPairWithVioPoses(
+          camera, camera, world_from_body1, vio_error * world_from_body2, body_from_cam,
+          data.points1, data.points2, data.matches, PriorVerificationOptions());
+      EXPECT_TRUE(result.accepted) << "draw " << draw;
+      EXPECT_TRUE(result.depth_applied);
+      EXPECT_EQ(result.num_depth_inconsistent, 0) << "draw " << draw;
+    }
+  }
+}
+
+// A 0.5 m baseline on a scene 40 to 60 m away (outdoors, or a far wall): a
+// point at 20 m would move only 460 * 0.5 / 20 = 11.5 px, below the 40 px
+// needed to score a match, so the check does not apply and the far points
+// (which are beyond max_scene_depth_m) do not reject the pair.
+TEST(PriorVerification, SmallBaselineFarSceneNotScored) {
+  const Camera camera = TestCamera();
+  Random random(8);
+  const std::vector<Eigen::Vector3d> scene = WallScene(random, 50.0, -20.0, 20.0);
+  const Rigid3d world_from_cam1 = LevelCamera(Eigen::Vector3d(0, 0, 1.5), 0.0);
+  const Rigid3d world_from_cam2 = LevelCamera(Eigen::Vector3d(0.5, 0.0, 1.5), 0.05);
+  const PairData data = MakeMatches(camera, scene, world_from_cam1, world_from_cam2,
+                                    Eigen::Vector3d::Zero(), 0.5, random);
+  ASSERT_GE(data.matches.size(), 100u);
+  const PriorVerificationResult result =
+      VerifyPairWithPrior(camera, camera, world_from_cam2.Inverse() * world_from_cam1, data.points1,
+                          data.points2, data.matches, PriorVerificationOptions());
+  EXPECT_FALSE(result.rotation_only);
+  EXPECT_TRUE(result.accepted);
+  EXPECT_EQ(result.num_depth_scored, 0);
+  EXPECT_FALSE(result.depth_applied);
+  EXPECT_FALSE(result.depth_rejected);
 }
 
 TEST(PriorVerification, NoMatchesIsRejected) {
@@ -309,6 +438,13 @@ TEST(PriorVerificationOptions, PaperDefaultsAndValidation) {
   options = PriorVerificationOptions();
   options.max_epipolar_error_px = -1.0;
   EXPECT_NE(options.Validate().find("max_epipolar_error_px"), std::string::npos);
+  EXPECT_TRUE(defaults.check_depth);
+  options = PriorVerificationOptions();
+  options.max_scene_depth_m = 0.0;
+  EXPECT_NE(options.Validate().find("max_scene_depth_m"), std::string::npos);
+  options = PriorVerificationOptions();
+  options.min_depth_parallax_px = 0.0;
+  EXPECT_NE(options.Validate().find("min_depth_parallax_px"), std::string::npos);
 }
 
 }  // namespace

@@ -3,19 +3,23 @@
 // CSV, one header line and one line a pair:
 //   image_id1,image_id2,name1,name2,source,num_matches,has_vio_prior,
 //   vio_outlier_ratio,vio_rotation_only,vio_rejected,num_inliers,accepted,
-//   resumed,reason
-// booleans as 0/1, the outlier ratio with 6 decimals or "nan" when the VIO
-// check did not run. Names are written as they are (database image names
-// hold no comma; a name with a comma, quote or line break is an InputError).
+//   resumed,reason,vio_depth_applied,vio_depth_inconsistent_ratio,
+//   vio_depth_rejected
+// booleans as 0/1, the ratios with 6 decimals or "nan" when the check did
+// not run (or, for the depth ratio, did not apply). Names are written as they are (database image
+// names hold no comma; a name with a comma, quote or line break is an InputError).
 //
-// JSON: {"summary": {counts and seconds}, "options": {name: value text},
-//        "pairs": [{one object a pair, the CSV's fields; vio_outlier_ratio
-//                   null when the check did not run}]}.
+// JSON: {"summary": {"database": path, counts and seconds},
+//        "options": {name: value text},
+//        "pairs": [{one object a pair, the CSV's fields; the ratios null
+//                   when NaN}]}.
 //
 // Both are written atomically (temporary file, then rename).
 #pragma once
 
 #include <filesystem>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "viosfm/scene/pair_decision.h"
@@ -27,5 +31,25 @@ void WritePairDecisionsCsv(const std::filesystem::path& path,
 
 void WriteVerificationJson(const std::filesystem::path& path, const VerificationSummary& summary,
                            const std::vector<PairDecision>& decisions);
+
+// Reads a CSV written by WritePairDecisionsCsv (also one without the three
+// depth columns, as written before they existed). Throws InputError naming
+// the file and line for a missing file, a wrong header, a row with the wrong
+// number of fields or a field that does not parse.
+std::vector<PairDecision> ReadPairDecisionsCsv(const std::filesystem::path& path);
+
+// Ground-truth evaluations of verification runs (`viosfm check-pairs`):
+// {"options": {name: value text}, "runs": [{"name", "num_candidates",
+// "num_correct_candidates", "num_accepted", "num_accepted_correct",
+// "num_accepted_wrong", "num_accepted_other", "num_baseline_correct",
+// "num_baseline_correct_kept", "recall_vs_baseline" (null if undefined),
+// "wrong_pairs": [[name1, name2], ...]}]}. Written atomically.
+void WriteVerificationTruthJson(const std::filesystem::path& path,
+                                const std::vector<VerificationTruthSummary>& summaries,
+                                const std::vector<std::pair<std::string, std::string>>& options);
+
+// summary.database of a verification JSON; empty when the key is absent.
+// Throws InputError for a missing file or invalid JSON.
+std::string ReadVerificationDatabasePath(const std::filesystem::path& path);
 
 }  // namespace viosfm

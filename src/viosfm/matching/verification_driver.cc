@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
+#include <limits>
 #include <map>
 #include <memory>
 #include <optional>
@@ -81,6 +82,10 @@ struct PairWork {
   PairDecision decision;
   FeatureMatches matches;  // to store (new pairs only)
   std::optional<TwoViewGeometry> geometry;
+  // Re-verified from stored matches (options.reverify_stored_matches): the
+  // matches are not written again; had_geometry: a geometry was stored.
+  bool reverified = false;
+  bool had_geometry = false;
 };
 
 }  // namespace
@@ -119,7 +124,12 @@ std::vector<std::pair<std::string, std::string>> VerificationOptions::ToKeyValue
       {"prior.max_epipolar_error_px", FormatDouble(prior.max_epipolar_error_px)},
       {"prior.max_outlier_ratio", FormatDouble(prior.max_outlier_ratio)},
       {"prior.min_baseline_m", FormatDouble(prior.min_baseline_m)},
+      {"prior.check_depth", prior.check_depth ? "true" : "false"},
+      {"prior.max_scene_depth_m", FormatDouble(prior.max_scene_depth_m)},
+      {"prior.depth_tolerance_px", FormatDouble(prior.depth_tolerance_px)},
+      {"prior.min_depth_parallax_px", FormatDouble(prior.min_depth_parallax_px)},
       {"guided_matching", guided_matching ? "true" : "false"},
+      {"reverify_stored_matches", reverify_stored_matches ? "true" : "false"},
       {"guided_band_px", FormatDouble(guided_band_px)},
       {"geometry.max_error_px", FormatDouble(geometry.max_error_px)},
       {"geometry.min_num_inliers", std::to_string(geometry.min_num_inliers)},
@@ -138,10 +148,12 @@ std::string FormatVerificationSummary(const VerificationSummary& s) {
   std::ostringstream out;
   out << s.num_pairs << " pairs of " << s.num_images << " images (" << s.num_images_with_prior
       << " with a VIO pose): " << s.num_accepted << " accepted, " << s.num_vio_rejected
-      << " rejected by VIO, " << s.num_ransac_rejected << " by RANSAC, " << s.num_no_matches
-      << " without matches";
+      << " rejected by VIO";
+  if (s.num_vio_depth_rejected > 0) out << " (" << s.num_vio_depth_rejected << " by depth)";
+  out << ", " << s.num_ransac_rejected << " by RANSAC, " << s.num_no_matches << " without matches";
   if (s.num_pairs_without_prior > 0) out << "; " << s.num_pairs_without_prior << " RANSAC only";
   if (s.num_resumed > 0) out << "; " << s.num_resumed << " already stored";
+  if (s.num_reverified > 0) out << "; " << s.num_reverified << " re-verified from stored matches";
   out << std::fixed << std::setprecision(2) << "; " << s.seconds_total << " s (pairs "
       << s.seconds_pair_generation << " s, loading " << s.seconds_loading << " s, writing "
       << s.seconds_writing << " s; thread-seconds: matching " << s.seconds_matching << ", VIO "
@@ -160,6 +172,7 @@ VerificationResult RunVerification(const Sequence& sequence, const Trajectory& v
   VerificationSummary& summary = result.summary;
   summary.options = options.ToKeyValues();
   const std::string database_path = database->path().string();
+  summary.database_path = database_path;
 
   // Images: the database's images that belong to the sequence, in time order.
   Timer step_timer;
@@ -311,7 +324,12 @@ VerificationResult RunVerification(const Sequence& sequence, const Trajectory& v
                             ? (temporal_pairs.count(pairs[i]) ? "temporal" : "retrieval")
                             : PairModeName(options.pairs.mode);
       decision.has_vio_prior = info1.world_from_body && info2.world_from_body;
-      if (stored[i]) {
+      if (stored[i] && options.reverify_stored_matches) {
+        work[i - begin].reverified = true;
+        work[i - begin].matches = database->ReadMatches(info1.image_id, info2.image_id);
+        work[i - begin].had_geometry =
+            database->ExistsTwoViewGeometry(info1.image_id, info2.image_id);
+      } else if (stored[i]) {
         decision.resumed = true;
         work[i - begin].matches = database->ReadMatches(info1.image_id, info2.image_id);
         if (database->ExistsTwoViewGeometry(info1.image_id, info2.image_id)) {
@@ -334,7 +352,7 @@ VerificationResult RunVerification(const Sequence& sequence, const Trajectory& v
       const Camera& camera1 = cameras.at(info1.camera_id);
       const Camera& camera2 = cameras.at(info2.camera_id);
       Timer timer;
-      if (!decision.resumed) {
+      if (!decision.resumed && !pair_work.reverified) {
         if (options.guided_matching && decision.has_vio_prior) {
           const Rigid3d cam2_from_cam1 = RelativePoseFromVio(
               *info1.world_from_body, *info2.world_from_body, body_from_cam, body_from_cam);
@@ -350,6 +368,7 @@ VerificationResult RunVerification(const Sequence& sequence, const Trajectory& v
       }
       const FeatureMatches& matches = pair_work.matches;
       decision.num_matches = static_cast<int>(matches.size());
+      std::vector<bool> depth_inconsistent;  // per match (with the depth check)
 
       // Step 1: the VIO prior.
       if (decision.has_vio_prior && !matches.empty()) {
@@ -359,7 +378,11 @@ VerificationResult RunVerification(const Sequence& sequence, const Trajectory& v
             data1.points_normalized, data2.points_normalized, matches, options.prior);
         decision.vio_outlier_ratio = check.outlier_ratio;
         decision.vio_rotation_only = check.rotation_only;
+        decision.vio_depth_applied = check.depth_applied;
+        decision.vio_depth_inconsistent_ratio = check.depth_inconsistent_ratio;
+        decision.vio_depth_rejected = check.depth_rejected;
         decision.vio_rejected = !check.accepted;
+        depth_inconsistent = check.depth_inconsistent;
         vio_seconds[thread] += timer.ElapsedSeconds();
       }
       if (decision.resumed) {
@@ -376,8 +399,19 @@ VerificationResult RunVerification(const Sequence& sequence, const Trajectory& v
         return;
       }
       if (decision.vio_rejected) {
-        decision.reason = kPairVioOutlierRatio;
+        decision.reason = decision.vio_depth_rejected ? kPairVioDepth : kPairVioOutlierRatio;
         return;
+      }
+
+      // Beyond the paper: the depth-inconsistent matches (impossible under
+      // the VIO pose) do not enter RANSAC.
+      const FeatureMatches* ransac_matches = &matches;
+      FeatureMatches consistent;
+      if (decision.has_vio_prior && decision.vio_depth_applied) {
+        for (size_t m = 0; m < matches.size(); ++m) {
+          if (!depth_inconsistent[m]) consistent.push_back(matches[m]);
+        }
+        ransac_matches = &consistent;
       }
 
       // Step 2: RANSAC.
@@ -385,8 +419,9 @@ VerificationResult RunVerification(const Sequence& sequence, const Trajectory& v
       TwoViewGeometryOptions geometry = options.geometry;
       geometry.seed =
           MixSeed64(options.seed, ImagePairToPairId(decision.image_id1, decision.image_id2));
-      const TwoViewGeometryResult estimate = EstimateCalibratedTwoViewGeometry(
-          data1.points_normalized, data2.points_normalized, matches, camera1, camera2, geometry);
+      const TwoViewGeometryResult estimate =
+          EstimateCalibratedTwoViewGeometry(data1.points_normalized, data2.points_normalized,
+                                            *ransac_matches, camera1, camera2, geometry);
       ransac_seconds[thread] += timer.ElapsedSeconds();
       decision.num_inliers = estimate.num_inliers();
       decision.accepted = estimate.accepted();
@@ -400,11 +435,17 @@ VerificationResult RunVerification(const Sequence& sequence, const Trajectory& v
       const PairDecision& decision = pair_work.decision;
       if (!decision.resumed) {
         ColmapDatabase::Transaction transaction(*database);
-        database->WriteMatches(decision.image_id1, decision.image_id2, pair_work.matches);
+        if (!pair_work.reverified) {
+          database->WriteMatches(decision.image_id1, decision.image_id2, pair_work.matches);
+        }
         if (pair_work.geometry) {
           database->WriteTwoViewGeometry(decision.image_id1, decision.image_id2,
                                          *pair_work.geometry);
+        } else if (pair_work.had_geometry) {
+          // Now rejected: no inliers (as COLMAP records a failed pair).
+          database->WriteTwoViewGeometry(decision.image_id1, decision.image_id2, TwoViewGeometry());
         }
+        if (pair_work.reverified) ++summary.num_reverified;
         transaction.Commit();
       }
       result.decisions.push_back(std::move(pair_work.decision));
@@ -423,6 +464,7 @@ VerificationResult RunVerification(const Sequence& sequence, const Trajectory& v
       ++summary.num_no_matches;
     } else if (decision.vio_rejected) {
       ++summary.num_vio_rejected;
+      if (decision.vio_depth_rejected) ++summary.num_vio_depth_rejected;
     } else {
       ++summary.num_ransac_rejected;
     }

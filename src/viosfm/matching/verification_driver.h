@@ -9,7 +9,14 @@
 //     max_outlier_ratio of its matches lie farther than T_EE from their
 //     epipolar lines (estimators/prior_verification.h);
 //  4. step 2, RANSAC: essential-matrix RANSAC on the survivors; kept with at
-//     least min_num_inliers inliers (estimators/two_view_geometry.h).
+//     least min_num_inliers inliers (estimators/two_view_geometry.h);
+//  3b. beyond the paper (prior.check_depth, default on), part of step 1:
+//     matches that show less parallax than any point nearer than
+//     prior.max_scene_depth_m would over the metric VIO baseline are
+//     impossible under the VIO pose; they count as outliers of the step-1
+//     ratio (a pair that only this rejects has reason "vio_depth",
+//     vio_depth_rejected set) and are left out of RANSAC (the matches table
+//     keeps all tentative matches).
 //
 // Input: a database whose images already have features (`viosfm features`,
 // features/feature_extraction.h: images are named by file name). Each
@@ -25,7 +32,8 @@
 // transaction per pair, batch by batch, so an interrupted run keeps every
 // finished pair. A re-run skips the pairs whose matches are stored (resume):
 // their record says resumed, accepted iff a geometry is stored, and the VIO
-// check is recomputed from the stored matches for the report.
+// check is recomputed from the stored matches for the report. With
+// reverify_stored_matches the stored matches are verified again instead.
 #pragma once
 
 #include <string>
@@ -57,7 +65,9 @@ struct VerificationOptions {
   // Step 1: the VIO-prior check. Default true. false: RANSAC only (COLMAP's
   // verification, the paper's baseline).
   bool use_vio_prior = true;
-  // T_EE 20 px, outlier ratio 0.5 (the paper's), min baseline 0.01 m.
+  // T_EE 20 px, outlier ratio 0.5 (the paper's), min baseline 0.01 m; the
+  // depth-consistency check (beyond the paper; prior.check_depth, default
+  // on) with max scene depth 20 m.
   PriorVerificationOptions prior;
   // Match inside the band of the VIO epipolar lines instead of by brute force
   // (pairs with a prior only). Default false. With it the matches agree with
@@ -79,6 +89,13 @@ struct VerificationOptions {
   // Seeds the RANSAC sampler (mixed with the pair id) and the vocabulary
   // training (replacing retrieval.vocabulary.seed). Default 0.
   uint64_t seed = 0;
+  // Pairs whose matches are already stored: false (default) keeps them as
+  // they are (resume); true reads their matches instead of matching again,
+  // runs both verification steps on them and replaces the stored geometry
+  // (a pair now rejected gets an empty one: no inliers). With a copy of a
+  // database that holds every pair's matches, this compares verification
+  // settings on identical tentative matches at a fraction of the cost.
+  bool reverify_stored_matches = false;
   // Draw progress bars. Default true.
   bool show_progress = true;
 

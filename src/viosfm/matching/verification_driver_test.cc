@@ -311,5 +311,64 @@ TEST(VerificationDriver, ImagesWithoutVioPoseFallBackToRansac) {
   }
 }
 
+// Stored matches verified again (reverify_stored_matches): a RANSAC-only
+// database re-verified with the VIO prior (on copies, with and without the
+// depth check, which is on by default): the pairs of the corrupted pose are
+// now rejected by the VIO step and keep no inliers; every stored geometry
+// matches its decision. On this room walk (baselines of at most ~1 m, walls
+// within 5 m) the depth check changes nothing.
+TEST(VerificationDriver, ReverifyStoredMatchesWithAndWithoutDepthCheck) {
+  const Fixture& f = SharedFixture();
+  const size_t bad = 6;
+  const Trajectory corrupted = CorruptPose(f.vio_body, bad);
+  const std::string bad_name = DatabaseImageName(f.sequence.images[bad]);
+  VerificationOptions ransac_only = SmallOptions();
+  ransac_only.use_vio_prior = false;
+  const fs::path matched_path = CopyFeatures(f, "matched.db");
+  VerificationResult baseline;
+  {
+    ColmapDatabase database = ColmapDatabase::Open(matched_path);
+    baseline = RunVerification(f.sequence, {}, &database, ransac_only);
+  }
+  ASSERT_GT(baseline.summary.num_accepted, 0u);
+  EXPECT_TRUE(SmallOptions().prior.check_depth);
+  std::vector<VerificationResult> results;
+  for (const bool check_depth : {true, false}) {
+    const fs::path path = f.folder / (check_depth ? "reverify_depth.db" : "reverify_paper.db");
+    fs::remove(path);
+    fs::copy_file(matched_path, path);
+    VerificationOptions options = SmallOptions();
+    options.reverify_stored_matches = true;
+    options.prior.check_depth = check_depth;
+    ColmapDatabase database = ColmapDatabase::Open(path);
+    VerificationResult result = RunVerification(f.sequence, corrupted, &database, options);
+    EXPECT_EQ(result.summary.num_reverified, result.summary.num_pairs);
+    EXPECT_EQ(result.summary.num_resumed, 0u);
+    EXPECT_EQ(result.summary.num_vio_depth_rejected, 0u);
+    ASSERT_EQ(result.decisions.size(), baseline.decisions.size());
+    for (size_t k = 0; k < result.decisions.size(); ++k) {
+      const PairDecision& d = result.decisions[k];
+      EXPECT_FALSE(d.resumed);
+      EXPECT_EQ(d.num_matches, baseline.decisions[k].num_matches);
+      const size_t stored_inliers =
+          database.ExistsTwoViewGeometry(d.image_id1, d.image_id2)
+              ? database.ReadTwoViewGeometry(d.image_id1, d.image_id2).inlier_matches.size()
+              : 0u;
+      EXPECT_EQ(stored_inliers, d.accepted ? static_cast<size_t>(d.num_inliers) : 0u);
+      if ((d.name1 == bad_name || d.name2 == bad_name) && d.num_matches > 0) {
+        EXPECT_TRUE(d.vio_rejected) << d.name1 << " " << d.name2;
+        EXPECT_FALSE(d.accepted);
+      }
+      if (!check_depth) {
+        EXPECT_FALSE(d.vio_depth_applied);
+        EXPECT_TRUE(std::isnan(d.vio_depth_inconsistent_ratio));
+      }
+    }
+    results.push_back(std::move(result));
+  }
+  EXPECT_LT(results[0].summary.num_accepted, baseline.summary.num_accepted);
+  EXPECT_EQ(AcceptedPairIds(results[0]), AcceptedPairIds(results[1]));
+}
+
 }  // namespace
 }  // namespace viosfm

@@ -30,13 +30,22 @@ struct PairDecision {
   double vio_outlier_ratio = std::numeric_limits<double>::quiet_NaN();
   // The VIO baseline was below the minimum: transfer errors were used.
   bool vio_rotation_only = false;
-  bool vio_rejected = false;  // step 1 rejected the pair
-  int num_inliers = 0;        // RANSAC inliers (0 if RANSAC did not run)
-  bool accepted = false;      // the pair's geometry is stored
+  // The depth-consistency check (estimators/prior_verification.h, beyond the
+  // paper) had enough scored matches to apply; its depth-inconsistent ratio
+  // (NaN when not applied), and whether it rejected the pair.
+  bool vio_depth_applied = false;
+  double vio_depth_inconsistent_ratio = std::numeric_limits<double>::quiet_NaN();
+  bool vio_depth_rejected = false;
+  // Step 1 rejected the pair (the EE test, or the depth check: then
+  // vio_depth_rejected too).
+  bool vio_rejected = false;
+  int num_inliers = 0;    // RANSAC inliers (0 if RANSAC did not run)
+  bool accepted = false;  // the pair's geometry is stored
   // The matches were already in the database: the pair was not matched or
   // verified again (accepted and num_inliers come from the stored geometry).
   bool resumed = false;
-  // "accepted", "no_matches", "vio_outlier_ratio", "too_few_inliers".
+  // "accepted", "no_matches", "vio_outlier_ratio", "vio_depth",
+  // "too_few_inliers".
   std::string reason;
 };
 
@@ -44,6 +53,7 @@ struct PairDecision {
 inline constexpr const char* kPairAccepted = "accepted";
 inline constexpr const char* kPairNoMatches = "no_matches";
 inline constexpr const char* kPairVioOutlierRatio = "vio_outlier_ratio";
+inline constexpr const char* kPairVioDepth = "vio_depth";
 inline constexpr const char* kPairTooFewInliers = "too_few_inliers";
 
 // What a verification run did, over all pairs.
@@ -53,8 +63,10 @@ struct VerificationSummary {
   size_t num_pairs = 0;                // pairs generated
   size_t num_pairs_without_prior = 0;  // pairs checked by RANSAC only (an image without pose)
   size_t num_resumed = 0;              // pairs whose matches were already stored
+  size_t num_reverified = 0;           // stored matches verified again (reverify_stored_matches)
   size_t num_no_matches = 0;           // rejected: no tentative match
-  size_t num_vio_rejected = 0;         // rejected by step 1 (VIO prior)
+  size_t num_vio_rejected = 0;         // rejected by step 1 (VIO prior; EE or depth)
+  size_t num_vio_depth_rejected = 0;   // of those, by the depth check
   size_t num_ransac_rejected = 0;      // rejected by step 2 (too few RANSAC inliers)
   size_t num_accepted = 0;             // accepted (geometry stored)
   // Wall-clock seconds of the whole run and of its sequential parts.
@@ -66,8 +78,32 @@ struct VerificationSummary {
   double seconds_matching = 0.0;
   double seconds_vio = 0.0;
   double seconds_ransac = 0.0;
+  // The database the run wrote (empty if unknown).
+  std::string database_path;
   // The options used, as (name, value) text, written next to the results.
   std::vector<std::pair<std::string, std::string>> options;
+};
+
+// A verification run judged against ground truth (sim/pair_truth.h): a
+// candidate pair is correct when its two views see the same surface; an
+// accepted pair is wrong when most of its inliers disagree with the true
+// geometry.
+struct VerificationTruthSummary {
+  std::string name;                   // the run (report folder)
+  size_t num_candidates = 0;          // pairs generated
+  size_t num_correct_candidates = 0;  // of those, correct
+  size_t num_accepted = 0;
+  size_t num_accepted_correct = 0;  // correct, inliers agree
+  size_t num_accepted_wrong = 0;    // inliers disagree
+  // Accepted, inliers agree, but the overlap is below the correct threshold.
+  size_t num_accepted_other = 0;
+  // Pairs the first (baseline) run accepted as correct, and how many of them
+  // this run accepted too; their ratio (NaN when the baseline has none).
+  size_t num_baseline_correct = 0;
+  size_t num_baseline_correct_kept = 0;
+  double recall_vs_baseline = std::numeric_limits<double>::quiet_NaN();
+  // The accepted wrong pairs (name1, name2).
+  std::vector<std::pair<std::string, std::string>> wrong_pairs;
 };
 
 }  // namespace viosfm
