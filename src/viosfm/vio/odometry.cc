@@ -1,0 +1,359 @@
+#include "viosfm/vio/odometry.h"
+
+#include <cmath>
+#include <ctime>
+#include <iomanip>
+#include <sstream>
+#include <unordered_map>
+
+#include "viosfm/io/image_io.h"
+#include "viosfm/io/trajectory_io.h"
+#include "viosfm/sensor/camera_models.h"
+#include "viosfm/util/errors.h"
+#include "viosfm/util/file_util.h"
+#include "viosfm/util/logging.h"
+#include "viosfm/util/progress.h"
+#include "viosfm/util/timer.h"
+
+namespace viosfm {
+
+std::string VioOptions::Validate() const {
+  if (const std::string error = tracker.Validate(); !error.empty()) return "tracker." + error;
+  if (const std::string error = window.Validate(); !error.empty()) return "window." + error;
+  if (const std::string error = static_init.Validate(); !error.empty()) {
+    return "static_init." + error;
+  }
+  if (const std::string error = vi_init.Validate(); !error.empty()) return "vi_init." + error;
+  for (const InitialStateSigmas* sigmas : {&static_start_sigmas, &restart_sigmas}) {
+    if (!(sigmas->position_m > 0) || !(sigmas->yaw_rad > 0) || !(sigmas->roll_pitch_rad > 0) ||
+        !(sigmas->velocity_mps > 0) || !(sigmas->gyro_bias > 0) || !(sigmas->accel_bias > 0)) {
+      return sigmas == &static_start_sigmas ? "static_start_sigmas must all be > 0"
+                                            : "restart_sigmas must all be > 0";
+    }
+  }
+  if (max_frames < 0) return "max_frames must be >= 0";
+  return "";
+}
+
+Trajectory VioResult::BodyTrajectory() const {
+  Trajectory trajectory;
+  trajectory.poses.reserve(frames.size());
+  for (const VioFrameResult& frame : frames) {
+    trajectory.poses.push_back({frame.timestamp_ns, frame.state.world_from_body});
+  }
+  return trajectory;
+}
+
+Trajectory VioResult::CameraTrajectory() const {
+  return BodyToCameraTrajectory(BodyTrajectory(), body_from_cam);
+}
+
+namespace {
+
+// Keyframe test for the initialisation buffer: the window's parallax and
+// shared-track criteria against the last buffered keyframe.
+bool IsNewKeyframe(const FrameFeatures& last, const FrameFeatures& frame, double focal_length_px,
+                   const SlidingWindowOptions& options) {
+  std::unordered_map<uint64_t, Eigen::Vector2d> previous;
+  for (const FeatureObservation& observation : last.observations) {
+    previous.emplace(observation.track_id, observation.normalized);
+  }
+  int shared = 0;
+  double parallax_sum = 0.0;
+  for (const FeatureObservation& observation : frame.observations) {
+    const auto it = previous.find(observation.track_id);
+    if (it == previous.end()) continue;
+    ++shared;
+    parallax_sum += (observation.normalized - it->second).norm() * focal_length_px;
+  }
+  if (shared < options.keyframe_min_shared_tracks) return true;
+  return parallax_sum / shared >= options.keyframe_parallax_px;
+}
+
+}  // namespace
+
+VisualInertialOdometry::VisualInertialOdometry(const SensorRig& rig,
+                                               const std::vector<ImuSample>& imu,
+                                               timestamp_ns_t first_frame_ns,
+                                               timestamp_ns_t last_frame_ns,
+                                               const VioOptions& options)
+    : rig_(rig),
+      imu_(imu),
+      options_(options),
+      window_(rig.body_from_cam, rig.imu_noise, MeanFocalLength(rig.camera), options.window) {
+  if (const std::string error = options.Validate(); !error.empty()) {
+    throw InputError("invalid VIO options: " + error);
+  }
+  summary_.static_init.status = StaticInitStatus::kNotEnoughData;
+  if (options_.use_static_init) {
+    summary_.static_init =
+        DetectStaticStart(imu_, rig_.CamToImuTime(first_frame_ns), rig_.CamToImuTime(last_frame_ns),
+                          options_.static_init);
+    static_start_ = summary_.static_init.is_static();
+  }
+  if (static_start_) {
+    const StaticInitResult& init = summary_.static_init;
+    static_state_.world_from_body = init.world_from_body;
+    static_state_.world_from_body.translation.setZero();
+    static_state_.gyro_bias = init.gyro_bias;
+    static_state_.accel_bias = init.accel_bias;
+    VIOSFM_LOG(INFO) << "vio: static start over " << NsToSeconds(init.end_ns - init.start_ns)
+                     << " s: roll " << init.roll_rad * 180.0 / M_PI << " deg, pitch "
+                     << init.pitch_rad * 180.0 / M_PI << " deg, gyro bias "
+                     << init.gyro_bias.transpose();
+  } else {
+    VIOSFM_LOG(INFO) << "vio: no static start (" << summary_.static_init.message
+                     << "); visual-inertial initialisation";
+  }
+}
+
+ImuState VisualInertialOdometry::Propagate(const ImuState& state, timestamp_ns_t to_ns) const {
+  if (to_ns <= state.timestamp_ns) return state;
+  ImuPreintegration preintegration(state.gyro_bias, state.accel_bias, rig_.imu_noise);
+  if (!preintegration.IntegrateRange(imu_, state.timestamp_ns, to_ns)) {
+    ImuState held = state;
+    held.timestamp_ns = to_ns;
+    return held;
+  }
+  ImuState predicted = preintegration.Predict(state);
+  predicted.timestamp_ns = to_ns;
+  return predicted;
+}
+
+Eigen::Quaterniond VisualInertialOdometry::GyroRotationPrior(timestamp_ns_t from_ns,
+                                                             timestamp_ns_t to_ns) const {
+  const timestamp_ns_t from = rig_.CamToImuTime(from_ns);
+  const timestamp_ns_t to = rig_.CamToImuTime(to_ns);
+  ImuPreintegration preintegration(last_state_.gyro_bias, last_state_.accel_bias, rig_.imu_noise);
+  if (!preintegration.IntegrateRange(imu_, from, to)) return Eigen::Quaterniond::Identity();
+  // x_cam_now = R_bc^T * R_body_now_from_body_prev * R_bc * x_cam_prev.
+  const Eigen::Quaterniond& body_from_cam = rig_.body_from_cam.rotation;
+  return (body_from_cam.conjugate() * preintegration.delta_R().conjugate() * body_from_cam)
+      .normalized();
+}
+
+void VisualInertialOdometry::StartWindow(const ImuState& state, const InitialStateSigmas& sigmas,
+                                         const FrameFeatures& features) {
+  window_.Initialize(state, sigmas, features);
+}
+
+void VisualInertialOdometry::Record(const VioFrameResult& result) {
+  ++summary_.num_frames;
+  ++summary_.status_counts[static_cast<int>(result.status)];
+  if (result.is_keyframe) ++summary_.num_keyframes;
+  if (result.status == VioStatus::kTracking && summary_.first_tracking_ns < 0) {
+    summary_.first_tracking_ns = result.timestamp_ns;
+    summary_.visual_initialized = true;
+  }
+  if (result.status == VioStatus::kLost) ++summary_.num_resets;
+  last_state_ = result.state;
+  if (result.status == VioStatus::kTracking ||
+      (result.status == VioStatus::kInitializing && static_start_)) {
+    last_good_state_ = result.state;
+    have_good_state_ = true;
+  }
+}
+
+VioFrameResult VisualInertialOdometry::ProcessFrame(const FrameFeatures& features) {
+  VioFrameResult result;
+  result.timestamp_ns = features.timestamp_ns;
+  result.num_features = static_cast<int>(features.observations.size());
+  FrameFeatures frame = features;
+  frame.timestamp_ns = rig_.CamToImuTime(features.timestamp_ns);
+
+  if (window_.initialized()) {
+    const WindowFrameEstimate estimate = window_.AddFrame(frame, imu_);
+    result.state = estimate.state;
+    result.status = estimate.status;
+    result.is_keyframe = estimate.is_keyframe;
+    result.num_landmarks = estimate.num_landmarks;
+    if (estimate.status == VioStatus::kLost) {
+      VIOSFM_LOG(WARNING) << "vio: lost at " << FormatNsAsSeconds(features.timestamp_ns, 3)
+                          << " s: " << estimate.message;
+    }
+    Record(result);
+    return result;
+  }
+
+  result.status = VioStatus::kInitializing;
+  if (static_start_ && frame.timestamp_ns <= summary_.static_init.end_ns) {
+    // Standing still: hold the static state.
+    result.state = static_state_;
+    result.state.timestamp_ns = frame.timestamp_ns;
+  } else if (have_good_state_) {
+    // The static start ended, or a restart after kLost: the window starts
+    // from the last good state carried forward by the IMU.
+    const bool from_static = static_start_ && summary_.num_resets == 0;
+    ImuState start = Propagate(last_good_state_, frame.timestamp_ns);
+    if (!start.velocity_in_world.allFinite() ||
+        start.velocity_in_world.norm() > options_.window.max_speed_mps) {
+      start = last_good_state_;
+      start.timestamp_ns = frame.timestamp_ns;
+      start.velocity_in_world.setZero();
+    }
+    StartWindow(start, from_static ? options_.static_start_sigmas : options_.restart_sigmas, frame);
+    result.state = start;
+  } else {
+    // Moving start: collect keyframes for the visual-inertial initialisation.
+    result.state.timestamp_ns = frame.timestamp_ns;
+    if (frame.is_keyframe || init_keyframes_.empty() ||
+        IsNewKeyframe(init_keyframes_.back(), frame, MeanFocalLength(rig_.camera),
+                      options_.window)) {
+      init_keyframes_.push_back(frame);
+      if (static_cast<int>(init_keyframes_.size()) > options_.vi_init.window_size) {
+        init_keyframes_.erase(init_keyframes_.begin());
+      }
+      if (static_cast<int>(init_keyframes_.size()) >= options_.vi_init.min_num_frames) {
+        const ViInitResult init = InitializeVisualInertial(
+            init_keyframes_, imu_, rig_.body_from_cam, rig_.imu_noise, options_.vi_init);
+        if (init.success && !init.states.empty()) {
+          VIOSFM_LOG(INFO) << "vio: visual-inertial initialisation at "
+                           << FormatNsAsSeconds(features.timestamp_ns, 3) << " s: " << init.message;
+          ImuState start = init.states.back();
+          start.timestamp_ns = frame.timestamp_ns;
+          StartWindow(start, options_.restart_sigmas, frame);
+          result.state = start;
+          init_keyframes_.clear();
+        }
+      }
+    }
+  }
+  Record(result);
+  return result;
+}
+
+namespace {
+
+double ProcessCpuSeconds() {
+  timespec spec{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &spec);
+  return static_cast<double>(spec.tv_sec) + 1e-9 * static_cast<double>(spec.tv_nsec);
+}
+
+}  // namespace
+
+VioResult RunVio(const Sequence& sequence, const VioOptions& options) {
+  if (const std::string error = options.Validate(); !error.empty()) {
+    throw InputError("invalid VIO options: " + error);
+  }
+  if (!sequence.has_imu()) {
+    throw InputError(sequence.root.string(), 0, "VIO needs an IMU stream (mav0/imu0/data.csv)");
+  }
+  if (sequence.images.empty()) throw InputError(sequence.root.string(), 0, "no images");
+  const double cpu_start = ProcessCpuSeconds();
+  Timer timer;
+  size_t num_frames = sequence.images.size();
+  if (options.max_frames > 0) num_frames = std::min(num_frames, size_t(options.max_frames));
+
+  VioResult result;
+  result.body_from_cam = sequence.rig.body_from_cam;
+  VisualInertialOdometry vio(sequence.rig, sequence.imu, sequence.images.front().timestamp_ns,
+                             sequence.images[num_frames - 1].timestamp_ns, options);
+  FeatureTracker tracker(sequence.rig.camera, options.tracker);
+  ProgressBar progress(
+      "vio", static_cast<int64_t>(num_frames),
+      options.show_progress ? ProgressBar::Mode::kAuto : ProgressBar::Mode::kNever);
+  result.frames.reserve(num_frames);
+  for (size_t k = 0; k < num_frames; ++k) {
+    const SequenceImage& image = sequence.images[k];
+    const GreyImage grey = ReadGreyImage(image.path);
+    std::optional<Eigen::Quaterniond> rotation_prior;
+    if (options.gyro_rotation_prior && k > 0) {
+      rotation_prior =
+          vio.GyroRotationPrior(sequence.images[k - 1].timestamp_ns, image.timestamp_ns);
+    }
+    const FrameFeatures features = tracker.Track(image.timestamp_ns, grey, rotation_prior);
+    result.frames.push_back(vio.ProcessFrame(features));
+    progress.Update();
+  }
+  progress.Finish();
+  result.summary = vio.summary();
+  VioSummary& summary = result.summary;
+  summary.cpu_seconds = ProcessCpuSeconds() - cpu_start;
+  summary.wall_seconds = timer.ElapsedSeconds();
+
+  std::ostringstream message;
+  if (summary.static_init.is_static()) {
+    message << "static start detected (" << std::fixed << std::setprecision(2)
+            << NsToSeconds(summary.static_init.end_ns - summary.static_init.start_ns) << " s); ";
+  } else {
+    message << "no static start; ";
+  }
+  if (summary.visual_initialized) {
+    message << "visual-inertial tracking from "
+            << FormatNsAsSeconds(summary.first_tracking_ns - sequence.images.front().timestamp_ns,
+                                 2)
+            << " s after the first image";
+  } else if (summary.static_init.is_static() &&
+             sequence.rig.CamToImuTime(sequence.images[num_frames - 1].timestamp_ns) <=
+                 summary.static_init.end_ns) {
+    message << "not enough motion to initialise the visual part (the platform stays static)";
+  } else {
+    message << "the visual part was never initialised (not enough motion or landmarks)";
+  }
+  if (summary.num_resets > 0) message << "; " << summary.num_resets << " resets after failures";
+  summary.message = message.str();
+  VIOSFM_LOG(INFO) << "vio: " << summary.num_frames << " frames (tracking "
+                   << summary.status_counts[1] << ", initializing " << summary.status_counts[0]
+                   << ", imu_only " << summary.status_counts[2] << ", lost "
+                   << summary.status_counts[3] << "), " << summary.num_keyframes
+                   << " keyframes, CPU " << summary.cpu_seconds << " s: " << summary.message;
+  return result;
+}
+
+std::string FormatVioSummary(const VioSummary& summary) {
+  std::ostringstream out;
+  out << std::setprecision(10);
+  out << "num_frames: " << summary.num_frames << "\n";
+  for (int k = 0; k < 4; ++k) {
+    out << "frames_" << VioStatusName(static_cast<VioStatus>(k)) << ": " << summary.status_counts[k]
+        << "\n";
+  }
+  out << "num_keyframes: " << summary.num_keyframes << "\n";
+  out << "static_start: " << (summary.static_init.is_static() ? "true" : "false") << "\n";
+  out << "static_init_status: " << StaticInitStatusName(summary.static_init.status) << "\n";
+  if (summary.static_init.is_static()) {
+    const StaticInitResult& init = summary.static_init;
+    out << "static_interval_ns: [" << init.start_ns << ", " << init.end_ns << "]\n";
+    out << "gravity_in_body: [" << init.gravity_in_body.x() << ", " << init.gravity_in_body.y()
+        << ", " << init.gravity_in_body.z() << "]\n";
+    out << "gyro_bias: [" << init.gyro_bias.x() << ", " << init.gyro_bias.y() << ", "
+        << init.gyro_bias.z() << "]\n";
+    out << "accel_bias: [" << init.accel_bias.x() << ", " << init.accel_bias.y() << ", "
+        << init.accel_bias.z() << "]\n";
+  }
+  out << "visual_initialized: " << (summary.visual_initialized ? "true" : "false") << "\n";
+  out << "first_tracking_ns: " << summary.first_tracking_ns << "\n";
+  out << "num_resets: " << summary.num_resets << "\n";
+  out << "cpu_seconds: " << summary.cpu_seconds << "\n";
+  out << "wall_seconds: " << summary.wall_seconds << "\n";
+  out << "message: \"" << summary.message << "\"\n";
+  return out.str();
+}
+
+void WriteVioResult(const std::filesystem::path& folder, const VioResult& result) {
+  std::error_code error;
+  std::filesystem::create_directories(folder, error);
+  if (error) throw InputError(folder.string(), 0, "cannot create the output folder");
+  WriteTumTrajectory(folder / "trajectory_body.tum", result.BodyTrajectory());
+  WriteTumTrajectory(folder / "trajectory_cam.tum", result.CameraTrajectory());
+  WriteFileAtomically(folder / "states.csv", [&](std::ostream& out) {
+    out << "#timestamp [ns],status,px,py,pz,qw,qx,qy,qz,vx,vy,vz,bgx,bgy,bgz,bax,bay,baz\n";
+    out << std::setprecision(17);
+    for (const VioFrameResult& frame : result.frames) {
+      const ImuState& s = frame.state;
+      const Eigen::Quaterniond q = s.world_from_body.rotation.normalized();
+      const Eigen::Vector3d& p = s.world_from_body.translation;
+      out << frame.timestamp_ns << "," << VioStatusName(frame.status) << "," << p.x() << ","
+          << p.y() << "," << p.z() << "," << q.w() << "," << q.x() << "," << q.y() << "," << q.z();
+      for (const Eigen::Vector3d* v : {&s.velocity_in_world, &s.gyro_bias, &s.accel_bias}) {
+        out << "," << v->x() << "," << v->y() << "," << v->z();
+      }
+      out << "\n";
+    }
+  });
+  WriteFileAtomically(folder / "vio_summary.txt",
+                      [&](std::ostream& out) { out << FormatVioSummary(result.summary); });
+}
+
+}  // namespace viosfm

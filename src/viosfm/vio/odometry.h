@@ -1,0 +1,152 @@
+// The monocular visual-inertial odometry: front end (feature_tracker.h),
+// initialisation (static_init.h for a static start, vi_initializer.h
+// otherwise) and the sliding-window back end (sliding_window.h), run over a
+// Sequence; one state and status per input frame.
+//
+// Initialisation:
+//  (a) static start (DetectStaticStart over the image time span): gravity,
+//      gyro bias and zero velocity are known; while the platform stands
+//      still the state is held (world_from_body = the gravity-aligned
+//      rotation with yaw 0 at the origin, status kInitializing); at the first
+//      frame after the static interval the window starts from that state
+//      with a tight prior, and the first landmarks are triangulated as the
+//      motion begins. The status turns kTracking once enough landmarks are
+//      seen. If the images end during the static interval, the visual part
+//      is never initialised (VioSummary::message says so).
+//  (b) otherwise, keyframes are collected until InitializeVisualInertial
+//      succeeds on them; the frames before have status kInitializing and
+//      the identity pose.
+// After kLost the window restarts from the last good state carried forward
+// by the IMU (velocity with a loose prior).
+#pragma once
+
+#include <array>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "viosfm/io/sequence.h"
+#include "viosfm/scene/trajectory.h"
+#include "viosfm/vio/feature_tracker.h"
+#include "viosfm/vio/sliding_window.h"
+#include "viosfm/vio/static_init.h"
+#include "viosfm/vio/vi_initializer.h"
+
+namespace viosfm {
+
+struct VioOptions {
+  FeatureTrackerOptions tracker;
+  SlidingWindowOptions window;
+  StaticInitOptions static_init;
+  ViInitOptions vi_init;
+  // Try the static start first (default true).
+  bool use_static_init = true;
+  // Prior of the first state after a static start (InitialStateSigmas defaults).
+  InitialStateSigmas static_start_sigmas;
+  // Prior of the first state after a visual-inertial initialisation or a
+  // reset: position and yaw are the gauge (tight), velocity loose.
+  InitialStateSigmas restart_sigmas{1e-3, 1e-3, 0.05, 0.5, 0.01, 0.2};
+  // Feed the tracker a gyro rotation prior between frames (default true).
+  bool gyro_rotation_prior = true;
+  // Process only the first max_frames images (0: all). Default 0.
+  int max_frames = 0;
+  // Progress bar over the frames (default true; drawn on a terminal only).
+  bool show_progress = true;
+
+  // Empty if valid; otherwise names the bad field.
+  std::string Validate() const;
+  bool Check() const { return Validate().empty(); }
+};
+
+// The estimate for one input frame.
+struct VioFrameResult {
+  timestamp_ns_t timestamp_ns = 0;  // the image stamp (camera clock)
+  // world_from_body, velocity (m/s, world), biases; the stamp is on the IMU clock.
+  ImuState state;
+  VioStatus status = VioStatus::kInitializing;
+  bool is_keyframe = false;
+  int num_features = 0;   // tracked corners
+  int num_landmarks = 0;  // triangulated landmarks seen, used by the window
+};
+
+struct VioSummary {
+  size_t num_frames = 0;
+  // Frames per status, indexed by static_cast<int>(VioStatus).
+  std::array<size_t, 4> status_counts{};
+  StaticInitResult static_init;  // status kNotStatic/kNotEnoughData when not a static start
+  bool visual_initialized = false;
+  // Camera stamp of the first kTracking frame (-1: never).
+  timestamp_ns_t first_tracking_ns = -1;
+  int num_resets = 0;  // kLost events
+  int num_keyframes = 0;
+  double cpu_seconds = 0.0;  // process CPU time of RunVio
+  double wall_seconds = 0.0;
+  std::string message;  // one-paragraph outcome (static start, initialisation, failures)
+};
+
+struct VioResult {
+  std::vector<VioFrameResult> frames;
+  VioSummary summary;
+  Rigid3d body_from_cam;
+
+  // world_from_body / world_from_cam at the image stamps, every frame.
+  Trajectory BodyTrajectory() const;
+  Trajectory CameraTrajectory() const;
+};
+
+// Frame-by-frame processing of front-end output (what RunVio calls per
+// image; tests feed it synthetic features).
+class VisualInertialOdometry {
+ public:
+  // `imu` must outlive the object. first/last_frame_ns: camera stamps of the
+  // first and last frame to come (the static start is detected in between).
+  VisualInertialOdometry(const SensorRig& rig, const std::vector<ImuSample>& imu,
+                         timestamp_ns_t first_frame_ns, timestamp_ns_t last_frame_ns,
+                         const VioOptions& options);
+
+  // Frames in time order; features stamped on the camera clock.
+  VioFrameResult ProcessFrame(const FrameFeatures& features);
+
+  // cam_now_from_cam_prev rotated by the gyro between two camera stamps with
+  // the current gyro bias estimate (for the tracker's rotation prior);
+  // identity without IMU coverage.
+  Eigen::Quaterniond GyroRotationPrior(timestamp_ns_t from_ns, timestamp_ns_t to_ns) const;
+
+  // The summary so far (the caller sets the timings).
+  const VioSummary& summary() const { return summary_; }
+  VioSummary& mutable_summary() { return summary_; }
+
+ private:
+  void StartWindow(const ImuState& state, const InitialStateSigmas& sigmas,
+                   const FrameFeatures& features);
+  ImuState Propagate(const ImuState& state, timestamp_ns_t to_ns) const;
+  void Record(const VioFrameResult& result);
+
+  SensorRig rig_;
+  const std::vector<ImuSample>& imu_;
+  VioOptions options_;
+  SlidingWindowEstimator window_;
+  VioSummary summary_;
+  ImuState static_state_;
+  bool static_start_ = false;
+  bool have_good_state_ = false;
+  ImuState last_good_state_;
+  ImuState last_state_;
+  std::vector<FrameFeatures> init_keyframes_;  // for the visual-inertial initialisation
+};
+
+// Runs the VIO over a sequence: every image is read once (ReadGreyImage),
+// tracked, and processed. Throws InputError if the sequence has no IMU or
+// the options are invalid.
+VioResult RunVio(const Sequence& sequence, const VioOptions& options);
+
+// Writes into `folder` (created if needed), each file atomically:
+//   trajectory_body.tum, trajectory_cam.tum   TUM, every frame
+//   states.csv   "#timestamp [ns],status,px,py,pz,qw,qx,qy,qz,vx,vy,vz,bgx,bgy,bgz,bax,bay,baz"
+//   vio_summary.txt   the summary as "key: value" lines
+void WriteVioResult(const std::filesystem::path& folder, const VioResult& result);
+
+// The summary as "key: value" lines (as written to vio_summary.txt).
+std::string FormatVioSummary(const VioSummary& summary);
+
+}  // namespace viosfm

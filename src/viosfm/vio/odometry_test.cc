@@ -1,0 +1,182 @@
+#include "viosfm/vio/odometry.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <iostream>
+
+#include "viosfm/geometry/alignment.h"
+#include "viosfm/io/euroc.h"
+#include "viosfm/io/trajectory_io.h"
+#include "viosfm/sim/sequence_simulator.h"
+#include "viosfm/util/file_util.h"
+#include "viosfm/util/testing.h"
+
+namespace viosfm {
+namespace {
+
+constexpr double kRadToDeg = 180.0 / M_PI;
+
+int CountLines(const std::filesystem::path& path) {
+  std::ifstream stream(path);
+  int lines = 0;
+  std::string line;
+  while (std::getline(stream, line)) ++lines;
+  return lines;
+}
+
+TEST(VioOptions, ValidateNamesTheBadField) {
+  VioOptions options;
+  EXPECT_EQ(options.Validate(), "");
+  options.window.max_num_iterations = 0;
+  EXPECT_NE(options.Validate().find("window.max_num_iterations"), std::string::npos);
+  options = VioOptions();
+  options.restart_sigmas.velocity_mps = 0.0;
+  EXPECT_NE(options.Validate().find("restart_sigmas"), std::string::npos);
+}
+
+// A short rendered room sequence (half-resolution camera to keep it fast):
+// static start, then tracking with a bounded error.
+TEST(RunVio, RenderedRoomSequence) {
+  SimulationOptions simulation;
+  simulation.scenario = "room";
+  simulation.duration_s = 7.0;
+  simulation.static_start_s = 2.0;
+  simulation.camera_rate_hz = 12.0;
+  simulation.seed = 3;
+  simulation.num_threads = 2;
+  simulation.texels_per_metre = 64.0;
+  Camera camera = SimulationOptions::DefaultCamera();
+  camera.width = 376;
+  camera.height = 240;
+  camera.params[0] *= 0.5;
+  camera.params[1] *= 0.5;
+  camera.params[2] = (camera.params[2] + 0.5) * 0.5 - 0.5;
+  camera.params[3] = (camera.params[3] + 0.5) * 0.5 - 0.5;
+  simulation.camera = camera;
+  const SimulatedSequence simulated = SimulateSequence(simulation);
+  const std::filesystem::path folder = testing::MakeScratchFolder("vio_room");
+  WriteSimulatedSequence(folder, simulated, simulation);
+  const Sequence sequence = ReadEurocDataset(folder);
+  ASSERT_EQ(sequence.images.size(), simulated.sequence.images.size());
+
+  VioOptions options;
+  options.show_progress = false;
+  options.tracker.min_distance_px = 15.0;
+  options.tracker.max_num_features = 120;
+  const VioResult result = RunVio(sequence, options);
+  ASSERT_EQ(result.frames.size(), sequence.images.size());
+
+  const timestamp_ns_t motion_start_ns =
+      sequence.images.front().timestamp_ns + SecondsToNs(simulation.static_start_s);
+  std::vector<Eigen::Vector3d> estimated;
+  std::vector<Eigen::Vector3d> truth;
+  size_t moving_frames = 0;
+  for (const VioFrameResult& frame : result.frames) {
+    ASSERT_TRUE(frame.state.world_from_body.translation.allFinite());
+    ASSERT_TRUE(frame.state.velocity_in_world.allFinite());
+    EXPECT_NE(frame.status, VioStatus::kLost);
+    if (frame.timestamp_ns < motion_start_ns - SecondsToNs(0.6)) {
+      EXPECT_EQ(frame.status, VioStatus::kInitializing);
+    } else {
+      ++moving_frames;
+    }
+    if (frame.status == VioStatus::kTracking) {
+      estimated.push_back(frame.state.world_from_body.translation);
+      truth.push_back(simulated.motion.PositionInWorld(frame.timestamp_ns));
+    }
+  }
+  const VioSummary& summary = result.summary;
+  EXPECT_TRUE(summary.static_init.is_static());
+  ASSERT_TRUE(summary.visual_initialized) << summary.message;
+  const double init_delay_s = NsToSeconds(summary.first_tracking_ns - motion_start_ns);
+  EXPECT_LT(init_delay_s, 3.0);
+  EXPECT_GT(estimated.size(), moving_frames * 6 / 10);
+  const std::optional<Sim3d> se3 = AlignPointsUmeyama(estimated, truth, false);
+  const std::optional<Sim3d> sim3 = AlignPointsUmeyama(estimated, truth, true);
+  ASSERT_TRUE(se3 && sim3);
+  double sum = 0.0;
+  for (size_t k = 0; k < estimated.size(); ++k) {
+    sum += ((*se3) * estimated[k] - truth[k]).squaredNorm();
+  }
+  const double ate_m = std::sqrt(sum / static_cast<double>(estimated.size()));
+  std::cout << "rendered room " << simulation.duration_s << " s: " << result.frames.size()
+            << " frames, " << estimated.size() << " tracking, init " << init_delay_s
+            << " s after motion onset, ATE SE(3) " << ate_m << " m, Sim(3) scale " << sim3->scale
+            << "; " << summary.message << "\n";
+  EXPECT_LT(ate_m, 0.10);
+  EXPECT_NEAR(sim3->scale, 1.0, 0.1);
+
+  // Outputs: one row per frame.
+  const std::filesystem::path out = folder / "vio_out";
+  WriteVioResult(out, result);
+  EXPECT_EQ(CountLines(out / "states.csv"), static_cast<int>(result.frames.size()) + 1);
+  EXPECT_EQ(ReadTumTrajectory(out / "trajectory_body.tum").size(), result.frames.size());
+  EXPECT_EQ(ReadTumTrajectory(out / "trajectory_cam.tum").size(), result.frames.size());
+}
+
+// The first 4.7 s of EuRoC V1_01_easy: the platform stands still. The
+// static start gives gravity and the gyro bias; the state is held (no
+// drift) and the visual part is reported as not initialised.
+TEST(RunVio, EurocStaticMicro) {
+  VIOSFM_REQUIRE_DATASET(root, "euroc_v101_static_micro");
+  const Sequence sequence = ReadEurocDataset(root);
+  VioOptions options;
+  options.show_progress = false;
+  const VioResult result = RunVio(sequence, options);
+  ASSERT_EQ(result.frames.size(), sequence.images.size());
+  const VioSummary& summary = result.summary;
+  ASSERT_TRUE(summary.static_init.is_static()) << summary.static_init.message;
+  EXPECT_FALSE(summary.visual_initialized);
+  EXPECT_NE(summary.message.find("not enough motion"), std::string::npos) << summary.message;
+  EXPECT_EQ(summary.status_counts[static_cast<int>(VioStatus::kInitializing)],
+            sequence.images.size());
+
+  // Ground truth over the image span: mean gyro bias and up direction.
+  const timestamp_ns_t from = sequence.images.front().timestamp_ns;
+  const timestamp_ns_t to = sequence.images.back().timestamp_ns;
+  Eigen::Vector3d true_gyro_bias = Eigen::Vector3d::Zero();
+  Eigen::Vector3d true_up = Eigen::Vector3d::Zero();
+  int count = 0;
+  for (const GroundTruthState& state : sequence.ground_truth) {
+    if (state.timestamp_ns < from - 1000 || state.timestamp_ns > to + 1000) continue;
+    true_gyro_bias += state.gyro_bias;
+    true_up += state.world_from_body.rotation.conjugate() * Eigen::Vector3d::UnitZ();
+    ++count;
+  }
+  ASSERT_GT(count, 90);
+  true_gyro_bias /= count;
+  true_up.normalize();
+  const Eigen::Vector3d up_in_body = -summary.static_init.gravity_in_body.normalized();
+  const double up_error_deg = std::acos(std::clamp(up_in_body.dot(true_up), -1.0, 1.0)) * kRadToDeg;
+  const double gyro_error = (summary.static_init.gyro_bias - true_gyro_bias).cwiseAbs().maxCoeff();
+
+  double drift_m = 0.0;
+  for (const VioFrameResult& frame : result.frames) {
+    ASSERT_TRUE(frame.state.world_from_body.translation.allFinite());
+    ASSERT_TRUE(frame.state.velocity_in_world.allFinite());
+    EXPECT_EQ(frame.status, VioStatus::kInitializing);
+    drift_m = std::max(drift_m, (frame.state.world_from_body.translation -
+                                 result.frames.front().state.world_from_body.translation)
+                                    .norm());
+    // The held state is gravity aligned: the body's up is the estimate's.
+    const Eigen::Vector3d up =
+        frame.state.world_from_body.rotation.conjugate() * Eigen::Vector3d::UnitZ();
+    EXPECT_LT((up - up_in_body).norm(), 1e-9);
+  }
+  std::cout << "EuRoC static micro: " << summary.message << "; gyro bias error " << gyro_error
+            << " rad/s, up error " << up_error_deg << " deg, drift " << drift_m << " m\n";
+  EXPECT_LT(gyro_error, 2e-3);
+  EXPECT_LT(up_error_deg, 1.0);
+  EXPECT_LT(drift_m, 0.05);
+
+  const std::filesystem::path out = testing::MakeScratchFolder("vio_euroc_static");
+  WriteVioResult(out, result);
+  EXPECT_EQ(CountLines(out / "states.csv"), static_cast<int>(sequence.images.size()) + 1);
+  const std::string summary_text = ReadTextFile(out / "vio_summary.txt");
+  EXPECT_NE(summary_text.find("visual_initialized: false"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace viosfm

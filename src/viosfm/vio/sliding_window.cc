@@ -1,0 +1,546 @@
+#include "viosfm/vio/sliding_window.h"
+
+#include <ceres/loss_function.h>
+#include <ceres/ordered_groups.h>
+#include <ceres/problem.h>
+#include <ceres/solver.h>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "viosfm/geometry/triangulation.h"
+#include "viosfm/util/errors.h"
+#include "viosfm/util/logging.h"
+#include "viosfm/vio/reprojection_factor.h"
+
+namespace viosfm {
+
+const char* VioStatusName(VioStatus status) {
+  switch (status) {
+    case VioStatus::kInitializing: return "initializing";
+    case VioStatus::kTracking: return "tracking";
+    case VioStatus::kImuOnly: return "imu_only";
+    case VioStatus::kLost: return "lost";
+  }
+  return "unknown";
+}
+
+std::string SlidingWindowOptions::Validate() const {
+  if (window_size < 2) return "window_size must be >= 2";
+  if (!(keyframe_parallax_px > 0)) return "keyframe_parallax_px must be > 0";
+  if (keyframe_min_shared_tracks < 0) return "keyframe_min_shared_tracks must be >= 0";
+  if (!(max_keyframe_interval_s > 0)) return "max_keyframe_interval_s must be > 0";
+  if (!(pixel_sigma_px > 0)) return "pixel_sigma_px must be > 0";
+  if (!(cauchy_loss_scale > 0)) return "cauchy_loss_scale must be > 0";
+  if (!(min_triangulation_angle_deg >= 0)) return "min_triangulation_angle_deg must be >= 0";
+  if (!(min_depth_m > 0) || !(max_depth_m > min_depth_m)) {
+    return "min_depth_m/max_depth_m must satisfy 0 < min < max";
+  }
+  if (!(max_reprojection_error_px > 0)) return "max_reprojection_error_px must be > 0";
+  if (max_landmarks < 1) return "max_landmarks must be >= 1";
+  if (max_num_iterations < 1) return "max_num_iterations must be >= 1";
+  if (num_threads < 1) return "num_threads must be >= 1";
+  if (min_tracked_landmarks < 0) return "min_tracked_landmarks must be >= 0";
+  if (!(max_imu_only_s > 0)) return "max_imu_only_s must be > 0";
+  if (!(max_speed_mps > 0)) return "max_speed_mps must be > 0";
+  if (!(max_gyro_bias > 0)) return "max_gyro_bias must be > 0";
+  if (!(max_accel_bias > 0)) return "max_accel_bias must be > 0";
+  if (!(max_position_correction_m > 0)) return "max_position_correction_m must be > 0";
+  if (const std::string error = preintegration.Validate(); !error.empty()) {
+    return "preintegration." + error;
+  }
+  return "";
+}
+
+struct SlidingWindowEstimator::Frame {
+  int id = 0;
+  timestamp_ns_t timestamp_ns = 0;
+  ImuStateParameters parameters;
+  // From the previous frame of the window to this one; null for the first.
+  std::unique_ptr<ImuPreintegration> preintegration;
+  bool is_keyframe = false;
+  std::unordered_map<uint64_t, Eigen::Vector2d> observations;  // normalised
+};
+
+struct SlidingWindowEstimator::Landmark {
+  uint64_t track_id = 0;
+  // The first window frame observing it; its observation is the anchor ray.
+  Frame* anchor = nullptr;
+  bool triangulated = false;
+  double inverse_depth = 0.0;  // 1/m, in the anchor camera
+  int num_observations = 0;    // in the window
+};
+
+namespace {
+
+ImuState StateOf(const ImuStateParameters& parameters, timestamp_ns_t timestamp_ns) {
+  return parameters.ToState(timestamp_ns);
+}
+
+}  // namespace
+
+SlidingWindowEstimator::SlidingWindowEstimator(const Rigid3d& body_from_cam, const ImuNoise& noise,
+                                               double focal_length_px,
+                                               const SlidingWindowOptions& options)
+    : body_from_cam_(body_from_cam),
+      noise_(noise),
+      focal_length_px_(focal_length_px),
+      options_(options),
+      pose_manifold_(CreatePoseManifold()) {
+  if (const std::string error = options.Validate(); !error.empty()) {
+    throw InputError("invalid sliding window options: " + error);
+  }
+  VIOSFM_CHECK_GT(focal_length_px, 0.0);
+}
+
+SlidingWindowEstimator::~SlidingWindowEstimator() = default;
+
+void SlidingWindowEstimator::Reset() {
+  frames_.clear();
+  landmarks_.clear();
+  prior_.reset();
+  has_tracked_ = false;
+  imu_only_since_ns_ = -1;
+}
+
+Rigid3d SlidingWindowEstimator::WorldFromCam(const Frame& frame) const {
+  return StateOf(frame.parameters, frame.timestamp_ns).world_from_body * body_from_cam_;
+}
+
+ImuState SlidingWindowEstimator::NewestState() const {
+  VIOSFM_CHECK(!frames_.empty());
+  return StateOf(frames_.back()->parameters, frames_.back()->timestamp_ns);
+}
+
+void SlidingWindowEstimator::Initialize(const ImuState& state, const InitialStateSigmas& sigmas,
+                                        const FrameFeatures& features) {
+  Reset();
+  rejected_tracks_.clear();
+  auto frame = std::make_unique<Frame>();
+  frame->id = next_frame_id_++;
+  frame->timestamp_ns = state.timestamp_ns;
+  frame->parameters = ImuStateParameters::FromState(state);
+  frame->is_keyframe = true;
+  for (const FeatureObservation& observation : features.observations) {
+    frame->observations[observation.track_id] = observation.normalized;
+    Landmark& landmark = landmarks_[observation.track_id];
+    landmark.track_id = observation.track_id;
+    landmark.anchor = frame.get();
+    landmark.num_observations = 1;
+  }
+  // Prior in the tangent space of (pose, speed_bias): the pose tangent of
+  // Ceres' quaternion manifold is half the world-frame rotation vector
+  // (left perturbation), then the translation.
+  Eigen::VectorXd diagonal(15);
+  diagonal << 2.0 / sigmas.roll_pitch_rad, 2.0 / sigmas.roll_pitch_rad, 2.0 / sigmas.yaw_rad,
+      Eigen::Vector3d::Constant(1.0 / sigmas.position_m),
+      Eigen::Vector3d::Constant(1.0 / sigmas.velocity_mps),
+      Eigen::Vector3d::Constant(1.0 / sigmas.gyro_bias),
+      Eigen::Vector3d::Constant(1.0 / sigmas.accel_bias);
+  Eigen::MatrixXd sqrt_information = diagonal.asDiagonal();
+  prior_ = MakeGaussianPrior({frame->parameters.pose.data(), frame->parameters.speed_bias.data()},
+                             {7, 9}, {pose_manifold_, nullptr}, sqrt_information);
+  frames_.push_back(std::move(frame));
+}
+
+bool SlidingWindowEstimator::IsKeyframe(const Frame& frame, const FrameFeatures& features) const {
+  const Frame* last_keyframe = nullptr;
+  for (auto it = frames_.rbegin(); it != frames_.rend(); ++it) {
+    if ((*it)->is_keyframe && it->get() != &frame) {
+      last_keyframe = it->get();
+      break;
+    }
+  }
+  if (last_keyframe == nullptr) return true;
+  if (NsToSeconds(frame.timestamp_ns - last_keyframe->timestamp_ns) >=
+      options_.max_keyframe_interval_s) {
+    return true;
+  }
+  if (features.is_keyframe) return true;
+  int shared = 0;
+  double parallax_sum = 0.0;
+  for (const auto& [track_id, normalized] : frame.observations) {
+    const auto it = last_keyframe->observations.find(track_id);
+    if (it == last_keyframe->observations.end()) continue;
+    ++shared;
+    parallax_sum += (normalized - it->second).norm() * focal_length_px_;
+  }
+  if (shared < options_.keyframe_min_shared_tracks) return true;
+  return parallax_sum / shared >= options_.keyframe_parallax_px;
+}
+
+void SlidingWindowEstimator::RemoveFrame(size_t index) {
+  VIOSFM_CHECK_LT(index, frames_.size());
+  Frame* frame = frames_[index].get();
+  for (const auto& [track_id, normalized] : frame->observations) {
+    auto it = landmarks_.find(track_id);
+    if (it == landmarks_.end()) continue;
+    Landmark& landmark = it->second;
+    --landmark.num_observations;
+    if (landmark.anchor != frame) continue;
+    // Re-anchor in the next frame that observes it.
+    Frame* next_anchor = nullptr;
+    for (size_t k = 0; k < frames_.size(); ++k) {
+      if (k == index) continue;
+      if (frames_[k]->observations.count(track_id) > 0) {
+        next_anchor = frames_[k].get();
+        break;
+      }
+    }
+    if (next_anchor == nullptr) {
+      landmarks_.erase(it);
+      continue;
+    }
+    if (landmark.triangulated) {
+      const Eigen::Vector3d point =
+          InverseDepthPointInWorld(StateOf(frame->parameters, frame->timestamp_ns).world_from_body,
+                                   body_from_cam_, normalized, landmark.inverse_depth);
+      const double inverse_depth = InverseDepthOfPoint(
+          StateOf(next_anchor->parameters, next_anchor->timestamp_ns).world_from_body,
+          body_from_cam_, point);
+      if (inverse_depth > 1.0 / options_.max_depth_m &&
+          inverse_depth < 1.0 / options_.min_depth_m) {
+        landmark.inverse_depth = inverse_depth;
+      } else {
+        landmark.triangulated = false;
+      }
+    }
+    landmark.anchor = next_anchor;
+  }
+  frames_.erase(frames_.begin() + static_cast<std::ptrdiff_t>(index));
+}
+
+void SlidingWindowEstimator::TriangulateLandmarks() {
+  const double min_angle = options_.min_triangulation_angle_deg * M_PI / 180.0;
+  std::vector<Matrix3x4d> cams_from_world;
+  std::vector<Eigen::Vector3d> centers;
+  cams_from_world.reserve(frames_.size());
+  for (const auto& frame : frames_) {
+    const Rigid3d world_from_cam = WorldFromCam(*frame);
+    cams_from_world.push_back(world_from_cam.Inverse().ToMatrix());
+    centers.push_back(world_from_cam.translation);
+  }
+  std::vector<Matrix3x4d> poses;
+  std::vector<Eigen::Vector2d> points;
+  std::vector<size_t> frame_indices;
+  for (auto& [track_id, landmark] : landmarks_) {
+    if (landmark.triangulated || landmark.num_observations < 2) continue;
+    poses.clear();
+    points.clear();
+    frame_indices.clear();
+    for (size_t k = 0; k < frames_.size(); ++k) {
+      const auto it = frames_[k]->observations.find(track_id);
+      if (it == frames_[k]->observations.end()) continue;
+      poses.push_back(cams_from_world[k]);
+      points.push_back(it->second);
+      frame_indices.push_back(k);
+    }
+    if (points.size() < 2) continue;
+    const std::optional<Eigen::Vector3d> point = TriangulateDlt(poses, points);
+    if (!point || !point->allFinite()) continue;
+    // The widest ray angle: first against the others.
+    double best_angle = 0.0;
+    for (size_t k = 1; k < frame_indices.size(); ++k) {
+      best_angle = std::max(best_angle, TriangulationAngle(centers[frame_indices.front()],
+                                                           centers[frame_indices[k]], *point));
+    }
+    if (best_angle < min_angle) continue;
+    bool good = true;
+    for (size_t k = 0; k < poses.size() && good; ++k) {
+      const Eigen::Vector3d in_cam = poses[k] * point->homogeneous();
+      if (in_cam.z() < options_.min_depth_m || in_cam.z() > options_.max_depth_m) {
+        good = false;
+        break;
+      }
+      const double error_px = (in_cam.hnormalized() - points[k]).norm() * focal_length_px_;
+      if (error_px > options_.max_reprojection_error_px) good = false;
+    }
+    if (!good) continue;
+    const Frame& anchor = *frames_[frame_indices.front()];
+    VIOSFM_CHECK(&anchor == landmark.anchor);
+    const double inverse_depth = InverseDepthOfPoint(
+        StateOf(anchor.parameters, anchor.timestamp_ns).world_from_body, body_from_cam_, *point);
+    if (inverse_depth <= 0.0) continue;
+    landmark.inverse_depth = inverse_depth;
+    landmark.triangulated = true;
+  }
+}
+
+std::vector<SlidingWindowEstimator::Landmark*> SlidingWindowEstimator::SelectLandmarks() {
+  std::vector<Landmark*> selected;
+  for (auto& [track_id, landmark] : landmarks_) {
+    if (landmark.triangulated && landmark.num_observations >= 2) selected.push_back(&landmark);
+  }
+  if (static_cast<int>(selected.size()) > options_.max_landmarks) {
+    std::stable_sort(selected.begin(), selected.end(), [](const Landmark* a, const Landmark* b) {
+      if (a->num_observations != b->num_observations) {
+        return a->num_observations > b->num_observations;
+      }
+      return a->track_id < b->track_id;
+    });
+    selected.resize(options_.max_landmarks);
+  }
+  // A deterministic order for the problem (the map's order is not).
+  std::sort(selected.begin(), selected.end(),
+            [](const Landmark* a, const Landmark* b) { return a->track_id < b->track_id; });
+  return selected;
+}
+
+void SlidingWindowEstimator::Optimize(const std::vector<Landmark*>& landmarks) {
+  ceres::Problem::Options problem_options;
+  problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::Problem problem(problem_options);
+  ceres::Manifold* pose_manifold = const_cast<ceres::Manifold*>(pose_manifold_.get());
+  auto* ordering = new ceres::ParameterBlockOrdering;
+  for (auto& frame : frames_) {
+    problem.AddParameterBlock(frame->parameters.pose.data(), 7, pose_manifold);
+    problem.AddParameterBlock(frame->parameters.speed_bias.data(), 9);
+    ordering->AddElementToGroup(frame->parameters.pose.data(), 1);
+    ordering->AddElementToGroup(frame->parameters.speed_bias.data(), 1);
+  }
+  if (prior_ != nullptr) {
+    problem.AddResidualBlock(new LinearPriorFactor(prior_), nullptr, prior_->ParameterBlocks());
+  }
+  for (size_t k = 1; k < frames_.size(); ++k) {
+    Frame& previous = *frames_[k - 1];
+    Frame& frame = *frames_[k];
+    const ImuState previous_state = StateOf(previous.parameters, previous.timestamp_ns);
+    frame.preintegration->RepropagateIfNeeded(previous_state.gyro_bias, previous_state.accel_bias);
+    problem.AddResidualBlock(ImuFactor::Create(*frame.preintegration), nullptr,
+                             previous.parameters.pose.data(), previous.parameters.speed_bias.data(),
+                             frame.parameters.pose.data(), frame.parameters.speed_bias.data());
+  }
+  const double sqrt_information = focal_length_px_ / options_.pixel_sigma_px;
+  for (Landmark* landmark : landmarks) {
+    const Eigen::Vector2d& anchor_observation =
+        landmark->anchor->observations.at(landmark->track_id);
+    problem.AddParameterBlock(&landmark->inverse_depth, 1);
+    ordering->AddElementToGroup(&landmark->inverse_depth, 0);
+    for (auto& frame : frames_) {
+      if (frame.get() == landmark->anchor) continue;
+      const auto it = frame->observations.find(landmark->track_id);
+      if (it == frame->observations.end()) continue;
+      problem.AddResidualBlock(new InverseDepthReprojectionCost(anchor_observation, it->second,
+                                                                body_from_cam_, sqrt_information),
+                               new ceres::CauchyLoss(options_.cauchy_loss_scale),
+                               landmark->anchor->parameters.pose.data(),
+                               frame->parameters.pose.data(), &landmark->inverse_depth);
+    }
+  }
+  ceres::Solver::Options solver_options;
+  if (landmarks.empty()) {
+    // Only states (IMU and prior factors): no landmark block to eliminate.
+    delete ordering;
+    solver_options.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
+  } else {
+    // Inverse depths eliminated first (Schur complement onto the states).
+    solver_options.linear_solver_type = ceres::DENSE_SCHUR;
+    solver_options.linear_solver_ordering.reset(ordering);
+  }
+  solver_options.trust_region_strategy_type = ceres::DOGLEG;
+  solver_options.max_num_iterations = options_.max_num_iterations;
+  solver_options.num_threads = options_.num_threads;
+  solver_options.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(solver_options, &problem, &summary);
+  if (!summary.IsSolutionUsable()) {
+    VIOSFM_LOG(DEBUG) << "sliding window: solver failed: " << summary.message;
+  }
+}
+
+void SlidingWindowEstimator::RemoveOutliers(const std::vector<Landmark*>& landmarks) {
+  for (Landmark* landmark : landmarks) {
+    bool bad = !(landmark->inverse_depth > 1.0 / options_.max_depth_m) ||
+               !(landmark->inverse_depth < 1.0 / options_.min_depth_m);
+    if (!bad) {
+      const Eigen::Vector3d point = InverseDepthPointInWorld(
+          StateOf(landmark->anchor->parameters, 0).world_from_body, body_from_cam_,
+          landmark->anchor->observations.at(landmark->track_id), landmark->inverse_depth);
+      for (auto& frame : frames_) {
+        const auto it = frame->observations.find(landmark->track_id);
+        if (it == frame->observations.end()) continue;
+        const Eigen::Vector3d in_cam = WorldFromCam(*frame).Inverse() * point;
+        if (in_cam.z() <= 0.0 || (in_cam.hnormalized() - it->second).norm() * focal_length_px_ >
+                                     options_.max_reprojection_error_px) {
+          bad = true;
+          break;
+        }
+      }
+    }
+    if (bad) {
+      // Drop the track for good: its observations are probably wrong.
+      const uint64_t track_id = landmark->track_id;
+      rejected_tracks_.insert(track_id);
+      for (auto& frame : frames_) frame->observations.erase(track_id);
+      landmarks_.erase(track_id);
+    }
+  }
+}
+
+void SlidingWindowEstimator::MarginalizeOldest(const std::vector<Landmark*>& landmarks) {
+  VIOSFM_CHECK_GE(frames_.size(), 2u);
+  Frame* oldest = frames_[0].get();
+  Frame* second = frames_[1].get();
+  Marginalizer marginalizer;
+  for (auto& frame : frames_) {
+    marginalizer.AddParameterBlock(frame->parameters.pose.data(), 7, pose_manifold_);
+    marginalizer.AddParameterBlock(frame->parameters.speed_bias.data(), 9);
+  }
+  if (prior_ != nullptr) {
+    bool touches_oldest = false;
+    for (const LinearPrior::Block& block : prior_->blocks) {
+      if (block.values == oldest->parameters.pose.data() ||
+          block.values == oldest->parameters.speed_bias.data()) {
+        touches_oldest = true;
+      }
+    }
+    if (touches_oldest) {
+      marginalizer.AddResidualBlock(new LinearPriorFactor(prior_), nullptr,
+                                    prior_->ParameterBlocks());
+    }
+  }
+  const ImuState oldest_state = StateOf(oldest->parameters, oldest->timestamp_ns);
+  second->preintegration->RepropagateIfNeeded(oldest_state.gyro_bias, oldest_state.accel_bias);
+  marginalizer.AddResidualBlock(
+      ImuFactor::Create(*second->preintegration), nullptr,
+      {oldest->parameters.pose.data(), oldest->parameters.speed_bias.data(),
+       second->parameters.pose.data(), second->parameters.speed_bias.data()});
+  const double sqrt_information = focal_length_px_ / options_.pixel_sigma_px;
+  for (Landmark* landmark : landmarks) {
+    if (landmark->anchor != oldest) continue;
+    const Eigen::Vector2d& anchor_observation = oldest->observations.at(landmark->track_id);
+    marginalizer.AddParameterBlock(&landmark->inverse_depth, 1);
+    marginalizer.MarkMarginalized(&landmark->inverse_depth);
+    for (auto& frame : frames_) {
+      if (frame.get() == oldest) continue;
+      const auto it = frame->observations.find(landmark->track_id);
+      if (it == frame->observations.end()) continue;
+      marginalizer.AddResidualBlock(
+          new InverseDepthReprojectionCost(anchor_observation, it->second, body_from_cam_,
+                                           sqrt_information),
+          new ceres::CauchyLoss(options_.cauchy_loss_scale),
+          {oldest->parameters.pose.data(), frame->parameters.pose.data(),
+           &landmark->inverse_depth});
+    }
+  }
+  marginalizer.MarkMarginalized(oldest->parameters.pose.data());
+  marginalizer.MarkMarginalized(oldest->parameters.speed_bias.data());
+  prior_ = marginalizer.Marginalize();
+  RemoveFrame(0);
+}
+
+std::string SlidingWindowEstimator::CheckPlausible(const ImuState& predicted) const {
+  for (const auto& frame : frames_) {
+    for (double value : frame->parameters.pose) {
+      if (!std::isfinite(value)) return "non-finite pose";
+    }
+    for (double value : frame->parameters.speed_bias) {
+      if (!std::isfinite(value)) return "non-finite velocity or bias";
+    }
+  }
+  const ImuState newest = NewestState();
+  std::ostringstream message;
+  if (newest.velocity_in_world.norm() > options_.max_speed_mps) {
+    message << "implausible speed " << newest.velocity_in_world.norm() << " m/s";
+  } else if (newest.gyro_bias.norm() > options_.max_gyro_bias) {
+    message << "implausible gyro bias " << newest.gyro_bias.norm() << " rad/s";
+  } else if (newest.accel_bias.norm() > options_.max_accel_bias) {
+    message << "implausible accel bias " << newest.accel_bias.norm() << " m/s^2";
+  } else if ((newest.world_from_body.translation - predicted.world_from_body.translation).norm() >
+             options_.max_position_correction_m) {
+    message << "position jumped "
+            << (newest.world_from_body.translation - predicted.world_from_body.translation).norm()
+            << " m from the IMU prediction";
+  }
+  return message.str();
+}
+
+WindowFrameEstimate SlidingWindowEstimator::AddFrame(const FrameFeatures& features,
+                                                     const std::vector<ImuSample>& imu) {
+  VIOSFM_CHECK(initialized()) << "AddFrame before Initialize";
+  WindowFrameEstimate estimate;
+  // The previous newest frame stays only if it is a keyframe.
+  if (frames_.size() >= 2 && !frames_.back()->is_keyframe) RemoveFrame(frames_.size() - 1);
+  const Frame& previous = *frames_.back();
+  VIOSFM_CHECK_GT(features.timestamp_ns, previous.timestamp_ns) << "frames must be in time order";
+  const ImuState previous_state = StateOf(previous.parameters, previous.timestamp_ns);
+
+  auto frame = std::make_unique<Frame>();
+  frame->id = next_frame_id_++;
+  frame->timestamp_ns = features.timestamp_ns;
+  frame->preintegration = std::make_unique<ImuPreintegration>(
+      previous_state.gyro_bias, previous_state.accel_bias, noise_, options_.preintegration);
+  if (!frame->preintegration->IntegrateRange(imu, previous.timestamp_ns, features.timestamp_ns)) {
+    // No IMU over the interval: nothing can carry the state.
+    estimate.state = previous_state;
+    estimate.state.timestamp_ns = features.timestamp_ns;
+    estimate.status = VioStatus::kLost;
+    estimate.message = "no IMU samples between the frames";
+    Reset();
+    return estimate;
+  }
+  const ImuState predicted = frame->preintegration->Predict(previous_state);
+  frame->parameters = ImuStateParameters::FromState(predicted);
+  for (const FeatureObservation& observation : features.observations) {
+    if (rejected_tracks_.count(observation.track_id) > 0) continue;
+    frame->observations[observation.track_id] = observation.normalized;
+  }
+  frame->is_keyframe = IsKeyframe(*frame, features);
+  Frame* frame_pointer = frame.get();
+  frames_.push_back(std::move(frame));
+  for (const auto& [track_id, normalized] : frame_pointer->observations) {
+    Landmark& landmark = landmarks_[track_id];
+    if (landmark.anchor == nullptr) {
+      landmark.track_id = track_id;
+      landmark.anchor = frame_pointer;
+    }
+    ++landmark.num_observations;
+  }
+
+  TriangulateLandmarks();
+  std::vector<Landmark*> selected = SelectLandmarks();
+  Optimize(selected);
+  const std::string failure = CheckPlausible(predicted);
+  if (!failure.empty()) {
+    estimate.state = predicted;
+    estimate.status = VioStatus::kLost;
+    estimate.message = failure;
+    Reset();
+    return estimate;
+  }
+  RemoveOutliers(selected);
+  selected = SelectLandmarks();
+
+  estimate.state = NewestState();
+  estimate.is_keyframe = frame_pointer->is_keyframe;
+  estimate.num_window_landmarks = static_cast<int>(selected.size());
+  for (const Landmark* landmark : selected) {
+    if (frame_pointer->observations.count(landmark->track_id) > 0) ++estimate.num_landmarks;
+  }
+  if (estimate.num_landmarks >= options_.min_tracked_landmarks) {
+    has_tracked_ = true;
+    imu_only_since_ns_ = -1;
+    estimate.status = VioStatus::kTracking;
+  } else if (!has_tracked_) {
+    estimate.status = VioStatus::kInitializing;
+  } else {
+    if (imu_only_since_ns_ < 0) imu_only_since_ns_ = frame_pointer->timestamp_ns;
+    estimate.status = VioStatus::kImuOnly;
+    if (NsToSeconds(frame_pointer->timestamp_ns - imu_only_since_ns_) > options_.max_imu_only_s) {
+      estimate.status = VioStatus::kLost;
+      estimate.message = "too few landmarks for too long";
+      Reset();
+      return estimate;
+    }
+  }
+
+  if (frame_pointer->is_keyframe) {
+    int num_keyframes = 0;
+    for (const auto& window_frame : frames_) num_keyframes += window_frame->is_keyframe ? 1 : 0;
+    if (num_keyframes > options_.window_size) MarginalizeOldest(selected);
+  }
+  return estimate;
+}
+
+}  // namespace viosfm

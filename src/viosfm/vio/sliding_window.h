@@ -1,0 +1,187 @@
+// Sliding-window visual-inertial estimator (monocular camera + IMU), in the
+// manner of VINS-Mono's back end.
+//
+// The window holds the states (world_from_body, velocity, gyro and accel
+// biases) of up to window_size keyframes plus the newest frame. Each new
+// frame is predicted from the newest state by IMU preintegration, joins the
+// window, and the window is optimised with Ceres over
+//  - IMU preintegration factors between consecutive states (imu_factor.h),
+//  - reprojection factors of landmarks parameterised by their inverse depth
+//    in the camera of their first observation in the window
+//    (reprojection_factor.h), with a Cauchy loss,
+//  - the prior left by marginalisation (marginalization.h), or at the start
+//    the Gaussian prior of the initial state.
+// After the optimisation, when the newest frame is a keyframe and the window
+// is full, the oldest keyframe is marginalised: its state, the IMU factor to
+// its successor, the landmarks anchored in it (with all their observations)
+// and the previous prior become the new prior (Schur complement); the
+// landmarks still observed later are re-anchored in their next observation.
+// A newest frame that is not a keyframe is dropped when the next frame
+// arrives (its IMU interval is integrated again from the state before it),
+// so every frame gets an optimised state but only keyframes stay.
+//
+// Keyframes: the front end's decision, or a mean parallax (px) to the last
+// keyframe of at least keyframe_parallax_px, or fewer shared tracks than
+// keyframe_min_shared_tracks, or max_keyframe_interval_s elapsed.
+//
+// Failure detection: an implausible state (speed, biases, a non-finite
+// value, a jump from the IMU prediction) resets the window (status kLost);
+// fewer than min_tracked_landmarks landmarks seen by the newest frame make
+// the frame kImuOnly (the window then carries the state on the IMU alone),
+// and kImuOnly for longer than max_imu_only_s is kLost as well. After a
+// reset, the caller starts the window again (Initialize).
+//
+// Frames are stamped on the IMU clock. Observations are the undistorted
+// normalised coordinates of FrameFeatures.
+#pragma once
+
+#include <ceres/manifold.h>
+
+#include <Eigen/Core>
+#include <deque>
+#include <memory>
+#include <string>
+#include <unordered_map>
+#include <unordered_set>
+#include <vector>
+
+#include "viosfm/geometry/rigid3.h"
+#include "viosfm/sensor/imu.h"
+#include "viosfm/vio/frame_features.h"
+#include "viosfm/vio/imu_factor.h"
+#include "viosfm/vio/imu_preintegration.h"
+#include "viosfm/vio/marginalization.h"
+
+namespace viosfm {
+
+enum class VioStatus {
+  kInitializing,  // no visual-inertial estimate yet (static start, waiting for motion/landmarks)
+  kTracking,      // visual-inertial estimate with enough landmarks
+  kImuOnly,       // too few landmarks: the state is carried by the IMU
+  kLost,          // the estimate failed (implausible state, no landmarks for too long)
+};
+const char* VioStatusName(VioStatus status);
+
+struct SlidingWindowOptions {
+  // Keyframes kept in the window (besides the newest frame). Default 10.
+  int window_size = 10;
+  // px, mean parallax to the last keyframe that makes a keyframe. Default 10.
+  double keyframe_parallax_px = 10.0;
+  // Fewer tracks shared with the last keyframe make a keyframe. Default 30.
+  int keyframe_min_shared_tracks = 30;
+  // s, longest time between keyframes. Default 1.0.
+  double max_keyframe_interval_s = 1.0;
+  // px, standard deviation of a feature position. Default 1.5 (VINS-Mono).
+  double pixel_sigma_px = 1.5;
+  // Scale of the Cauchy loss on the whitened reprojection residual (units of
+  // pixel_sigma_px). Default 1.0.
+  double cauchy_loss_scale = 1.0;
+  // deg, largest angle between two rays of a landmark needed to triangulate
+  // it. Default 1.0.
+  double min_triangulation_angle_deg = 1.0;
+  // m, depth range of an accepted landmark (anchor camera). Defaults 0.1, 50.
+  double min_depth_m = 0.1;
+  double max_depth_m = 50.0;
+  // px, a landmark with an observation farther than this from its
+  // reprojection after the optimisation is removed. Default 4.
+  double max_reprojection_error_px = 4.0;
+  // Most landmarks in one optimisation (the longest-observed first). Default 200.
+  int max_landmarks = 200;
+  // Ceres iterations per frame. Default 8.
+  int max_num_iterations = 8;
+  // Threads of the Ceres solver. Default 1.
+  int num_threads = 1;
+  // Fewer landmarks seen by the newest frame: kImuOnly. Default 10.
+  int min_tracked_landmarks = 10;
+  // s, kImuOnly for longer than this: kLost. Default 3.
+  double max_imu_only_s = 3.0;
+  // Plausibility limits: speed (m/s, default 10), gyro bias (rad/s, default
+  // 0.3), accel bias (m/s^2, default 2), change of the newest position from
+  // its IMU prediction in one optimisation (m, default 1).
+  double max_speed_mps = 10.0;
+  double max_gyro_bias = 0.3;
+  double max_accel_bias = 2.0;
+  double max_position_correction_m = 1.0;
+  ImuPreintegrationOptions preintegration;
+
+  // Empty if valid; otherwise names the bad field.
+  std::string Validate() const;
+  bool Check() const { return Validate().empty(); }
+};
+
+// Standard deviations of the Gaussian prior of the first state.
+struct InitialStateSigmas {
+  double position_m = 1e-3;      // m
+  double yaw_rad = 1e-3;         // rad
+  double roll_pitch_rad = 0.02;  // rad
+  double velocity_mps = 0.05;    // m/s
+  double gyro_bias = 0.005;      // rad/s
+  double accel_bias = 0.1;       // m/s^2
+};
+
+// What the estimator says about one frame.
+struct WindowFrameEstimate {
+  ImuState state;
+  VioStatus status = VioStatus::kInitializing;
+  bool is_keyframe = false;
+  int num_landmarks = 0;  // triangulated landmarks seen by this frame, used in the optimisation
+  int num_window_landmarks = 0;
+  std::string message;  // why kLost
+};
+
+class SlidingWindowEstimator {
+ public:
+  // focal_length_px converts pixel thresholds to normalised coordinates.
+  SlidingWindowEstimator(const Rigid3d& body_from_cam, const ImuNoise& noise,
+                         double focal_length_px, const SlidingWindowOptions& options);
+  ~SlidingWindowEstimator();
+
+  // Starts the window with `state` (stamped) and its observations; clears
+  // what was there.
+  void Initialize(const ImuState& state, const InitialStateSigmas& sigmas,
+                  const FrameFeatures& features);
+  bool initialized() const { return !frames_.empty(); }
+
+  // Adds a frame (stamp after the newest state; `imu` ordered, covering the
+  // interval from the newest state) and optimises. On kLost the window is
+  // cleared (initialized() becomes false) and the state is the IMU prediction.
+  WindowFrameEstimate AddFrame(const FrameFeatures& features, const std::vector<ImuSample>& imu);
+
+  // The newest state (requires initialized()).
+  ImuState NewestState() const;
+  void Reset();
+
+  int num_frames() const { return static_cast<int>(frames_.size()); }
+  int num_landmarks() const { return static_cast<int>(landmarks_.size()); }
+
+ private:
+  struct Frame;
+  struct Landmark;
+
+  bool IsKeyframe(const Frame& frame, const FrameFeatures& features) const;
+  void RemoveFrame(size_t index);
+  void TriangulateLandmarks();
+  // Landmarks used in the optimisation: triangulated, seen twice or more.
+  std::vector<Landmark*> SelectLandmarks();
+  void Optimize(const std::vector<Landmark*>& landmarks);
+  void RemoveOutliers(const std::vector<Landmark*>& landmarks);
+  void MarginalizeOldest(const std::vector<Landmark*>& landmarks);
+  std::string CheckPlausible(const ImuState& predicted) const;
+  Rigid3d WorldFromCam(const Frame& frame) const;
+
+  Rigid3d body_from_cam_;
+  ImuNoise noise_;
+  double focal_length_px_;
+  SlidingWindowOptions options_;
+  std::shared_ptr<const ceres::Manifold> pose_manifold_;
+
+  std::deque<std::unique_ptr<Frame>> frames_;
+  std::unordered_map<uint64_t, Landmark> landmarks_;
+  std::unordered_set<uint64_t> rejected_tracks_;
+  std::shared_ptr<LinearPrior> prior_;
+  bool has_tracked_ = false;
+  timestamp_ns_t imu_only_since_ns_ = -1;
+  int next_frame_id_ = 0;
+};
+
+}  // namespace viosfm

@@ -1,0 +1,328 @@
+#include "viosfm/vio/sliding_window.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <iostream>
+#include <unordered_map>
+
+#include "viosfm/geometry/alignment.h"
+#include "viosfm/sensor/camera_models.h"
+#include "viosfm/sim/imu_synthesis.h"
+#include "viosfm/sim/sequence_simulator.h"
+#include "viosfm/sim/trajectory.h"
+#include "viosfm/util/random.h"
+#include "viosfm/vio/odometry.h"
+
+namespace viosfm {
+namespace {
+
+// A room of random landmarks (walls, floor, ceiling and a few pillars),
+// observed along a simulated walk by an ideal tracker: up to max_features
+// visible landmarks per frame, kept while visible, with Gaussian pixel noise.
+struct SyntheticRun {
+  BodyTrajectory motion;
+  SynthesizedImu imu;
+  SensorRig rig;
+  std::vector<FrameFeatures> frames;
+  timestamp_ns_t motion_start_ns = 0;
+};
+
+SyntheticRun MakeSyntheticRun(double duration_s, double static_start_s, uint64_t seed) {
+  SyntheticRun run;
+  WalkOptions walk;
+  walk.duration_s = duration_s;
+  walk.static_start_s = static_start_s;
+  walk.seed = seed;
+  run.motion = GenerateWalk(walk);
+  run.motion_start_ns = walk.start_ns + SecondsToNs(static_start_s);
+
+  run.rig.camera = SimulationOptions::DefaultCamera();
+  run.rig.body_from_cam = SimulationOptions::DefaultBodyFromCam();
+  run.rig.imu_noise = ImuNoise();
+  run.rig.camera_rate_hz = 20.0;
+
+  ImuSynthesisOptions imu_options;
+  imu_options.noise = run.rig.imu_noise;
+  imu_options.initial_gyro_bias = Eigen::Vector3d(0.004, -0.003, 0.002);
+  imu_options.initial_accel_bias = Eigen::Vector3d(0.05, -0.04, 0.03);
+  imu_options.seed = seed + 1;
+  run.imu = SynthesizeImu(run.motion, run.motion.start_ns(), run.motion.end_ns(), imu_options);
+
+  Random random(seed + 2);
+  std::vector<Eigen::Vector3d> points;
+  for (int k = 0; k < 3000; ++k) {
+    const int face = static_cast<int>(random.UniformInt(0, 5));
+    const double u = random.Uniform(-4.0, 4.0);
+    const double v = random.Uniform(-4.0, 4.0);
+    const double h = random.Uniform(0.0, 3.0);
+    switch (face) {
+      case 0: points.emplace_back(4.0, u, h); break;
+      case 1: points.emplace_back(-4.0, u, h); break;
+      case 2: points.emplace_back(u, 4.0, h); break;
+      case 3: points.emplace_back(u, -4.0, h); break;
+      case 4: points.emplace_back(u, v, 0.0); break;
+      default: points.emplace_back(u, v, 3.0); break;
+    }
+  }
+
+  const Camera& camera = run.rig.camera;
+  const double focal = MeanFocalLength(camera);
+  const int kMaxFeatures = 100;
+  const double kPixelSigma = 0.5;
+  std::unordered_map<size_t, uint64_t> active;  // landmark -> track id
+  uint64_t next_track_id = 1;
+  const timestamp_ns_t period = SecondsToNs(1.0 / run.rig.camera_rate_hz);
+  for (timestamp_ns_t t = walk.start_ns + period; t + period < run.motion.end_ns(); t += period) {
+    const Rigid3d cam_from_world = (run.motion.WorldFromBody(t) * run.rig.body_from_cam).Inverse();
+    std::vector<std::pair<size_t, Eigen::Vector2d>> visible;
+    for (size_t k = 0; k < points.size(); ++k) {
+      const Eigen::Vector3d in_cam = cam_from_world * points[k];
+      if (in_cam.z() < 0.3) continue;
+      const std::optional<Eigen::Vector2d> pixel = Project(camera, in_cam);
+      if (!pixel || pixel->x() < 10 || pixel->y() < 10 ||
+          pixel->x() > static_cast<double>(camera.width) - 10 ||
+          pixel->y() > static_cast<double>(camera.height) - 10) {
+        continue;
+      }
+      visible.emplace_back(k, in_cam.hnormalized());
+    }
+    std::unordered_map<size_t, uint64_t> next_active;
+    FrameFeatures frame;
+    frame.timestamp_ns = t;
+    auto add = [&](size_t landmark, const Eigen::Vector2d& normalized, uint64_t track_id) {
+      FeatureObservation observation;
+      observation.track_id = track_id;
+      observation.normalized = normalized + Eigen::Vector2d(random.Normal(0, kPixelSigma / focal),
+                                                            random.Normal(0, kPixelSigma / focal));
+      observation.pixel = CamToImage(camera, observation.normalized);
+      frame.observations.push_back(observation);
+      next_active[landmark] = track_id;
+    };
+    for (const auto& [landmark, normalized] : visible) {
+      const auto it = active.find(landmark);
+      if (it != active.end()) add(landmark, normalized, it->second);
+    }
+    std::shuffle(visible.begin(), visible.end(), random.engine());
+    for (const auto& [landmark, normalized] : visible) {
+      if (static_cast<int>(frame.observations.size()) >= kMaxFeatures) break;
+      if (next_active.count(landmark) == 0) add(landmark, normalized, next_track_id++);
+    }
+    active = std::move(next_active);
+    run.frames.push_back(std::move(frame));
+  }
+  return run;
+}
+
+struct Accuracy {
+  double ate_se3_m = 0.0;
+  double ate_sim3_m = 0.0;
+  double scale = 0.0;
+  size_t count = 0;
+};
+
+Accuracy Evaluate(const std::vector<Eigen::Vector3d>& estimated,
+                  const std::vector<Eigen::Vector3d>& truth) {
+  Accuracy accuracy;
+  accuracy.count = estimated.size();
+  for (bool with_scale : {false, true}) {
+    const std::optional<Sim3d> alignment = AlignPointsUmeyama(estimated, truth, with_scale);
+    if (!alignment) return accuracy;
+    double sum = 0.0;
+    for (size_t k = 0; k < estimated.size(); ++k) {
+      sum += ((*alignment) * estimated[k] - truth[k]).squaredNorm();
+    }
+    const double rmse = std::sqrt(sum / static_cast<double>(estimated.size()));
+    if (with_scale) {
+      accuracy.ate_sim3_m = rmse;
+      accuracy.scale = alignment->scale;
+    } else {
+      accuracy.ate_se3_m = rmse;
+    }
+  }
+  return accuracy;
+}
+
+TEST(SlidingWindowOptions, ValidateNamesTheBadField) {
+  SlidingWindowOptions options;
+  EXPECT_EQ(options.Validate(), "");
+  options.window_size = 1;
+  EXPECT_NE(options.Validate().find("window_size"), std::string::npos);
+  options = SlidingWindowOptions();
+  options.pixel_sigma_px = 0.0;
+  EXPECT_NE(options.Validate().find("pixel_sigma_px"), std::string::npos);
+}
+
+// 10 s walk in a room with a 2 s static start: the static start initialises
+// gravity and the gyro bias, the window tracks from the start of the motion.
+TEST(SlidingWindowEstimator, TracksSyntheticWalkWithStaticStart) {
+  const SyntheticRun run = MakeSyntheticRun(10.0, 2.0, 7);
+  VioOptions options;
+  options.show_progress = false;
+  VisualInertialOdometry vio(run.rig, run.imu.samples, run.frames.front().timestamp_ns,
+                             run.frames.back().timestamp_ns, options);
+  std::vector<Eigen::Vector3d> estimated;
+  std::vector<Eigen::Vector3d> truth;
+  timestamp_ns_t first_tracking_ns = -1;
+  size_t moving_frames = 0;
+  for (const FrameFeatures& frame : run.frames) {
+    const VioFrameResult result = vio.ProcessFrame(frame);
+    ASSERT_TRUE(result.state.world_from_body.translation.allFinite());
+    ASSERT_TRUE(result.state.velocity_in_world.allFinite());
+    if (result.status == VioStatus::kTracking) {
+      if (first_tracking_ns < 0) first_tracking_ns = frame.timestamp_ns;
+      estimated.push_back(result.state.world_from_body.translation);
+      truth.push_back(run.motion.PositionInWorld(frame.timestamp_ns));
+    }
+    if (frame.timestamp_ns < run.motion_start_ns - SecondsToNs(0.6)) {
+      EXPECT_EQ(result.status, VioStatus::kInitializing);
+    } else if (frame.timestamp_ns > run.motion_start_ns + SecondsToNs(1.0)) {
+      ++moving_frames;
+      EXPECT_EQ(result.status, VioStatus::kTracking);
+    }
+  }
+  const VioSummary& summary = vio.summary();
+  EXPECT_TRUE(summary.static_init.is_static());
+  EXPECT_EQ(summary.num_resets, 0);
+  ASSERT_GE(first_tracking_ns, 0);
+  const double init_delay_s = NsToSeconds(first_tracking_ns - run.motion_start_ns);
+  EXPECT_LT(init_delay_s, 3.0);
+  // Every frame from 1 s after the motion onset is tracked.
+  EXPECT_GE(estimated.size(), moving_frames);
+  const Accuracy accuracy = Evaluate(estimated, truth);
+  std::cout << "synthetic 10 s: " << accuracy.count << " tracking frames of " << run.frames.size()
+            << ", init " << init_delay_s << " s after motion onset, ATE SE(3) "
+            << accuracy.ate_se3_m << " m, Sim(3) " << accuracy.ate_sim3_m << " m, scale "
+            << accuracy.scale << "\n";
+  EXPECT_LT(accuracy.ate_se3_m, 0.05);
+  EXPECT_LT(accuracy.ate_sim3_m, 0.05);
+  EXPECT_NEAR(accuracy.scale, 1.0, 0.01);
+}
+
+// A moving start (no static interval): the visual-inertial initialisation
+// starts the window; the trajectory after it is tracked.
+TEST(SlidingWindowEstimator, MovingStartUsesVisualInertialInitialization) {
+  const SyntheticRun run = MakeSyntheticRun(6.0, 0.0, 31);
+  VioOptions options;
+  options.show_progress = false;
+  VisualInertialOdometry vio(run.rig, run.imu.samples, run.frames.front().timestamp_ns,
+                             run.frames.back().timestamp_ns, options);
+  std::vector<Eigen::Vector3d> estimated;
+  std::vector<Eigen::Vector3d> truth;
+  for (const FrameFeatures& frame : run.frames) {
+    FrameFeatures with_keyframes = frame;
+    const VioFrameResult result = vio.ProcessFrame(with_keyframes);
+    ASSERT_TRUE(result.state.world_from_body.translation.allFinite());
+    if (result.status == VioStatus::kTracking) {
+      estimated.push_back(result.state.world_from_body.translation);
+      truth.push_back(run.motion.PositionInWorld(frame.timestamp_ns));
+    }
+  }
+  const VioSummary& summary = vio.summary();
+  EXPECT_FALSE(summary.static_init.is_static());
+  ASSERT_TRUE(summary.visual_initialized);
+  const double init_s = NsToSeconds(summary.first_tracking_ns - run.frames.front().timestamp_ns);
+  const Accuracy accuracy = Evaluate(estimated, truth);
+  std::cout << "moving start: tracking from " << init_s << " s, " << estimated.size()
+            << " tracking frames of " << run.frames.size() << ", ATE SE(3) " << accuracy.ate_se3_m
+            << " m, scale " << accuracy.scale << "\n";
+  EXPECT_LT(init_s, 3.0);
+  EXPECT_LT(accuracy.ate_se3_m, 0.05);
+  EXPECT_NEAR(accuracy.scale, 1.0, 0.03);
+}
+
+// A 1.5 s visual gap (no features at all) in the middle of a walk: the frames
+// in it are kImuOnly with a bounded drift, and tracking resumes after it.
+TEST(SlidingWindowEstimator, BridgesShortVisualGapWithImu) {
+  SyntheticRun run = MakeSyntheticRun(9.0, 2.0, 21);
+  const timestamp_ns_t gap_start = run.motion_start_ns + SecondsToNs(3.5);
+  const timestamp_ns_t gap_end = gap_start + SecondsToNs(1.5);
+  for (FrameFeatures& frame : run.frames) {
+    if (frame.timestamp_ns >= gap_start && frame.timestamp_ns < gap_end) {
+      frame.observations.clear();
+    }
+  }
+  VioOptions options;
+  options.show_progress = false;
+  VisualInertialOdometry vio(run.rig, run.imu.samples, run.frames.front().timestamp_ns,
+                             run.frames.back().timestamp_ns, options);
+  std::vector<Eigen::Vector3d> tracked_estimate;
+  std::vector<Eigen::Vector3d> tracked_truth;
+  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> gap;  // estimate, truth
+  int tracking_after_gap = 0;
+  for (const FrameFeatures& frame : run.frames) {
+    const VioFrameResult result = vio.ProcessFrame(frame);
+    ASSERT_TRUE(result.state.world_from_body.translation.allFinite());
+    EXPECT_NE(result.status, VioStatus::kLost);
+    const Eigen::Vector3d truth = run.motion.PositionInWorld(frame.timestamp_ns);
+    if (frame.timestamp_ns >= gap_start && frame.timestamp_ns < gap_end) {
+      EXPECT_EQ(result.status, VioStatus::kImuOnly);
+      gap.emplace_back(result.state.world_from_body.translation, truth);
+    } else if (result.status == VioStatus::kTracking) {
+      tracked_estimate.push_back(result.state.world_from_body.translation);
+      tracked_truth.push_back(truth);
+      if (frame.timestamp_ns > gap_end) ++tracking_after_gap;
+    }
+  }
+  // Tracking resumes within 1 s of the gap's end.
+  const int frames_after_gap = static_cast<int>(
+      NsToSeconds(run.frames.back().timestamp_ns - gap_end) * run.rig.camera_rate_hz);
+  EXPECT_GT(tracking_after_gap, frames_after_gap - 20);
+  const std::optional<Sim3d> alignment = AlignPointsUmeyama(tracked_estimate, tracked_truth, false);
+  ASSERT_TRUE(alignment);
+  double worst_gap_error = 0.0;
+  for (const auto& [estimate, truth] : gap) {
+    worst_gap_error = std::max(worst_gap_error, ((*alignment) * estimate - truth).norm());
+  }
+  const Accuracy accuracy = Evaluate(tracked_estimate, tracked_truth);
+  std::cout << "1.5 s visual gap: " << gap.size() << " IMU-only frames, worst error "
+            << worst_gap_error << " m; tracking ATE " << accuracy.ate_se3_m << " m\n";
+  EXPECT_EQ(gap.size(), 30u);
+  EXPECT_LT(worst_gap_error, 0.2);
+  EXPECT_LT(accuracy.ate_se3_m, 0.05);
+}
+
+// A visual gap longer than max_imu_only_s: the estimate is declared lost
+// once, the window restarts from the last good state carried by the IMU, and
+// tracking resumes after the gap.
+TEST(SlidingWindowEstimator, RestartsAfterLongVisualGap) {
+  SyntheticRun run = MakeSyntheticRun(9.0, 2.0, 41);
+  const timestamp_ns_t gap_start = run.motion_start_ns + SecondsToNs(3.0);
+  const timestamp_ns_t gap_end = gap_start + SecondsToNs(1.5);
+  for (FrameFeatures& frame : run.frames) {
+    if (frame.timestamp_ns >= gap_start && frame.timestamp_ns < gap_end) {
+      frame.observations.clear();
+    }
+  }
+  VioOptions options;
+  options.show_progress = false;
+  options.window.max_imu_only_s = 0.5;
+  VisualInertialOdometry vio(run.rig, run.imu.samples, run.frames.front().timestamp_ns,
+                             run.frames.back().timestamp_ns, options);
+  std::vector<Eigen::Vector3d> estimated;
+  std::vector<Eigen::Vector3d> truth;
+  int tracking_after_gap = 0;
+  for (const FrameFeatures& frame : run.frames) {
+    const VioFrameResult result = vio.ProcessFrame(frame);
+    ASSERT_TRUE(result.state.world_from_body.translation.allFinite());
+    if (result.status == VioStatus::kTracking) {
+      estimated.push_back(result.state.world_from_body.translation);
+      truth.push_back(run.motion.PositionInWorld(frame.timestamp_ns));
+      if (frame.timestamp_ns > gap_end) ++tracking_after_gap;
+    }
+  }
+  const VioSummary& summary = vio.summary();
+  EXPECT_EQ(summary.num_resets, 1);
+  EXPECT_EQ(summary.status_counts[static_cast<int>(VioStatus::kLost)], 1u);
+  const int frames_after_gap = static_cast<int>(
+      NsToSeconds(run.frames.back().timestamp_ns - gap_end) * run.rig.camera_rate_hz);
+  EXPECT_GT(tracking_after_gap, frames_after_gap - 20);
+  const Accuracy accuracy = Evaluate(estimated, truth);
+  std::cout << "restart after a 1.5 s gap: " << tracking_after_gap << " of " << frames_after_gap
+            << " frames tracked after it, ATE SE(3) " << accuracy.ate_se3_m << " m\n";
+  EXPECT_LT(accuracy.ate_se3_m, 0.10);
+}
+
+}  // namespace
+}  // namespace viosfm
