@@ -76,7 +76,8 @@ void RegisterRun(CLI::App& app) {
       ->required();
   command->add_option("--out", args->out, "Output folder (created if missing)")->required();
   command->add_option("--vio-trajectory", args->vio_trajectory,
-                      "VIO trajectory (TUM by default), world_from_body unless --vio-frame cam");
+                      "VIO trajectory (TUM by default), world_from_body unless --vio-frame cam; "
+                      "without it viosfm's own VIO runs on the images and IMU");
   command->add_option("--vio-format", args->vio_format, "Its format: tum, euroc or kitti")
       ->capture_default_str();
   command->add_option("--vio-frame", args->vio_frame, "Frame of the VIO poses: body or cam")

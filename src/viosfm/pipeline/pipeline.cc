@@ -27,6 +27,7 @@
 #include "viosfm/util/progress.h"
 #include "viosfm/util/string_util.h"
 #include "viosfm/util/timer.h"
+#include "viosfm/vio/odometry.h"
 
 #ifndef VIOSFM_VERSION
 #define VIOSFM_VERSION "unknown"
@@ -469,17 +470,55 @@ Sequence ReadPipelineDataset(const fs::path& dataset, const ImageFolderOptions& 
   return sequence;
 }
 
+Trajectory RunOwnVio(const Sequence& sequence, const PipelineOptions& options) {
+  if (!sequence.has_imu()) {
+    throw InputError(sequence.root.string(), 0,
+                     "no VIO poses: the dataset has no IMU for viosfm's own VIO; pass "
+                     "--vio-trajectory FILE (the TUM trajectory of any VIO)");
+  }
+  VIOSFM_LOG(INFO) << "run: no VIO trajectory given: running viosfm's own VIO";
+  VioOptions vio_options = options.own_vio;
+  vio_options.show_progress = vio_options.show_progress && options.show_progress;
+  const VioResult result = RunVio(sequence, vio_options);
+  WriteVioResult(options.output_folder / "vio", result);
+  // The poses of the longest stretch of frames the VIO tracked (tracking or
+  // IMU-only) without a reset: a reset starts a new world frame, and the
+  // frames before the visual-inertial initialisation have no pose.
+  Trajectory best;
+  Trajectory current;
+  for (const VioFrameResult& frame : result.frames) {
+    const bool posed = frame.status == VioStatus::kTracking || frame.status == VioStatus::kImuOnly;
+    if (posed) {
+      current.poses.push_back({frame.timestamp_ns, frame.state.world_from_body});
+    } else if (!current.empty()) {
+      if (current.size() > best.size()) best = current;
+      current = Trajectory{};
+    }
+  }
+  if (current.size() > best.size()) best = current;
+  if (best.empty()) {
+    throw InputError(sequence.root.string(), 0,
+                     "viosfm's own VIO never initialised: " + result.summary.message);
+  }
+  if (best.size() + result.summary.status_counts[static_cast<int>(VioStatus::kInitializing)] <
+      result.frames.size()) {
+    VIOSFM_LOG(WARNING) << "run: the VIO was reset " << result.summary.num_resets
+                        << " time(s); using its longest tracked stretch, " << best.size() << " of "
+                        << result.frames.size() << " frames";
+  }
+  VIOSFM_LOG(INFO) << "run: own VIO: " << best.size() << " of " << result.frames.size()
+                   << " frames posed, " << result.summary.cpu_seconds << " CPU s (output in "
+                   << (options.output_folder / "vio").string() << ")";
+  return best;
+}
+
 Trajectory LoadVioTrajectory(const Sequence& sequence, const PipelineOptions& options) {
   if (options.vio_source) {
     Trajectory vio = options.vio_source(sequence);
     if (vio.empty()) throw InputError("the VIO gave no poses for " + sequence.root.string());
     return vio;
   }
-  if (options.vio_trajectory.empty()) {
-    throw InputError(
-        "no VIO poses: pass --vio-trajectory FILE (a TUM trajectory from any VIO); viosfm's own "
-        "VIO is not wired in yet");
-  }
+  if (options.vio_trajectory.empty()) return RunOwnVio(sequence, options);
   const std::string path = options.vio_trajectory.string();
   if (!fs::is_regular_file(options.vio_trajectory)) {
     throw InputError(path, 0, "VIO trajectory file not found");
@@ -504,8 +543,9 @@ PipelineSummary RunPipeline(const PipelineOptions& options) {
   summary.output_folder = options.output_folder;
   StageClock clock(&summary.stages);
   const fs::path out = options.output_folder;
-  const std::string vio_name =
-      options.vio_source ? std::string("the VIO") : options.vio_trajectory.string();
+  const std::string vio_name = options.vio_source || options.vio_trajectory.empty()
+                                   ? std::string("the VIO")
+                                   : options.vio_trajectory.string();
 
   // 1. Dataset.
   clock.Begin("read_dataset");

@@ -7,7 +7,8 @@
 //  1. read_dataset   EuRoC ASL folder (mav0/) or an image folder;
 //  2. vio            the VIO trajectory (world_from_body) of the sequence,
 //                    from PipelineOptions::vio_source if set, else from the
-//                    file vio_trajectory (see LoadVioTrajectory);
+//                    file vio_trajectory, else from viosfm's own VIO
+//                    (vio/odometry.h) on the images and IMU (LoadVioTrajectory);
 //  3. select_frames  static start/end trimming and downsampling to
 //                    target_rate_hz (matching/frame_selection.h); frames
 //                    without a VIO pose within max_vio_time_difference_ns are
@@ -60,6 +61,7 @@
 #include "viosfm/scene/trajectory.h"
 #include "viosfm/sfm/batched_mapper.h"
 #include "viosfm/util/timestamp.h"
+#include "viosfm/vio/odometry.h"
 
 namespace viosfm {
 
@@ -88,6 +90,10 @@ struct PipelineOptions {
   // VIO poses. When vio_source is set it is called on the sequence and the
   // file options are ignored; otherwise the file vio_trajectory is read.
   VioSource vio_source;
+  // Without vio_source and vio_trajectory, viosfm's own VIO (vio/odometry.h)
+  // runs on the images and IMU with these options; its output goes to
+  // OUT/vio/ and the poses of its longest tracked stretch are used.
+  VioOptions own_vio;
   std::filesystem::path vio_trajectory;                  // trajectory file; default none
   TrajectoryFormat vio_format = TrajectoryFormat::kTum;  // default TUM
   // The frame of the file's poses; kCam poses are converted with the
