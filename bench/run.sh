@@ -17,6 +17,9 @@
 #                          on viosfm's candidate pairs + mapper
 #   colmap_sequential      COLMAP's own sequential matcher + mapper
 #   vio                    the input VIO trajectory itself
+#   viosfm_own_vio         `viosfm run` with viosfm's own VIO (images + IMU
+#                          only; simulated scenarios)
+#   own_vio                viosfm's own VIO trajectory itself
 # evaluates each with `viosfm eval` (Sim(3)-aligned ATE of the body
 # trajectory against the ground truth), records wall-clock time and peak
 # memory of each run (/usr/bin/time), and then, on the first scenario, the
@@ -24,7 +27,7 @@
 # sweep. `viosfm bench-report` turns the folder into tables and plots
 # (docs/benchmarks-suite.md and docs/images/bench_*.svg by default).
 #
-# Full mode: 60 s at 10 Hz (600 frames) a scenario; --quick: 20 s at 5 Hz.
+# Full mode: 60 s at 10 Hz (600 frames) a scenario; --quick: 15 s at 10 Hz.
 # Needs: viosfm built (make build), colmap, /usr/bin/time, sqlite3
 # (VIOSFM_WITH_COLMAP=1 scripts/install-deps.sh installs them).
 set -euo pipefail
@@ -66,7 +69,7 @@ fi
 export QT_QPA_PLATFORM=offscreen
 
 if [ $quick = 1 ]; then
-  duration=20; rate=5; n1=6; n2=4; max_features=1500; batch=25
+  duration=15; rate=10; n1=6; n2=4; max_features=1500; batch=25
   batch_sizes="5 10 25 50"; lengths=""
 else
   duration=60; rate=10; n1=10; n2=5; max_features=1500; batch=50
@@ -111,13 +114,15 @@ evaluate() {
     echo "   (evaluation failed, see $dir/eval.txt)"
 }
 
-# viosfm_run DIR SEQ VIO [args...]
+# viosfm_run DIR SEQ VIO [args...]   (VIO "own": viosfm's own VIO)
 viosfm_run() {
   local dir=$1 seq=$2 vio=$3
   shift 3
   echo "-- viosfm run -> $dir"
   rm -rf "$dir/run"
-  timed "$dir" "$VIOSFM" run "$seq" --out "$dir/run" --vio-trajectory "$vio" --rate "$rate" \
+  local source=(--vio-trajectory "$vio")
+  [ "$vio" = own ] && source=()
+  timed "$dir" "$VIOSFM" run "$seq" --out "$dir/run" "${source[@]}" --rate "$rate" \
     --n1 "$n1" --n2 "$n2" --max-features "$max_features" --threads "$threads" "$@"
   [ -f "$dir/run/trajectory_body.tum" ] && evaluate "$dir" "$dir/run/trajectory_body.tum" tum "$seq"
   return 0
@@ -169,9 +174,10 @@ EOF
   fi
 }
 
-# run_all NAME SEQ VIO: every method on one sequence.
+# run_all NAME SEQ VIO OWN: every method on one sequence (OWN=1: also with
+# viosfm's own VIO).
 run_all() {
-  local name=$1 seq=$2 vio=$3
+  local name=$1 seq=$2 vio=$3 own=$4
   local root="$out/$name/runs"
   mkdir -p "$root/vio"
   echo "== $name"
@@ -179,6 +185,12 @@ run_all() {
   viosfm_run "$root/viosfm" "$seq" "$vio" --batch-size "$batch"
   viosfm_run "$root/viosfm_no_vio_check" "$seq" "$vio" --batch-size "$batch" --no-vio-prior
   viosfm_run "$root/viosfm_no_rpc" "$seq" "$vio" --batch-size "$batch" --no-rpc
+  if [ "$own" = 1 ]; then
+    viosfm_run "$root/viosfm_own_vio" "$seq" own --batch-size "$batch"
+    mkdir -p "$root/own_vio"
+    [ -f "$root/viosfm_own_vio/run/vio/trajectory_body.tum" ] &&
+      evaluate "$root/own_vio" "$root/viosfm_own_vio/run/vio/trajectory_body.tum" tum "$seq"
+  fi
   if [ $with_colmap = 1 ]; then
     local pairs="$root/viosfm/run/verification/pairs.csv"
     if [ -f "$pairs" ]; then
@@ -202,11 +214,11 @@ for scenario in $scenarios; do
   seq="$out/$scenario/sequence"
   mkdir -p "$out/$scenario"
   simulate "$scenario" "$duration" "$seq"
-  run_all "$scenario" "$seq" "$seq/vio_emulated.tum"
+  run_all "$scenario" "$seq" "$seq/vio_emulated.tum" 1
 done
 for i in "${!datasets[@]}"; do
   name=$(basename "${datasets[$i]}")
-  run_all "$name" "${datasets[$i]}" "${dataset_vio[$i]}"
+  run_all "$name" "${datasets[$i]}" "${dataset_vio[$i]}" 1
 done
 
 if [ $with_sweeps = 1 ]; then

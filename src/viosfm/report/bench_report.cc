@@ -25,10 +25,12 @@ using Json = nlohmann::json;
 // The order methods are listed in, and their table names.
 const std::vector<std::pair<std::string, std::string>>& MethodNames() {
   static const std::vector<std::pair<std::string, std::string>> names = {
-      {"vio", "input VIO"},
+      {"vio", "input VIO (emulated)"},
       {"viosfm", "viosfm"},
       {"viosfm_no_vio_check", "viosfm w/o VIO-aided verification"},
       {"viosfm_no_rpc", "viosfm w/o relative-pose term"},
+      {"own_vio", "viosfm's own VIO"},
+      {"viosfm_own_vio", "viosfm with its own VIO"},
       {"colmap_same_pairs", "COLMAP 3.8, viosfm's pairs"},
       {"colmap_sequential", "COLMAP 3.8, sequential matcher"},
   };
@@ -250,7 +252,7 @@ std::string FormatBenchMarkdown(const BenchResults& results,
           "memory (MiB) |\n|---|---|---|---|---|---|\n";
     for (const BenchRun& run : results.runs) {
       if (run.sequence != sequence) continue;
-      const bool is_vio = run.method == "vio";
+      const bool is_vio = run.method == "vio" || run.method == "own_vio";
       md << "| " << MethodName(run.method) << " | " << (is_vio ? "-" : Registered(run)) << " | "
          << Fixed(run.ate_rmse_m, 3) << " | " << Fixed(run.ate_median_m, 3) << " | "
          << (is_vio ? "-" : Fixed(run.seconds, 1)) << " | "
