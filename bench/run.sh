@@ -5,7 +5,8 @@
 # Usage:
 #   bench/run.sh [--quick] [--out DIR] [--scenarios "room two_floors corridor"]
 #                [--dataset EUROC_DIR --vio-trajectory TUM]... [--no-colmap]
-#                [--no-sweeps] [--docs FILE]
+#                [--no-sweeps] [--sweeps-only] [--colmap-modes "pairs sequential"]
+#                [--docs FILE]
 #
 # For every scenario (simulated: images, IMU, ground truth and the emulated
 # drifting VIO that stands in for a VIO's output) or dataset, it runs
@@ -41,6 +42,8 @@ datasets=()
 dataset_vio=()
 with_colmap=1
 with_sweeps=1
+with_runs=1
+colmap_modes="pairs sequential"
 docs=$here/docs/benchmarks-suite.md
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -51,6 +54,8 @@ while [ $# -gt 0 ]; do
     --vio-trajectory) dataset_vio+=("$2"); shift ;;
     --no-colmap) with_colmap=0 ;;
     --no-sweeps) with_sweeps=0 ;;
+    --sweeps-only) with_runs=0 ;;
+    --colmap-modes) colmap_modes=$2; shift ;;
     --docs) docs=$2; shift ;;
     -h|--help) sed -n 2,30p "$0"; exit 0 ;;
     *) echo "bench/run.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
@@ -193,11 +198,13 @@ run_all() {
   fi
   if [ $with_colmap = 1 ]; then
     local pairs="$root/viosfm/run/verification/pairs.csv"
-    if [ -f "$pairs" ]; then
+    if [ -f "$pairs" ] && [[ " $colmap_modes " == *" pairs "* ]]; then
       tail -n +2 "$pairs" | cut -d, -f3,4 | tr , ' ' > "$out/$name/pairs.txt"
       colmap_run "$root/colmap_same_pairs" "$seq" pairs "$out/$name/pairs.txt"
     fi
-    colmap_run "$root/colmap_sequential" "$seq" sequential
+    if [[ " $colmap_modes " == *" sequential "* ]]; then
+      colmap_run "$root/colmap_sequential" "$seq" sequential
+    fi
   fi
 }
 
@@ -214,12 +221,14 @@ for scenario in $scenarios; do
   seq="$out/$scenario/sequence"
   mkdir -p "$out/$scenario"
   simulate "$scenario" "$duration" "$seq"
-  run_all "$scenario" "$seq" "$seq/vio_emulated.tum" 1
+  [ $with_runs = 1 ] && run_all "$scenario" "$seq" "$seq/vio_emulated.tum" 1
 done
-for i in "${!datasets[@]}"; do
-  name=$(basename "${datasets[$i]}")
-  run_all "$name" "${datasets[$i]}" "${dataset_vio[$i]}" 1
-done
+if [ $with_runs = 1 ]; then
+  for i in "${!datasets[@]}"; do
+    name=$(basename "${datasets[$i]}")
+    run_all "$name" "${datasets[$i]}" "${dataset_vio[$i]}" 1
+  done
+fi
 
 if [ $with_sweeps = 1 ]; then
   first=${scenarios%% *}

@@ -108,6 +108,11 @@ void RegisterRun(CLI::App& app) {
       ->add_option("--batch-size", args->options.mapper.batch_size,
                    "Frames registered per batch (k)")
       ->capture_default_str();
+  command
+      ->add_option("--ba-window", args->options.mapper.ba_window_batches,
+                   "Bundle adjust only the last N batches after each batch (0: all images, "
+                   "the paper's; the final BA always refines all)")
+      ->capture_default_str();
   command->add_flag("--no-vio-prior", args->no_vio_prior,
                     "RANSAC-only verification (COLMAP's; the baseline)");
   command->add_flag("--no-rpc", args->no_rpc,

@@ -344,6 +344,7 @@ std::vector<std::pair<std::string, std::string>> PipelineOptions::ToKeyValues() 
       values.end(),
       {
           {"mapper.batch_size", Text(m.batch_size)},
+          {"mapper.ba_window_batches", Text(m.ba_window_batches)},
           {"mapper.tracks.min_track_length", Text(m.tracks.min_track_length)},
           {"mapper.tracks.conflict_policy",
            m.tracks.conflict_policy == TrackConflictPolicy::kSplit ? "split" : "drop"},

@@ -111,7 +111,7 @@ BenchRun ReadRun(const fs::path& folder, const std::string& sequence, const std:
     }
     if (summary.contains("stages") && summary["stages"].is_array()) {
       for (const Json& stage : summary["stages"]) {
-        if (stage.value("name", "") == "mapping" && stage.contains("seconds")) {
+        if (stage.value("name", "") == "mapper" && stage.contains("seconds")) {
           run.mapping_seconds = stage["seconds"].get<double>();
         }
       }

@@ -38,7 +38,7 @@ fs::path MakeFixture() {
   Write(runs / "viosfm/eval.json", EvalJson(0.0123, 0.0101, 4));
   Write(runs / "viosfm/run/summary.json",
         "{\"frames\": {\"in\": 4, \"selected\": 4, \"registered\": 4},"
-        " \"stages\": [{\"name\": \"mapping\", \"seconds\": 3.25}]}");
+        " \"stages\": [{\"name\": \"mapper\", \"seconds\": 3.25}]}");
   Write(runs / "colmap_sequential/time.txt", "30.0 102400\n");
   Write(runs / "colmap_sequential/eval.json", EvalJson(0.5, 0.25, 3));
   Write(runs / "colmap_sequential/num_models.txt", "2\n");
