@@ -61,7 +61,9 @@ std::string Integer(std::optional<double> value) {
   return buffer;
 }
 
-Json ReadJson(const fs::path& path) { return ReadJsonFile(path); }
+Json ReadJson(const fs::path& path) {
+  return ReadJsonFile(path);
+}
 
 std::optional<Json> ReadOptionalJson(const fs::path& path) {
   if (!fs::is_regular_file(path)) return std::nullopt;
