@@ -29,8 +29,8 @@ GT="$SEQ/mav0/state_groundtruth_estimate0/data.csv"
 # ate MODE: "rmse median [scale]" of the ATE translation after MODE alignment.
 ate() {
   "$VIOSFM" eval --est "$OUT/trajectory_body.tum" --ref "$GT" --align "$1" --rpe-delta 0 |
-    awk '/^alignment:/ { for (i = 1; i < NF; ++i) if ($i == "scale") scale = $(i + 1) }
-         /ATE translation/ { printf "ATE RMSE %s m, median %s m", $4, $6 }
+    awk '/^alignment:/ { for (i = 1; i < NF; ++i) if ($i == "scale") { scale = $(i + 1); gsub(",", "", scale) } }
+         /ATE translation/ { printf "ATE RMSE %s m, median %s m", $5, $7 }
          END { if (scale != "") printf ", scale %s", scale; print "" }'
 }
 echo "$SCENARIO, $DURATION s at $RATE Hz, seed $SEED, $(date -u +%F), $(nproc) cores"
