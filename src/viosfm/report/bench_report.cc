@@ -232,8 +232,9 @@ std::string FormatBenchMarkdown(const BenchResults& results,
   std::ostringstream md;
   md << "# Benchmark suite results\n\n"
      << "Written by `bench/run.sh` and `viosfm bench-report` (docs/benchmarks.md explains the "
-        "methods and how to reproduce them). Every number below was measured in the one run "
-        "described here:\n\n";
+        "methods and how to reproduce them). Every number below was measured on this machine by "
+        "bench/run.sh with these settings (meta.txt of the results folder; date and version "
+        "of the last invocation):\n\n";
   for (const auto& [key, value] : results.meta) md << "- " << key << ": " << value << "\n";
   md << "\nATE: Sim(3)-aligned absolute trajectory error of the body trajectory against the "
         "ground truth, over the frames each method registered. Time and memory: wall clock "
