@@ -6,7 +6,7 @@
 #   bench/run.sh [--quick] [--out DIR] [--scenarios "room two_floors corridor"]
 #                [--dataset EUROC_DIR --vio-trajectory TUM]... [--no-colmap]
 #                [--no-sweeps] [--sweeps-only] [--colmap-modes "pairs sequential"]
-#                [--docs FILE]
+#                [--jobs 1|2] [--lane viosfm|colmap] [--force] [--docs FILE]
 #
 # For every scenario (simulated: images, IMU, ground truth and the emulated
 # drifting VIO that stands in for a VIO's output) or dataset, it runs
@@ -28,7 +28,26 @@
 # sweep. `viosfm bench-report` turns the folder into tables and plots
 # (docs/benchmarks-suite.md and docs/images/bench_*.svg by default).
 #
-# Full mode: 60 s at 10 Hz (600 frames) a scenario; --quick: 15 s at 10 Hz.
+# Full mode: 63 s at 10 Hz (631 images, 610 after the static start is
+# trimmed) a scenario, N1 10, N2 5, at most 1000 features, batch 50; the
+# batch-size sweep on a 30 s room sequence (the paper's Fig. 6, with COLMAP on
+# the same images as reference); the length sweep on room with 300, 600, 1200
+# and 2400 images. --quick: room and two_floors, 8 s at 10 Hz, COLMAP with
+# viosfm's pairs only, batch sizes 10 and 25: a few minutes.
+#
+# Two jobs run at a time (--jobs 2, the default, on 2 cores): the viosfm runs
+# in one lane and the COLMAP runs in the other, each job single-threaded, so
+# every figure is the time of a one-core run and viosfm and COLMAP are timed
+# under the same conditions. --jobs 1 runs one job at a time with 2 threads.
+# --lane viosfm or --lane colmap runs one lane only (two invocations into the
+# same folder make the two lanes). The viosfm lane runs the full method on
+# every sequence first (COLMAP's pairs come from it), then the ablations, the
+# sweeps, and viosfm with its own VIO.
+# The viosfm w/o relative-pose term run reuses the features and verified
+# matches of the full run (its time covers the mapping only); COLMAP's two
+# matchers share one feature extraction (both times include it).
+# A finished run (time.txt without failed) is kept when the suite is run again
+# into the same folder; --force reruns everything.
 # Needs: viosfm built (make build), colmap, /usr/bin/time, sqlite3
 # (VIOSFM_WITH_COLMAP=1 scripts/install-deps.sh installs them).
 set -euo pipefail
@@ -37,13 +56,16 @@ here=$(cd "$(dirname "$0")/.." && pwd)
 VIOSFM=${VIOSFM:-$here/build/src/viosfm/cli/viosfm}
 out=out/bench-suite
 quick=0
-scenarios="room two_floors corridor"
+scenarios=""
 datasets=()
 dataset_vio=()
 with_colmap=1
 with_sweeps=1
 with_runs=1
-colmap_modes="pairs sequential"
+colmap_modes=""
+jobs=2
+lane_only=""
+force=0
 docs=$here/docs/benchmarks-suite.md
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -56,8 +78,11 @@ while [ $# -gt 0 ]; do
     --no-sweeps) with_sweeps=0 ;;
     --sweeps-only) with_runs=0 ;;
     --colmap-modes) colmap_modes=$2; shift ;;
+    --jobs) jobs=$2; shift ;;
+    --lane) lane_only=$2; shift ;;
+    --force) force=1 ;;
     --docs) docs=$2; shift ;;
-    -h|--help) sed -n 2,30p "$0"; exit 0 ;;
+    -h|--help) sed -n 2,50p "$0"; exit 0 ;;
     *) echo "bench/run.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
   shift
@@ -66,6 +91,8 @@ if [ ${#datasets[@]} -ne ${#dataset_vio[@]} ]; then
   echo "bench/run.sh: every --dataset needs its --vio-trajectory (a TUM file of a VIO run on it)" >&2
   exit 2
 fi
+case "$jobs" in 1|2) ;; *) echo "bench/run.sh: --jobs must be 1 or 2" >&2; exit 2 ;; esac
+case "$lane_only" in ""|viosfm|colmap) ;; *) echo "bench/run.sh: --lane must be viosfm or colmap" >&2; exit 2 ;; esac
 [ -x "$VIOSFM" ] || { echo "bench/run.sh: $VIOSFM not built (make build)" >&2; exit 2; }
 if [ $with_colmap = 1 ] && ! command -v colmap > /dev/null; then
   echo "bench/run.sh: colmap not found: install it (VIOSFM_WITH_COLMAP=1 scripts/install-deps.sh) or pass --no-colmap" >&2
@@ -74,13 +101,18 @@ fi
 export QT_QPA_PLATFORM=offscreen
 
 if [ $quick = 1 ]; then
-  duration=15; rate=10; n1=6; n2=4; max_features=1500; batch=25
-  batch_sizes="5 10 25 50"; lengths=""
+  duration=8; rate=10; n1=6; n2=4; max_features=1000; batch=25
+  default_scenarios="room two_floors"; default_modes="pairs"
+  sweep_duration=8; batch_sizes="10 25"; lengths=""; length_window=0
 else
-  duration=60; rate=10; n1=10; n2=5; max_features=1500; batch=50
-  batch_sizes="5 10 25 50 100 200"; lengths="300 600 1200 2400"
+  duration=63; rate=10; n1=10; n2=5; max_features=1000; batch=50
+  default_scenarios="room two_floors corridor"; default_modes="pairs sequential"
+  sweep_duration=30; batch_sizes="5 10 25 50 100 200"; lengths="300 600 1200 2400"
+  length_window=0
 fi
-threads=2
+[ -z "$scenarios" ] && [ ${#datasets[@]} = 0 ] && scenarios=$default_scenarios
+[ -z "$colmap_modes" ] && colmap_modes=$default_modes
+threads=$((jobs == 2 ? 1 : 2))
 mkdir -p "$out"
 out=$(cd "$out" && pwd)
 {
@@ -88,20 +120,27 @@ out=$(cd "$out" && pwd)
   echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs)"
   echo "memory_gib: $(awk '/MemTotal/ { printf "%.0f", $2 / 1048576 }' /proc/meminfo)"
   echo "mode: $([ $quick = 1 ] && echo quick || echo full)"
-  echo "viosfm: $(git -C "$here" describe --always --dirty 2>/dev/null || echo unknown)"
+  echo "viosfm: ${BENCH_VERSION:-$(git -C "$here" describe --always --dirty 2>/dev/null || echo unknown)}"
   echo "colmap: $(command -v colmap > /dev/null && colmap -h 2>/dev/null | grep -m1 -o 'COLMAP [0-9.]*' || echo none)"
-  echo "settings: $duration s at $rate Hz, N1 $n1, N2 $n2, at most $max_features features, batch $batch, $threads threads"
+  echo "settings: $duration s at $rate Hz, N1 $n1, N2 $n2, at most $max_features features, batch $batch"
+  echo "jobs: $jobs at a time, $threads thread(s) each"
 } > "$out/meta.txt"
 echo "== bench: results in $out"
 
+# done_run DIR: whether DIR holds a finished run to keep.
+done_run() {
+  [ $force = 0 ] && [ -s "$1/time.txt" ] && [ ! -f "$1/failed" ]
+}
+
 # timed DIR COMMAND...: runs COMMAND with its log in DIR/log.txt and writes
-# "seconds peak_kib" to DIR/time.txt. A failed command leaves DIR/failed.
+# "seconds peak_kib user_s system_s" to DIR/time.txt. A failed command leaves
+# DIR/failed.
 timed() {
   local dir=$1
   shift
   mkdir -p "$dir"
   rm -f "$dir/failed"
-  if ! /usr/bin/time -f "%e %M" -o "$dir/time.txt" "$@" > "$dir/log.txt" 2>&1; then
+  if ! /usr/bin/time -f "%e %M %U %S" -o "$dir/time.txt" "$@" > "$dir/log.txt" 2>&1; then
     touch "$dir/failed"
     echo "   (failed, see $dir/log.txt)"
   fi
@@ -113,57 +152,99 @@ evaluate() {
   local dir=$1 est=$2 format=$3 seq=$4 cam=${5:-}
   local extra=()
   [ -n "$cam" ] && extra=(--extrinsics-yaml "$seq/mav0/cam0/sensor.yaml" --cam-frame est)
+  mkdir -p "$dir"
   "$VIOSFM" eval --est "$est" --est-format "$format" \
     --ref "$seq/mav0/state_groundtruth_estimate0/data.csv" --ref-format euroc \
     --align sim3 --rpe-delta 0 "${extra[@]}" --json "$dir/eval.json" > "$dir/eval.txt" 2>&1 ||
     echo "   (evaluation failed, see $dir/eval.txt)"
 }
 
-# viosfm_run DIR SEQ VIO [args...]   (VIO "own": viosfm's own VIO)
+# viosfm_run DIR SEQ VIO [args...]   (VIO "own": viosfm's own VIO). With
+# REUSE=FOLDER set, starts from the database of the run in FOLDER.
 viosfm_run() {
   local dir=$1 seq=$2 vio=$3
   shift 3
-  echo "-- viosfm run -> $dir"
-  rm -rf "$dir/run"
-  local source=(--vio-trajectory "$vio")
-  [ "$vio" = own ] && source=()
-  timed "$dir" "$VIOSFM" run "$seq" --out "$dir/run" "${source[@]}" --rate "$rate" \
-    --n1 "$n1" --n2 "$n2" --max-features "$max_features" --threads "$threads" "$@"
+  if done_run "$dir"; then
+    echo "-- viosfm run -> $dir (kept)"
+  else
+    echo "-- viosfm run -> $dir"
+    rm -rf "$dir/run" "$dir/reused.txt"
+    if [ -n "${REUSE:-}" ] && [ -f "$REUSE/run/database.db" ]; then
+      mkdir -p "$dir/run"
+      cp "$REUSE/run/database.db" "$REUSE/run/options.json" "$dir/run/"
+      echo "features and verified matches of $(basename "$REUSE")" > "$dir/reused.txt"
+    fi
+    local source=(--vio-trajectory "$vio")
+    [ "$vio" = own ] && source=()
+    timed "$dir" "$VIOSFM" run "$seq" --out "$dir/run" "${source[@]}" --rate "$rate" \
+      --n1 "$n1" --n2 "$n2" --max-features "$max_features" --threads "$threads" "$@"
+  fi
   [ -f "$dir/run/trajectory_body.tum" ] && evaluate "$dir" "$dir/run/trajectory_body.tum" tum "$seq"
   return 0
 }
 
-# colmap_run DIR SEQ MATCHER [PAIRS]: COLMAP on the sequence's images.
-colmap_run() {
-  local dir=$1 seq=$2 matcher=$3 pairs=${4:-}
-  echo "-- colmap ($matcher) -> $dir"
+# colmap_features DIR SEQ: COLMAP's feature extraction (same camera model,
+# intrinsics and feature cap as viosfm) into DIR/database.db, once.
+colmap_features() {
+  local dir=$1 seq=$2
+  done_run "$dir" && return 0
+  echo "-- colmap feature_extractor -> $dir"
   rm -rf "$dir"
-  mkdir -p "$dir/sparse"
-  local images="$seq/mav0/cam0/data"
+  mkdir -p "$dir"
   # The camera of the sequence (OPENCV, COLMAP's principal point convention).
   local params
   params=$(awk '
     /intrinsics:/ { gsub(/[\[\],]/, " "); fx = $2; fy = $3; cx = $4 + 0.5; cy = $5 + 0.5 }
     /distortion_coefficients:/ { gsub(/[\[\],]/, " "); k1 = $2; k2 = $3; p1 = $4; p2 = $5 }
     END { printf "%s,%s,%s,%s,%s,%s,%s,%s", fx, fy, cx, cy, k1, k2, p1, p2 }' "$seq/mav0/cam0/sensor.yaml")
-  cat > "$dir/run.sh" << EOF
-set -e
-colmap feature_extractor --database_path "$dir/database.db" --image_path "$images" \
-  --ImageReader.camera_model OPENCV --ImageReader.single_camera 1 \
-  --ImageReader.camera_params "$params" --SiftExtraction.use_gpu 0 \
-  --SiftExtraction.num_threads $threads --SiftExtraction.max_num_features $max_features
-if [ "$matcher" = pairs ]; then
-  colmap matches_importer --database_path "$dir/database.db" --match_list_path "$pairs" \
-    --match_type pairs --SiftMatching.use_gpu 0 --SiftMatching.num_threads $threads
-else
-  colmap sequential_matcher --database_path "$dir/database.db" --SiftMatching.use_gpu 0 \
-    --SiftMatching.num_threads $threads --SequentialMatching.overlap $n1 \
-    --SequentialMatching.loop_detection 0
-fi
-colmap mapper --database_path "$dir/database.db" --image_path "$images" \
-  --output_path "$dir/sparse" --Mapper.num_threads $threads
-EOF
-  timed "$dir" bash "$dir/run.sh"
+  timed "$dir" colmap feature_extractor --database_path "$dir/database.db" \
+    --image_path "$seq/mav0/cam0/data" \
+    --ImageReader.camera_model OPENCV --ImageReader.single_camera 1 \
+    --ImageReader.camera_params "$params" --SiftExtraction.use_gpu 0 \
+    --SiftExtraction.num_threads "$threads" --SiftExtraction.max_num_features "$max_features"
+}
+
+# colmap_run DIR SEQ FEATURES MATCHER [PAIRS]: COLMAP matching + mapping on the
+# features in FEATURES/database.db; DIR/time.txt includes the extraction.
+colmap_run() {
+  local dir=$1 seq=$2 features=$3 matcher=$4 pairs=${5:-}
+  if done_run "$dir"; then
+    echo "-- colmap ($matcher) -> $dir (kept)"
+  elif [ -f "$features/failed" ] || [ ! -f "$features/database.db" ]; then
+    echo "-- colmap ($matcher) -> $dir: no features (see $features/log.txt)"
+    mkdir -p "$dir"
+    touch "$dir/failed"
+    return 0
+  else
+    echo "-- colmap ($matcher) -> $dir"
+    rm -rf "$dir"
+    mkdir -p "$dir/sparse"
+    cp "$features/database.db" "$dir/database.db"
+    {
+      echo "set -e"
+      if [ "$matcher" = pairs ]; then
+        echo "colmap matches_importer --database_path '$dir/database.db'" \
+          "--match_list_path '$pairs' --match_type pairs --SiftMatching.use_gpu 0" \
+          "--SiftMatching.num_threads $threads"
+      else
+        echo "colmap sequential_matcher --database_path '$dir/database.db'" \
+          "--SiftMatching.use_gpu 0 --SiftMatching.num_threads $threads" \
+          "--SequentialMatching.overlap $n1 --SequentialMatching.loop_detection 0"
+      fi
+      echo "colmap mapper --database_path '$dir/database.db' --image_path '$seq/mav0/cam0/data'" \
+        "--output_path '$dir/sparse' --Mapper.num_threads $threads"
+    } > "$dir/run.sh"
+    timed "$dir" bash "$dir/run.sh"
+    # Extraction + matching + mapping.
+    local e_s e_kib e_u e_sys m_s m_kib m_u m_sys
+    read -r e_s e_kib e_u e_sys < "$features/time.txt"
+    read -r m_s m_kib m_u m_sys < "$dir/time.txt"
+    awk -v a="$e_s" -v b="$m_s" -v ka="$e_kib" -v kb="$m_kib" -v ua="$e_u" -v ub="$m_u" \
+      -v sa="$e_sys" -v sb="$m_sys" \
+      'BEGIN { printf "%.2f %d %.2f %.2f\n", a + b, (ka > kb ? ka : kb), ua + ub, sa + sb }' \
+      > "$dir/time.txt"
+    echo "matching and mapping $m_s s, feature extraction $e_s s ($features)" > "$dir/stages.txt"
+  fi
   # The model with the most images.
   local best="" best_n=0 n
   for model in "$dir"/sparse/*/; do
@@ -179,72 +260,144 @@ EOF
   fi
 }
 
-# run_all NAME SEQ VIO OWN: every method on one sequence (OWN=1: also with
-# viosfm's own VIO).
-run_all() {
-  local name=$1 seq=$2 vio=$3 own=$4
+# viosfm_full NAME SEQ VIO: the input VIO and the full method on one sequence.
+viosfm_full() {
+  local name=$1 seq=$2 vio=$3
   local root="$out/$name/runs"
-  mkdir -p "$root/vio"
-  echo "== $name"
+  echo "== $name: viosfm"
   evaluate "$root/vio" "$vio" tum "$seq"
   viosfm_run "$root/viosfm" "$seq" "$vio" --batch-size "$batch"
+}
+
+# viosfm_ablations NAME SEQ VIO: the ablations on one sequence.
+viosfm_ablations() {
+  local name=$1 seq=$2 vio=$3
+  local root="$out/$name/runs"
+  echo "== $name: viosfm ablations"
+  REUSE="$root/viosfm" viosfm_run "$root/viosfm_no_rpc" "$seq" "$vio" --batch-size "$batch" --no-rpc
   viosfm_run "$root/viosfm_no_vio_check" "$seq" "$vio" --batch-size "$batch" --no-vio-prior
-  viosfm_run "$root/viosfm_no_rpc" "$seq" "$vio" --batch-size "$batch" --no-rpc
-  if [ "$own" = 1 ]; then
-    viosfm_run "$root/viosfm_own_vio" "$seq" own --batch-size "$batch"
-    mkdir -p "$root/own_vio"
-    [ -f "$root/viosfm_own_vio/run/vio/trajectory_body.tum" ] &&
-      evaluate "$root/own_vio" "$root/viosfm_own_vio/run/vio/trajectory_body.tum" tum "$seq"
-  fi
-  if [ $with_colmap = 1 ]; then
+}
+
+# viosfm_own NAME SEQ: viosfm with its own VIO (images + IMU only) on one
+# sequence, and that VIO's trajectory.
+viosfm_own() {
+  local name=$1 seq=$2
+  local root="$out/$name/runs"
+  viosfm_run "$root/viosfm_own_vio" "$seq" own --batch-size "$batch"
+  [ -f "$root/viosfm_own_vio/run/vio/trajectory_body.tum" ] &&
+    evaluate "$root/own_vio" "$root/viosfm_own_vio/run/vio/trajectory_body.tum" tum "$seq"
+  return 0
+}
+
+# colmap_all NAME SEQ MODES: COLMAP on one sequence; the "pairs" mode waits for
+# viosfm's candidate pairs of the sequence.
+colmap_all() {
+  local name=$1 seq=$2 modes=$3
+  local root="$out/$name/runs"
+  echo "== $name: COLMAP"
+  colmap_features "$out/$name/colmap_features" "$seq"
+  if [[ " $modes " == *" pairs "* ]]; then
     local pairs="$root/viosfm/run/verification/pairs.csv"
-    if [ -f "$pairs" ] && [[ " $colmap_modes " == *" pairs "* ]]; then
+    # (GNU time creates its output file at the start and fills it at the end.)
+    while [ ! -s "$root/viosfm/time.txt" ]; do sleep 10; done
+    if [ -f "$pairs" ]; then
       tail -n +2 "$pairs" | cut -d, -f3,4 | tr , ' ' > "$out/$name/pairs.txt"
-      colmap_run "$root/colmap_same_pairs" "$seq" pairs "$out/$name/pairs.txt"
-    fi
-    if [[ " $colmap_modes " == *" sequential "* ]]; then
-      colmap_run "$root/colmap_sequential" "$seq" sequential
+      colmap_run "$root/colmap_same_pairs" "$seq" "$out/$name/colmap_features" pairs \
+        "$out/$name/pairs.txt"
+    else
+      echo "   (no viosfm pairs for $name: $root/viosfm failed)"
     fi
   fi
+  if [[ " $modes " == *" sequential "* ]]; then
+    colmap_run "$root/colmap_sequential" "$seq" "$out/$name/colmap_features" sequential
+  fi
+  return 0
 }
 
 simulate() {
   local scenario=$1 seconds=$2 dest=$3
   if [ ! -f "$dest/simulation.yaml" ]; then
     echo "-- simulate $scenario, $seconds s at $rate Hz -> $dest"
+    mkdir -p "$(dirname "$dest")"
     "$VIOSFM" simulate --scenario "$scenario" --duration "$seconds" --rate "$rate" --seed 0 \
       --out "$dest" > "$dest.log" 2>&1
   fi
 }
 
+# The sequences: simulated scenarios, then the user's datasets.
+names=()
+seqs=()
+vios=()
 for scenario in $scenarios; do
-  seq="$out/$scenario/sequence"
-  mkdir -p "$out/$scenario"
-  simulate "$scenario" "$duration" "$seq"
-  [ $with_runs = 1 ] && run_all "$scenario" "$seq" "$seq/vio_emulated.tum" 1
+  simulate "$scenario" "$duration" "$out/$scenario/sequence"
+  names+=("$scenario")
+  seqs+=("$out/$scenario/sequence")
+  vios+=("$out/$scenario/sequence/vio_emulated.tum")
 done
-if [ $with_runs = 1 ]; then
-  for i in "${!datasets[@]}"; do
-    name=$(basename "${datasets[$i]}")
-    run_all "$name" "${datasets[$i]}" "${dataset_vio[$i]}" 1
-  done
-fi
+for i in "${!datasets[@]}"; do
+  names+=("$(basename "${datasets[$i]}")")
+  seqs+=("${datasets[$i]}")
+  vios+=("${dataset_vio[$i]}")
+done
+sweep_name=room_${sweep_duration}s
+[ $with_sweeps = 1 ] && simulate room "$sweep_duration" "$out/$sweep_name/sequence"
 
-if [ $with_sweeps = 1 ]; then
-  first=${scenarios%% *}
-  if [ -n "$first" ]; then
-    seq="$out/$first/sequence"
+# Lane 2: COLMAP (in the background with --jobs 2).
+colmap_lane() {
+  [ $with_colmap = 1 ] || return 0
+  if [ $with_runs = 1 ]; then
+    for i in "${!names[@]}"; do colmap_all "${names[$i]}" "${seqs[$i]}" "$colmap_modes"; done
+  fi
+  [ $with_sweeps = 1 ] && colmap_all "$sweep_name" "$out/$sweep_name/sequence" pairs
+  return 0
+}
+
+# Lane 1: viosfm. The full method on every sequence first (COLMAP's pairs
+# come from it), then the ablations, the sweeps and the own-VIO runs.
+viosfm_lane() {
+  if [ $with_runs = 1 ]; then
+    for i in "${!names[@]}"; do viosfm_full "${names[$i]}" "${seqs[$i]}" "${vios[$i]}"; done
+    for i in "${!names[@]}"; do viosfm_ablations "${names[$i]}" "${seqs[$i]}" "${vios[$i]}"; done
+  fi
+  if [ $with_sweeps = 1 ]; then
+    local seq="$out/$sweep_name/sequence"
+    # The sweep sequence's reference rows: its VIO and viosfm at the default
+    # batch size (whose pairs COLMAP gets); every batch size reuses its
+    # features and verified matches, so the sweep times the mapping.
+    evaluate "$out/$sweep_name/runs/vio" "$seq/vio_emulated.tum" tum "$seq"
+    viosfm_run "$out/$sweep_name/runs/viosfm" "$seq" "$seq/vio_emulated.tum" --batch-size "$batch"
+    echo "$sweep_name" > "$out/batch_size_sequence.txt"
     for k in $batch_sizes; do
-      viosfm_run "$out/batch_size/$k" "$seq" "$seq/vio_emulated.tum" --batch-size "$k"
+      REUSE="$out/$sweep_name/runs/viosfm" viosfm_run "$out/batch_size/$k" "$seq" \
+        "$seq/vio_emulated.tum" --batch-size "$k"
     done
     for frames in $lengths; do
-      seconds=$((frames / rate))
-      lseq="$out/length/$frames/sequence"
-      mkdir -p "$out/length/$frames"
-      simulate room "$seconds" "$lseq"
-      viosfm_run "$out/length/$frames" "$lseq" "$lseq/vio_emulated.tum" --batch-size "$batch"
+      local lseq="$out/length/$frames/sequence"
+      simulate room "$((frames / rate))" "$lseq"
+      viosfm_run "$out/length/$frames" "$lseq" "$lseq/vio_emulated.tum" --batch-size "$batch" \
+        --ba-window "$length_window"
     done
   fi
+  if [ $with_runs = 1 ]; then
+    for i in "${!names[@]}"; do viosfm_own "${names[$i]}" "${seqs[$i]}"; done
+  fi
+  return 0
+}
+
+if [ "$lane_only" = viosfm ]; then
+  viosfm_lane
+elif [ "$lane_only" = colmap ]; then
+  colmap_lane
+elif [ "$jobs" = 2 ]; then
+  colmap_lane > "$out/colmap_lane.log" 2>&1 &
+  lane=$!
+  viosfm_lane
+  echo "== waiting for the COLMAP runs ($out/colmap_lane.log)"
+  wait "$lane"
+  cat "$out/colmap_lane.log"
+else
+  viosfm_lane
+  colmap_lane
 fi
 
 "$VIOSFM" bench-report "$out" --markdown "$docs" --figures "$(dirname "$docs")/images"

@@ -113,6 +113,16 @@ void RegisterRun(CLI::App& app) {
                    "Bundle adjust only the last N batches after each batch (0: all images, "
                    "the paper's; the final BA always refines all)")
       ->capture_default_str();
+  command
+      ->add_option("--batch-ba-iterations", args->options.mapper.batch_ba_max_num_iterations,
+                   "Iterations of each per-batch bundle adjustment (0: as many as the final "
+                   "one)")
+      ->capture_default_str();
+  command
+      ->add_option("--ba-sparse-max-images", args->options.mapper.ba.max_images_for_sparse_schur,
+                   "Above this many images bundle adjustment solves with ITERATIVE_SCHUR "
+                   "instead of SPARSE_SCHUR")
+      ->capture_default_str();
   command->add_flag("--no-vio-prior", args->no_vio_prior,
                     "RANSAC-only verification (COLMAP's; the baseline)");
   command->add_flag("--no-rpc", args->no_rpc,

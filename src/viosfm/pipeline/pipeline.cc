@@ -345,6 +345,7 @@ std::vector<std::pair<std::string, std::string>> PipelineOptions::ToKeyValues() 
       {
           {"mapper.batch_size", Text(m.batch_size)},
           {"mapper.ba_window_batches", Text(m.ba_window_batches)},
+          {"mapper.batch_ba_max_num_iterations", Text(m.batch_ba_max_num_iterations)},
           {"mapper.tracks.min_track_length", Text(m.tracks.min_track_length)},
           {"mapper.tracks.conflict_policy",
            m.tracks.conflict_policy == TrackConflictPolicy::kSplit ? "split" : "drop"},
@@ -358,6 +359,8 @@ std::vector<std::pair<std::string, std::string>> PipelineOptions::ToKeyValues() 
           {"mapper.ba.refine_intrinsics", Text(m.ba.refine_intrinsics)},
           {"mapper.ba.refine_principal_point", Text(m.ba.refine_principal_point)},
           {"mapper.ba.use_relative_pose_priors", Text(m.ba.use_relative_pose_priors)},
+          {"mapper.ba.max_num_iterations", Text(m.ba.max_num_iterations)},
+          {"mapper.ba.max_images_for_sparse_schur", Text(m.ba.max_images_for_sparse_schur)},
           {"mapper.ba.prior_alpha", Text(m.ba.prior_alpha)},
           {"mapper.ba.prior_beta", Text(m.ba.prior_beta)},
           {"mapper.ba.prior_rotation_sigma_rad", Text(m.ba.prior_rotation_sigma_rad)},
@@ -433,7 +436,8 @@ std::string PipelineSummaryToJson(const PipelineSummary& s) {
                        {"registered_total", batch.num_registered_total},
                        {"points_total", batch.num_points_total},
                        {"mean_reprojection_error_px", batch.mean_reprojection_error_px},
-                       {"seconds_ba", batch.seconds_ba}});
+                       {"seconds_ba", batch.seconds_ba},
+                       {"ba_iterations", batch.num_ba_iterations}});
   }
   json["batches"] = batches;
   ordered_json stages = ordered_json::array();

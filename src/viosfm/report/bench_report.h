@@ -7,10 +7,14 @@
 // Folder layout (what bench/run.sh writes):
 //   ROOT/meta.txt                      "key: value" lines (date, machine, settings)
 //   ROOT/<sequence>/sequence/          the dataset (EuRoC layout; ground truth)
-//   ROOT/<sequence>/runs/<method>/     one run: time.txt ("seconds peak_kib"),
-//       eval.json (`viosfm eval --json`), failed (present if the run failed),
-//       run/ (a `viosfm run` output folder) or sparse/N/ (COLMAP models)
+//   ROOT/<sequence>/runs/<method>/     one run: time.txt ("seconds peak_kib
+//       [user_s system_s]"), eval.json (`viosfm eval --json`), failed (present
+//       if the run failed), reused.txt (present if the run started from
+//       another run's features and matches: what it reused), run/ (a
+//       `viosfm run` output folder) or sparse/N/ (COLMAP models)
 //   ROOT/batch_size/<k>/               a `viosfm run` with batch size k
+//   ROOT/batch_size_sequence.txt       the sequence the batch sizes ran on (its
+//       COLMAP and VIO runs are the reference lines; default: the first)
 //   ROOT/length/<frames>/              a `viosfm run` on a sequence of that length
 #pragma once
 
@@ -33,6 +37,8 @@ struct BenchRun {
   std::optional<double> ate_rmse_m;
   std::optional<double> ate_median_m;
   std::optional<double> seconds;          // wall clock of the whole run
+  std::optional<double> cpu_seconds;      // user + system CPU time
+  std::string reused;                     // what the run reused (reused.txt), or empty
   std::optional<double> peak_memory_mb;   // MiB
   std::optional<double> mapping_seconds;  // viosfm: the mapper stage
 };
@@ -43,6 +49,7 @@ struct BenchResults {
   std::vector<BenchRun> runs;                             // <sequence>/runs/<method>
   std::vector<BenchRun> batch_size;                       // method = the batch size
   std::vector<BenchRun> length;                           // method = the number of frames
+  std::string batch_size_sequence;  // the sequence of the batch-size sweep
 };
 
 // Reads a benchmark folder. Throws InputError for a missing folder or a

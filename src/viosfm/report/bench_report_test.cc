@@ -34,7 +34,7 @@ fs::path MakeFixture() {
   Write(root / "room/sequence/mav0/cam0/data.csv",
         "#timestamp [ns],filename\n1,1.png\n2,2.png\n3,3.png\n4,4.png\n");
   const fs::path runs = root / "room/runs";
-  Write(runs / "viosfm/time.txt", "12.5 204800\n");
+  Write(runs / "viosfm/time.txt", "12.5 204800 10.25 1.5\n");
   Write(runs / "viosfm/eval.json", EvalJson(0.0123, 0.0101, 4));
   Write(runs / "viosfm/run/summary.json",
         "{\"frames\": {\"in\": 4, \"selected\": 4, \"registered\": 4},"
@@ -43,6 +43,9 @@ fs::path MakeFixture() {
   Write(runs / "colmap_sequential/eval.json", EvalJson(0.5, 0.25, 3));
   Write(runs / "colmap_sequential/num_models.txt", "2\n");
   Write(runs / "vio/eval.json", EvalJson(0.2, 0.15, 4));
+  Write(runs / "viosfm_no_rpc/time.txt", "4.0 204800\n");
+  Write(runs / "viosfm_no_rpc/eval.json", EvalJson(0.04, 0.03, 4));
+  Write(runs / "viosfm_no_rpc/reused.txt", "features and verified matches of viosfm\n");
   Write(root / "batch_size/10/time.txt", "8.0 1024\n");
   Write(root / "batch_size/10/eval.json", EvalJson(0.02, 0.01, 4));
   Write(root / "batch_size/5/time.txt", "9.0 1024\n");
@@ -53,10 +56,11 @@ fs::path MakeFixture() {
 
 TEST(BenchReport, ReadsRunsInMethodOrder) {
   const BenchResults results = ReadBenchResults(MakeFixture());
-  ASSERT_EQ(results.runs.size(), 3u);
+  ASSERT_EQ(results.runs.size(), 4u);
   EXPECT_EQ(results.runs[0].method, "vio");
   EXPECT_EQ(results.runs[1].method, "viosfm");
-  EXPECT_EQ(results.runs[2].method, "colmap_sequential");
+  EXPECT_EQ(results.runs[2].method, "viosfm_no_rpc");
+  EXPECT_EQ(results.runs[3].method, "colmap_sequential");
   const BenchRun& viosfm = results.runs[1];
   EXPECT_EQ(viosfm.frames_in, 4);
   EXPECT_EQ(viosfm.frames_registered, 4);
@@ -64,7 +68,13 @@ TEST(BenchReport, ReadsRunsInMethodOrder) {
   EXPECT_NEAR(*viosfm.seconds, 12.5, 1e-9);
   EXPECT_NEAR(*viosfm.peak_memory_mb, 200.0, 1e-9);
   EXPECT_NEAR(*viosfm.mapping_seconds, 3.25, 1e-9);
-  const BenchRun& colmap = results.runs[2];
+  EXPECT_NEAR(*viosfm.cpu_seconds, 11.75, 1e-9);
+  EXPECT_TRUE(viosfm.reused.empty());
+  EXPECT_FALSE(results.runs[2].cpu_seconds.has_value());
+  EXPECT_EQ(results.runs[2].reused, "features and verified matches of viosfm");
+  // Without batch_size_sequence.txt the sweep belongs to the first sequence.
+  EXPECT_EQ(results.batch_size_sequence, "room");
+  const BenchRun& colmap = results.runs[3];
   EXPECT_EQ(colmap.frames_registered, 3);
   EXPECT_EQ(colmap.num_models, 2);
   // Sweeps are sorted by number, not by name.
@@ -77,10 +87,14 @@ TEST(BenchReport, ReadsRunsInMethodOrder) {
 TEST(BenchReport, MarkdownHasTheNumbers) {
   const std::string md = FormatBenchMarkdown(ReadBenchResults(MakeFixture()), "images");
   EXPECT_THAT(md, HasSubstr("- mode: quick"));
-  EXPECT_THAT(md, HasSubstr("| viosfm | 4 / 4 | 0.012 | 0.010 | 12.5 | 200 |"));
+  EXPECT_THAT(md, HasSubstr("| viosfm | 4 / 4 | 0.012 | 0.010 | 12.5 | 11.8 | 200 |"));
+  EXPECT_THAT(md, HasSubstr("| viosfm w/o relative-pose term [1] | 4 / 4 | 0.040 | 0.030 | 4.0 "
+                            "| n/a | 200 |"));
+  EXPECT_THAT(md, HasSubstr("[1] viosfm w/o relative-pose term: started from the features and "
+                            "verified matches of viosfm;"));
   EXPECT_THAT(md,
               HasSubstr("| COLMAP 3.8, sequential matcher | 3 / 4 (2 models) | 0.500 | 0.250 |"));
-  EXPECT_THAT(md, HasSubstr("| input VIO (emulated) | - | 0.200 | 0.150 | - | - |"));
+  EXPECT_THAT(md, HasSubstr("| input VIO (emulated) | - | 0.200 | 0.150 | - | - | - |"));
   EXPECT_THAT(md, HasSubstr("| 10 | 4 | 0.020 | 8.0 |"));
 }
 
@@ -91,6 +105,20 @@ TEST(BenchReport, WritesPageAndBatchSizeFigures) {
   EXPECT_THAT(ReadTextFile(root / "docs/bench.md"),
               HasSubstr("](images/bench_batch_size_ate.svg)"));
   EXPECT_THAT(ReadTextFile(root / "docs/images/bench_batch_size_ate.svg"), HasSubstr("<svg"));
+}
+
+TEST(BenchReport, BatchSizeSweepNamesItsSequence) {
+  const fs::path root = MakeFixture();
+  Write(root / "batch_size_sequence.txt", "room_30s\n");
+  Write(root / "room_30s/runs/colmap_same_pairs/time.txt", "50.0 1024\n");
+  Write(root / "room_30s/runs/colmap_same_pairs/eval.json", EvalJson(0.07, 0.05, 4));
+  const BenchResults results = ReadBenchResults(root);
+  EXPECT_EQ(results.batch_size_sequence, "room_30s");
+  EXPECT_THAT(FormatBenchMarkdown(results, "images"), HasSubstr("On room_30s;"));
+  WriteBenchReport(results, root / "docs/bench.md", root / "docs/images");
+  // COLMAP's ATE of the sweep's sequence is a reference line of the figure.
+  EXPECT_THAT(ReadTextFile(root / "docs/images/bench_batch_size_ate.svg"),
+              HasSubstr("COLMAP 3.8, viosfm&#39;s pairs"));
 }
 
 TEST(BenchReport, BadInputNamesTheFile) {

@@ -141,6 +141,7 @@ std::string BatchedMapperOptions::Validate() const {
   if (std::string error = ba.Validate(); !error.empty()) return "ba." + error;
   if (std::string error = filter.Validate(); !error.empty()) return "filter." + error;
   if (ba_window_batches < 0) return "ba_window_batches must be >= 0";
+  if (batch_ba_max_num_iterations < 0) return "batch_ba_max_num_iterations must be >= 0";
   if (num_threads < 1) return "num_threads must be >= 1";
   return "";
 }
@@ -362,9 +363,14 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
       const std::vector<image_t> free_images(registered.begin() + window_begin, registered.end());
       const image_t held_neighbour =
           window_begin > 0 ? registered[window_begin - 1] : kInvalidImageId;
+      BundleAdjustmentOptions batch_ba_options = ba_options;
+      if (!global && options.batch_ba_max_num_iterations > 0) {
+        batch_ba_options.max_num_iterations = options.batch_ba_max_num_iterations;
+      }
       const BundleAdjustmentSummary ba_summary = AdjustImages(
-          &reconstruction, free_images, held_neighbour, gauge_image, priors, ba_options);
+          &reconstruction, free_images, held_neighbour, gauge_image, priors, batch_ba_options);
       stats.seconds_ba = ba_summary.time_s;
+      stats.num_ba_iterations = ba_summary.num_iterations;
       stats.num_ba_free_images = static_cast<int>(free_images.size());
       if (global) summary.final_ba = ba_summary;
       if (!ba_summary.usable && ba_summary.termination != "nothing to adjust") {
@@ -395,7 +401,8 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
                      << stats.num_images << "), points " << stats.num_points_total << " (+"
                      << triangulation.num_points_added << " new), reprojection error "
                      << stats.mean_reprojection_error_px << " px, BA over "
-                     << stats.num_ba_free_images << " images " << stats.seconds_ba << " s, "
+                     << stats.num_ba_free_images << " images " << stats.seconds_ba << " s ("
+                     << stats.num_ba_iterations << " iterations), "
                      << stats.seconds_total << " s";
     summary.batches.push_back(stats);
     progress.Update();

@@ -82,6 +82,12 @@ struct BatchedMapperOptions {
   // only by older images are left out. The final global bundle adjustment
   // refines everything either way.
   int ba_window_batches = 0;
+  // Levenberg-Marquardt iterations of each per-batch bundle adjustment, >= 1,
+  // or 0 for ba.max_num_iterations; the final global bundle adjustment always
+  // runs ba.max_num_iterations. Default 10. Every per-batch adjustment starts
+  // from a refined reconstruction plus one batch placed by the VIO, so a few
+  // iterations take it most of the way, and the final one converges.
+  int batch_ba_max_num_iterations = 10;
   // Worker threads (BA, triangulation); default 2.
   int num_threads = 2;
   bool show_progress = true;
@@ -95,6 +101,7 @@ struct MapperBatchStatistics {
   int num_images = 0;            // images in the batch
   int num_registered_total = 0;  // registered images after the batch
   int num_points_total = 0;      // points after the batch (after filtering)
+  int num_ba_iterations = 0;     // iterations of the batch's bundle adjustment
   // Mean over all observations after the batch (BA, filtering and
   // re-triangulation), px.
   double mean_reprojection_error_px = 0.0;
