@@ -339,7 +339,10 @@ for i in "${!datasets[@]}"; do
   seqs+=("${datasets[$i]}")
   vios+=("${dataset_vio[$i]}")
 done
+# The batch-size sweep's sequence: room of sweep_duration seconds (the room
+# scenario itself when it has that length).
 sweep_name=room_${sweep_duration}s
+[ "$sweep_duration" = "$duration" ] && [[ " $scenarios " == *" room "* ]] && sweep_name=room
 [ $with_sweeps = 1 ] && simulate room "$sweep_duration" "$out/$sweep_name/sequence"
 
 # Lane 2: COLMAP (in the background with --jobs 2).

@@ -1,11 +1,13 @@
 #include "viosfm/report/bench_report.h"
 
 #include <algorithm>
+#include <array>
 #include <cstdio>
 #include <fstream>
 #include <map>
 #include <sstream>
 
+#include "viosfm/eval/traj_eval.h"
 #include "viosfm/io/euroc.h"
 #include "viosfm/io/trajectory_io.h"
 #include "viosfm/report/json_file.h"
@@ -15,6 +17,7 @@
 #include "viosfm/util/errors.h"
 #include "viosfm/util/file_util.h"
 #include "viosfm/util/string_util.h"
+#include "viosfm/util/timestamp.h"
 
 namespace viosfm {
 namespace {
@@ -196,7 +199,64 @@ std::optional<Trajectory> RunTrajectory(const BenchRun& run, const fs::path& seq
   return CameraToBodyTrajectory(best, body_from_cam);
 }
 
+// timestamp -> floor of frames.csv.
+std::map<int64_t, int> ReadFloors(const fs::path& frames_csv) {
+  std::map<int64_t, int> floors;
+  std::ifstream in(frames_csv);
+  if (!in) throw InputError(frames_csv.string(), 0, "cannot open");
+  std::string line;
+  int line_number = 0;
+  while (std::getline(in, line)) {
+    ++line_number;
+    if (Trim(line).empty() || line[0] == '#') continue;
+    const std::vector<std::string_view> fields = Split(line, ",");
+    const std::optional<timestamp_ns_t> stamp =
+        fields.size() >= 3 ? ParseNs(Trim(fields[0])) : std::nullopt;
+    const std::optional<int64_t> floor =
+        fields.size() >= 3 ? ParseInt(Trim(fields[2])) : std::nullopt;
+    if (!stamp || !floor) {
+      throw InputError(frames_csv.string(), line_number,
+                       "expected 'timestamp [ns],region,floor,...', got '" + line + "'");
+    }
+    floors[*stamp] = static_cast<int>(*floor);
+  }
+  return floors;
+}
+
 }  // namespace
+
+FloorPlacement ComputeFloorPlacement(const Trajectory& estimate, const Trajectory& ground_truth,
+                                     const fs::path& frames_csv) {
+  const std::map<int64_t, int> floor_of = ReadFloors(frames_csv);
+  std::map<int, int> counts;
+  for (const auto& [stamp, floor] : floor_of) {
+    if (floor >= 0) ++counts[floor];
+  }
+  FloorPlacement placement;
+  if (counts.size() < 2 || estimate.size() < 3) return placement;
+  EvaluationOptions options;
+  options.alignment = AlignmentMode::kSim3;
+  options.rpe_delta_frames = 0;
+  const EvaluationResult result = EvaluateTrajectories(estimate, ground_truth, options);
+  std::map<int, std::array<double, 3>> sums;  // floor -> {count, est z, true z}
+  for (const PosePair& pair : result.pairs) {
+    const StampedPose& est = estimate.poses[pair.est_index];
+    const auto it = floor_of.find(est.timestamp_ns);
+    if (it == floor_of.end() || it->second < 0) continue;
+    const Eigen::Vector3d position = result.ref_from_est * est.world_from_frame.translation;
+    auto& sum = sums[it->second];
+    sum[0] += 1.0;
+    sum[1] += position.z();
+    sum[2] += ground_truth.poses[pair.ref_index].world_from_frame.translation.z();
+  }
+  for (const auto& [floor, sum] : sums) {
+    placement.floors.push_back(floor);
+    placement.num_frames.push_back(static_cast<int>(sum[0]));
+    placement.mean_height_m.push_back(sum[1] / sum[0]);
+    placement.true_mean_height_m.push_back(sum[2] / sum[0]);
+  }
+  return placement;
+}
 
 BenchResults ReadBenchResults(const fs::path& root) {
   if (!fs::is_directory(root)) {
@@ -226,6 +286,28 @@ BenchResults ReadBenchResults(const fs::path& root) {
     std::stable_sort(runs.begin(), runs.end(), [](const BenchRun& a, const BenchRun& b) {
       return MethodRank(a.method) < MethodRank(b.method);
     });
+    const fs::path frames_csv = folder / "sequence" / "frames.csv";
+    const fs::path gt_csv =
+        folder / "sequence" / "mav0" / "state_groundtruth_estimate0" / "data.csv";
+    if (fs::is_regular_file(frames_csv) && fs::is_regular_file(gt_csv)) {
+      const Trajectory ground_truth = ReadEurocTrajectory(gt_csv);
+      std::vector<FloorPlacement> placements;
+      for (const BenchRun& run : runs) {
+        std::optional<Trajectory> estimate;
+        if (run.method == "vio" || run.method == "own_vio") continue;
+        try {
+          estimate = RunTrajectory(run, folder / "sequence");
+        } catch (const InputError&) {
+          continue;  // a failed run's partial output
+        }
+        if (!estimate) continue;
+        FloorPlacement placement = ComputeFloorPlacement(*estimate, ground_truth, frames_csv);
+        if (placement.floors.empty()) continue;
+        placement.method = run.method;
+        placements.push_back(std::move(placement));
+      }
+      if (!placements.empty()) results.floors.emplace_back(name, std::move(placements));
+    }
     results.runs.insert(results.runs.end(), runs.begin(), runs.end());
   }
   results.batch_size = ReadSweep(root / "batch_size", "batch_size");
@@ -270,7 +352,8 @@ std::string FormatBenchMarkdown(const BenchResults& results,
       const bool is_vio = run.method == "vio" || run.method == "own_vio";
       std::string name = MethodName(run.method);
       if (!run.reused.empty()) {
-        notes.push_back(name + ": started from the " + run.reused + "; its time is that of the "
+        notes.push_back(name + ": started from the " + run.reused +
+                        "; its time is that of the "
                         "remaining stages.");
         name += " [" + std::to_string(notes.size()) + "]";
       }
@@ -282,6 +365,19 @@ std::string FormatBenchMarkdown(const BenchResults& results,
     }
     if (!notes.empty()) md << "\n";
     for (size_t i = 0; i < notes.size(); ++i) md << "[" << i + 1 << "] " << notes[i] << "\n";
+    for (const auto& [floor_sequence, placements] : results.floors) {
+      if (floor_sequence != sequence) continue;
+      md << "\nFloors: mean height of each floor's registered frames after the Sim(3) "
+            "alignment, against the true height of the same frames (frames.csv).\n\n"
+         << "| method | floor | frames | height (m) | true height (m) |\n|---|---|---|---|---|\n";
+      for (const FloorPlacement& p : placements) {
+        for (size_t i = 0; i < p.floors.size(); ++i) {
+          md << "| " << MethodName(p.method) << " | " << p.floors[i] << " | " << p.num_frames[i]
+             << " | " << Fixed(p.mean_height_m[i], 2) << " | " << Fixed(p.true_mean_height_m[i], 2)
+             << " |\n";
+        }
+      }
+    }
     for (const char* method : {"viosfm", "colmap_same_pairs", "colmap_sequential"}) {
       if (FindRun(results, sequence, method) == nullptr) continue;
       const std::string stem = "bench_" + sequence + "_" + method;

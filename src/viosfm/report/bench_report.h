@@ -23,6 +23,8 @@
 #include <string>
 #include <vector>
 
+#include "viosfm/scene/trajectory.h"
+
 namespace viosfm {
 
 // One run of one method.
@@ -43,21 +45,44 @@ struct BenchRun {
   std::optional<double> mapping_seconds;  // viosfm: the mapper stage
 };
 
+// Where a run put the floors of a multi-floor sequence (sequence/frames.csv
+// with a "floor" column; -1 = between floors): the mean height of each
+// floor's frames after the Sim(3) alignment to the ground truth, beside the
+// true mean height of the same frames.
+struct FloorPlacement {
+  std::string method;
+  std::vector<int> floors;            // floor numbers, ascending
+  std::vector<int> num_frames;        // registered frames per floor
+  std::vector<double> mean_height_m;  // estimated, ground-truth world z
+  std::vector<double> true_mean_height_m;
+};
+
 struct BenchResults {
   std::filesystem::path root;
   std::vector<std::pair<std::string, std::string>> meta;  // meta.txt
   std::vector<BenchRun> runs;                             // <sequence>/runs/<method>
   std::vector<BenchRun> batch_size;                       // method = the batch size
   std::vector<BenchRun> length;                           // method = the number of frames
-  std::string batch_size_sequence;  // the sequence of the batch-size sweep
+  std::string batch_size_sequence;                        // the sequence of the batch-size sweep
+  // Per sequence with two or more floors: the floor placement of each run
+  // with a trajectory.
+  std::vector<std::pair<std::string, std::vector<FloorPlacement>>> floors;
 };
 
 // Reads a benchmark folder. Throws InputError for a missing folder or a
 // malformed eval.json / summary.json / time.txt (naming the file).
 BenchResults ReadBenchResults(const std::filesystem::path& root);
 
+// The floor placement of `estimate` (body poses) against `ground_truth` for
+// the frames of frames_csv (columns timestamp, region, floor, ...). Empty
+// `floors` if the file has fewer than two floors. Throws InputError for a
+// malformed frames.csv.
+FloorPlacement ComputeFloorPlacement(const Trajectory& estimate, const Trajectory& ground_truth,
+                                     const std::filesystem::path& frames_csv);
+
 // The Markdown page: settings, the Table-I-style table per sequence, the
-// ablation rows, the sweeps, links to the figures (relative to the page).
+// floor placement, the ablation rows, the sweeps, links to the figures
+// (relative to the page).
 std::string FormatBenchMarkdown(const BenchResults& results,
                                 const std::string& figures_relative_path);
 

@@ -5,6 +5,7 @@
 
 #include <filesystem>
 
+#include "viosfm/io/trajectory_io.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/file_util.h"
 #include "viosfm/util/testing.h"
@@ -119,6 +120,76 @@ TEST(BenchReport, BatchSizeSweepNamesItsSequence) {
   // COLMAP's ATE of the sweep's sequence is a reference line of the figure.
   EXPECT_THAT(ReadTextFile(root / "docs/images/bench_batch_size_ate.svg"),
               HasSubstr("COLMAP 3.8, viosfm&#39;s pairs"));
+}
+
+// Two floors 3 m apart, 4 frames each, plus one stairwell frame (-1).
+struct TwoFloors {
+  Trajectory ground_truth;
+  std::string frames_csv = "#timestamp [ns],region,floor\n";
+};
+
+TwoFloors MakeTwoFloors() {
+  TwoFloors scene;
+  const double xy[4][2] = {{0, 0}, {4, 0}, {4, 3}, {0, 3}};
+  for (int i = 0; i < 9; ++i) {
+    const int floor = i < 4 ? 0 : (i == 4 ? -1 : 1);
+    StampedPose pose;
+    pose.timestamp_ns = 1000 + i;
+    const double* p = xy[i < 4 ? i : (i == 4 ? 0 : i - 5)];
+    pose.world_from_frame.translation =
+        Eigen::Vector3d(p[0], p[1], floor < 0 ? 1.5 : 3.0 * floor) + Eigen::Vector3d(0, 0, 1.2);
+    scene.ground_truth.poses.push_back(pose);
+    scene.frames_csv += std::to_string(pose.timestamp_ns) + ",r," + std::to_string(floor) + "\n";
+  }
+  return scene;
+}
+
+TEST(BenchReport, FloorPlacementOfExactAndMergedFloors) {
+  const TwoFloors scene = MakeTwoFloors();
+  const fs::path folder = testing::MakeScratchFolder("bench_report_floors");
+  Write(folder / "frames.csv", scene.frames_csv);
+  // An exact estimate in another frame (scaled, shifted): the true heights.
+  Trajectory moved = scene.ground_truth;
+  for (StampedPose& pose : moved.poses) {
+    pose.world_from_frame.translation =
+        0.5 * pose.world_from_frame.translation + Eigen::Vector3d(10, -2, 7);
+  }
+  FloorPlacement exact = ComputeFloorPlacement(moved, scene.ground_truth, folder / "frames.csv");
+  ASSERT_EQ(exact.floors, (std::vector<int>{0, 1}));
+  EXPECT_EQ(exact.num_frames, (std::vector<int>{4, 4}));
+  EXPECT_NEAR(exact.mean_height_m[0], 1.2, 1e-9);
+  EXPECT_NEAR(exact.mean_height_m[1], 4.2, 1e-9);
+  EXPECT_NEAR(exact.true_mean_height_m[1], 4.2, 1e-9);
+  // Floors merged into one (the failure of purely visual SfM): the
+  // estimated gap shrinks far below the true 3 m.
+  Trajectory merged = scene.ground_truth;
+  for (StampedPose& pose : merged.poses) pose.world_from_frame.translation.z() = 1.2;
+  const FloorPlacement wrong =
+      ComputeFloorPlacement(merged, scene.ground_truth, folder / "frames.csv");
+  ASSERT_EQ(wrong.floors.size(), 2u);
+  EXPECT_LT(std::abs(wrong.mean_height_m[1] - wrong.mean_height_m[0]), 0.5);
+  // One floor only: nothing to report. A broken row names the file.
+  Write(folder / "one_floor.csv", "1000,r,0\n1001,r,0\n");
+  EXPECT_TRUE(
+      ComputeFloorPlacement(moved, scene.ground_truth, folder / "one_floor.csv").floors.empty());
+  Write(folder / "bad.csv", "1000,r,zero\n");
+  EXPECT_THAT(testing::InputErrorMessage(
+                  [&] { ComputeFloorPlacement(moved, scene.ground_truth, folder / "bad.csv"); }),
+              HasSubstr("bad.csv:1"));
+}
+
+TEST(BenchReport, MarkdownHasTheFloorTable) {
+  const fs::path root = MakeFixture();
+  const TwoFloors scene = MakeTwoFloors();
+  Write(root / "room/sequence/frames.csv", scene.frames_csv);
+  WriteEurocTrajectory(root / "room/sequence/mav0/state_groundtruth_estimate0/data.csv",
+                       scene.ground_truth);
+  WriteTumTrajectory(root / "room/runs/viosfm/run/trajectory_body.tum", scene.ground_truth);
+  const BenchResults results = ReadBenchResults(root);
+  ASSERT_EQ(results.floors.size(), 1u);
+  EXPECT_EQ(results.floors[0].first, "room");
+  const std::string md = FormatBenchMarkdown(results, "images");
+  EXPECT_THAT(md, HasSubstr("| viosfm | 1 | 4 | 4.20 | 4.20 |"));
 }
 
 TEST(BenchReport, BadInputNamesTheFile) {
