@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <sstream>
 
@@ -32,6 +34,7 @@ const std::vector<std::pair<std::string, std::string>>& MethodNames() {
       {"viosfm", "viosfm"},
       {"viosfm_no_vio_check", "viosfm w/o VIO-aided verification"},
       {"viosfm_no_rpc", "viosfm w/o relative-pose term"},
+      {"viosfm_batch_ba50", "viosfm, 50 iterations in every batch's BA"},
       {"own_vio", "viosfm's own VIO"},
       {"viosfm_own_vio", "viosfm with its own VIO"},
       {"colmap_same_pairs", "COLMAP 3.8, viosfm's pairs"},
@@ -87,7 +90,9 @@ BenchRun ReadRun(const fs::path& folder, const std::string& sequence, const std:
   run.frames_in = frames_in;
   run.failed = fs::exists(folder / "failed");
   const fs::path time_path = folder / "time.txt";
-  if (fs::is_regular_file(time_path)) {
+  // GNU time creates its file at the start and fills it at the end: an empty
+  // one is a run still going, or one that was killed.
+  if (fs::is_regular_file(time_path) && !Trim(ReadTextFile(time_path)).empty()) {
     std::istringstream in(ReadTextFile(time_path));
     double seconds = 0.0;
     double kib = 0.0;
@@ -168,6 +173,7 @@ std::string Fixed(const std::optional<double>& value, int decimals) {
 
 std::string Registered(const BenchRun& run) {
   if (run.failed && run.frames_registered == 0) return "failed";
+  if (!run.seconds && run.frames_registered == 0) return "not finished";
   std::string text = std::to_string(run.frames_registered);
   if (run.frames_in > 0) text += " / " + std::to_string(run.frames_in);
   if (run.num_models > 1) text += " (" + std::to_string(run.num_models) + " models)";
@@ -238,7 +244,8 @@ FloorPlacement ComputeFloorPlacement(const Trajectory& estimate, const Trajector
   options.alignment = AlignmentMode::kSim3;
   options.rpe_delta_frames = 0;
   const EvaluationResult result = EvaluateTrajectories(estimate, ground_truth, options);
-  std::map<int, std::array<double, 3>> sums;  // floor -> {count, est z, true z}
+  std::map<int, std::array<double, 3>> sums;               // floor -> {count, est z, true z}
+  std::map<int, std::pair<Trajectory, Trajectory>> parts;  // floor -> {est, true}
   for (const PosePair& pair : result.pairs) {
     const StampedPose& est = estimate.poses[pair.est_index];
     const auto it = floor_of.find(est.timestamp_ns);
@@ -248,12 +255,23 @@ FloorPlacement ComputeFloorPlacement(const Trajectory& estimate, const Trajector
     sum[0] += 1.0;
     sum[1] += position.z();
     sum[2] += ground_truth.poses[pair.ref_index].world_from_frame.translation.z();
+    parts[it->second].first.poses.push_back(est);
+    parts[it->second].second.poses.push_back(ground_truth.poses[pair.ref_index]);
   }
+  options.association = AssociationMethod::kIndex;
   for (const auto& [floor, sum] : sums) {
     placement.floors.push_back(floor);
     placement.num_frames.push_back(static_cast<int>(sum[0]));
     placement.mean_height_m.push_back(sum[1] / sum[0]);
     placement.true_mean_height_m.push_back(sum[2] / sum[0]);
+    const auto& [est, truth] = parts.at(floor);
+    double rmse = std::numeric_limits<double>::quiet_NaN();
+    try {
+      if (est.size() >= 3) rmse = EvaluateTrajectories(est, truth, options).ate_translation_m.rmse;
+    } catch (const InputError&) {
+      // Too few or collinear positions on this floor: no alignment of its own.
+    }
+    placement.floor_ate_rmse_m.push_back(rmse);
   }
   return placement;
 }
@@ -368,13 +386,16 @@ std::string FormatBenchMarkdown(const BenchResults& results,
     for (const auto& [floor_sequence, placements] : results.floors) {
       if (floor_sequence != sequence) continue;
       md << "\nFloors: mean height of each floor's registered frames after the Sim(3) "
-            "alignment, against the true height of the same frames (frames.csv).\n\n"
-         << "| method | floor | frames | height (m) | true height (m) |\n|---|---|---|---|---|\n";
+            "alignment, against the true height of the same frames (frames.csv), and the ATE of "
+            "each floor's frames aligned on their own.\n\n"
+         << "| method | floor | frames | height (m) | true height (m) | ATE RMSE within the "
+            "floor (m) |\n|---|---|---|---|---|---|\n";
       for (const FloorPlacement& p : placements) {
         for (size_t i = 0; i < p.floors.size(); ++i) {
+          const double ate = p.floor_ate_rmse_m[i];
           md << "| " << MethodName(p.method) << " | " << p.floors[i] << " | " << p.num_frames[i]
              << " | " << Fixed(p.mean_height_m[i], 2) << " | " << Fixed(p.true_mean_height_m[i], 2)
-             << " |\n";
+             << " | " << (std::isnan(ate) ? std::string("n/a") : Fixed(ate, 3)) << " |\n";
         }
       }
     }

@@ -55,6 +55,9 @@ struct FloorPlacement {
   std::vector<int> num_frames;        // registered frames per floor
   std::vector<double> mean_height_m;  // estimated, ground-truth world z
   std::vector<double> true_mean_height_m;
+  // Sim(3) ATE RMSE of each floor's frames aligned on their own (the
+  // accuracy within a floor, without the placement of the floors).
+  std::vector<double> floor_ate_rmse_m;
 };
 
 struct BenchResults {

@@ -160,6 +160,8 @@ TEST(BenchReport, FloorPlacementOfExactAndMergedFloors) {
   EXPECT_NEAR(exact.mean_height_m[0], 1.2, 1e-9);
   EXPECT_NEAR(exact.mean_height_m[1], 4.2, 1e-9);
   EXPECT_NEAR(exact.true_mean_height_m[1], 4.2, 1e-9);
+  EXPECT_NEAR(exact.floor_ate_rmse_m[0], 0.0, 1e-9);
+  EXPECT_NEAR(exact.floor_ate_rmse_m[1], 0.0, 1e-9);
   // Floors merged into one (the failure of purely visual SfM): the
   // estimated gap shrinks far below the true 3 m.
   Trajectory merged = scene.ground_truth;
@@ -168,6 +170,8 @@ TEST(BenchReport, FloorPlacementOfExactAndMergedFloors) {
       ComputeFloorPlacement(merged, scene.ground_truth, folder / "frames.csv");
   ASSERT_EQ(wrong.floors.size(), 2u);
   EXPECT_LT(std::abs(wrong.mean_height_m[1] - wrong.mean_height_m[0]), 0.5);
+  // Each floor on its own is still exact (a translation of the other).
+  EXPECT_NEAR(wrong.floor_ate_rmse_m[1], 0.0, 1e-9);
   // One floor only: nothing to report. A broken row names the file.
   Write(folder / "one_floor.csv", "1000,r,0\n1001,r,0\n");
   EXPECT_TRUE(
@@ -189,7 +193,7 @@ TEST(BenchReport, MarkdownHasTheFloorTable) {
   ASSERT_EQ(results.floors.size(), 1u);
   EXPECT_EQ(results.floors[0].first, "room");
   const std::string md = FormatBenchMarkdown(results, "images");
-  EXPECT_THAT(md, HasSubstr("| viosfm | 1 | 4 | 4.20 | 4.20 |"));
+  EXPECT_THAT(md, HasSubstr("| viosfm | 1 | 4 | 4.20 | 4.20 | 0.000 |"));
 }
 
 TEST(BenchReport, BadInputNamesTheFile) {
@@ -198,6 +202,9 @@ TEST(BenchReport, BadInputNamesTheFile) {
   EXPECT_THAT(testing::InputErrorMessage([&] { ReadBenchResults(root); }),
               HasSubstr("room/runs/viosfm/eval.json"));
   Write(root / "room/runs/viosfm/eval.json", "{}");
+  // An empty time.txt is a run still going: no time, no error.
+  Write(root / "room/runs/viosfm/time.txt", "");
+  EXPECT_FALSE(ReadBenchResults(root).runs[1].seconds.has_value());
   Write(root / "room/runs/viosfm/time.txt", "twelve\n");
   EXPECT_THAT(testing::InputErrorMessage([&] { ReadBenchResults(root); }), HasSubstr("time.txt"));
   EXPECT_THROW(ReadBenchResults(root / "missing"), InputError);
