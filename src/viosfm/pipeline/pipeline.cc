@@ -359,8 +359,6 @@ std::vector<std::pair<std::string, std::string>> PipelineOptions::ToKeyValues() 
           {"mapper.ba.refine_intrinsics", Text(m.ba.refine_intrinsics)},
           {"mapper.ba.refine_principal_point", Text(m.ba.refine_principal_point)},
           {"mapper.ba.use_relative_pose_priors", Text(m.ba.use_relative_pose_priors)},
-          {"mapper.ba.max_num_iterations", Text(m.ba.max_num_iterations)},
-          {"mapper.ba.max_images_for_sparse_schur", Text(m.ba.max_images_for_sparse_schur)},
           {"mapper.ba.prior_alpha", Text(m.ba.prior_alpha)},
           {"mapper.ba.prior_beta", Text(m.ba.prior_beta)},
           {"mapper.ba.prior_rotation_sigma_rad", Text(m.ba.prior_rotation_sigma_rad)},
