@@ -121,7 +121,12 @@ out=$(cd "$out" && pwd)
   echo "memory_gib: $(awk '/MemTotal/ { printf "%.0f", $2 / 1048576 }' /proc/meminfo)"
   echo "mode: $([ $quick = 1 ] && echo quick || echo full)"
   echo "viosfm: ${BENCH_VERSION:-$(git -C "$here" describe --always --dirty 2>/dev/null || echo unknown)}"
-  echo "colmap: $(command -v colmap > /dev/null && colmap -h 2>/dev/null | grep -m1 -o 'COLMAP [0-9.]*' || echo none)"
+  colmap_help=$(colmap -h 2> /dev/null || true)
+  if [[ $colmap_help =~ COLMAP\ [0-9.]+ ]]; then
+    echo "colmap: ${BASH_REMATCH[0]}"
+  else
+    echo "colmap: none"
+  fi
   echo "settings: $duration s at $rate Hz, N1 $n1, N2 $n2, at most $max_features features, batch $batch"
   echo "jobs: $jobs at a time, $threads thread(s) each"
 } > "$out/meta.txt"
