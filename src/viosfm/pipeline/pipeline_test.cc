@@ -203,8 +203,14 @@ TEST(PipelineTest, SummaryJsonHasTheDocumentedKeys) {
   ASSERT_EQ(json["batches"].size(), s.mapper.batches.size());
   EXPECT_EQ(json["batches"].size(), (s.num_frames_selected + 9) / 10);
   for (const char* key : {"index", "images", "registered_total", "points_total",
-                          "mean_reprojection_error_px", "seconds_ba"}) {
+                          "mean_reprojection_error_px", "seconds_ba", "ba_iterations"}) {
     EXPECT_TRUE(json["batches"][0].contains(key)) << key;
+  }
+  // Every batch's BA but the final global one is capped.
+  const int cap = SmallOptions(f, f.out).mapper.batch_ba_max_num_iterations;
+  for (size_t i = 0; i + 1 < json["batches"].size(); ++i) {
+    EXPECT_GE(json["batches"][i]["ba_iterations"].get<int>(), 1) << i;
+    EXPECT_LE(json["batches"][i]["ba_iterations"].get<int>(), cap) << i;
   }
   EXPECT_EQ(json["batches"].back()["registered_total"], s.num_frames_registered);
   EXPECT_EQ(json["stages"].size(), 10u);
