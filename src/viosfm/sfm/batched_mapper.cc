@@ -402,8 +402,7 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
                      << triangulation.num_points_added << " new), reprojection error "
                      << stats.mean_reprojection_error_px << " px, BA over "
                      << stats.num_ba_free_images << " images " << stats.seconds_ba << " s ("
-                     << stats.num_ba_iterations << " iterations), "
-                     << stats.seconds_total << " s";
+                     << stats.num_ba_iterations << " iterations), " << stats.seconds_total << " s";
     summary.batches.push_back(stats);
     progress.Update();
   }
