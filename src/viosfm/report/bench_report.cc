@@ -243,7 +243,12 @@ FloorPlacement ComputeFloorPlacement(const Trajectory& estimate, const Trajector
   EvaluationOptions options;
   options.alignment = AlignmentMode::kSim3;
   options.rpe_delta_frames = 0;
-  const EvaluationResult result = EvaluateTrajectories(estimate, ground_truth, options);
+  EvaluationResult result;
+  try {
+    result = EvaluateTrajectories(estimate, ground_truth, options);
+  } catch (const InputError&) {
+    return placement;  // no stamp in common, or positions too degenerate to align
+  }
   std::map<int, std::array<double, 3>> sums;               // floor -> {count, est z, true z}
   std::map<int, std::pair<Trajectory, Trajectory>> parts;  // floor -> {est, true}
   for (const PosePair& pair : result.pairs) {

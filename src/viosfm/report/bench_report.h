@@ -78,7 +78,8 @@ BenchResults ReadBenchResults(const std::filesystem::path& root);
 
 // The floor placement of `estimate` (body poses) against `ground_truth` for
 // the frames of frames_csv (columns timestamp, region, floor, ...). Empty
-// `floors` if the file has fewer than two floors. Throws InputError for a
+// `floors` if the file has fewer than two floors or the estimate cannot be
+// aligned to the ground truth. Throws InputError for a
 // malformed frames.csv.
 FloorPlacement ComputeFloorPlacement(const Trajectory& estimate, const Trajectory& ground_truth,
                                      const std::filesystem::path& frames_csv);

@@ -176,6 +176,12 @@ TEST(BenchReport, FloorPlacementOfExactAndMergedFloors) {
   Write(folder / "one_floor.csv", "1000,r,0\n1001,r,0\n");
   EXPECT_TRUE(
       ComputeFloorPlacement(moved, scene.ground_truth, folder / "one_floor.csv").floors.empty());
+  // Three collinear positions cannot be aligned: no placement, no error.
+  Trajectory line;
+  for (int i = 0; i < 3; ++i) line.poses.push_back(moved.poses[i]);
+  for (int i = 0; i < 3; ++i) line.poses[i].world_from_frame.translation = Eigen::Vector3d(i, 0, 0);
+  EXPECT_TRUE(
+      ComputeFloorPlacement(line, scene.ground_truth, folder / "frames.csv").floors.empty());
   Write(folder / "bad.csv", "1000,r,zero\n");
   EXPECT_THAT(testing::InputErrorMessage(
                   [&] { ComputeFloorPlacement(moved, scene.ground_truth, folder / "bad.csv"); }),
