@@ -7,6 +7,7 @@
 #                [--dataset EUROC_DIR --vio-trajectory TUM]... [--no-colmap]
 #                [--no-sweeps] [--sweeps-only] [--colmap-modes "pairs sequential"]
 #                [--jobs 1|2] [--lane viosfm|colmap] [--force] [--docs FILE]
+#                [--lengths "300 600 1200 2400"] [--length-window N]
 #
 # For every scenario (simulated: images, IMU, ground truth and the emulated
 # drifting VIO that stands in for a VIO's output) or dataset, it runs
@@ -32,8 +33,11 @@
 # trimmed) a scenario, N1 10, N2 5, at most 1000 features, batch 50; the
 # batch-size sweep on a 30 s room sequence (the paper's Fig. 6, with COLMAP on
 # the same images as reference); the length sweep on room with 300, 600, 1200
-# and 2400 images. --quick: room and two_floors, 8 s at 10 Hz, COLMAP with
-# viosfm's pairs only, batch sizes 10 and 25: a few minutes.
+# and 2400 images, each per-batch BA over the last 4 batches (--ba-window 4;
+# the final global BA over all images). --lengths "" skips the length sweep,
+# --length-window 0 frees every image in every BA. --quick: room and
+# two_floors, 8 s at 10 Hz, COLMAP with viosfm's pairs only, batch sizes 10
+# and 25: a few minutes.
 #
 # Two jobs run at a time (--jobs 2, the default, on 2 cores): the viosfm runs
 # in one lane and the COLMAP runs in the other, each job single-threaded, so
@@ -66,6 +70,8 @@ colmap_modes=""
 jobs=2
 lane_only=""
 force=0
+lengths_arg=unset
+length_window_arg=unset
 docs=$here/docs/benchmarks-suite.md
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -82,6 +88,8 @@ while [ $# -gt 0 ]; do
     --lane) lane_only=$2; shift ;;
     --force) force=1 ;;
     --docs) docs=$2; shift ;;
+    --lengths) lengths_arg=$2; shift ;;
+    --length-window) length_window_arg=$2; shift ;;
     -h|--help) sed -n 2,50p "$0"; exit 0 ;;
     *) echo "bench/run.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
@@ -108,8 +116,10 @@ else
   duration=63; rate=10; n1=10; n2=5; max_features=1000; batch=50
   default_scenarios="room two_floors corridor"; default_modes="pairs sequential"
   sweep_duration=30; batch_sizes="5 10 25 50 100 200"; lengths="300 600 1200 2400"
-  length_window=0
+  length_window=4
 fi
+[ "$lengths_arg" != unset ] && lengths=$lengths_arg
+[ "$length_window_arg" != unset ] && length_window=$length_window_arg
 [ -z "$scenarios" ] && [ ${#datasets[@]} = 0 ] && scenarios=$default_scenarios
 [ -z "$colmap_modes" ] && colmap_modes=$default_modes
 threads=$((jobs == 2 ? 1 : 2))

@@ -8,6 +8,7 @@
 #include <limits>
 #include <memory>
 #include <sstream>
+#include <unordered_map>
 #include <unordered_set>
 
 #include "viosfm/ba/cost_functions.h"
@@ -82,7 +83,14 @@ BundleAdjustmentSummary BundleAdjust(Reconstruction* reconstruction,
       options.loss_scale_px > 0.0 ? new ceres::CauchyLoss(options.loss_scale_px) : nullptr;
   bool loss_used = false;
 
-  std::unordered_set<image_t> images_in_problem;
+  // Each image's pose as one parameter block (cost_functions.h), copied
+  // back after the solve. Node-based map: the blocks' addresses are stable.
+  std::unordered_map<image_t, PoseParameters> poses;
+  const auto pose_block = [&](const Image& image) {
+    auto [it, inserted] = poses.try_emplace(image.image_id);
+    if (inserted) it->second = ToPoseParameters(image.cam_from_world);
+    return it->second.data();
+  };
   std::unordered_set<camera_t> cameras_in_problem;
   for (const point3D_t point3D_id : reconstruction->Point3DIds()) {
     Point3D& point3D = reconstruction->GetPoint3D(point3D_id);
@@ -92,14 +100,16 @@ BundleAdjustmentSummary BundleAdjust(Reconstruction* reconstruction,
       if (!image.registered) continue;
       Camera& camera = reconstruction->GetCamera(image.camera_id);
       const Point2D& point2D = image.points2D.at(element.point2D_idx);
-      problem.AddResidualBlock(CreateReprojectionCost(camera.model_id, point2D.xy), loss,
-                               image.cam_from_world.rotation.coeffs().data(),
-                               image.cam_from_world.translation.data(), point3D.xyz.data(),
-                               camera.params.data());
+      if (options.refine_intrinsics) {
+        problem.AddResidualBlock(CreateReprojectionCost(camera.model_id, point2D.xy), loss,
+                                 pose_block(image), point3D.xyz.data(), camera.params.data());
+        cameras_in_problem.insert(camera.camera_id);
+      } else {
+        problem.AddResidualBlock(CreateConstantCameraReprojectionCost(camera, point2D.xy), loss,
+                                 pose_block(image), point3D.xyz.data());
+      }
       loss_used = true;
       point_used = true;
-      images_in_problem.insert(image.image_id);
-      cameras_in_problem.insert(camera.camera_id);
       ++summary.num_observations;
     }
     if (point_used) ++summary.num_points;
@@ -123,32 +133,19 @@ BundleAdjustmentSummary BundleAdjust(Reconstruction* reconstruction,
               prior.cam2_from_cam1,
               RelativePoseSqrtInformation(weight, options.prior_rotation_sigma_rad,
                                           options.prior_translation_sigma_m)),
-          nullptr, image1.cam_from_world.rotation.coeffs().data(),
-          image1.cam_from_world.translation.data(), image2.cam_from_world.rotation.coeffs().data(),
-          image2.cam_from_world.translation.data());
-      images_in_problem.insert(prior.image_id1);
-      images_in_problem.insert(prior.image_id2);
+          nullptr, pose_block(image1), pose_block(image2));
       ++summary.num_priors;
     }
   }
-  summary.num_images = static_cast<int>(images_in_problem.size());
+  summary.num_images = static_cast<int>(poses.size());
 
-  for (const image_t image_id : images_in_problem) {
-    Image& image = reconstruction->GetImage(image_id);
-    double* rotation = image.cam_from_world.rotation.coeffs().data();
-    double* translation = image.cam_from_world.translation.data();
-    problem.SetManifold(rotation, new ceres::EigenQuaternionManifold());
-    if (constant.count(image_id) > 0) {
-      problem.SetParameterBlockConstant(rotation);
-      problem.SetParameterBlockConstant(translation);
-    }
+  for (auto& [image_id, pose] : poses) {
+    problem.SetManifold(pose.data(), CreatePoseManifold());
+    if (constant.count(image_id) > 0) problem.SetParameterBlockConstant(pose.data());
   }
+  // (Only with refine_intrinsics are cameras parameter blocks.)
   for (const camera_t camera_id : cameras_in_problem) {
     Camera& camera = reconstruction->GetCamera(camera_id);
-    if (!options.refine_intrinsics) {
-      problem.SetParameterBlockConstant(camera.params.data());
-      continue;
-    }
     const std::vector<int> held = ConstantIntrinsicIndices(camera, options);
     if (!held.empty()) {
       problem.SetManifold(camera.params.data(),
@@ -172,14 +169,25 @@ BundleAdjustmentSummary BundleAdjust(Reconstruction* reconstruction,
   solver_options.minimizer_progress_to_stdout = options.print_progress;
   solver_options.logging_type =
       options.print_progress ? ceres::PER_MINIMIZER_ITERATION : ceres::SILENT;
-  if (summary.num_images > options.max_images_for_sparse_schur) {
-    solver_options.linear_solver_type = ceres::ITERATIVE_SCHUR;
-    solver_options.preconditioner_type = ceres::SCHUR_JACOBI;
-  } else if (ceres::IsSparseLinearAlgebraLibraryTypeAvailable(ceres::SUITE_SPARSE) ||
-             ceres::IsSparseLinearAlgebraLibraryTypeAvailable(ceres::EIGEN_SPARSE)) {
-    solver_options.linear_solver_type = ceres::SPARSE_SCHUR;
-  } else {
-    solver_options.linear_solver_type = ceres::DENSE_SCHUR;
+  const bool sparse_available =
+      ceres::IsSparseLinearAlgebraLibraryTypeAvailable(ceres::SUITE_SPARSE) ||
+      ceres::IsSparseLinearAlgebraLibraryTypeAvailable(ceres::EIGEN_SPARSE);
+  BaLinearSolver solver = options.linear_solver;
+  if (solver == BaLinearSolver::kAuto) {
+    solver = summary.num_images > options.max_images_for_sparse_schur
+                 ? BaLinearSolver::kIterativeSchur
+                 : BaLinearSolver::kSparseSchur;
+  }
+  if (solver == BaLinearSolver::kSparseSchur && !sparse_available) {
+    solver = BaLinearSolver::kDenseSchur;
+  }
+  switch (solver) {
+    case BaLinearSolver::kIterativeSchur:
+      solver_options.linear_solver_type = ceres::ITERATIVE_SCHUR;
+      solver_options.preconditioner_type = ceres::SCHUR_JACOBI;
+      break;
+    case BaLinearSolver::kDenseSchur: solver_options.linear_solver_type = ceres::DENSE_SCHUR; break;
+    default: solver_options.linear_solver_type = ceres::SPARSE_SCHUR; break;
   }
   std::string error;
   VIOSFM_CHECK(solver_options.IsValid(&error)) << error;
@@ -187,8 +195,9 @@ BundleAdjustmentSummary BundleAdjust(Reconstruction* reconstruction,
   ceres::Solver::Summary ceres_summary;
   ceres::Solve(solver_options, &problem, &ceres_summary);
 
-  for (const image_t image_id : images_in_problem) {
-    reconstruction->GetImage(image_id).cam_from_world.rotation.normalize();
+  for (const auto& [image_id, pose] : poses) {
+    if (constant.count(image_id) > 0) continue;
+    reconstruction->GetImage(image_id).cam_from_world = FromPoseParameters(pose);
   }
   summary.initial_cost = ceres_summary.initial_cost;
   summary.final_cost = ceres_summary.final_cost;

@@ -24,6 +24,11 @@
 
 namespace viosfm {
 
+// The linear solver of the Levenberg-Marquardt steps. kAuto: SPARSE_SCHUR up
+// to max_images_for_sparse_schur registered images, ITERATIVE_SCHUR (with the
+// SCHUR_JACOBI preconditioner) above.
+enum class BaLinearSolver { kAuto, kSparseSchur, kDenseSchur, kIterativeSchur };
+
 struct BundleAdjustmentOptions {
   // Cauchy loss scale on the reprojection error, pixels (default 1.0): an
   // observation r px off costs s^2 log(1 + r^2 / s^2) / 2. 0 = plain squares.
@@ -64,6 +69,7 @@ struct BundleAdjustmentOptions {
   // Above this number of registered images ITERATIVE_SCHUR (with the
   // SCHUR_JACOBI preconditioner) replaces SPARSE_SCHUR (default 1000).
   int max_images_for_sparse_schur = 1000;
+  BaLinearSolver linear_solver = BaLinearSolver::kAuto;  // (default kAuto)
   double function_tolerance = 1e-6;   // relative cost change to stop (default 1e-6)
   double gradient_tolerance = 1e-10;  // (default 1e-10)
   double parameter_tolerance = 1e-8;  // relative step size to stop (default 1e-8)

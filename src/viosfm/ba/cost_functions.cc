@@ -1,16 +1,50 @@
 #include "viosfm/ba/cost_functions.h"
 
+#include <ceres/product_manifold.h>
+
 #include <cmath>
 
 #include "viosfm/util/errors.h"
 
 namespace viosfm {
 
+PoseParameters ToPoseParameters(const Rigid3d& cam_from_world) {
+  const Eigen::Quaterniond rotation = cam_from_world.rotation.normalized();
+  return {rotation.x(),
+          rotation.y(),
+          rotation.z(),
+          rotation.w(),
+          cam_from_world.translation.x(),
+          cam_from_world.translation.y(),
+          cam_from_world.translation.z()};
+}
+
+Rigid3d FromPoseParameters(const PoseParameters& pose) {
+  return Rigid3d(Eigen::Quaterniond(pose[3], pose[0], pose[1], pose[2]).normalized(),
+                 Eigen::Vector3d(pose[4], pose[5], pose[6]));
+}
+
+ceres::Manifold* CreatePoseManifold() {
+  return new ceres::ProductManifold<ceres::EigenQuaternionManifold, ceres::EuclideanManifold<3>>();
+}
+
 ceres::CostFunction* CreateReprojectionCost(CameraModelId model_id, const Eigen::Vector2d& observed,
                                             const Eigen::Matrix2d& sqrt_information) {
   return VisitCameraModel(model_id, [&](auto model) -> ceres::CostFunction* {
     using Model = decltype(model);
     return ReprojectionError<Model>::Create(observed, sqrt_information);
+  });
+}
+
+ceres::CostFunction* CreateConstantCameraReprojectionCost(const Camera& camera,
+                                                          const Eigen::Vector2d& observed,
+                                                          const Eigen::Matrix2d& sqrt_information) {
+  return VisitCameraModel(camera.model_id, [&](auto model) -> ceres::CostFunction* {
+    using Model = decltype(model);
+    VIOSFM_CHECK(static_cast<int>(camera.params.size()) == Model::kNumParams())
+        << camera.params.size() << " parameters for " << camera.ModelName();
+    return ReprojectionErrorConstantCamera<Model>::Create(observed, camera.params.data(),
+                                                          sqrt_information);
   });
 }
 
@@ -27,7 +61,7 @@ RelativePoseError::RelativePoseError(const Rigid3d& cam2_from_cam1,
 
 ceres::CostFunction* RelativePoseError::Create(
     const Rigid3d& cam2_from_cam1, const Eigen::Matrix<double, 6, 6>& sqrt_information) {
-  return new ceres::AutoDiffCostFunction<RelativePoseError, kNumResiduals, 4, 3, 4, 3>(
+  return new ceres::AutoDiffCostFunction<RelativePoseError, kNumResiduals, 7, 7>(
       new RelativePoseError(cam2_from_cam1, sqrt_information));
 }
 
@@ -47,11 +81,10 @@ Eigen::Matrix<double, 6, 1> RelativePoseResidual(const Rigid3d& cam1_from_world,
                                                  const Rigid3d& cam2_from_world,
                                                  const Rigid3d& prior_cam2_from_cam1) {
   const RelativePoseError functor(prior_cam2_from_cam1, Eigen::Matrix<double, 6, 6>::Identity());
-  const Eigen::Quaterniond q1 = cam1_from_world.rotation.normalized();
-  const Eigen::Quaterniond q2 = cam2_from_world.rotation.normalized();
+  const PoseParameters pose1 = ToPoseParameters(cam1_from_world);
+  const PoseParameters pose2 = ToPoseParameters(cam2_from_world);
   Eigen::Matrix<double, 6, 1> residual;
-  functor(q1.coeffs().data(), cam1_from_world.translation.data(), q2.coeffs().data(),
-          cam2_from_world.translation.data(), residual.data());
+  functor(pose1.data(), pose2.data(), residual.data());
   return residual;
 }
 

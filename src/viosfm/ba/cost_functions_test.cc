@@ -80,10 +80,10 @@ TEST(ReprojectionError, ZeroAtTheTruthAndScaledBySqrtInformation) {
 
     std::unique_ptr<ceres::CostFunction> cost(CreateReprojectionCost(model_id, observed));
     ASSERT_EQ(cost->num_residuals(), 2);
+    ASSERT_EQ(cost->parameter_block_sizes().front(), 7);
     ASSERT_EQ(cost->parameter_block_sizes().back(), static_cast<int>(camera.params.size()));
-    const double* parameters[] = {cam_from_world.rotation.coeffs().data(),
-                                  cam_from_world.translation.data(), point_in_world.data(),
-                                  camera.params.data()};
+    const PoseParameters pose = ToPoseParameters(cam_from_world);
+    const double* parameters[] = {pose.data(), point_in_world.data(), camera.params.data()};
     Eigen::Vector2d residual;
     ASSERT_TRUE(cost->Evaluate(parameters, residual.data(), nullptr));
     EXPECT_LT(residual.norm(), 1e-9) << camera.ModelName();
@@ -105,9 +105,8 @@ TEST(ReprojectionError, UnsupportedModelThrowsInputError) {
 
 TEST(ReprojectionError, JacobiansMatchNumericDifferentiationForEveryModel) {
   Random random(2);
-  ceres::EigenQuaternionManifold quaternion_manifold;
-  const std::vector<const ceres::Manifold*> manifolds = {&quaternion_manifold, nullptr, nullptr,
-                                                         nullptr};
+  const std::unique_ptr<ceres::Manifold> pose_manifold(CreatePoseManifold());
+  const std::vector<const ceres::Manifold*> manifolds = {pose_manifold.get(), nullptr, nullptr};
   for (const CameraModelId model_id : kSupportedModels) {
     const Camera camera = MakeCamera(model_id, 752, 480, ParamsFor(model_id));
     for (int trial = 0; trial < 3; ++trial) {
@@ -119,9 +118,8 @@ TEST(ReprojectionError, JacobiansMatchNumericDifferentiationForEveryModel) {
                                        Eigen::Vector2d(random.Normal(0, 2), random.Normal(0, 2));
       std::unique_ptr<ceres::CostFunction> cost(CreateReprojectionCost(model_id, observed));
       ceres::GradientChecker checker(cost.get(), &manifolds, CheckerOptions());
-      const double* parameters[] = {cam_from_world.rotation.coeffs().data(),
-                                    cam_from_world.translation.data(), point_in_world.data(),
-                                    camera.params.data()};
+      const PoseParameters pose = ToPoseParameters(cam_from_world);
+      const double* parameters[] = {pose.data(), point_in_world.data(), camera.params.data()};
       ceres::GradientChecker::ProbeResults results;
       checker.Probe(parameters, 1e-6, &results);
       ASSERT_EQ(results.return_value, true) << camera.ModelName();
@@ -129,6 +127,75 @@ TEST(ReprojectionError, JacobiansMatchNumericDifferentiationForEveryModel) {
                                                        << results.error_log;
     }
   }
+}
+
+TEST(ReprojectionErrorConstantCamera, SameResidualAndJacobiansAsTheFullCost) {
+  Random random(7);
+  for (const CameraModelId model_id : kSupportedModels) {
+    const Camera camera = MakeCamera(model_id, 752, 480, ParamsFor(model_id));
+    const Rigid3d cam_from_world = RandomPose(&random, 0.3, 1.0);
+    const Eigen::Vector3d point_in_cam(random.Uniform(-1, 1), random.Uniform(-1, 1),
+                                       random.Uniform(2, 5));
+    const Eigen::Vector3d point_in_world = cam_from_world.Inverse() * point_in_cam;
+    const Eigen::Vector2d observed =
+        *Project(camera, point_in_cam) + Eigen::Vector2d(random.Normal(0, 2), random.Normal(0, 2));
+    Eigen::Matrix2d sqrt_information;
+    sqrt_information << 2.0, 0.5, 0.0, 1.5;
+    for (const Eigen::Matrix2d& weight : {Eigen::Matrix2d::Identity().eval(), sqrt_information}) {
+      std::unique_ptr<ceres::CostFunction> full(CreateReprojectionCost(model_id, observed, weight));
+      std::unique_ptr<ceres::CostFunction> held(
+          CreateConstantCameraReprojectionCost(camera, observed, weight));
+      ASSERT_EQ(held->parameter_block_sizes(), (std::vector<int32_t>{7, 3}));
+      const PoseParameters pose = ToPoseParameters(cam_from_world);
+      const double* full_parameters[] = {pose.data(), point_in_world.data(), camera.params.data()};
+      const double* held_parameters[] = {pose.data(), point_in_world.data()};
+      Eigen::Vector2d full_residual;
+      Eigen::Vector2d held_residual;
+      Eigen::Matrix<double, 2, 7, Eigen::RowMajor> full_d_pose;
+      Eigen::Matrix<double, 2, 3, Eigen::RowMajor> full_d_point;
+      Eigen::Matrix<double, 2, 7, Eigen::RowMajor> held_d_pose;
+      Eigen::Matrix<double, 2, 3, Eigen::RowMajor> held_d_point;
+      double* full_jacobians[] = {full_d_pose.data(), full_d_point.data(), nullptr};
+      double* held_jacobians[] = {held_d_pose.data(), held_d_point.data()};
+      ASSERT_TRUE(full->Evaluate(full_parameters, full_residual.data(), full_jacobians));
+      ASSERT_TRUE(held->Evaluate(held_parameters, held_residual.data(), held_jacobians));
+      EXPECT_GT(held_residual.norm(), 0.1) << camera.ModelName();
+      EXPECT_LT((held_residual - full_residual).norm(), 1e-12) << camera.ModelName();
+      EXPECT_LT((held_d_pose - full_d_pose).norm(), 1e-9 * full_d_pose.norm())
+          << camera.ModelName();
+      EXPECT_LT((held_d_point - full_d_point).norm(), 1e-9 * full_d_point.norm())
+          << camera.ModelName();
+    }
+  }
+}
+
+TEST(PoseParameters, RoundTripAndLayout) {
+  Random random(6);
+  const Rigid3d cam_from_world = RandomPose(&random, 1.0, 3.0);
+  const PoseParameters pose = ToPoseParameters(cam_from_world);
+  // [x, y, z, w] of the unit quaternion, then the translation.
+  const Eigen::Quaterniond q = cam_from_world.rotation.normalized();
+  EXPECT_DOUBLE_EQ(pose[0], q.x());
+  EXPECT_DOUBLE_EQ(pose[3], q.w());
+  EXPECT_DOUBLE_EQ(pose[4], cam_from_world.translation.x());
+  EXPECT_DOUBLE_EQ(pose[6], cam_from_world.translation.z());
+  const Rigid3d back = FromPoseParameters(pose);
+  EXPECT_LT(back.rotation.angularDistance(cam_from_world.rotation), 1e-12);
+  EXPECT_LT((back.translation - cam_from_world.translation).norm(), 1e-15);
+
+  // The manifold: 7 ambient, 6 tangent; a step moves the rotation by the
+  // first three components (Ceres' quaternion convention: |delta| is half
+  // the angle) and the translation by the last three.
+  const std::unique_ptr<ceres::Manifold> manifold(CreatePoseManifold());
+  EXPECT_EQ(manifold->AmbientSize(), 7);
+  EXPECT_EQ(manifold->TangentSize(), 6);
+  const double delta[6] = {0.0, 0.0, 0.1, 1.0, 2.0, 3.0};
+  PoseParameters moved;
+  ASSERT_TRUE(manifold->Plus(pose.data(), delta, moved.data()));
+  const Rigid3d stepped = FromPoseParameters(moved);
+  EXPECT_NEAR(stepped.rotation.angularDistance(cam_from_world.rotation), 0.2, 1e-12);
+  EXPECT_LT((stepped.translation - cam_from_world.translation - Eigen::Vector3d(1, 2, 3)).norm(),
+            1e-12);
 }
 
 TEST(RelativePoseWeight, PaperValues) {
@@ -149,9 +216,9 @@ TEST(RelativePoseError, ZeroAtTheTruth) {
     EXPECT_LT(RelativePoseResidual(cam1_from_world, cam2_from_world, cam2_from_cam1).norm(), 1e-12);
     std::unique_ptr<ceres::CostFunction> cost(
         RelativePoseError::Create(cam2_from_cam1, RelativePoseSqrtInformation(1e3, 0.005, 0.01)));
-    const double* parameters[] = {
-        cam1_from_world.rotation.coeffs().data(), cam1_from_world.translation.data(),
-        cam2_from_world.rotation.coeffs().data(), cam2_from_world.translation.data()};
+    const PoseParameters pose1 = ToPoseParameters(cam1_from_world);
+    const PoseParameters pose2 = ToPoseParameters(cam2_from_world);
+    const double* parameters[] = {pose1.data(), pose2.data()};
     Eigen::Matrix<double, 6, 1> residual;
     ASSERT_TRUE(cost->Evaluate(parameters, residual.data(), nullptr));
     EXPECT_LT(residual.norm(), 1e-8);
@@ -177,9 +244,9 @@ TEST(RelativePoseError, ResidualIsLogOfTheErrorTransformWeighted) {
   const double weight = RelativePoseWeight(200, 1e3, 0.003);
   std::unique_ptr<ceres::CostFunction> cost(
       RelativePoseError::Create(prior, RelativePoseSqrtInformation(weight, 0.005, 0.01)));
-  const double* parameters[] = {
-      cam1_from_world.rotation.coeffs().data(), cam1_from_world.translation.data(),
-      cam2_from_world.rotation.coeffs().data(), cam2_from_world.translation.data()};
+  const PoseParameters pose1 = ToPoseParameters(cam1_from_world);
+  const PoseParameters pose2 = ToPoseParameters(cam2_from_world);
+  const double* parameters[] = {pose1.data(), pose2.data()};
   Eigen::Matrix<double, 6, 1> weighted;
   ASSERT_TRUE(cost->Evaluate(parameters, weighted.data(), nullptr));
   EXPECT_LT((weighted.head<3>() - std::sqrt(weight) / 0.005 * omega).norm(), 1e-9);
@@ -188,9 +255,8 @@ TEST(RelativePoseError, ResidualIsLogOfTheErrorTransformWeighted) {
 
 TEST(RelativePoseError, JacobiansMatchNumericDifferentiation) {
   Random random(5);
-  ceres::EigenQuaternionManifold quaternion_manifold;
-  const std::vector<const ceres::Manifold*> manifolds = {&quaternion_manifold, nullptr,
-                                                         &quaternion_manifold, nullptr};
+  const std::unique_ptr<ceres::Manifold> pose_manifold(CreatePoseManifold());
+  const std::vector<const ceres::Manifold*> manifolds = {pose_manifold.get(), pose_manifold.get()};
   for (int trial = 0; trial < 5; ++trial) {
     const Rigid3d cam1_from_world = RandomPose(&random, 1.0, 3.0);
     const Rigid3d cam2_from_world = RandomPose(&random, 1.0, 3.0);
@@ -201,9 +267,9 @@ TEST(RelativePoseError, JacobiansMatchNumericDifferentiation) {
     std::unique_ptr<ceres::CostFunction> cost(
         RelativePoseError::Create(prior, RelativePoseSqrtInformation(1.0, 1.0, 1.0)));
     ceres::GradientChecker checker(cost.get(), &manifolds, CheckerOptions());
-    const double* parameters[] = {
-        cam1_from_world.rotation.coeffs().data(), cam1_from_world.translation.data(),
-        cam2_from_world.rotation.coeffs().data(), cam2_from_world.translation.data()};
+    const PoseParameters pose1 = ToPoseParameters(cam1_from_world);
+    const PoseParameters pose2 = ToPoseParameters(cam2_from_world);
+    const double* parameters[] = {pose1.data(), pose2.data()};
     ceres::GradientChecker::ProbeResults results;
     checker.Probe(parameters, 1e-6, &results);
     ASSERT_EQ(results.return_value, true);

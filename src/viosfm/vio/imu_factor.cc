@@ -1,7 +1,5 @@
 #include "viosfm/vio/imu_factor.h"
 
-#include <ceres/product_manifold.h>
-
 namespace viosfm {
 
 ImuStateParameters ImuStateParameters::FromState(const ImuState& state) {
@@ -32,10 +30,6 @@ ImuState ImuStateParameters::ToState(timestamp_ns_t timestamp_ns) const {
   state.gyro_bias = Eigen::Vector3d(speed_bias[3], speed_bias[4], speed_bias[5]);
   state.accel_bias = Eigen::Vector3d(speed_bias[6], speed_bias[7], speed_bias[8]);
   return state;
-}
-
-ceres::Manifold* CreatePoseManifold() {
-  return new ceres::ProductManifold<ceres::EigenQuaternionManifold, ceres::EuclideanManifold<3>>();
 }
 
 ImuFactor::ImuFactor(const ImuPreintegration& preintegration,

@@ -24,6 +24,7 @@
 #include <array>
 #include <memory>
 
+#include "viosfm/ba/cost_functions.h"  // CreatePoseManifold
 #include "viosfm/geometry/lie.h"
 #include "viosfm/vio/imu_preintegration.h"
 
@@ -38,10 +39,6 @@ struct ImuStateParameters {
   // The state (timestamp left to the caller) with a normalised quaternion.
   ImuState ToState(timestamp_ns_t timestamp_ns = 0) const;
 };
-
-// EigenQuaternionManifold x Euclidean<3> for a pose[7] block. Ownership goes
-// to the caller (or to the ceres::Problem it is given to).
-ceres::Manifold* CreatePoseManifold();
 
 class ImuFactor {
  public:
