@@ -43,8 +43,8 @@ ceres::CostFunction* CreateConstantCameraReprojectionCost(const Camera& camera,
     using Model = decltype(model);
     VIOSFM_CHECK(static_cast<int>(camera.params.size()) == Model::kNumParams())
         << camera.params.size() << " parameters for " << camera.ModelName();
-    return ReprojectionErrorConstantCamera<Model>::Create(observed, camera.params.data(),
-                                                          sqrt_information);
+    return new ReprojectionErrorConstantCamera<Model>(observed, camera.params.data(),
+                                                      sqrt_information);
   });
 }
 
