@@ -92,12 +92,27 @@ BenchRun ReadRun(const fs::path& folder, const std::string& sequence, const std:
   const fs::path time_path = folder / "time.txt";
   // GNU time creates its file at the start and fills it at the end: an empty
   // one is a run still going, or one that was killed.
-  if (fs::is_regular_file(time_path) && !Trim(ReadTextFile(time_path)).empty()) {
-    std::istringstream in(ReadTextFile(time_path));
+  // A command that failed or was killed gets GNU time's status line
+  // ("Command exited with non-zero status 1", "Command terminated by signal
+  // 15") before the figures.
+  std::string figures;
+  int figures_line = 0;
+  if (fs::is_regular_file(time_path)) {
+    std::istringstream lines(ReadTextFile(time_path));
+    std::string line;
+    while (std::getline(lines, line)) {
+      ++figures_line;
+      if (Trim(line).empty() || line.rfind("Command ", 0) == 0) continue;
+      figures = line;
+      break;
+    }
+  }
+  if (!figures.empty()) {
+    std::istringstream in(figures);
     double seconds = 0.0;
     double kib = 0.0;
     if (!(in >> seconds >> kib)) {
-      throw InputError(time_path.string(), 1,
+      throw InputError(time_path.string(), figures_line,
                        "expected 'seconds peak_kib [user_s system_s]' (/usr/bin/time -f "
                        "'%e %M %U %S')");
     }

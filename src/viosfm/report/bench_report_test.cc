@@ -211,6 +211,15 @@ TEST(BenchReport, BadInputNamesTheFile) {
   // An empty time.txt is a run still going: no time, no error.
   Write(root / "room/runs/viosfm/time.txt", "");
   EXPECT_FALSE(ReadBenchResults(root).runs[1].seconds.has_value());
+  // A killed run: GNU time's status line, then the figures.
+  Write(root / "room/runs/viosfm/time.txt", "Command terminated by signal 15\n7.5 2048 6.0 0.5\n");
+  Write(root / "room/runs/viosfm/failed", "");
+  {
+    const BenchResults results = ReadBenchResults(root);
+    ASSERT_TRUE(results.runs[1].seconds.has_value());
+    EXPECT_DOUBLE_EQ(*results.runs[1].seconds, 7.5);
+    EXPECT_TRUE(results.runs[1].failed);
+  }
   Write(root / "room/runs/viosfm/time.txt", "twelve\n");
   EXPECT_THAT(testing::InputErrorMessage([&] { ReadBenchResults(root); }), HasSubstr("time.txt"));
   EXPECT_THROW(ReadBenchResults(root / "missing"), InputError);
