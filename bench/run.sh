@@ -125,12 +125,15 @@ fi
 threads=$((jobs == 2 ? 1 : 2))
 mkdir -p "$out"
 out=$(cd "$out" && pwd)
+# The viosfm version of the runs (meta.txt and each viosfm run's version.txt,
+# so that a folder filled by several invocations says which made what).
+version=${BENCH_VERSION:-$(git -C "$here" describe --always --dirty 2>/dev/null || echo unknown)}
 {
   echo "date: $(date -u +%FT%TZ)"
   echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs)"
   echo "memory_gib: $(awk '/MemTotal/ { printf "%.0f", $2 / 1048576 }' /proc/meminfo)"
   echo "mode: $([ $quick = 1 ] && echo quick || echo full)"
-  echo "viosfm: ${BENCH_VERSION:-$(git -C "$here" describe --always --dirty 2>/dev/null || echo unknown)}"
+  echo "viosfm: $version"
   colmap_help=$(colmap -h 2> /dev/null || true)
   if [[ $colmap_help =~ COLMAP\ [0-9.]+ ]]; then
     echo "colmap: ${BASH_REMATCH[0]}"
@@ -191,6 +194,7 @@ viosfm_run() {
     fi
     local source=(--vio-trajectory "$vio")
     [ "$vio" = own ] && source=()
+    echo "$version" > "$dir/version.txt"
     timed "$dir" "$VIOSFM" run "$seq" --out "$dir/run" "${source[@]}" --rate "$rate" \
       --n1 "$n1" --n2 "$n2" --max-features "$max_features" --threads "$threads" "$@"
   fi

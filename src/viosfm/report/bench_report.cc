@@ -124,6 +124,8 @@ BenchRun ReadRun(const fs::path& folder, const std::string& sequence, const std:
   }
   const fs::path reused_path = folder / "reused.txt";
   if (fs::is_regular_file(reused_path)) run.reused = Trim(ReadTextFile(reused_path));
+  const fs::path version_path = folder / "version.txt";
+  if (fs::is_regular_file(version_path)) run.version = Trim(ReadTextFile(version_path));
   const fs::path eval_path = folder / "eval.json";
   if (fs::is_regular_file(eval_path)) {
     const Json eval = ReadJsonFile(eval_path);
@@ -374,6 +376,11 @@ std::string FormatBenchMarkdown(const BenchResults& results,
         "feature extraction, matching and mapping; viosfm: every stage of `viosfm run`, "
         "except where a note says the run reused another run's features and matches).\n";
 
+  // Runs made by another viosfm version than meta.txt's get a note.
+  std::string meta_version;
+  for (const auto& [key, value] : results.meta) {
+    if (key == "viosfm") meta_version = value;
+  }
   std::vector<std::string> sequences;
   for (const BenchRun& run : results.runs) {
     if (std::find(sequences.begin(), sequences.end(), run.sequence) == sequences.end()) {
@@ -389,12 +396,18 @@ std::string FormatBenchMarkdown(const BenchResults& results,
       if (run.sequence != sequence) continue;
       const bool is_vio = run.method == "vio" || run.method == "own_vio";
       std::string name = MethodName(run.method);
+      std::string marks;
       if (!run.reused.empty()) {
         notes.push_back(name + ": started from the " + run.reused +
                         "; its time is that of the "
                         "remaining stages.");
-        name += " [" + std::to_string(notes.size()) + "]";
+        marks += " [" + std::to_string(notes.size()) + "]";
       }
+      if (!run.version.empty() && run.version != meta_version) {
+        notes.push_back(name + ": run with viosfm " + run.version + ".");
+        marks += " [" + std::to_string(notes.size()) + "]";
+      }
+      name += marks;
       md << "| " << name << " | " << (is_vio ? "-" : Registered(run)) << " | "
          << Fixed(run.ate_rmse_m, 3) << " | " << Fixed(run.ate_median_m, 3) << " | "
          << (is_vio ? "-" : Fixed(run.seconds, 1)) << " | "
@@ -434,11 +447,14 @@ std::string FormatBenchMarkdown(const BenchResults& results,
           "sequence's viosfm run, so the time is that of the VIO read, the mapping and the "
           "outputs. The figures' reference lines are the methods of the "
        << results.batch_size_sequence << " table.\n\n"
-       << "| batch size | registered / frames | ATE RMSE (m) | time (s) | mapping (s) |\n"
-       << "|---|---|---|---|---|\n";
+       << "| batch size | registered / frames | ATE RMSE (m) | time (s) | CPU (s) | mapping (s) "
+          "| viosfm |\n"
+       << "|---|---|---|---|---|---|---|\n";
     for (const BenchRun& run : results.batch_size) {
       md << "| " << run.method << " | " << Registered(run) << " | " << Fixed(run.ate_rmse_m, 3)
-         << " | " << Fixed(run.seconds, 1) << " | " << Fixed(run.mapping_seconds, 1) << " |\n";
+         << " | " << Fixed(run.seconds, 1) << " | " << Fixed(run.cpu_seconds, 1) << " | "
+         << Fixed(run.mapping_seconds, 1) << " | "
+         << (run.version.empty() ? meta_version : run.version) << " |\n";
     }
     md << "\n![ATE against batch size](" << figures_relative_path
        << "/bench_batch_size_ate.svg) ![time against batch size](" << figures_relative_path
@@ -447,11 +463,12 @@ std::string FormatBenchMarkdown(const BenchResults& results,
   if (!results.length.empty()) {
     md << "\n## Sequence length\n\n"
        << "| frames | registered / frames | ATE RMSE (m) | time (s) | CPU (s) | mapping (s) | "
-          "peak memory (MiB) |\n|---|---|---|---|---|---|---|\n";
+          "peak memory (MiB) | viosfm |\n|---|---|---|---|---|---|---|---|\n";
     for (const BenchRun& run : results.length) {
       md << "| " << run.method << " | " << Registered(run) << " | " << Fixed(run.ate_rmse_m, 3)
          << " | " << Fixed(run.seconds, 1) << " | " << Fixed(run.cpu_seconds, 1) << " | "
-         << Fixed(run.mapping_seconds, 1) << " | " << Fixed(run.peak_memory_mb, 0) << " |\n";
+         << Fixed(run.mapping_seconds, 1) << " | " << Fixed(run.peak_memory_mb, 0) << " | "
+         << (run.version.empty() ? meta_version : run.version) << " |\n";
     }
   }
   return md.str();

@@ -10,7 +10,8 @@
 //   ROOT/<sequence>/runs/<method>/     one run: time.txt ("seconds peak_kib
 //       [user_s system_s]"), eval.json (`viosfm eval --json`), failed (present
 //       if the run failed), reused.txt (present if the run started from
-//       another run's features and matches: what it reused), run/ (a
+//       another run's features and matches: what it reused), version.txt
+//       (the viosfm version that made the run, if recorded), run/ (a
 //       `viosfm run` output folder) or sparse/N/ (COLMAP models)
 //   ROOT/batch_size/<k>/               a `viosfm run` with batch size k
 //   ROOT/batch_size_sequence.txt       the sequence the batch sizes ran on (its
@@ -41,6 +42,7 @@ struct BenchRun {
   std::optional<double> seconds;          // wall clock of the whole run
   std::optional<double> cpu_seconds;      // user + system CPU time
   std::string reused;                     // what the run reused (reused.txt), or empty
+  std::string version;                    // version.txt (viosfm runs), or empty
   std::optional<double> peak_memory_mb;   // MiB
   std::optional<double> mapping_seconds;  // viosfm: the mapper stage
 };

@@ -15,6 +15,7 @@ namespace {
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
+using ::testing::Not;
 
 std::string EvalJson(double rmse, double median, int pairs) {
   return "{\"num_pairs\": " + std::to_string(pairs) +
@@ -31,7 +32,7 @@ void Write(const fs::path& path, const std::string& text) {
 // methods and a batch-size sweep of two runs.
 fs::path MakeFixture() {
   const fs::path root = testing::MakeScratchFolder("bench_report");
-  Write(root / "meta.txt", "date: 2026-01-01\nmode: quick\n");
+  Write(root / "meta.txt", "date: 2026-01-01\nmode: quick\nviosfm: abc1234\n");
   Write(root / "room/sequence/mav0/cam0/data.csv",
         "#timestamp [ns],filename\n1,1.png\n2,2.png\n3,3.png\n4,4.png\n");
   const fs::path runs = root / "room/runs";
@@ -52,6 +53,7 @@ fs::path MakeFixture() {
   Write(root / "batch_size/5/time.txt", "9.0 1024\n");
   Write(root / "batch_size/5/eval.json", EvalJson(0.03, 0.01, 4));
   Write(root / "batch_size/5/failed", "");
+  Write(root / "batch_size/5/version.txt", "0ld0001\n");
   return root;
 }
 
@@ -97,6 +99,20 @@ TEST(BenchReport, MarkdownHasTheNumbers) {
               HasSubstr("| COLMAP 3.8, sequential matcher | 3 / 4 (2 models) | 0.500 | 0.250 |"));
   EXPECT_THAT(md, HasSubstr("| input VIO (emulated) | - | 0.200 | 0.150 | - | - | - |"));
   EXPECT_THAT(md, HasSubstr("| 10 | 4 | 0.020 | 8.0 |"));
+  // The version of each sweep run: its version.txt, else meta.txt's.
+  EXPECT_THAT(md, HasSubstr("| 10 | 4 | 0.020 | 8.0 | n/a | n/a | abc1234 |"));
+  EXPECT_THAT(md, HasSubstr("| 0ld0001 |"));
+}
+
+TEST(BenchReport, RunsOfAnotherVersionGetANote) {
+  const fs::path root = MakeFixture();
+  Write(root / "room/runs/viosfm/version.txt", "abc1234\n");
+  EXPECT_THAT(FormatBenchMarkdown(ReadBenchResults(root), "images"),
+              Not(HasSubstr("run with viosfm")));
+  Write(root / "room/runs/viosfm/version.txt", "0ld0001\n");
+  const std::string md = FormatBenchMarkdown(ReadBenchResults(root), "images");
+  EXPECT_THAT(md, HasSubstr("| viosfm [1] | 4 / 4 |"));
+  EXPECT_THAT(md, HasSubstr("[1] viosfm: run with viosfm 0ld0001."));
 }
 
 TEST(BenchReport, WritesPageAndBatchSizeFigures) {
