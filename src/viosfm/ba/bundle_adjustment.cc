@@ -29,6 +29,16 @@ std::vector<int> ConstantIntrinsicIndices(const Camera& camera,
 
 }  // namespace
 
+const char* BaLinearSolverName(BaLinearSolver solver) {
+  switch (solver) {
+    case BaLinearSolver::kSparseSchur: return "SPARSE_SCHUR";
+    case BaLinearSolver::kDenseSchur: return "DENSE_SCHUR";
+    case BaLinearSolver::kIterativeSchur: return "ITERATIVE_SCHUR";
+    default: break;
+  }
+  return "auto";
+}
+
 std::string BundleAdjustmentOptions::Validate() const {
   if (!(loss_scale_px >= 0.0)) return "loss_scale_px must be >= 0";
   if (!(prior_alpha >= 0.0)) return "prior_alpha must be >= 0";
@@ -51,7 +61,7 @@ std::string BundleAdjustmentSummary::ToString() const {
       << " relative-pose priors; reprojection error " << mean_reprojection_error_before_px << " -> "
       << mean_reprojection_error_after_px << " px; cost " << std::setprecision(6) << initial_cost
       << " -> " << final_cost << "; " << num_iterations << " iterations, " << std::setprecision(3)
-      << time_s << " s; " << termination;
+      << time_s << " s (" << BaLinearSolverName(linear_solver) << "); " << termination;
   return out.str();
 }
 
@@ -181,6 +191,7 @@ BundleAdjustmentSummary BundleAdjust(Reconstruction* reconstruction,
   if (solver == BaLinearSolver::kSparseSchur && !sparse_available) {
     solver = BaLinearSolver::kDenseSchur;
   }
+  summary.linear_solver = solver;
   switch (solver) {
     case BaLinearSolver::kIterativeSchur:
       solver_options.linear_solver_type = ceres::ITERATIVE_SCHUR;

@@ -24,9 +24,10 @@
 
 namespace viosfm {
 
-// The linear solver of the Levenberg-Marquardt steps. kAuto: SPARSE_SCHUR up
-// to max_images_for_sparse_schur registered images, ITERATIVE_SCHUR (with the
-// SCHUR_JACOBI preconditioner) above.
+// The linear solver of the Levenberg-Marquardt steps. kAuto in BundleAdjust:
+// SPARSE_SCHUR up to max_images_for_sparse_schur images, ITERATIVE_SCHUR
+// (with the SCHUR_JACOBI preconditioner) above; the batched mapper instead
+// measures both above that size and keeps the faster (batched_mapper.h).
 enum class BaLinearSolver { kAuto, kSparseSchur, kDenseSchur, kIterativeSchur };
 
 struct BundleAdjustmentOptions {
@@ -66,14 +67,15 @@ struct BundleAdjustmentOptions {
   // Solver.
   int max_num_iterations = 50;  // Levenberg-Marquardt iterations (default 50)
   int num_threads = 2;          // Jacobian evaluation and linear solver threads (default 2)
-  // Above this number of images in the problem ITERATIVE_SCHUR (with the
-  // SCHUR_JACOBI preconditioner) replaces SPARSE_SCHUR (default 100). Where
-  // the cameras see each other (a room), the reduced camera matrix is nearly
-  // dense and its factorisation dominates SPARSE_SCHUR: on the benchmark
-  // suite's 610-image room an iteration costs 5.0 CPU-s with SPARSE_SCHUR
-  // and 1.4 with ITERATIVE_SCHUR (0.45 and 0.38 at 150 images), and the
-  // whole run from stored matches 334 against 143 CPU-s, with the same
-  // trajectory (ATE 0.85 and 0.84 mm). See docs/benchmarks.md.
+  // Up to this number of images in the problem SPARSE_SCHUR is used; above
+  // it, see BaLinearSolver (default 100). Neither solver wins everywhere
+  // (docs/benchmarks.md): where the cameras see each other (a room) the
+  // reduced camera matrix is nearly dense and its factorisation dominates
+  // SPARSE_SCHUR (610 images: 5.0 CPU-s an iteration against 1.4 for
+  // ITERATIVE_SCHUR; the whole run from stored matches 334 against 143
+  // CPU-s, ATE 0.85 and 0.84 mm); along a weakly textured corridor the
+  // conjugate gradients need many steps and SPARSE_SCHUR is about twice as
+  // fast.
   int max_images_for_sparse_schur = 100;
   BaLinearSolver linear_solver = BaLinearSolver::kAuto;  // (default kAuto)
   double function_tolerance = 1e-6;   // relative cost change to stop (default 1e-6)
@@ -84,6 +86,9 @@ struct BundleAdjustmentOptions {
   std::string Validate() const;  // empty if valid, else names the bad field
   bool Check() const { return Validate().empty(); }
 };
+
+// "SPARSE_SCHUR", "DENSE_SCHUR", "ITERATIVE_SCHUR" or "auto".
+const char* BaLinearSolverName(BaLinearSolver solver);
 
 // The VIO's relative pose between two (normally consecutive) frames.
 struct RelativePosePrior {
@@ -102,7 +107,8 @@ struct BundleAdjustmentSummary {
   double mean_reprojection_error_after_px = 0.0;
   int num_iterations = 0;
   double time_s = 0.0;
-  std::string termination;  // Ceres' termination type and message
+  std::string termination;                               // Ceres' termination type and message
+  BaLinearSolver linear_solver = BaLinearSolver::kAuto;  // the one used
   // Whether Ceres returned a usable solution (converged or hit the
   // iteration limit); the reconstruction is updated either way.
   bool usable = false;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
+#include <optional>
 #include <sstream>
 #include <unordered_map>
 #include <unordered_set>
@@ -42,6 +43,48 @@ Image CopyImageWithoutPoints(const Image& image) {
   for (Point2D& point2D : copy.points2D) point2D.point3D_id = kInvalidPoint3DId;
   return copy;
 }
+
+// The linear solver of each bundle adjustment with more than
+// max_images_for_sparse_schur images, when the options leave it to kAuto:
+// neither SPARSE_SCHUR nor ITERATIVE_SCHUR is faster on every scene
+// (bundle_adjustment.h), so the mapper measures. The first such adjustment
+// runs SPARSE_SCHUR, the second ITERATIVE_SCHUR; after that each uses the
+// one with the lower last-measured time per iteration and observation, and
+// every kProbePeriod-th tries the other again, since the balance shifts as
+// the reconstruction grows.
+class LinearSolverChooser {
+ public:
+  static constexpr int kProbePeriod = 4;
+
+  explicit LinearSolverChooser(const BundleAdjustmentOptions& options) : options_(options) {}
+
+  BaLinearSolver Next(size_t num_images, bool final) {
+    if (options_.linear_solver != BaLinearSolver::kAuto) return options_.linear_solver;
+    if (num_images <= static_cast<size_t>(options_.max_images_for_sparse_schur)) {
+      return BaLinearSolver::kSparseSchur;
+    }
+    if (!sparse_cost_) return BaLinearSolver::kSparseSchur;
+    if (!iterative_cost_) return BaLinearSolver::kIterativeSchur;
+    const bool sparse_better = *sparse_cost_ <= *iterative_cost_;
+    const bool probe = !final && ++num_choices_ % kProbePeriod == 0;
+    return sparse_better != probe ? BaLinearSolver::kSparseSchur : BaLinearSolver::kIterativeSchur;
+  }
+
+  void Record(const BundleAdjustmentSummary& summary) {
+    // (Only adjustments in the measured range count.)
+    if (summary.num_images <= options_.max_images_for_sparse_schur) return;
+    if (summary.num_iterations < 1 || summary.num_observations < 1) return;
+    const double cost = summary.time_s / summary.num_iterations / summary.num_observations;
+    if (summary.linear_solver == BaLinearSolver::kSparseSchur) sparse_cost_ = cost;
+    if (summary.linear_solver == BaLinearSolver::kIterativeSchur) iterative_cost_ = cost;
+  }
+
+ private:
+  BundleAdjustmentOptions options_;
+  std::optional<double> sparse_cost_;
+  std::optional<double> iterative_cost_;
+  int num_choices_ = 0;
+};
 
 // Bundle adjustment of the poses of `free_images` and of the points they
 // observe. Every other image observing those points is held constant, and so
@@ -311,6 +354,7 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
   BundleAdjustmentOptions ba_options = options.ba;
   ba_options.num_threads = options.num_threads;
   const image_t gauge_image = input.images.front().image_id;
+  LinearSolverChooser solver_chooser(ba_options);
 
   const size_t batch_size = static_cast<size_t>(options.batch_size);
   const size_t num_batches = (num_images + batch_size - 1) / batch_size;
@@ -367,10 +411,13 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
       if (!global && options.batch_ba_max_num_iterations > 0) {
         batch_ba_options.max_num_iterations = options.batch_ba_max_num_iterations;
       }
+      batch_ba_options.linear_solver = solver_chooser.Next(free_images.size(), global);
       const BundleAdjustmentSummary ba_summary = AdjustImages(
           &reconstruction, free_images, held_neighbour, gauge_image, priors, batch_ba_options);
+      solver_chooser.Record(ba_summary);
       stats.seconds_ba = ba_summary.time_s;
       stats.num_ba_iterations = ba_summary.num_iterations;
+      stats.ba_linear_solver = ba_summary.linear_solver;
       stats.num_ba_free_images = static_cast<int>(free_images.size());
       if (global) summary.final_ba = ba_summary;
       if (!ba_summary.usable && ba_summary.termination != "nothing to adjust") {
@@ -402,7 +449,9 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
                      << triangulation.num_points_added << " new), reprojection error "
                      << stats.mean_reprojection_error_px << " px, BA over "
                      << stats.num_ba_free_images << " images " << stats.seconds_ba << " s ("
-                     << stats.num_ba_iterations << " iterations), " << stats.seconds_total << " s";
+                     << stats.num_ba_iterations << " iterations, "
+                     << BaLinearSolverName(stats.ba_linear_solver) << "), " << stats.seconds_total
+                     << " s";
     summary.batches.push_back(stats);
     progress.Update();
   }

@@ -102,6 +102,7 @@ struct MapperBatchStatistics {
   int num_registered_total = 0;  // registered images after the batch
   int num_points_total = 0;      // points after the batch (after filtering)
   int num_ba_iterations = 0;     // iterations of the batch's bundle adjustment
+  BaLinearSolver ba_linear_solver = BaLinearSolver::kAuto;  // the one it used
   // Mean over all observations after the batch (BA, filtering and
   // re-triangulation), px.
   double mean_reprojection_error_px = 0.0;

@@ -357,6 +357,46 @@ TEST(BatchedMapperTest, WindowedBundleAdjustment) {
   EXPECT_EQ(NumMixedObservations(reconstruction, sequence), 0u);
 }
 
+// Above max_images_for_sparse_schur the mapper measures both linear
+// solvers (first SPARSE_SCHUR, then ITERATIVE_SCHUR) and keeps the faster,
+// with the same result as either alone; a solver set in the options is used
+// throughout.
+TEST(BatchedMapperTest, ChoosesTheLinearSolverByMeasurement) {
+  const SyntheticSequence sequence = MakeSyntheticSequence(SmallSequenceOptions(70, 9));
+  BatchedMapperOptions options = QuietOptions(10);
+  options.ba.max_images_for_sparse_schur = 15;
+  BatchedMapperSummary summary;
+  const Reconstruction reconstruction = RunBatchedMapper(sequence.input, options, &summary);
+  ASSERT_EQ(summary.batches.size(), 7u);
+  EXPECT_EQ(summary.batches[0].ba_linear_solver, BaLinearSolver::kSparseSchur);  // 10 images
+  EXPECT_EQ(summary.batches[1].ba_linear_solver, BaLinearSolver::kSparseSchur);  // first probe
+  EXPECT_EQ(summary.batches[2].ba_linear_solver, BaLinearSolver::kIterativeSchur);
+  int num_sparse = 0;
+  int num_iterative = 0;
+  for (const MapperBatchStatistics& batch : summary.batches) {
+    num_sparse += batch.ba_linear_solver == BaLinearSolver::kSparseSchur ? 1 : 0;
+    num_iterative += batch.ba_linear_solver == BaLinearSolver::kIterativeSchur ? 1 : 0;
+  }
+  EXPECT_EQ(num_sparse + num_iterative, 7);
+  EXPECT_EQ(summary.final_ba.linear_solver, summary.batches.back().ba_linear_solver);
+  const double rmse = CenterRmse(sequence.cams_from_world, RegisteredPoses(reconstruction, 70));
+  EXPECT_LT(rmse, 0.005);
+
+  for (const BaLinearSolver forced :
+       {BaLinearSolver::kSparseSchur, BaLinearSolver::kIterativeSchur}) {
+    options.ba.linear_solver = forced;
+    BatchedMapperSummary forced_summary;
+    const Reconstruction forced_reconstruction =
+        RunBatchedMapper(sequence.input, options, &forced_summary);
+    for (const MapperBatchStatistics& batch : forced_summary.batches) {
+      EXPECT_EQ(batch.ba_linear_solver, forced) << BaLinearSolverName(forced);
+    }
+    const double forced_rmse =
+        CenterRmse(sequence.cams_from_world, RegisteredPoses(forced_reconstruction, 70));
+    EXPECT_NEAR(forced_rmse, rmse, 0.2 * rmse) << BaLinearSolverName(forced);
+  }
+}
+
 // A frame without any keypoint (and so without verified matches) is placed
 // by its relative-pose priors alone (c = 0, the largest weight).
 TEST(BatchedMapperTest, FrameWithoutFeaturesFollowsTheVio) {
