@@ -188,6 +188,12 @@ std::string Fixed(const std::optional<double>& value, int decimals) {
   return buffer;
 }
 
+// An ATE in metres as millimetres with two decimals ("n/a" without one).
+std::string Millimetres(const std::optional<double>& metres) {
+  if (!metres) return "n/a";
+  return Fixed(*metres * 1e3, 2);
+}
+
 std::string Registered(const BenchRun& run) {
   if (run.failed && run.frames_registered == 0) return "failed";
   if (!run.seconds && run.frames_registered == 0) return "not finished";
@@ -389,7 +395,7 @@ std::string FormatBenchMarkdown(const BenchResults& results,
   }
   for (const std::string& sequence : sequences) {
     md << "\n## " << sequence << "\n\n"
-       << "| method | registered / frames | ATE RMSE (m) | ATE median (m) | time (s) | CPU (s) "
+       << "| method | registered / frames | ATE RMSE (mm) | ATE median (mm) | time (s) | CPU (s) "
           "| peak memory (MiB) |\n|---|---|---|---|---|---|---|\n";
     std::vector<std::string> notes;
     for (const BenchRun& run : results.runs) {
@@ -409,7 +415,7 @@ std::string FormatBenchMarkdown(const BenchResults& results,
       }
       name += marks;
       md << "| " << name << " | " << (is_vio ? "-" : Registered(run)) << " | "
-         << Fixed(run.ate_rmse_m, 3) << " | " << Fixed(run.ate_median_m, 3) << " | "
+         << Millimetres(run.ate_rmse_m) << " | " << Millimetres(run.ate_median_m) << " | "
          << (is_vio ? "-" : Fixed(run.seconds, 1)) << " | "
          << (is_vio ? "-" : Fixed(run.cpu_seconds, 1)) << " | "
          << (is_vio ? "-" : Fixed(run.peak_memory_mb, 0)) << " |\n";
@@ -422,13 +428,13 @@ std::string FormatBenchMarkdown(const BenchResults& results,
             "alignment, against the true height of the same frames (frames.csv), and the ATE of "
             "each floor's frames aligned on their own.\n\n"
          << "| method | floor | frames | height (m) | true height (m) | ATE RMSE within the "
-            "floor (m) |\n|---|---|---|---|---|---|\n";
+            "floor (mm) |\n|---|---|---|---|---|---|\n";
       for (const FloorPlacement& p : placements) {
         for (size_t i = 0; i < p.floors.size(); ++i) {
           const double ate = p.floor_ate_rmse_m[i];
           md << "| " << MethodName(p.method) << " | " << p.floors[i] << " | " << p.num_frames[i]
              << " | " << Fixed(p.mean_height_m[i], 2) << " | " << Fixed(p.true_mean_height_m[i], 2)
-             << " | " << (std::isnan(ate) ? std::string("n/a") : Fixed(ate, 3)) << " |\n";
+             << " | " << (std::isnan(ate) ? std::string("n/a") : Millimetres(ate)) << " |\n";
         }
       }
     }
@@ -447,11 +453,11 @@ std::string FormatBenchMarkdown(const BenchResults& results,
           "sequence's viosfm run, so the time is that of the VIO read, the mapping and the "
           "outputs. The figures' reference lines are the methods of the "
        << results.batch_size_sequence << " table.\n\n"
-       << "| batch size | registered / frames | ATE RMSE (m) | time (s) | CPU (s) | mapping (s) "
+       << "| batch size | registered / frames | ATE RMSE (mm) | time (s) | CPU (s) | mapping (s) "
           "| viosfm |\n"
        << "|---|---|---|---|---|---|---|\n";
     for (const BenchRun& run : results.batch_size) {
-      md << "| " << run.method << " | " << Registered(run) << " | " << Fixed(run.ate_rmse_m, 3)
+      md << "| " << run.method << " | " << Registered(run) << " | " << Millimetres(run.ate_rmse_m)
          << " | " << Fixed(run.seconds, 1) << " | " << Fixed(run.cpu_seconds, 1) << " | "
          << Fixed(run.mapping_seconds, 1) << " | "
          << (run.version.empty() ? meta_version : run.version) << " |\n";
@@ -462,10 +468,10 @@ std::string FormatBenchMarkdown(const BenchResults& results,
   }
   if (!results.length.empty()) {
     md << "\n## Sequence length\n\n"
-       << "| frames | registered / frames | ATE RMSE (m) | time (s) | CPU (s) | mapping (s) | "
+       << "| frames | registered / frames | ATE RMSE (mm) | time (s) | CPU (s) | mapping (s) | "
           "peak memory (MiB) | viosfm |\n|---|---|---|---|---|---|---|---|\n";
     for (const BenchRun& run : results.length) {
-      md << "| " << run.method << " | " << Registered(run) << " | " << Fixed(run.ate_rmse_m, 3)
+      md << "| " << run.method << " | " << Registered(run) << " | " << Millimetres(run.ate_rmse_m)
          << " | " << Fixed(run.seconds, 1) << " | " << Fixed(run.cpu_seconds, 1) << " | "
          << Fixed(run.mapping_seconds, 1) << " | " << Fixed(run.peak_memory_mb, 0) << " | "
          << (run.version.empty() ? meta_version : run.version) << " |\n";

@@ -90,17 +90,17 @@ TEST(BenchReport, ReadsRunsInMethodOrder) {
 TEST(BenchReport, MarkdownHasTheNumbers) {
   const std::string md = FormatBenchMarkdown(ReadBenchResults(MakeFixture()), "images");
   EXPECT_THAT(md, HasSubstr("- mode: quick"));
-  EXPECT_THAT(md, HasSubstr("| viosfm | 4 / 4 | 0.012 | 0.010 | 12.5 | 11.8 | 200 |"));
-  EXPECT_THAT(md, HasSubstr("| viosfm w/o relative-pose term [1] | 4 / 4 | 0.040 | 0.030 | 4.0 "
+  EXPECT_THAT(md, HasSubstr("| viosfm | 4 / 4 | 12.30 | 10.10 | 12.5 | 11.8 | 200 |"));
+  EXPECT_THAT(md, HasSubstr("| viosfm w/o relative-pose term [1] | 4 / 4 | 40.00 | 30.00 | 4.0 "
                             "| n/a | 200 |"));
   EXPECT_THAT(md, HasSubstr("[1] viosfm w/o relative-pose term: started from the features and "
                             "verified matches of viosfm;"));
   EXPECT_THAT(md,
-              HasSubstr("| COLMAP 3.8, sequential matcher | 3 / 4 (2 models) | 0.500 | 0.250 |"));
-  EXPECT_THAT(md, HasSubstr("| input VIO (emulated) | - | 0.200 | 0.150 | - | - | - |"));
-  EXPECT_THAT(md, HasSubstr("| 10 | 4 | 0.020 | 8.0 |"));
+              HasSubstr("| COLMAP 3.8, sequential matcher | 3 / 4 (2 models) | 500.00 | 250.00 |"));
+  EXPECT_THAT(md, HasSubstr("| input VIO (emulated) | - | 200.00 | 150.00 | - | - | - |"));
+  EXPECT_THAT(md, HasSubstr("| 10 | 4 | 20.00 | 8.0 |"));
   // The version of each sweep run: its version.txt, else meta.txt's.
-  EXPECT_THAT(md, HasSubstr("| 10 | 4 | 0.020 | 8.0 | n/a | n/a | abc1234 |"));
+  EXPECT_THAT(md, HasSubstr("| 10 | 4 | 20.00 | 8.0 | n/a | n/a | abc1234 |"));
   EXPECT_THAT(md, HasSubstr("| 0ld0001 |"));
 }
 
@@ -215,7 +215,7 @@ TEST(BenchReport, MarkdownHasTheFloorTable) {
   ASSERT_EQ(results.floors.size(), 1u);
   EXPECT_EQ(results.floors[0].first, "room");
   const std::string md = FormatBenchMarkdown(results, "images");
-  EXPECT_THAT(md, HasSubstr("| viosfm | 1 | 4 | 4.20 | 4.20 | 0.000 |"));
+  EXPECT_THAT(md, HasSubstr("| viosfm | 1 | 4 | 4.20 | 4.20 | 0.00 |"));
 }
 
 TEST(BenchReport, BadInputNamesTheFile) {
