@@ -50,11 +50,13 @@ Image CopyImageWithoutPoints(const Image& image) {
 // (bundle_adjustment.h), so the mapper measures. The first such adjustment
 // runs SPARSE_SCHUR, the second ITERATIVE_SCHUR; after that each uses the
 // one with the lower last-measured time per iteration and observation, and
-// every kProbePeriod-th tries the other again, since the balance shifts as
-// the reconstruction grows.
+// every kProbePeriod-th tries the other again if it was less than
+// kProbeMaxRatio times slower, since the balance shifts as the
+// reconstruction grows.
 class LinearSolverChooser {
  public:
   static constexpr int kProbePeriod = 4;
+  static constexpr double kProbeMaxRatio = 2.0;
 
   explicit LinearSolverChooser(const BundleAdjustmentOptions& options) : options_(options) {}
 
@@ -66,7 +68,9 @@ class LinearSolverChooser {
     if (!sparse_cost_) return BaLinearSolver::kSparseSchur;
     if (!iterative_cost_) return BaLinearSolver::kIterativeSchur;
     const bool sparse_better = *sparse_cost_ <= *iterative_cost_;
-    const bool probe = !final && ++num_choices_ % kProbePeriod == 0;
+    const bool close = std::max(*sparse_cost_, *iterative_cost_) <
+                       kProbeMaxRatio * std::min(*sparse_cost_, *iterative_cost_);
+    const bool probe = !final && ++num_choices_ % kProbePeriod == 0 && close;
     return sparse_better != probe ? BaLinearSolver::kSparseSchur : BaLinearSolver::kIterativeSchur;
   }
 
