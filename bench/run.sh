@@ -8,6 +8,7 @@
 #                [--no-sweeps] [--sweeps-only] [--colmap-modes "pairs sequential"]
 #                [--jobs 1|2] [--lane viosfm|colmap] [--force] [--docs FILE]
 #                [--lengths "300 600 1200 2400"] [--length-window N]
+#                [--colmap-scenarios "room two_floors corridor"]
 #
 # For every scenario (simulated: images, IMU, ground truth and the emulated
 # drifting VIO that stands in for a VIO's output) or dataset, it runs
@@ -36,8 +37,10 @@
 # and 2400 images, each per-batch BA over the last 4 batches (--ba-window 4;
 # the final global BA over all images). --lengths "" skips the length sweep,
 # --length-window 0 frees every image in every BA. --quick: room and
-# two_floors, 8 s at 10 Hz, COLMAP with viosfm's pairs only, batch sizes 10
-# and 25: a few minutes.
+# two_floors, 8 s at 10 Hz, COLMAP with viosfm's pairs on room only (8 s of
+# two_floors never leave the first floor), batch sizes 10 and 25 on room: a
+# few minutes. --colmap-scenarios limits COLMAP to some scenarios (datasets
+# always get COLMAP).
 #
 # Two jobs run at a time (--jobs 2, the default, on 2 cores): the viosfm runs
 # in one lane and the COLMAP runs in the other, each job single-threaded, so
@@ -67,6 +70,7 @@ with_colmap=1
 with_sweeps=1
 with_runs=1
 colmap_modes=""
+colmap_scenarios=""
 jobs=2
 lane_only=""
 force=0
@@ -84,6 +88,7 @@ while [ $# -gt 0 ]; do
     --no-sweeps) with_sweeps=0 ;;
     --sweeps-only) with_runs=0 ;;
     --colmap-modes) colmap_modes=$2; shift ;;
+    --colmap-scenarios) colmap_scenarios=$2; shift ;;
     --jobs) jobs=$2; shift ;;
     --lane) lane_only=$2; shift ;;
     --force) force=1 ;;
@@ -110,11 +115,12 @@ export QT_QPA_PLATFORM=offscreen
 
 if [ $quick = 1 ]; then
   duration=8; rate=10; n1=6; n2=4; max_features=1000; batch=25
-  default_scenarios="room two_floors"; default_modes="pairs"
+  default_scenarios="room two_floors"; default_modes="pairs"; default_colmap_scenarios="room"
   sweep_duration=8; batch_sizes="10 25"; lengths=""; length_window=0
 else
   duration=63; rate=10; n1=10; n2=5; max_features=1000; batch=50
   default_scenarios="room two_floors corridor"; default_modes="pairs sequential"
+  default_colmap_scenarios="room two_floors corridor"
   sweep_duration=30; batch_sizes="5 10 25 50 100 200"; lengths="300 600 1200 2400"
   length_window=4
 fi
@@ -122,6 +128,7 @@ fi
 [ "$length_window_arg" != unset ] && length_window=$length_window_arg
 [ -z "$scenarios" ] && [ ${#datasets[@]} = 0 ] && scenarios=$default_scenarios
 [ -z "$colmap_modes" ] && colmap_modes=$default_modes
+[ -z "$colmap_scenarios" ] && colmap_scenarios=$default_colmap_scenarios
 threads=$((jobs == 2 ? 1 : 2))
 mkdir -p "$out"
 out=$(cd "$out" && pwd)
@@ -353,6 +360,7 @@ for scenario in $scenarios; do
   seqs+=("$out/$scenario/sequence")
   vios+=("$out/$scenario/sequence/vio_emulated.tum")
 done
+num_simulated=${#names[@]}
 for i in "${!datasets[@]}"; do
   names+=("$(basename "${datasets[$i]}")")
   seqs+=("${datasets[$i]}")
@@ -368,7 +376,14 @@ sweep_name=room_${sweep_duration}s
 colmap_lane() {
   [ $with_colmap = 1 ] || return 0
   if [ $with_runs = 1 ]; then
-    for i in "${!names[@]}"; do colmap_all "${names[$i]}" "${seqs[$i]}" "$colmap_modes"; done
+    for i in "${!names[@]}"; do
+      # Simulated scenarios outside --colmap-scenarios go without COLMAP.
+      if [ "$i" -lt "$num_simulated" ] &&
+        [[ " $colmap_scenarios " != *" ${names[$i]} "* ]]; then
+        continue
+      fi
+      colmap_all "${names[$i]}" "${seqs[$i]}" "$colmap_modes"
+    done
   fi
   [ $with_sweeps = 1 ] && colmap_all "$sweep_name" "$out/$sweep_name/sequence" pairs
   return 0
