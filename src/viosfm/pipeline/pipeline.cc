@@ -327,6 +327,11 @@ std::vector<std::pair<std::string, std::string>> PipelineOptions::ToKeyValues() 
       {"frame_selection.max_static_rotation_rad", Text(frame_selection.max_static_rotation_rad)},
       {"frame_selection.target_rate_hz", Text(frame_selection.target_rate_hz)},
   };
+  // viosfm's own VIO runs only without a VIO source or file.
+  if (!vio_source && vio_trajectory.empty()) {
+    for (const auto& [key, value] : own_vio.ToKeyValues())
+      values.emplace_back("own_vio." + key, value);
+  }
   const SiftOptions s = EffectiveSiftOptions();
   values.insert(values.end(), {
                                   {"sift.max_num_features", Text(s.max_num_features)},
@@ -366,6 +371,7 @@ std::vector<std::pair<std::string, std::string>> PipelineOptions::ToKeyValues() 
           {"mapper.ba.max_num_iterations", Text(m.ba.max_num_iterations)},
           {"mapper.ba.num_threads", Text(m.ba.num_threads)},
           {"mapper.ba.max_images_for_sparse_schur", Text(m.ba.max_images_for_sparse_schur)},
+          {"mapper.ba.linear_solver", BaLinearSolverName(m.ba.linear_solver)},
           {"mapper.ba.function_tolerance", Text(m.ba.function_tolerance)},
           {"mapper.ba.gradient_tolerance", Text(m.ba.gradient_tolerance)},
           {"mapper.ba.parameter_tolerance", Text(m.ba.parameter_tolerance)},

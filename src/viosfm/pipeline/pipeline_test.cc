@@ -176,7 +176,10 @@ TEST(PipelineTest, OutputsReadBack) {
   EXPECT_EQ(options["mapper.batch_size"], "10");
   EXPECT_EQ(options["verification.pairs.num_temporal_neighbors"], "4");
   EXPECT_EQ(options["seed"], "7");
+  EXPECT_EQ(options["mapper.ba.linear_solver"], "auto");
   EXPECT_EQ(options.size(), SmallOptions(f, f.out).ToKeyValues().size());
+  // With a VIO file the own VIO's options are not part of the run.
+  EXPECT_FALSE(options.contains("own_vio.window.window_size"));
 }
 
 TEST(PipelineTest, SummaryJsonHasTheDocumentedKeys) {
@@ -275,6 +278,13 @@ TEST(PipelineTest, WithoutVioTrajectoryOwnVioGivesThePoses) {
   EXPECT_GE(summary.num_frames_registered, 25);
   ASSERT_TRUE(summary.evaluation.has_value());
   EXPECT_LT(summary.evaluation->ate_rmse_m, 0.03);
+  // options.json records the own VIO's options.
+  const nlohmann::json written =
+      nlohmann::json::parse(ReadTextFile(f.folder / "own_vio" / "options.json"));
+  EXPECT_EQ(written["own_vio.window.window_size"],
+            std::to_string(options.own_vio.window.window_size));
+  EXPECT_EQ(written["own_vio.tracker.equalization"], "when_dark");
+  EXPECT_EQ(written.size(), options.ToKeyValues().size());
   std::cout << "own VIO: " << summary.num_frames_registered << " frames, ATE "
             << summary.evaluation->ate_rmse_m << " m, VIO " << summary.evaluation->vio_ate_rmse_m
             << " m\n";

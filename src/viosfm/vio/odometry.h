@@ -23,6 +23,7 @@
 #include <array>
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "viosfm/io/sequence.h"
@@ -56,6 +57,8 @@ struct VioOptions {
   // Empty if valid; otherwise names the bad field.
   std::string Validate() const;
   bool Check() const { return Validate().empty(); }
+  // Every option as "group.name" -> value text (for a run's options.json).
+  std::vector<std::pair<std::string, std::string>> ToKeyValues() const;
 };
 
 // The estimate for one input frame.
