@@ -168,6 +168,8 @@ BatchSizeFigures MakeBatchSizeFigures(const BatchSizeSweep& sweep) {
     figure.log_x = sweep.log_x;
     figure.y_from_zero = true;
     figure.margin_fraction = 0.04;
+    // The reference lines' labels are written at their right ends.
+    figure.legend_right = false;
     return figure;
   };
   figures.ate = base("Trajectory RMSE vs batch size", "ATE RMSE (m)");
