@@ -74,9 +74,11 @@ class LinearSolverChooser {
     return sparse_better != probe ? BaLinearSolver::kSparseSchur : BaLinearSolver::kIterativeSchur;
   }
 
-  void Record(const BundleAdjustmentSummary& summary) {
+  // `num_free_images`: as given to Next (held images are not in Ceres'
+  // reduced camera system).
+  void Record(const BundleAdjustmentSummary& summary, size_t num_free_images) {
     // (Only adjustments in the measured range count.)
-    if (summary.num_images <= options_.max_images_for_sparse_schur) return;
+    if (num_free_images <= static_cast<size_t>(options_.max_images_for_sparse_schur)) return;
     if (summary.num_iterations < 1 || summary.num_observations < 1) return;
     const double cost = summary.time_s / summary.num_iterations / summary.num_observations;
     if (summary.linear_solver == BaLinearSolver::kSparseSchur) sparse_cost_ = cost;
@@ -418,7 +420,7 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
       batch_ba_options.linear_solver = solver_chooser.Next(free_images.size(), global);
       const BundleAdjustmentSummary ba_summary = AdjustImages(
           &reconstruction, free_images, held_neighbour, gauge_image, priors, batch_ba_options);
-      solver_chooser.Record(ba_summary);
+      solver_chooser.Record(ba_summary, free_images.size());
       stats.seconds_ba = ba_summary.time_s;
       stats.num_ba_iterations = ba_summary.num_iterations;
       stats.ba_linear_solver = ba_summary.linear_solver;
