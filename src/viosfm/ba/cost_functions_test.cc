@@ -64,6 +64,30 @@ ceres::NumericDiffOptions CheckerOptions() {
   return options;
 }
 
+// A random camera pose, a point 2-5 m in front of it and its observation in
+// `camera`, off by N(0, noise_px) in each coordinate.
+struct RandomObservation {
+  Rigid3d cam_from_world;
+  Eigen::Vector3d point_in_cam;
+  Eigen::Vector3d point_in_world;
+  Eigen::Vector2d observed;
+};
+
+RandomObservation MakeRandomObservation(const Camera& camera, double noise_px, Random* random) {
+  RandomObservation o;
+  o.cam_from_world = RandomPose(random, 0.3, 1.0);
+  const double x = random->Uniform(-1, 1);
+  const double y = random->Uniform(-1, 1);
+  o.point_in_cam = Eigen::Vector3d(x, y, random->Uniform(2, 5));
+  o.point_in_world = o.cam_from_world.Inverse() * o.point_in_cam;
+  o.observed = *Project(camera, o.point_in_cam);
+  if (noise_px > 0.0) {
+    const double dx = random->Normal(0, noise_px);
+    o.observed += Eigen::Vector2d(dx, random->Normal(0, noise_px));
+  }
+  return o;
+}
+
 const CameraModelId kSupportedModels[] = {
     CameraModelId::kSimplePinhole, CameraModelId::kPinhole, CameraModelId::kSimpleRadial,
     CameraModelId::kRadial,        CameraModelId::kOpenCV,  CameraModelId::kOpenCVFisheye};
@@ -72,11 +96,8 @@ TEST(ReprojectionError, ZeroAtTheTruthAndScaledBySqrtInformation) {
   Random random(1);
   for (const CameraModelId model_id : kSupportedModels) {
     const Camera camera = MakeCamera(model_id, 752, 480, ParamsFor(model_id));
-    const Rigid3d cam_from_world = RandomPose(&random, 0.3, 1.0);
-    const Eigen::Vector3d point_in_cam(random.Uniform(-1, 1), random.Uniform(-1, 1),
-                                       random.Uniform(2, 5));
-    const Eigen::Vector3d point_in_world = cam_from_world.Inverse() * point_in_cam;
-    const Eigen::Vector2d observed = *Project(camera, point_in_cam);
+    const auto [cam_from_world, point_in_cam, point_in_world, observed] =
+        MakeRandomObservation(camera, 0.0, &random);
 
     std::unique_ptr<ceres::CostFunction> cost(CreateReprojectionCost(model_id, observed));
     ASSERT_EQ(cost->num_residuals(), 2);
@@ -110,12 +131,8 @@ TEST(ReprojectionError, JacobiansMatchNumericDifferentiationForEveryModel) {
   for (const CameraModelId model_id : kSupportedModels) {
     const Camera camera = MakeCamera(model_id, 752, 480, ParamsFor(model_id));
     for (int trial = 0; trial < 3; ++trial) {
-      const Rigid3d cam_from_world = RandomPose(&random, 0.3, 1.0);
-      const Eigen::Vector3d point_in_cam(random.Uniform(-1, 1), random.Uniform(-1, 1),
-                                         random.Uniform(2, 5));
-      const Eigen::Vector3d point_in_world = cam_from_world.Inverse() * point_in_cam;
-      const Eigen::Vector2d observed = *Project(camera, point_in_cam) +
-                                       Eigen::Vector2d(random.Normal(0, 2), random.Normal(0, 2));
+      const auto [cam_from_world, point_in_cam, point_in_world, observed] =
+          MakeRandomObservation(camera, 2.0, &random);
       std::unique_ptr<ceres::CostFunction> cost(CreateReprojectionCost(model_id, observed));
       ceres::GradientChecker checker(cost.get(), &manifolds, CheckerOptions());
       const PoseParameters pose = ToPoseParameters(cam_from_world);
@@ -133,12 +150,8 @@ TEST(ReprojectionErrorConstantCamera, SameResidualAndJacobiansAsTheFullCost) {
   Random random(7);
   for (const CameraModelId model_id : kSupportedModels) {
     const Camera camera = MakeCamera(model_id, 752, 480, ParamsFor(model_id));
-    const Rigid3d cam_from_world = RandomPose(&random, 0.3, 1.0);
-    const Eigen::Vector3d point_in_cam(random.Uniform(-1, 1), random.Uniform(-1, 1),
-                                       random.Uniform(2, 5));
-    const Eigen::Vector3d point_in_world = cam_from_world.Inverse() * point_in_cam;
-    const Eigen::Vector2d observed =
-        *Project(camera, point_in_cam) + Eigen::Vector2d(random.Normal(0, 2), random.Normal(0, 2));
+    const auto [cam_from_world, point_in_cam, point_in_world, observed] =
+        MakeRandomObservation(camera, 2.0, &random);
     Eigen::Matrix2d sqrt_information;
     sqrt_information << 2.0, 0.5, 0.0, 1.5;
     for (const Eigen::Matrix2d& weight : {Eigen::Matrix2d::Identity().eval(), sqrt_information}) {
