@@ -201,6 +201,7 @@ viosfm_run() {
     fi
     local source=(--vio-trajectory "$vio")
     [ "$vio" = own ] && source=()
+    mkdir -p "$dir"
     echo "$version" > "$dir/version.txt"
     timed "$dir" "$VIOSFM" run "$seq" --out "$dir/run" "${source[@]}" --rate "$rate" \
       --n1 "$n1" --n2 "$n2" --max-features "$max_features" --threads "$threads" "$@"
