@@ -9,6 +9,7 @@
 #include <unordered_set>
 
 #include "viosfm/scene/reprojection.h"
+#include "viosfm/sfm/linear_solver_chooser.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/logging.h"
 #include "viosfm/util/progress.h"
@@ -43,54 +44,6 @@ Image CopyImageWithoutPoints(const Image& image) {
   for (Point2D& point2D : copy.points2D) point2D.point3D_id = kInvalidPoint3DId;
   return copy;
 }
-
-// The linear solver of each bundle adjustment with more than
-// max_images_for_sparse_schur images, when the options leave it to kAuto:
-// neither SPARSE_SCHUR nor ITERATIVE_SCHUR is faster on every scene
-// (bundle_adjustment.h), so the mapper measures. The first such adjustment
-// runs SPARSE_SCHUR, the second ITERATIVE_SCHUR; after that each uses the
-// one with the lower last-measured time per iteration and observation, and
-// every kProbePeriod-th tries the other again if it was less than
-// kProbeMaxRatio times slower, since the balance shifts as the
-// reconstruction grows.
-class LinearSolverChooser {
- public:
-  static constexpr int kProbePeriod = 4;
-  static constexpr double kProbeMaxRatio = 2.0;
-
-  explicit LinearSolverChooser(const BundleAdjustmentOptions& options) : options_(options) {}
-
-  BaLinearSolver Next(size_t num_images, bool final) {
-    if (options_.linear_solver != BaLinearSolver::kAuto) return options_.linear_solver;
-    if (num_images <= static_cast<size_t>(options_.max_images_for_sparse_schur)) {
-      return BaLinearSolver::kSparseSchur;
-    }
-    if (!sparse_cost_) return BaLinearSolver::kSparseSchur;
-    if (!iterative_cost_) return BaLinearSolver::kIterativeSchur;
-    const bool sparse_better = *sparse_cost_ <= *iterative_cost_;
-    const bool close = std::max(*sparse_cost_, *iterative_cost_) <
-                       kProbeMaxRatio * std::min(*sparse_cost_, *iterative_cost_);
-    const bool probe = !final && ++num_choices_ % kProbePeriod == 0 && close;
-    return sparse_better != probe ? BaLinearSolver::kSparseSchur : BaLinearSolver::kIterativeSchur;
-  }
-
-  // `num_free_images`: as given to Next (held images are not in Ceres'
-  // reduced camera system).
-  void Record(const BundleAdjustmentSummary& summary, size_t num_free_images) {
-    // (Only adjustments in the measured range count.)
-    if (num_free_images <= static_cast<size_t>(options_.max_images_for_sparse_schur)) return;
-    if (summary.num_iterations < 1 || summary.num_observations < 1) return;
-    const double cost = summary.time_s / summary.num_iterations / summary.num_observations;
-    if (summary.linear_solver == BaLinearSolver::kSparseSchur) sparse_cost_ = cost;
-    if (summary.linear_solver == BaLinearSolver::kIterativeSchur) iterative_cost_ = cost;
-  }
-
- private:
-  BundleAdjustmentOptions options_;
-  std::optional<double> sparse_cost_;
-  std::optional<double> iterative_cost_;
-  int num_choices_ = 0;
-};
 
 // Bundle adjustment of the poses of `free_images` and of the points they
 // observe. Every other image observing those points is held constant, and so
