@@ -137,13 +137,13 @@ BundleAdjustmentSummary BundleAdjust(Reconstruction* reconstruction,
       if (!image1.registered || !image2.registered) continue;
       if (constant.count(prior.image_id1) > 0 && constant.count(prior.image_id2) > 0) continue;
       const double weight =
+          prior.weight_scale *
           RelativePoseWeight(prior.num_verified_matches, options.prior_alpha, options.prior_beta);
-      problem.AddResidualBlock(
-          RelativePoseError::Create(
-              prior.cam2_from_cam1,
-              RelativePoseSqrtInformation(weight, options.prior_rotation_sigma_rad,
-                                          options.prior_translation_sigma_m)),
-          nullptr, pose_block(image1), pose_block(image2));
+      Eigen::Matrix<double, 6, 6> sqrt_information = RelativePoseSqrtInformation(
+          weight, options.prior_rotation_sigma_rad, options.prior_translation_sigma_m);
+      if (prior.rotation_only) sqrt_information.bottomRightCorner<3, 3>().setZero();
+      problem.AddResidualBlock(RelativePoseError::Create(prior.cam2_from_cam1, sqrt_information),
+                               nullptr, pose_block(image1), pose_block(image2));
       ++summary.num_priors;
     }
   }

@@ -96,6 +96,10 @@ struct RelativePosePrior {
   image_t image_id2 = kInvalidImageId;
   Rigid3d cam2_from_cam1;
   int num_verified_matches = 0;  // c in w = alpha exp(-beta c)
+  // Multiplies w (default 1).
+  double weight_scale = 1.0;
+  // Only the rotation residual counts (the translation rows get weight 0).
+  bool rotation_only = false;
 };
 
 struct BundleAdjustmentSummary {

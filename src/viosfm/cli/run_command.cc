@@ -27,6 +27,7 @@ struct RunArguments {
   bool no_trim_static = false;
   bool no_vio_prior = false;
   bool no_rpc = false;
+  bool no_bridging = false;
   bool no_progress = false;
   PipelineOptions options;
 };
@@ -44,6 +45,7 @@ void RunRun(RunArguments args) {
   options.frame_selection.trim_static = !args.no_trim_static;
   options.verification.use_vio_prior = !args.no_vio_prior;
   options.mapper.ba.use_relative_pose_priors = !args.no_rpc;
+  if (args.no_bridging) options.mapper.bridge_spans.clear();
   options.show_progress = !args.no_progress;
   if (const std::string error = options.Validate(); !error.empty()) {
     throw InputError("invalid run options: " + error);
@@ -123,6 +125,18 @@ void RegisterRun(CLI::App& app) {
                    "Above this many images bundle adjustment solves with ITERATIVE_SCHUR "
                    "instead of SPARSE_SCHUR")
       ->capture_default_str();
+  command
+      ->add_option("--bridge-spans", args->options.mapper.bridge_spans,
+                   "Rotation-only VIO priors between frames this many apart across poorly "
+                   "matched stretches (comma-separated)")
+      ->delimiter(',')
+      ->capture_default_str();
+  command
+      ->add_option("--bridge-max-matches", args->options.mapper.bridge_max_matches,
+                   "A consecutive pair with fewer verified matches is poorly matched")
+      ->capture_default_str();
+  command->add_flag("--no-bridging", args->no_bridging,
+                    "Relative-pose priors between consecutive frames only (the paper's)");
   command->add_flag("--no-vio-prior", args->no_vio_prior,
                     "RANSAC-only verification (COLMAP's; the baseline)");
   command->add_flag("--no-rpc", args->no_rpc,

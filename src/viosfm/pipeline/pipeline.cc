@@ -56,6 +56,15 @@ std::string Text(double value) {
 std::string Text(bool value) {
   return value ? "true" : "false";
 }
+std::string JoinInts(const std::vector<int>& values) {
+  std::string text;
+  for (const int value : values) {
+    if (!text.empty()) text += ',';
+    text += std::to_string(value);
+  }
+  return text;
+}
+
 std::string Text(int value) {
   return std::to_string(value);
 }
@@ -351,6 +360,8 @@ std::vector<std::pair<std::string, std::string>> PipelineOptions::ToKeyValues() 
           {"mapper.batch_size", Text(m.batch_size)},
           {"mapper.ba_window_batches", Text(m.ba_window_batches)},
           {"mapper.batch_ba_max_num_iterations", Text(m.batch_ba_max_num_iterations)},
+          {"mapper.bridge_spans", JoinInts(m.bridge_spans)},
+          {"mapper.bridge_max_matches", Text(m.bridge_max_matches)},
           {"mapper.tracks.min_track_length", Text(m.tracks.min_track_length)},
           {"mapper.tracks.conflict_policy",
            m.tracks.conflict_policy == TrackConflictPolicy::kSplit ? "split" : "drop"},
@@ -433,6 +444,8 @@ std::string PipelineSummaryToJson(const PipelineSummary& s) {
   json["observations"] = s.num_observations;
   json["mean_track_length"] = s.mean_track_length;
   json["mean_reprojection_error_px"] = s.mean_reprojection_error_px;
+  json["relative_pose_priors"] = {{"consecutive", s.mapper.num_consecutive_priors},
+                                  {"bridging", s.mapper.num_bridging_priors}};
   ordered_json batches = ordered_json::array();
   for (const MapperBatchStatistics& batch : s.mapper.batches) {
     batches.push_back({{"index", batch.batch_index},

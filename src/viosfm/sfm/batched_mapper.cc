@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
+#include <limits>
 #include <optional>
 #include <sstream>
 #include <unordered_map>
@@ -144,6 +145,10 @@ std::string BatchedMapperOptions::Validate() const {
   if (std::string error = filter.Validate(); !error.empty()) return "filter." + error;
   if (ba_window_batches < 0) return "ba_window_batches must be >= 0";
   if (batch_ba_max_num_iterations < 0) return "batch_ba_max_num_iterations must be >= 0";
+  for (const int span : bridge_spans) {
+    if (span < 2) return "bridge_spans must be >= 2 frames each";
+  }
+  if (bridge_max_matches < 0) return "bridge_max_matches must be >= 0";
   if (num_threads < 1) return "num_threads must be >= 1";
   return "";
 }
@@ -155,6 +160,8 @@ std::string BatchedMapperSummary::ToString() const {
       << " points, " << num_observations << " observations, mean track length " << mean_track_length
       << ", mean reprojection error " << mean_reprojection_error_px << " px, " << seconds_total
       << " s (tracks " << seconds_tracks << " s)\n"
+      << "  relative-pose priors: " << num_consecutive_priors << " consecutive, "
+      << num_bridging_priors << " bridging\n"
       << "  " << tracks.Summary();
   if (!final_ba.termination.empty()) out << "\n  final " << final_ba.ToString();
   return out.str();
@@ -261,6 +268,37 @@ std::vector<RelativePosePrior> MakeConsecutiveRelativePosePriors(const BatchedMa
   return priors;
 }
 
+std::vector<RelativePosePrior> MakeBridgingRelativePosePriors(
+    const BatchedMapperInput& input, const std::vector<RelativePosePrior>& consecutive,
+    const std::vector<int>& spans, int max_matches) {
+  VIOSFM_CHECK(consecutive.size() + 1 == input.images.size() || input.images.empty())
+      << consecutive.size() << " consecutive priors for " << input.images.size() << " images";
+  std::vector<RelativePosePrior> priors;
+  const size_t num_images = input.images.size();
+  for (const int span_int : spans) {
+    const size_t span = static_cast<size_t>(span_int);
+    if (span < 2 || span >= num_images) continue;
+    for (size_t i = 0; i + span < num_images; ++i) {
+      int fewest = std::numeric_limits<int>::max();
+      for (size_t j = i; j < i + span; ++j) {
+        fewest = std::min(fewest, consecutive[j].num_verified_matches);
+      }
+      if (fewest >= max_matches) continue;
+      const MapperImage& image1 = input.images[i];
+      const MapperImage& image2 = input.images[i + span];
+      RelativePosePrior prior;
+      prior.image_id1 = image1.image_id;
+      prior.image_id2 = image2.image_id;
+      prior.cam2_from_cam1 = image2.vio_cam_from_world * image1.vio_cam_from_world.Inverse();
+      prior.cam2_from_cam1.rotation.normalize();
+      prior.num_verified_matches = fewest;
+      prior.rotation_only = true;
+      priors.push_back(prior);
+    }
+  }
+  return priors;
+}
+
 Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
                                 const BatchedMapperOptions& options,
                                 BatchedMapperSummary* summary_out) {
@@ -309,7 +347,14 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
     }
     reconstruction.AddImage(std::move(image));
   }
-  const std::vector<RelativePosePrior> priors = MakeConsecutiveRelativePosePriors(input);
+  std::vector<RelativePosePrior> priors = MakeConsecutiveRelativePosePriors(input);
+  summary.num_consecutive_priors = static_cast<int>(priors.size());
+  if (options.ba.use_relative_pose_priors) {
+    const std::vector<RelativePosePrior> bridging = MakeBridgingRelativePosePriors(
+        input, priors, options.bridge_spans, options.bridge_max_matches);
+    summary.num_bridging_priors = static_cast<int>(bridging.size());
+    priors.insert(priors.end(), bridging.begin(), bridging.end());
+  }
   BundleAdjustmentOptions ba_options = options.ba;
   ba_options.num_threads = options.num_threads;
   const image_t gauge_image = input.images.front().image_id;

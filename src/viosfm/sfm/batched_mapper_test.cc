@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <map>
 #include <string>
 #include <vector>
@@ -456,6 +457,66 @@ TEST(BatchedMapperTest, ConsecutivePriors) {
     EXPECT_LT((priors[i].cam2_from_cam1.translation - expected.translation).norm(), 1e-12);
   }
   EXPECT_GT(priors[0].num_verified_matches, 100);
+}
+
+TEST(BatchedMapperTest, BridgingPriors) {
+  const SyntheticSequence sequence = MakeSyntheticSequence(SmallSequenceOptions(12, 7));
+  BatchedMapperInput input = sequence.input;
+  // The pair (5, 6) not verified: consecutive prior 4 has c = 0.
+  std::vector<ImagePairMatches> pairs;
+  for (const ImagePairMatches& pair : input.verified_pairs) {
+    if (!(pair.image_id1 == 5 && pair.image_id2 == 6)) pairs.push_back(pair);
+  }
+  input.verified_pairs = pairs;
+  const std::vector<RelativePosePrior> consecutive = MakeConsecutiveRelativePosePriors(input);
+  ASSERT_EQ(consecutive.size(), 11u);
+  ASSERT_EQ(consecutive[4].num_verified_matches, 0);
+  int fewest_elsewhere = std::numeric_limits<int>::max();
+  for (size_t j = 0; j < consecutive.size(); ++j) {
+    if (j != 4) fewest_elsewhere = std::min(fewest_elsewhere, consecutive[j].num_verified_matches);
+  }
+  ASSERT_GT(fewest_elsewhere, 50);
+
+  // Only the three span-3 priors straddling (5, 6): 3 -> 6, 4 -> 7, 5 -> 8;
+  // span 20 is longer than the sequence.
+  const std::vector<RelativePosePrior> bridging =
+      MakeBridgingRelativePosePriors(input, consecutive, {3, 20}, 30);
+  ASSERT_EQ(bridging.size(), 3u);
+  for (size_t k = 0; k < bridging.size(); ++k) {
+    const image_t id1 = static_cast<image_t>(k + 3);
+    EXPECT_EQ(bridging[k].image_id1, id1);
+    EXPECT_EQ(bridging[k].image_id2, id1 + 3);
+    EXPECT_EQ(bridging[k].num_verified_matches, 0);
+    EXPECT_TRUE(bridging[k].rotation_only);
+    EXPECT_EQ(bridging[k].weight_scale, 1.0);
+    const Rigid3d expected =
+        input.images[k + 5].vio_cam_from_world * input.images[k + 2].vio_cam_from_world.Inverse();
+    EXPECT_LT(bridging[k].cam2_from_cam1.rotation.angularDistance(expected.rotation), 1e-12);
+  }
+  EXPECT_FALSE(consecutive[0].rotation_only);
+
+  // A threshold above every count: every span-3 pair, c the fewest it straddles.
+  const std::vector<RelativePosePrior> all =
+      MakeBridgingRelativePosePriors(input, consecutive, {3}, 100000);
+  ASSERT_EQ(all.size(), 9u);
+  for (size_t i = 0; i < all.size(); ++i) {
+    const int fewest = std::min({consecutive[i].num_verified_matches,
+                                 consecutive[i + 1].num_verified_matches,
+                                 consecutive[i + 2].num_verified_matches});
+    EXPECT_EQ(all[i].num_verified_matches, fewest) << i;
+  }
+  EXPECT_TRUE(MakeBridgingRelativePosePriors(input, consecutive, {}, 100000).empty());
+
+  BatchedMapperOptions options = QuietOptions(4);
+  options.bridge_spans = {3};
+  options.bridge_max_matches = 30;
+  BatchedMapperSummary summary;
+  RunBatchedMapper(input, options, &summary);
+  EXPECT_EQ(summary.num_consecutive_priors, 11);
+  EXPECT_EQ(summary.num_bridging_priors, 3);
+  EXPECT_EQ(summary.num_registered, 12);
+  options.bridge_spans = {1};
+  EXPECT_THAT(options.Validate(), HasSubstr("bridge_spans"));
 }
 
 void ExpectInputError(const BatchedMapperInput& input, const BatchedMapperOptions& options,
