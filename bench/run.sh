@@ -15,6 +15,8 @@
 #   viosfm                 `viosfm run` (full method)
 #   viosfm_no_vio_check    the same without the VIO-aided verification
 #   viosfm_no_rpc          the same without the relative-pose term in BA
+#   viosfm_no_bridging     the same with the paper's consecutive-frame
+#                          relative-pose terms only (no bridging priors)
 #   colmap_same_pairs      COLMAP feature_extractor (same camera model and
 #                          intrinsics, same feature cap) + matches_importer
 #                          on viosfm's candidate pairs + mapper
@@ -302,6 +304,8 @@ viosfm_ablations() {
   local root="$out/$name/runs"
   echo "== $name: viosfm ablations"
   REUSE="$root/viosfm" viosfm_run "$root/viosfm_no_rpc" "$seq" "$vio" --batch-size "$batch" --no-rpc
+  REUSE="$root/viosfm" viosfm_run "$root/viosfm_no_bridging" "$seq" "$vio" --batch-size "$batch" \
+    --no-bridging
   viosfm_run "$root/viosfm_no_vio_check" "$seq" "$vio" --batch-size "$batch" --no-vio-prior
 }
 

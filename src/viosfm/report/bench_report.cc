@@ -32,6 +32,7 @@ const std::vector<std::pair<std::string, std::string>>& MethodNames() {
   static const std::vector<std::pair<std::string, std::string>> names = {
       {"vio", "input VIO (emulated)"},
       {"viosfm", "viosfm"},
+      {"viosfm_no_bridging", "viosfm w/o bridging priors (the paper's terms only)"},
       {"viosfm_no_vio_check", "viosfm w/o VIO-aided verification"},
       {"viosfm_no_rpc", "viosfm w/o relative-pose term"},
       {"viosfm_batch_ba50", "viosfm, 50 iterations in every batch's BA"},
