@@ -22,8 +22,15 @@ namespace viosfm {
 // Measurements are taken at different sizes, so each solver's time per
 // iteration and observation is modelled as c * n^e in the number n of free
 // images, with e measured from that solver's last two measurements at sizes
-// at least kMinSizeRatio apart (clamped to [0, kMaxExponent]; 0 until
-// measured). How it grows depends on the scene: on the suite's room, whose
+// at least kMinSizeRatio apart (clamped to [0, kMaxExponent]). Until
+// measured, e is kPriorSparseExponent for SPARSE_SCHUR and 0 for
+// ITERATIVE_SCHUR: a windowed run (--ba-window) measures at one size only,
+// and its final BA over every image must not extrapolate SPARSE_SCHUR's
+// cost as flat (a 2400-image room, measured at 200 free images, spent more
+// than 20 minutes in its final SPARSE_SCHUR adjustment before it was
+// stopped). Guessing wrong the
+// other way costs at most ITERATIVE_SCHUR's factor of about 2 on a sparse
+// scene. How it grows depends on the scene: on the suite's room, whose
 // cameras all see each other, SPARSE_SCHUR's cost per observation went from
 // 4.0 to 9.1 us between 300 and 610 images (e = 1.2: the reduced camera
 // matrix fills in) while ITERATIVE_SCHUR's stayed at 2.6-2.7 us; along the
@@ -36,6 +43,7 @@ class LinearSolverChooser {
   static constexpr double kProbeMaxRatio = 2.0;
   static constexpr double kMinSizeRatio = 1.25;
   static constexpr double kMaxExponent = 2.0;
+  static constexpr double kPriorSparseExponent = 1.0;
 
   explicit LinearSolverChooser(const BundleAdjustmentOptions& options);
 
@@ -51,7 +59,7 @@ class LinearSolverChooser {
   // once `solver` has been measured.
   std::optional<double> PredictedCost(BaLinearSolver solver, size_t num_free_images) const;
 
-  // The measured growth exponent e of `solver` (0 until measured).
+  // The growth exponent e of `solver` (measured, or the prior above).
   double GrowthExponent(BaLinearSolver solver) const;
 
  private:
@@ -67,7 +75,7 @@ class LinearSolverChooser {
   const SolverModel& Model(BaLinearSolver solver) const;
 
   BundleAdjustmentOptions options_;
-  SolverModel sparse_;
+  SolverModel sparse_{std::nullopt, std::nullopt, kPriorSparseExponent};
   SolverModel iterative_;
   int num_choices_ = 0;
 };

@@ -46,19 +46,18 @@ TEST(LinearSolverChooserTest, MeasuresHowEachSolverGrowsWithTheReconstruction) {
   chooser.Record(Measured(BaLinearSolver::kSparseSchur, 10 * 1.05, 10, 265000), 300);
   EXPECT_EQ(chooser.Next(300, false), BaLinearSolver::kIterativeSchur);
   chooser.Record(Measured(BaLinearSolver::kIterativeSchur, 10 * 0.71, 10, 265000), 300);
-  EXPECT_EQ(chooser.GrowthExponent(BaLinearSolver::kSparseSchur), 0.0);
 
-  // One size measured: both predicted flat per observation. ITERATIVE_SCHUR
-  // is 1.5 times cheaper, so it is chosen and SPARSE_SCHUR probed every
-  // kProbePeriod-th time.
-  EXPECT_NEAR(*chooser.PredictedCost(BaLinearSolver::kSparseSchur, 610), 1.05 / 265000, 1e-12);
-  int num_sparse = 0;
-  for (int i = 0; i < LinearSolverChooser::kProbePeriod; ++i) {
-    num_sparse += chooser.Next(610, false) == BaLinearSolver::kSparseSchur ? 1 : 0;
-  }
-  EXPECT_EQ(num_sparse, 1);
+  // One size measured: SPARSE_SCHUR extrapolated with the prior exponent,
+  // ITERATIVE_SCHUR flat per observation.
+  EXPECT_EQ(chooser.GrowthExponent(BaLinearSolver::kSparseSchur),
+            LinearSolverChooser::kPriorSparseExponent);
+  EXPECT_EQ(chooser.GrowthExponent(BaLinearSolver::kIterativeSchur), 0.0);
+  EXPECT_NEAR(*chooser.PredictedCost(BaLinearSolver::kSparseSchur, 610),
+              1.05 / 265000 * 610.0 / 300.0, 1e-12);
+  EXPECT_NEAR(*chooser.PredictedCost(BaLinearSolver::kIterativeSchur, 610), 0.71 / 265000,
+              1e-12);
 
-  // The probe at 610 images and an ITERATIVE_SCHUR adjustment there.
+  // Both measured at 610 images.
   chooser.Record(Measured(BaLinearSolver::kSparseSchur, 10 * 5.01, 10, 548000), 610);
   chooser.Record(Measured(BaLinearSolver::kIterativeSchur, 10 * 1.42, 10, 548000), 610);
   const double expected_exponent =
@@ -70,26 +69,52 @@ TEST(LinearSolverChooserTest, MeasuresHowEachSolverGrowsWithTheReconstruction) {
   EXPECT_NEAR(*chooser.PredictedCost(BaLinearSolver::kSparseSchur, 700),
               5.01 / 548000 * std::pow(700.0 / 610.0, expected_exponent), 1e-12);
 
-  // SPARSE_SCHUR is now predicted more than twice as slow: never probed.
+  // SPARSE_SCHUR is predicted more than twice as slow: never probed.
   for (int i = 0; i < 2 * LinearSolverChooser::kProbePeriod; ++i) {
     EXPECT_EQ(chooser.Next(700, false), BaLinearSolver::kIterativeSchur) << i;
   }
 }
 
-// A corridor-like scene: SPARSE_SCHUR's cost per observation stays flat, so
-// it stays the choice as the reconstruction grows.
+// A windowed run measures at one size only; its final BA over many more
+// images does not extrapolate SPARSE_SCHUR as flat.
+TEST(LinearSolverChooserTest, FinalAdjustmentFarBeyondTheMeasuredSize) {
+  LinearSolverChooser chooser(AutoOptions());
+  chooser.Next(200, false);
+  chooser.Record(Measured(BaLinearSolver::kSparseSchur, 1.0, 1, 200000), 200);
+  chooser.Next(200, false);
+  chooser.Record(Measured(BaLinearSolver::kIterativeSchur, 1.5, 1, 200000), 200);
+  for (int i = 0; i < 8; ++i) {
+    const BaLinearSolver solver = chooser.Next(200, false);
+    chooser.Record(Measured(solver, solver == BaLinearSolver::kSparseSchur ? 1.0 : 1.5, 1,
+                            200000),
+                   200);
+  }
+  EXPECT_EQ(chooser.Next(200, true), BaLinearSolver::kSparseSchur);
+  EXPECT_EQ(chooser.Next(2400, true), BaLinearSolver::kIterativeSchur);
+}
+
+// A corridor-like scene: SPARSE_SCHUR's cost per observation stays flat.
+// The prior exponent first favours ITERATIVE_SCHUR; a probe measures
+// SPARSE_SCHUR at a larger size, and from then on it is the choice.
 TEST(LinearSolverChooserTest, KeepsSparseSchurWhenItDoesNotGrow) {
   LinearSolverChooser chooser(AutoOptions());
   chooser.Next(150, false);
-  chooser.Record(Measured(BaLinearSolver::kSparseSchur, 1.0, 1, 100000), 150);
+  chooser.Record(Measured(BaLinearSolver::kSparseSchur, 1.0, 1, 100000), 150);  // 10 us
   chooser.Next(200, false);
-  chooser.Record(Measured(BaLinearSolver::kIterativeSchur, 2.0, 1, 130000), 200);
-  EXPECT_EQ(chooser.Next(250, false), BaLinearSolver::kSparseSchur);
-  chooser.Record(Measured(BaLinearSolver::kSparseSchur, 1.62, 1, 160000), 250);
-  EXPECT_NEAR(chooser.GrowthExponent(BaLinearSolver::kSparseSchur),
-              std::log((1.62 / 160000) / (1.0 / 100000)) / std::log(250.0 / 150.0), 1e-9);
-  EXPECT_LT(*chooser.PredictedCost(BaLinearSolver::kSparseSchur, 600),
-            0.8 * *chooser.PredictedCost(BaLinearSolver::kIterativeSchur, 600));
+  chooser.Record(Measured(BaLinearSolver::kIterativeSchur, 2.0, 1, 130000), 200);  // 15.4 us
+  size_t num_images = 250;
+  int num_sparse = 0;
+  for (int i = 0; i < LinearSolverChooser::kProbePeriod; ++i, num_images += 50) {
+    const BaLinearSolver solver = chooser.Next(num_images, false);
+    const bool sparse = solver == BaLinearSolver::kSparseSchur;
+    num_sparse += sparse ? 1 : 0;
+    const double observations = 500.0 * static_cast<double>(num_images);
+    chooser.Record(Measured(solver, (sparse ? 10e-6 : 15.4e-6) * observations, 1,
+                            static_cast<int>(observations)),
+                   num_images);
+  }
+  EXPECT_EQ(num_sparse, 1);  // the probe
+  EXPECT_NEAR(chooser.GrowthExponent(BaLinearSolver::kSparseSchur), 0.0, 1e-9);
   EXPECT_EQ(chooser.Next(600, true), BaLinearSolver::kSparseSchur);
 }
 
