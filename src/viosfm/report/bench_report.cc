@@ -477,6 +477,12 @@ std::string FormatBenchMarkdown(const BenchResults& results,
          << Fixed(run.mapping_seconds, 1) << " | " << Fixed(run.peak_memory_mb, 0) << " | "
          << (run.version.empty() ? meta_version : run.version) << " |\n";
     }
+    for (const BenchRun& run : results.length) {
+      if (!run.reused.empty()) {
+        md << "\n" << run.method << " frames: started from the " << run.reused
+           << "; its time is that of the remaining stages.\n";
+      }
+    }
   }
   return md.str();
 }

@@ -115,6 +115,23 @@ TEST(BenchReport, RunsOfAnotherVersionGetANote) {
   EXPECT_THAT(md, HasSubstr("[1] viosfm: run with viosfm 0ld0001."));
 }
 
+TEST(BenchReport, LengthRunsStartedFromStoredMatchesGetANote) {
+  const fs::path root = MakeFixture();
+  Write(root / "length/300/time.txt", "30.0 2048 29.0 1.0\n");
+  Write(root / "length/300/eval.json", EvalJson(0.001, 0.001, 4));
+  Write(root / "length/2400/time.txt", "90.0 4096 88.0 2.0\n");
+  Write(root / "length/2400/eval.json", EvalJson(0.002, 0.001, 4));
+  Write(root / "length/2400/reused.txt", "features and verified matches of an earlier run\n");
+  Write(root / "length/2400_stopped/time.txt", "");
+  const BenchResults results = ReadBenchResults(root);
+  ASSERT_EQ(results.length.size(), 2u);
+  const std::string md = FormatBenchMarkdown(results, "images");
+  EXPECT_THAT(md, HasSubstr("| 2400 | 4 | 2.00 | 90.0 | 90.0 |"));
+  EXPECT_THAT(md, HasSubstr("2400 frames: started from the features and verified matches of an "
+                            "earlier run; its time is that of the remaining stages."));
+  EXPECT_THAT(md, Not(HasSubstr("300 frames: started")));
+}
+
 TEST(BenchReport, WritesPageAndBatchSizeFigures) {
   const fs::path root = MakeFixture();
   const BenchResults results = ReadBenchResults(root);
