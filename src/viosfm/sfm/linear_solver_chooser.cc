@@ -20,9 +20,13 @@ std::optional<double> LinearSolverChooser::PredictedCost(BaLinearSolver solver,
                                                          size_t num_free_images) const {
   const SolverModel& model = Model(solver);
   if (!model.last) return std::nullopt;
-  return model.last->cost *
-         std::pow(static_cast<double>(num_free_images) / model.last->num_free_images,
-                  model.exponent);
+  const double n = static_cast<double>(num_free_images);
+  double exponent = model.exponent;
+  if (solver == BaLinearSolver::kSparseSchur &&
+      n > kMaxExtrapolation * model.largest_num_free_images) {
+    exponent = std::max(exponent, kPriorSparseExponent);
+  }
+  return model.last->cost * std::pow(n / model.last->num_free_images, exponent);
 }
 
 BaLinearSolver LinearSolverChooser::Next(size_t num_free_images, bool final) {
@@ -57,6 +61,7 @@ void LinearSolverChooser::Record(const BundleAdjustmentSummary& summary, size_t 
     model.reference = model.last;
   }
   model.last = now;
+  model.largest_num_free_images = std::max(model.largest_num_free_images, now.num_free_images);
   if (model.reference && now.num_free_images >= kMinSizeRatio * model.reference->num_free_images) {
     const double exponent = std::log(now.cost / model.reference->cost) /
                             std::log(now.num_free_images / model.reference->num_free_images);

@@ -30,7 +30,10 @@ namespace viosfm {
 // than 20 minutes in its final SPARSE_SCHUR adjustment before it was
 // stopped). Guessing wrong the
 // other way costs at most ITERATIVE_SCHUR's factor of about 2 on a sparse
-// scene. How it grows depends on the scene: on the suite's room, whose
+// scene. For the same reason an exponent measured between small sizes
+// (150 and 200 free images) is not trusted more than kMaxExtrapolation
+// times beyond the largest measured size: there SPARSE_SCHUR's exponent is
+// at least the prior. How it grows depends on the scene: on the suite's room, whose
 // cameras all see each other, SPARSE_SCHUR's cost per observation went from
 // 4.0 to 9.1 us between 300 and 610 images (e = 1.2: the reduced camera
 // matrix fills in) while ITERATIVE_SCHUR's stayed at 2.6-2.7 us; along the
@@ -44,6 +47,7 @@ class LinearSolverChooser {
   static constexpr double kMinSizeRatio = 1.25;
   static constexpr double kMaxExponent = 2.0;
   static constexpr double kPriorSparseExponent = 1.0;
+  static constexpr double kMaxExtrapolation = 2.0;
 
   explicit LinearSolverChooser(const BundleAdjustmentOptions& options);
 
@@ -71,11 +75,12 @@ class LinearSolverChooser {
     std::optional<Measurement> last;
     std::optional<Measurement> reference;  // an earlier one, for the exponent
     double exponent = 0.0;
+    double largest_num_free_images = 0.0;  // of any measurement
   };
   const SolverModel& Model(BaLinearSolver solver) const;
 
   BundleAdjustmentOptions options_;
-  SolverModel sparse_{std::nullopt, std::nullopt, kPriorSparseExponent};
+  SolverModel sparse_{std::nullopt, std::nullopt, kPriorSparseExponent, 0.0};
   SolverModel iterative_;
   int num_choices_ = 0;
 };
