@@ -344,10 +344,9 @@ TEST(BundleAdjust, RotationOnlyPriorIgnoresTranslation) {
   RelativePosePrior prior;
   prior.image_id1 = neighbour;
   prior.image_id2 = free_image;
-  prior.cam2_from_cam1 =
-      Rigid3d(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.5, 0.0, 0.0)) *
-      scene.truth.GetImage(free_image).cam_from_world *
-      scene.truth.GetImage(neighbour).cam_from_world.Inverse();
+  prior.cam2_from_cam1 = Rigid3d(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.5, 0.0, 0.0)) *
+                         scene.truth.GetImage(free_image).cam_from_world *
+                         scene.truth.GetImage(neighbour).cam_from_world.Inverse();
   prior.num_verified_matches = 0;  // the largest weight
   const auto center_error = [&](bool rotation_only, double weight_scale) {
     Reconstruction estimate = scene.truth;

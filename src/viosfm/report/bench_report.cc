@@ -479,7 +479,8 @@ std::string FormatBenchMarkdown(const BenchResults& results,
     }
     for (const BenchRun& run : results.length) {
       if (!run.reused.empty()) {
-        md << "\n" << run.method << " frames: started from the " << run.reused
+        md << "\n"
+           << run.method << " frames: started from the " << run.reused
            << "; its time is that of the remaining stages.\n";
       }
     }

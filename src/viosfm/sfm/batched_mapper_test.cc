@@ -500,9 +500,9 @@ TEST(BatchedMapperTest, BridgingPriors) {
       MakeBridgingRelativePosePriors(input, consecutive, {3}, 100000);
   ASSERT_EQ(all.size(), 9u);
   for (size_t i = 0; i < all.size(); ++i) {
-    const int fewest = std::min({consecutive[i].num_verified_matches,
-                                 consecutive[i + 1].num_verified_matches,
-                                 consecutive[i + 2].num_verified_matches});
+    const int fewest =
+        std::min({consecutive[i].num_verified_matches, consecutive[i + 1].num_verified_matches,
+                  consecutive[i + 2].num_verified_matches});
     EXPECT_EQ(all[i].num_verified_matches, fewest) << i;
   }
   EXPECT_TRUE(MakeBridgingRelativePosePriors(input, consecutive, {}, 100000).empty());

@@ -52,8 +52,7 @@ void LinearSolverChooser::Record(const BundleAdjustmentSummary& summary, size_t 
       summary.linear_solver != BaLinearSolver::kIterativeSchur) {
     return;
   }
-  SolverModel& model =
-      summary.linear_solver == BaLinearSolver::kSparseSchur ? sparse_ : iterative_;
+  SolverModel& model = summary.linear_solver == BaLinearSolver::kSparseSchur ? sparse_ : iterative_;
   const Measurement now{static_cast<double>(num_free_images),
                         summary.time_s / summary.num_iterations / summary.num_observations};
   // The reference is the latest measurement at least kMinSizeRatio smaller.

@@ -54,8 +54,7 @@ TEST(LinearSolverChooserTest, MeasuresHowEachSolverGrowsWithTheReconstruction) {
   EXPECT_EQ(chooser.GrowthExponent(BaLinearSolver::kIterativeSchur), 0.0);
   EXPECT_NEAR(*chooser.PredictedCost(BaLinearSolver::kSparseSchur, 610),
               1.05 / 265000 * 610.0 / 300.0, 1e-12);
-  EXPECT_NEAR(*chooser.PredictedCost(BaLinearSolver::kIterativeSchur, 610), 0.71 / 265000,
-              1e-12);
+  EXPECT_NEAR(*chooser.PredictedCost(BaLinearSolver::kIterativeSchur, 610), 0.71 / 265000, 1e-12);
 
   // Both measured at 610 images.
   chooser.Record(Measured(BaLinearSolver::kSparseSchur, 10 * 5.01, 10, 548000), 610);
