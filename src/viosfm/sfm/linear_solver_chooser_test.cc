@@ -59,9 +59,9 @@ TEST(LinearSolverChooserTest, MeasuresHowEachSolverGrowsWithTheReconstruction) {
   // Both measured at 610 images.
   chooser.Record(Measured(BaLinearSolver::kSparseSchur, 10 * 5.01, 10, 548000), 610);
   chooser.Record(Measured(BaLinearSolver::kIterativeSchur, 10 * 1.42, 10, 548000), 610);
+  // The room's SPARSE_SCHUR cost per observation grew as n^1.18 from 300 to 610 images.
   const double expected_exponent =
       std::log((5.01 / 548000) / (1.05 / 265000)) / std::log(610.0 / 300.0);
-  EXPECT_NEAR(expected_exponent, 1.18, 0.01);
   EXPECT_NEAR(chooser.GrowthExponent(BaLinearSolver::kSparseSchur), expected_exponent, 1e-9);
   // ITERATIVE_SCHUR got slightly cheaper per observation: clamped to 0.
   EXPECT_EQ(chooser.GrowthExponent(BaLinearSolver::kIterativeSchur), 0.0);
