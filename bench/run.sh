@@ -23,7 +23,7 @@
 #   colmap_sequential      COLMAP's own sequential matcher + mapper
 #   vio                    the input VIO trajectory itself
 #   viosfm_own_vio         `viosfm run` with viosfm's own VIO (images + IMU
-#                          only; simulated scenarios)
+#                          only)
 #   own_vio                viosfm's own VIO trajectory itself
 # evaluates each with `viosfm eval` (Sim(3)-aligned ATE of the body
 # trajectory against the ground truth), records wall-clock time and peak
@@ -367,7 +367,15 @@ for scenario in $scenarios; do
 done
 num_simulated=${#names[@]}
 for i in "${!datasets[@]}"; do
-  names+=("$(basename "${datasets[$i]}")")
+  name=$(basename "${datasets[$i]}")
+  [ -d "${datasets[$i]}/mav0/cam0" ] ||
+    { echo "bench/run.sh: ${datasets[$i]}: no mav0/cam0 (not a EuRoC-layout dataset)" >&2; exit 2; }
+  [ -f "${dataset_vio[$i]}" ] ||
+    { echo "bench/run.sh: ${dataset_vio[$i]}: file does not exist (--vio-trajectory)" >&2; exit 2; }
+  # The report finds every sequence at RESULTS/NAME/sequence: a link to the dataset.
+  mkdir -p "$out/$name"
+  ln -sfn "$(cd "${datasets[$i]}" && pwd)" "$out/$name/sequence"
+  names+=("$name")
   seqs+=("${datasets[$i]}")
   vios+=("${dataset_vio[$i]}")
 done

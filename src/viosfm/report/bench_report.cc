@@ -403,6 +403,11 @@ std::string FormatBenchMarkdown(const BenchResults& results,
       if (run.sequence != sequence) continue;
       const bool is_vio = run.method == "vio" || run.method == "own_vio";
       std::string name = MethodName(run.method);
+      // The emulated VIO is the simulator's; a dataset's is the user's --vio-trajectory.
+      if (run.method == "vio" &&
+          !fs::is_regular_file(results.root / sequence / "sequence" / "simulation.yaml")) {
+        name = "input VIO (--vio-trajectory)";
+      }
       std::string marks;
       if (!run.reused.empty()) {
         notes.push_back(name + ": started from the " + run.reused +
@@ -499,8 +504,10 @@ void WriteBenchReport(const BenchResults& results, const fs::path& markdown_path
     }
     const fs::path sequence = results.root / run.sequence / "sequence";
     const fs::path gt_csv = sequence / "mav0" / "state_groundtruth_estimate0" / "data.csv";
+    // Without the sequence's ground truth (e.g. a dataset folder that has moved), no figure.
+    if (!fs::is_regular_file(gt_csv)) continue;
     const std::optional<Trajectory> estimate = RunTrajectory(run, sequence);
-    if (!estimate || estimate->size() < 3 || !fs::is_regular_file(gt_csv)) continue;
+    if (!estimate || estimate->size() < 3) continue;
     const Trajectory ground_truth = ReadEurocTrajectory(gt_csv);
     TrajectoryFigures figures = MakeTrajectoryFigures(*estimate, ground_truth, Trajectory{});
     const std::string stem = "bench_" + run.sequence + "_" + run.method;

@@ -33,6 +33,7 @@ void Write(const fs::path& path, const std::string& text) {
 fs::path MakeFixture() {
   const fs::path root = testing::MakeScratchFolder("bench_report");
   Write(root / "meta.txt", "date: 2026-01-01\nmode: quick\nviosfm: abc1234\n");
+  Write(root / "room/sequence/simulation.yaml", "scenario: room\n");
   Write(root / "room/sequence/mav0/cam0/data.csv",
         "#timestamp [ns],filename\n1,1.png\n2,2.png\n3,3.png\n4,4.png\n");
   const fs::path runs = root / "room/runs";
@@ -139,6 +140,29 @@ TEST(BenchReport, WritesPageAndBatchSizeFigures) {
   EXPECT_THAT(ReadTextFile(root / "docs/bench.md"),
               HasSubstr("](images/bench_batch_size_ate.svg)"));
   EXPECT_THAT(ReadTextFile(root / "docs/images/bench_batch_size_ate.svg"), HasSubstr("<svg"));
+}
+
+// A dataset's runs whose sequence folder is not there (a moved dataset, or a
+// results folder copied elsewhere): the page still has its numbers, without
+// trajectory figures.
+TEST(BenchReport, DatasetWithoutItsSequenceFolderStillGetsItsRows) {
+  const fs::path root = MakeFixture();
+  const fs::path run = root / "MyData/runs/colmap_same_pairs";
+  fs::create_directories(run / "sparse/0");
+  for (const auto& entry :
+       fs::directory_iterator(testing::SourcePath("io/testdata/colmap_fountain_bin"))) {
+    fs::copy_file(entry.path(), run / "sparse/0" / entry.path().filename());
+  }
+  Write(run / "time.txt", "40.0 1024\n");
+  Write(run / "eval.json", EvalJson(0.0777, 0.05, 11));
+  Write(root / "MyData/runs/vio/eval.json", EvalJson(0.0888, 0.06, 11));
+  const BenchResults results = ReadBenchResults(root);
+  WriteBenchReport(results, root / "docs/bench.md", root / "docs/images");
+  const std::string page = ReadTextFile(root / "docs/bench.md");
+  EXPECT_THAT(page, HasSubstr("MyData"));
+  EXPECT_THAT(page, HasSubstr("77.7"));
+  EXPECT_THAT(page, HasSubstr("| input VIO (--vio-trajectory) | - | 88.80 |"));
+  EXPECT_FALSE(fs::exists(root / "docs/images/bench_MyData_colmap_same_pairs_top.svg"));
 }
 
 TEST(BenchReport, BatchSizeSweepNamesItsSequence) {
