@@ -509,7 +509,10 @@ void WriteBenchReport(const BenchResults& results, const fs::path& markdown_path
     const std::optional<Trajectory> estimate = RunTrajectory(run, sequence);
     if (!estimate || estimate->size() < 3) continue;
     const Trajectory ground_truth = ReadEurocTrajectory(gt_csv);
-    TrajectoryFigures figures = MakeTrajectoryFigures(*estimate, ground_truth, Trajectory{});
+    TrajectoryPlotOptions plot_options;
+    plot_options.estimate_label = MethodName(run.method);
+    TrajectoryFigures figures =
+        MakeTrajectoryFigures(*estimate, ground_truth, Trajectory{}, plot_options);
     const std::string stem = "bench_" + run.sequence + "_" + run.method;
     figures.top_view.title = run.sequence + ": " + MethodName(run.method) + " (top view)";
     figures.side_view.title = run.sequence + ": " + MethodName(run.method) + " (side view)";

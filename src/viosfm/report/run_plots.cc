@@ -126,7 +126,7 @@ TrajectoryFigures MakeTrajectoryFigures(const Trajectory& estimate, const Trajec
     std::sort(errors.begin(), errors.end());
     ViewSeries views;
     views.top.kind = SeriesKind::kColoredLine;
-    views.top.label = "viosfm (" + alignment + "-aligned)";
+    views.top.label = options.estimate_label + " (" + alignment + "-aligned)";
     views.top.line_width = 2.5;
     for (const auto& [index, error] : errors) {
       const Eigen::Vector3d p =
@@ -146,7 +146,8 @@ TrajectoryFigures MakeTrajectoryFigures(const Trajectory& estimate, const Trajec
       figure->color_min = 0.0;
     }
   } else if (!estimate.empty()) {
-    layers.push_back(MakeLine(Positions(estimate, Sim3d()), "viosfm", kEstimateColor, false, 2.0));
+    layers.push_back(
+        MakeLine(Positions(estimate, Sim3d()), options.estimate_label, kEstimateColor, false, 2.0));
   }
 
   for (ViewSeries& layer : layers) {

@@ -18,6 +18,8 @@ struct TrajectoryPlotOptions {
   AlignmentMode alignment = AlignmentMode::kSim3;
   // Largest stamp difference of an associated pose pair (ns). Default 10 ms.
   int64_t max_dt_ns = 10'000'000;
+  // Legend of the estimate (e.g. "COLMAP 3.8" in the benchmark report).
+  std::string estimate_label = "viosfm";
   // Size of each view (px). Defaults 560 x 440.
   double width = 560.0;
   double height = 440.0;

@@ -71,6 +71,7 @@ TEST(MakeTrajectoryFigures, AlignsEstimateAndColoursByError) {
     EXPECT_EQ(vio_line.x.size(), vio.size());
     const Series* colored = FindSeries(*view, SeriesKind::kColoredLine);
     ASSERT_NE(colored, nullptr);
+    EXPECT_EQ(colored->label, "viosfm (sim3-aligned)");
     ASSERT_EQ(colored->values.size(), truth.size());
     EXPECT_EQ(view->colorbar_label, "position error (m)");
     // The largest error is the perturbed pose's; the aligned estimate lies
@@ -111,6 +112,20 @@ TEST(MakeTrajectoryFigures, UnassociatedEstimateFallsBackToPlainLine) {
   EXPECT_FALSE(figures.estimate_alignment_error.empty());
   ASSERT_EQ(figures.top_view.series.size(), 2u);
   EXPECT_EQ(figures.top_view.series[1].label, "viosfm");
+}
+
+// Another tool's trajectory (the benchmark report's COLMAP rows) carries its own name.
+TEST(MakeTrajectoryFigures, EstimateLabelNamesTheTool) {
+  const Trajectory truth = MakeGroundTruth(20);
+  TrajectoryPlotOptions options;
+  options.estimate_label = "COLMAP 3.8";
+  const TrajectoryFigures aligned = MakeTrajectoryFigures(truth, truth, Trajectory(), options);
+  const Series* colored = FindSeries(aligned.top_view, SeriesKind::kColoredLine);
+  ASSERT_NE(colored, nullptr);
+  EXPECT_EQ(colored->label, "COLMAP 3.8 (sim3-aligned)");
+  const TrajectoryFigures plain = MakeTrajectoryFigures(truth, Trajectory(), Trajectory(), options);
+  ASSERT_EQ(plain.top_view.series.size(), 1u);
+  EXPECT_EQ(plain.top_view.series[0].label, "COLMAP 3.8");
 }
 
 TEST(MakeTrajectoryFigures, RejectsInvalidOptions) {
