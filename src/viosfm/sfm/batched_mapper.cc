@@ -348,7 +348,9 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
     reconstruction.AddImage(std::move(image));
   }
   std::vector<RelativePosePrior> priors = MakeConsecutiveRelativePosePriors(input);
-  summary.num_consecutive_priors = static_cast<int>(priors.size());
+  // Without the relative-pose term (w/o RPC) the BA ignores every prior: count none.
+  summary.num_consecutive_priors =
+      options.ba.use_relative_pose_priors ? static_cast<int>(priors.size()) : 0;
   if (options.ba.use_relative_pose_priors) {
     const std::vector<RelativePosePrior> bridging = MakeBridgingRelativePosePriors(
         input, priors, options.bridge_spans, options.bridge_max_matches);

@@ -515,6 +515,12 @@ TEST(BatchedMapperTest, BridgingPriors) {
   EXPECT_EQ(summary.num_consecutive_priors, 11);
   EXPECT_EQ(summary.num_bridging_priors, 3);
   EXPECT_EQ(summary.num_registered, 12);
+  // Without the relative-pose term there are no priors of either kind.
+  options.ba.use_relative_pose_priors = false;
+  RunBatchedMapper(input, options, &summary);
+  EXPECT_EQ(summary.num_consecutive_priors, 0);
+  EXPECT_EQ(summary.num_bridging_priors, 0);
+  options.ba.use_relative_pose_priors = true;
   options.bridge_spans = {1};
   EXPECT_THAT(options.Validate(), HasSubstr("bridge_spans"));
 }
