@@ -212,6 +212,20 @@ const BenchRun* FindRun(const BenchResults& results, const std::string& sequence
   return nullptr;
 }
 
+// Whether the page draws `run`'s trajectory: the sequence has a ground truth
+// and the run left a trajectory (viosfm's TUM file or a COLMAP model).
+bool DrawsTrajectory(const BenchResults& results, const BenchRun& run) {
+  const fs::path sequence = results.root / run.sequence / "sequence";
+  if (!fs::is_regular_file(sequence / "mav0" / "state_groundtruth_estimate0" / "data.csv")) {
+    return false;
+  }
+  if (fs::is_regular_file(run.folder / "run" / "trajectory_body.tum")) return true;
+  for (const fs::path& model : SortedSubfolders(run.folder / "sparse")) {
+    if (fs::is_regular_file(model / "images.bin")) return true;
+  }
+  return false;
+}
+
 // The estimated body trajectory of a run folder: viosfm's
 // run/trajectory_body.tum, or COLMAP's largest model converted to body poses.
 std::optional<Trajectory> RunTrajectory(const BenchRun& run, const fs::path& sequence) {
@@ -445,7 +459,8 @@ std::string FormatBenchMarkdown(const BenchResults& results,
       }
     }
     for (const char* method : {"viosfm", "colmap_same_pairs", "colmap_sequential"}) {
-      if (FindRun(results, sequence, method) == nullptr) continue;
+      const BenchRun* run = FindRun(results, sequence, method);
+      if (run == nullptr || !DrawsTrajectory(results, *run)) continue;
       const std::string stem = "bench_" + sequence + "_" + method;
       md << "\n"
          << MethodName(method) << ": ![top](" << figures_relative_path << "/" << stem
@@ -504,10 +519,11 @@ void WriteBenchReport(const BenchResults& results, const fs::path& markdown_path
     }
     const fs::path sequence = results.root / run.sequence / "sequence";
     const fs::path gt_csv = sequence / "mav0" / "state_groundtruth_estimate0" / "data.csv";
-    // Without the sequence's ground truth (e.g. a dataset folder that has moved), no figure.
-    if (!fs::is_regular_file(gt_csv)) continue;
+    // Without the sequence's ground truth (e.g. a dataset folder that has moved)
+    // or the run's trajectory (a run still going), no figure and no link to one.
+    if (!DrawsTrajectory(results, run)) continue;
     const std::optional<Trajectory> estimate = RunTrajectory(run, sequence);
-    if (!estimate || estimate->size() < 3) continue;
+    if (!estimate) continue;
     const Trajectory ground_truth = ReadEurocTrajectory(gt_csv);
     TrajectoryPlotOptions plot_options;
     plot_options.estimate_label = MethodName(run.method);

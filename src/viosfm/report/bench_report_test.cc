@@ -165,6 +165,32 @@ TEST(BenchReport, DatasetWithoutItsSequenceFolderStillGetsItsRows) {
   EXPECT_FALSE(fs::exists(root / "docs/images/bench_MyData_colmap_same_pairs_top.svg"));
 }
 
+// Trajectory figures: drawn and linked for a run with a trajectory on a
+// sequence with ground truth; not linked for a run without one (still going).
+TEST(BenchReport, LinksOnlyTheTrajectoriesItDraws) {
+  const fs::path root = MakeFixture();
+  std::string truth =
+      "#timestamp,p_x,p_y,p_z,q_w,q_x,q_y,q_z,v_x,v_y,v_z,bw_x,bw_y,bw_z,ba_x,ba_y,ba_z\n";
+  std::string tum;
+  for (int i = 1; i <= 4; ++i) {
+    const std::string x = std::to_string(0.5 * i);
+    const std::string y = std::to_string(0.1 * i * i);
+    truth += std::to_string(i) + "000000000," + x + "," + y + ",1,1,0,0,0,0,0,0,0,0,0,0,0,0\n";
+    tum += std::to_string(i) + ".0 " + x + " " + y + " 1 0 0 0 1\n";
+  }
+  Write(root / "room/sequence/mav0/state_groundtruth_estimate0/data.csv", truth);
+  Write(root / "room/runs/viosfm/run/trajectory_body.tum", tum);
+  const BenchResults results = ReadBenchResults(root);
+  WriteBenchReport(results, root / "docs/bench.md", root / "docs/images");
+  const std::string page = ReadTextFile(root / "docs/bench.md");
+  EXPECT_THAT(page, HasSubstr("](images/bench_room_viosfm_top.svg)"));
+  EXPECT_THAT(ReadTextFile(root / "docs/images/bench_room_viosfm_top.svg"),
+              HasSubstr("viosfm (sim3-aligned)"));
+  // colmap_sequential has numbers but no model.
+  EXPECT_THAT(page, Not(HasSubstr("bench_room_colmap_sequential_top.svg")));
+  EXPECT_FALSE(fs::exists(root / "docs/images/bench_room_colmap_sequential_top.svg"));
+}
+
 TEST(BenchReport, BatchSizeSweepNamesItsSequence) {
   const fs::path root = MakeFixture();
   Write(root / "batch_size_sequence.txt", "room_30s\n");
