@@ -106,6 +106,12 @@ if [ ${#datasets[@]} -ne ${#dataset_vio[@]} ]; then
   echo "bench/run.sh: every --dataset needs its --vio-trajectory (a TUM file of a VIO run on it)" >&2
   exit 2
 fi
+for i in "${!datasets[@]}"; do
+  [ -d "${datasets[$i]}/mav0/cam0" ] ||
+    { echo "bench/run.sh: ${datasets[$i]}: no mav0/cam0 (not a EuRoC-layout dataset)" >&2; exit 2; }
+  [ -f "${dataset_vio[$i]}" ] ||
+    { echo "bench/run.sh: ${dataset_vio[$i]}: file does not exist (--vio-trajectory)" >&2; exit 2; }
+done
 case "$jobs" in 1|2) ;; *) echo "bench/run.sh: --jobs must be 1 or 2" >&2; exit 2 ;; esac
 case "$lane_only" in ""|viosfm|colmap) ;; *) echo "bench/run.sh: --lane must be viosfm or colmap" >&2; exit 2 ;; esac
 [ -x "$VIOSFM" ] || { echo "bench/run.sh: $VIOSFM not built (make build)" >&2; exit 2; }
@@ -368,10 +374,6 @@ done
 num_simulated=${#names[@]}
 for i in "${!datasets[@]}"; do
   name=$(basename "${datasets[$i]}")
-  [ -d "${datasets[$i]}/mav0/cam0" ] ||
-    { echo "bench/run.sh: ${datasets[$i]}: no mav0/cam0 (not a EuRoC-layout dataset)" >&2; exit 2; }
-  [ -f "${dataset_vio[$i]}" ] ||
-    { echo "bench/run.sh: ${dataset_vio[$i]}: file does not exist (--vio-trajectory)" >&2; exit 2; }
   # The report finds every sequence at RESULTS/NAME/sequence: a link to the dataset.
   mkdir -p "$out/$name"
   ln -sfn "$(cd "${datasets[$i]}" && pwd)" "$out/$name/sequence"
