@@ -212,13 +212,16 @@ const BenchRun* FindRun(const BenchResults& results, const std::string& sequence
   return nullptr;
 }
 
+// The ground truth of a sequence folder (EuRoC layout).
+fs::path GroundTruthCsv(const fs::path& sequence) {
+  return sequence / "mav0" / "state_groundtruth_estimate0" / "data.csv";
+}
+
 // Whether the page draws `run`'s trajectory: the sequence has a ground truth
 // and the run left a trajectory (viosfm's TUM file or a COLMAP model).
 bool DrawsTrajectory(const BenchResults& results, const BenchRun& run) {
   const fs::path sequence = results.root / run.sequence / "sequence";
-  if (!fs::is_regular_file(sequence / "mav0" / "state_groundtruth_estimate0" / "data.csv")) {
-    return false;
-  }
+  if (!fs::is_regular_file(GroundTruthCsv(sequence))) return false;
   if (fs::is_regular_file(run.folder / "run" / "trajectory_body.tum")) return true;
   for (const fs::path& model : SortedSubfolders(run.folder / "sparse")) {
     if (fs::is_regular_file(model / "images.bin")) return true;
@@ -348,8 +351,7 @@ BenchResults ReadBenchResults(const fs::path& root) {
       return MethodRank(a.method) < MethodRank(b.method);
     });
     const fs::path frames_csv = folder / "sequence" / "frames.csv";
-    const fs::path gt_csv =
-        folder / "sequence" / "mav0" / "state_groundtruth_estimate0" / "data.csv";
+    const fs::path gt_csv = GroundTruthCsv(folder / "sequence");
     if (fs::is_regular_file(frames_csv) && fs::is_regular_file(gt_csv)) {
       const Trajectory ground_truth = ReadEurocTrajectory(gt_csv);
       std::vector<FloorPlacement> placements;
@@ -518,7 +520,7 @@ void WriteBenchReport(const BenchResults& results, const fs::path& markdown_path
       continue;
     }
     const fs::path sequence = results.root / run.sequence / "sequence";
-    const fs::path gt_csv = sequence / "mav0" / "state_groundtruth_estimate0" / "data.csv";
+    const fs::path gt_csv = GroundTruthCsv(sequence);
     // Without the sequence's ground truth (e.g. a dataset folder that has moved)
     // or the run's trajectory (a run still going), no figure and no link to one.
     if (!DrawsTrajectory(results, run)) continue;
