@@ -2,6 +2,8 @@
 
 #include <ceres/ceres.h>
 
+#include <Eigen/Cholesky>
+
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
@@ -39,12 +41,23 @@ const char* BaLinearSolverName(BaLinearSolver solver) {
   return "auto";
 }
 
+const char* PriorWeightingName(PriorWeighting weighting) {
+  return weighting == PriorWeighting::kPaper ? "paper" : "covariance";
+}
+
+PriorWeighting ParsePriorWeighting(const std::string& name) {
+  if (name == "covariance") return PriorWeighting::kCovariance;
+  if (name == "paper") return PriorWeighting::kPaper;
+  throw InputError("prior weighting '" + name + "': expected 'covariance' or 'paper'");
+}
+
 std::string BundleAdjustmentOptions::Validate() const {
   if (!(loss_scale_px >= 0.0)) return "loss_scale_px must be >= 0";
   if (!(prior_alpha >= 0.0)) return "prior_alpha must be >= 0";
   if (!(prior_beta >= 0.0)) return "prior_beta must be >= 0";
   if (!(prior_rotation_sigma_rad > 0.0)) return "prior_rotation_sigma_rad must be > 0";
   if (!(prior_translation_sigma_m > 0.0)) return "prior_translation_sigma_m must be > 0";
+  if (!(prior_loss_scale >= 0.0)) return "prior_loss_scale must be >= 0";
   if (max_num_iterations < 0) return "max_num_iterations must be >= 0";
   if (num_threads < 1) return "num_threads must be >= 1";
   if (max_images_for_sparse_schur < 0) return "max_images_for_sparse_schur must be >= 0";
@@ -136,14 +149,38 @@ BundleAdjustmentSummary BundleAdjust(Reconstruction* reconstruction,
       Image& image2 = reconstruction->GetImage(prior.image_id2);
       if (!image1.registered || !image2.registered) continue;
       if (constant.count(prior.image_id1) > 0 && constant.count(prior.image_id2) > 0) continue;
-      const double weight =
-          prior.weight_scale *
-          RelativePoseWeight(prior.num_verified_matches, options.prior_alpha, options.prior_beta);
-      Eigen::Matrix<double, 6, 6> sqrt_information = RelativePoseSqrtInformation(
-          weight, options.prior_rotation_sigma_rad, options.prior_translation_sigma_m);
-      if (prior.rotation_only) sqrt_information.bottomRightCorner<3, 3>().setZero();
+      Eigen::Matrix<double, 6, 6> sqrt_information;
+      ceres::LossFunction* prior_loss = nullptr;
+      if (options.prior_weighting == PriorWeighting::kCovariance && prior.sqrt_information) {
+        // The connectivity factor exp(-beta c) scales the information.
+        const double factor = std::sqrt(
+            prior.weight_scale *
+            RelativePoseWeight(prior.num_verified_matches, 1.0, options.prior_beta));
+        sqrt_information = factor * *prior.sqrt_information;
+        if (prior.rotation_only) {
+          // The rotation's marginal information: whiten the rotation block alone.
+          sqrt_information.setZero();
+          const Eigen::Matrix<double, 6, 6> information =
+              prior.sqrt_information->transpose() * *prior.sqrt_information;
+          const Eigen::Matrix3d rotation_covariance =
+              information.inverse().topLeftCorner<3, 3>();
+          const Eigen::Matrix3d rotation_sqrt = rotation_covariance.llt().matrixL().solve(
+              Eigen::Matrix3d::Identity());
+          sqrt_information.topLeftCorner<3, 3>() = factor * rotation_sqrt;
+        }
+        if (options.prior_loss_scale > 0.0) {
+          prior_loss = new ceres::TukeyLoss(options.prior_loss_scale);
+        }
+      } else {
+        const double weight =
+            prior.weight_scale *
+            RelativePoseWeight(prior.num_verified_matches, options.prior_alpha, options.prior_beta);
+        sqrt_information = RelativePoseSqrtInformation(weight, options.prior_rotation_sigma_rad,
+                                                       options.prior_translation_sigma_m);
+        if (prior.rotation_only) sqrt_information.bottomRightCorner<3, 3>().setZero();
+      }
       problem.AddResidualBlock(RelativePoseError::Create(prior.cam2_from_cam1, sqrt_information),
-                               nullptr, pose_block(image1), pose_block(image2));
+                               prior_loss, pose_block(image1), pose_block(image2));
       ++summary.num_priors;
     }
   }

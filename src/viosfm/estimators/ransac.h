@@ -83,7 +83,14 @@ class Ransac {
     VIOSFM_CHECK(options_.Check()) << options_.Validate();
   }
 
-  Report Estimate(const std::vector<X_t>& x, const std::vector<Y_t>& y) const;
+  Report Estimate(const std::vector<X_t>& x, const std::vector<Y_t>& y) const {
+    return Estimate(x, y, {});
+  }
+  // The same, with models known beforehand (e.g. a prediction from other
+  // sensors) scored before the first sample: a good one is kept (and
+  // locally optimised) and its support lowers the number of trials needed.
+  Report Estimate(const std::vector<X_t>& x, const std::vector<Y_t>& y,
+                  const std::vector<M_t>& initial_models) const;
 
  private:
   struct Support {
@@ -114,7 +121,8 @@ class Ransac {
 
 template <typename Estimator, typename LocalEstimator>
 typename Ransac<Estimator, LocalEstimator>::Report Ransac<Estimator, LocalEstimator>::Estimate(
-    const std::vector<X_t>& x, const std::vector<Y_t>& y) const {
+    const std::vector<X_t>& x, const std::vector<Y_t>& y,
+    const std::vector<M_t>& initial_models) const {
   VIOSFM_CHECK_EQ(x.size(), y.size());
   Report report;
   const size_t num_samples = x.size();
@@ -161,6 +169,19 @@ typename Ransac<Estimator, LocalEstimator>::Report Ransac<Estimator, LocalEstima
       if (!improved) return;
     }
   };
+
+  for (const M_t& model : initial_models) {
+    const Support support = Evaluate(x, y, model, &residuals);
+    if (support.num_inliers < static_cast<size_t>(kSampleSize)) continue;
+    if (!have_model || support.BetterThan(best_support)) {
+      have_model = true;
+      best_support = support;
+      best_model = model;
+      if (options_.local_optimization) optimize_locally();
+      needed_trials =
+          RansacNumTrials(best_support.num_inliers, num_samples, kSampleSize, options_.confidence);
+    }
+  }
 
   int trial = 0;
   for (; trial < options_.max_num_trials; ++trial) {

@@ -14,6 +14,8 @@
 
 #include "viosfm/features/feature_extraction.h"
 #include "viosfm/features/sift.h"
+#include <Eigen/Eigenvalues>
+
 #include "viosfm/geometry/epipolar.h"
 #include "viosfm/sensor/camera_models.h"
 #include "viosfm/util/errors.h"
@@ -39,6 +41,7 @@ struct ImageInfo {
   camera_t camera_id = kInvalidCameraId;
   timestamp_ns_t timestamp_ns = 0;
   std::optional<Rigid3d> world_from_body;  // the VIO pose, if associated
+  VioOdometer odometer;                    // of that pose
 };
 
 // Features of one image as the per-pair steps use them.
@@ -48,9 +51,10 @@ struct ImageData {
   std::shared_ptr<const FloatDescriptors> descriptors;  // null if not needed
 };
 
-// The pose of `trajectory` nearest in time to `stamp`, if within `tolerance`.
-std::optional<Rigid3d> NearestPose(const Trajectory& trajectory, timestamp_ns_t stamp,
-                                   timestamp_ns_t tolerance) {
+// The index of the pose of `trajectory` nearest in time to `stamp`, if
+// within `tolerance`.
+std::optional<size_t> NearestPose(const Trajectory& trajectory, timestamp_ns_t stamp,
+                                  timestamp_ns_t tolerance) {
   if (trajectory.empty()) return std::nullopt;
   const auto it = std::lower_bound(
       trajectory.poses.begin(), trajectory.poses.end(), stamp,
@@ -68,7 +72,7 @@ std::optional<Rigid3d> NearestPose(const Trajectory& trajectory, timestamp_ns_t 
   if (it != trajectory.poses.end()) consider(*it);
   if (it != trajectory.poses.begin()) consider(*(it - 1));
   if (best == nullptr || best_gap > tolerance) return std::nullopt;
-  return best->world_from_frame;
+  return static_cast<size_t>(best - trajectory.poses.data());
 }
 
 std::string FormatDouble(double value) {
@@ -100,6 +104,11 @@ std::string VerificationOptions::Validate() const {
   }
   if (std::string error = matching.Validate(); !error.empty()) return "matching." + error;
   if (std::string error = prior.Validate(); !error.empty()) return "prior." + error;
+  if (std::string error = vio_uncertainty.Validate(); !error.empty()) {
+    return "vio_uncertainty." + error;
+  }
+  if (!(band_sigmas >= 0.0) || !std::isfinite(band_sigmas)) return "band_sigmas must be >= 0";
+  if (!(band_depth_m > 0.0) || !std::isfinite(band_depth_m)) return "band_depth_m must be > 0";
   if (!(guided_band_px > 0.0) || !std::isfinite(guided_band_px)) {
     return "guided_band_px must be positive";
   }
@@ -128,6 +137,9 @@ std::vector<std::pair<std::string, std::string>> VerificationOptions::ToKeyValue
       {"prior.max_scene_depth_m", FormatDouble(prior.max_scene_depth_m)},
       {"prior.depth_tolerance_px", FormatDouble(prior.depth_tolerance_px)},
       {"prior.min_depth_parallax_px", FormatDouble(prior.min_depth_parallax_px)},
+      {"band_follows_drift", band_follows_drift ? "true" : "false"},
+      {"band_sigmas", FormatDouble(band_sigmas)},
+      {"band_depth_m", FormatDouble(band_depth_m)},
       {"guided_matching", guided_matching ? "true" : "false"},
       {"reverify_stored_matches", reverify_stored_matches ? "true" : "false"},
       {"guided_band_px", FormatDouble(guided_band_px)},
@@ -161,8 +173,30 @@ std::string FormatVerificationSummary(const VerificationSummary& s) {
   return out.str();
 }
 
+double DriftEpipolarBandPx(const Eigen::Matrix<double, 6, 6>& covariance,
+                           const Rigid3d& cam2_from_cam1, double focal_length_px,
+                           const VerificationOptions& options) {
+  const RelativePoseSigmas sigmas = LargestSigmas(covariance);
+  // The translation's covariance across the baseline.
+  Eigen::Matrix3d across = Eigen::Matrix3d::Identity();
+  if (cam2_from_cam1.translation.norm() > 1e-9) {
+    const Eigen::Vector3d direction = cam2_from_cam1.translation.normalized();
+    across -= direction * direction.transpose();
+  }
+  const Eigen::Matrix3d translation = across * covariance.bottomRightCorner<3, 3>() * across;
+  const double sigma_across = std::sqrt(std::max(
+      0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(translation, Eigen::EigenvaluesOnly)
+               .eigenvalues()
+               .maxCoeff()));
+  const double expected_px = options.band_sigmas * focal_length_px *
+                             (sigmas.rotation_rad + sigma_across / options.band_depth_m);
+  const double base = options.prior.max_epipolar_error_px;
+  return std::sqrt(base * base + expected_px * expected_px);
+}
+
 VerificationResult RunVerification(const Sequence& sequence, const Trajectory& vio_world_from_body,
-                                   ColmapDatabase* database, const VerificationOptions& options) {
+                                   ColmapDatabase* database, const VerificationOptions& options,
+                                   const std::vector<int>& vio_segments) {
   VIOSFM_CHECK(database != nullptr);
   if (const std::string error = options.Validate(); !error.empty()) {
     throw InputError("invalid verification options: " + error);
@@ -201,10 +235,18 @@ VerificationResult RunVerification(const Sequence& sequence, const Trajectory& v
             [](const ImageInfo& a, const ImageInfo& b) { return a.timestamp_ns < b.timestamp_ns; });
   summary.num_images = images.size();
   const bool use_prior = options.use_vio_prior && !vio_world_from_body.empty();
+  VIOSFM_CHECK(vio_segments.empty() || vio_segments.size() == vio_world_from_body.size())
+      << vio_segments.size() << " segment indices for " << vio_world_from_body.size() << " poses";
+  const std::vector<VioOdometer> odometers =
+      use_prior ? ComputeVioOdometers(vio_world_from_body, vio_segments)
+                : std::vector<VioOdometer>();
   for (ImageInfo& info : images) {
     if (use_prior) {
-      info.world_from_body =
-          NearestPose(vio_world_from_body, info.timestamp_ns, options.max_pose_time_difference_ns);
+      if (const std::optional<size_t> index = NearestPose(
+              vio_world_from_body, info.timestamp_ns, options.max_pose_time_difference_ns)) {
+        info.world_from_body = vio_world_from_body.poses[*index].world_from_frame;
+        info.odometer = odometers[*index];
+      }
     }
     if (info.world_from_body) ++summary.num_images_with_prior;
   }
@@ -323,7 +365,8 @@ VerificationResult RunVerification(const Sequence& sequence, const Trajectory& v
       decision.source = options.pairs.mode == PairMode::kTemporalRetrieval
                             ? (temporal_pairs.count(pairs[i]) ? "temporal" : "retrieval")
                             : PairModeName(options.pairs.mode);
-      decision.has_vio_prior = info1.world_from_body && info2.world_from_body;
+      decision.has_vio_prior = info1.world_from_body && info2.world_from_body &&
+                               info1.odometer.segment == info2.odometer.segment;
       if (stored[i] && options.reverify_stored_matches) {
         work[i - begin].reverified = true;
         work[i - begin].matches = database->ReadMatches(info1.image_id, info2.image_id);
@@ -373,9 +416,22 @@ VerificationResult RunVerification(const Sequence& sequence, const Trajectory& v
       // Step 1: the VIO prior.
       if (decision.has_vio_prior && !matches.empty()) {
         timer.Start();
+        PriorVerificationOptions prior = options.prior;
+        if (options.band_follows_drift) {
+          const VioSample frame1{info1.timestamp_ns, *info1.world_from_body * body_from_cam,
+                                info1.odometer};
+          const VioSample frame2{info2.timestamp_ns, *info2.world_from_body * body_from_cam,
+                                info2.odometer};
+          const Rigid3d cam2_from_cam1 = RelativePoseFromVio(
+              *info1.world_from_body, *info2.world_from_body, body_from_cam, body_from_cam);
+          prior.max_epipolar_error_px = DriftEpipolarBandPx(
+              RelativePoseCovariance(options.vio_uncertainty, frame1, frame2), cam2_from_cam1,
+              0.5 * (MeanFocalLength(camera1) + MeanFocalLength(camera2)), options);
+        }
+        decision.vio_band_px = prior.max_epipolar_error_px;
         const PriorVerificationResult check = VerifyPairWithVioPoses(
             camera1, camera2, *info1.world_from_body, *info2.world_from_body, body_from_cam,
-            data1.points_normalized, data2.points_normalized, matches, options.prior);
+            data1.points_normalized, data2.points_normalized, matches, prior);
         decision.vio_outlier_ratio = check.outlier_ratio;
         decision.vio_rotation_only = check.rotation_only;
         decision.vio_depth_applied = check.depth_applied;

@@ -49,6 +49,7 @@
 #include "viosfm/retrieval/image_retrieval.h"
 #include "viosfm/scene/pair_decision.h"
 #include "viosfm/scene/trajectory.h"
+#include "viosfm/scene/vio_uncertainty.h"
 
 namespace viosfm {
 
@@ -69,6 +70,24 @@ struct VerificationOptions {
   // depth-consistency check (beyond the paper; prior.check_depth, default
   // on) with max scene depth 20 m.
   PriorVerificationOptions prior;
+  // Beyond the paper: the epipolar band follows the VIO's expected drift
+  // between the two frames (DriftEpipolarBandPx): far-apart frames, such as
+  // the two visits of a loop, get the band their drift allows instead of
+  // the fixed T_EE, which rejects correct loop pairs once the VIO has
+  // drifted a few decimetres. Default true; false: the fixed T_EE (the
+  // paper).
+  bool band_follows_drift = true;
+  // The VIO's uncertainty (scene/vio_uncertainty.h; the pipeline sets it
+  // from its own option).
+  VioUncertaintyModel vio_uncertainty;
+  // Standard deviations of the expected epipolar error added to the band.
+  // Default 3.
+  double band_sigmas = 3.0;
+  // m, the depth at which the VIO's translation error (across the baseline)
+  // is turned into pixels: a point this near moves most. Default 2 (indoor
+  // scenes; nearer points are few and mostly seen by temporal neighbours,
+  // whose drift is small).
+  double band_depth_m = 2.0;
   // Match inside the band of the VIO epipolar lines instead of by brute force
   // (pairs with a prior only). Default false. With it the matches agree with
   // the prior by construction, so step 1 rejects nothing and only RANSAC
@@ -114,11 +133,26 @@ struct VerificationResult {
 // Verifies the pairs of the sequence's images held in `database` (see the
 // top of this file). `vio_world_from_body` is the VIO trajectory as
 // world_from_body poses (the sequence's rig.body_from_cam gives the camera
-// poses); empty, or options.use_vio_prior false: RANSAC only. Throws
-// InputError for invalid options, a database image without features or a
-// camera model that cannot project.
+// poses); empty, or options.use_vio_prior false: RANSAC only.
+// `vio_segments` gives each VIO pose's segment (vio_input.h; empty: one
+// segment): a pair whose frames lie in two segments has no VIO prior (a
+// relative pose across a re-initialisation means nothing) and is verified
+// by RANSAC only. Throws InputError for invalid options, a database image
+// without features or a camera model that cannot project.
 VerificationResult RunVerification(const Sequence& sequence, const Trajectory& vio_world_from_body,
-                                   ColmapDatabase* database, const VerificationOptions& options);
+                                   ColmapDatabase* database, const VerificationOptions& options,
+                                   const std::vector<int>& vio_segments = {});
+
+// The epipolar band (pixels) of a pair whose VIO relative pose
+// cam2_from_cam1 has covariance `covariance` (of [Log R_E; t_E],
+// scene/vio_uncertainty.h): sqrt(T_EE^2 + (band_sigmas f (sigma_rot +
+// sigma_t / band_depth_m))^2), sigma_rot the largest rotation sigma and
+// sigma_t the largest translation sigma across the baseline (an error along
+// it, e.g. of the scale, moves no epipolar line). T_EE =
+// options.prior.max_epipolar_error_px, f in pixels.
+double DriftEpipolarBandPx(const Eigen::Matrix<double, 6, 6>& covariance,
+                           const Rigid3d& cam2_from_cam1, double focal_length_px,
+                           const VerificationOptions& options);
 
 // "120 pairs: 80 accepted, 30 rejected by VIO, 10 by RANSAC, ... ; 3.2 s"
 std::string FormatVerificationSummary(const VerificationSummary& summary);

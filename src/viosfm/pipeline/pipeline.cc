@@ -20,6 +20,7 @@
 #include "viosfm/io/image_io.h"
 #include "viosfm/io/ply.h"
 #include "viosfm/io/verification_report.h"
+#include "viosfm/pipeline/vio_input.h"
 #include "viosfm/scene/reprojection.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/file_util.h"
@@ -93,26 +94,6 @@ double PeakMemoryMb() {
 bool IsEurocDataset(const fs::path& root) {
   return fs::is_directory(root / "mav0") ||
          (root.filename() == "mav0" && fs::is_directory(root / "cam0"));
-}
-
-// Index of the pose nearest to `t` within max_dt, or -1.
-int64_t NearestPoseIndex(const Trajectory& trajectory, timestamp_ns_t t, timestamp_ns_t max_dt) {
-  const auto& poses = trajectory.poses;
-  const auto it = std::lower_bound(
-      poses.begin(), poses.end(), t,
-      [](const StampedPose& pose, timestamp_ns_t stamp) { return pose.timestamp_ns < stamp; });
-  int64_t best = -1;
-  timestamp_ns_t best_dt = max_dt;
-  const auto consider = [&](std::vector<StampedPose>::const_iterator candidate) {
-    const timestamp_ns_t dt = std::abs(candidate->timestamp_ns - t);
-    if (dt <= best_dt) {
-      best_dt = dt;
-      best = candidate - poses.begin();
-    }
-  };
-  if (it != poses.begin()) consider(std::prev(it));
-  if (it != poses.end()) consider(it);
-  return best;
 }
 
 // The pose at `t`, interpolated (linear position, slerp rotation) between
@@ -204,6 +185,15 @@ void WriteJsonFile(const fs::path& path, const std::string& text) {
   WriteFileAtomically(path, [&text](std::ostream& stream) { stream << text << "\n"; });
 }
 
+ordered_json MetricJson(const MetricAccuracy& m) {
+  return {{"ate_sim3_rmse_m", m.ate_sim3_m.rmse},
+          {"ate_se3_rmse_m", m.ate_se3_m.rmse},
+          {"ate_posyaw_rmse_m", m.ate_posyaw_m.rmse},
+          {"scale", m.scale},
+          {"scale_error", m.scale_error()},
+          {"num_poses", m.num_poses}};
+}
+
 ordered_json StatsJson(const PipelineEvaluation& e) {
   ordered_json json;
   json["alignment"] = "sim3";
@@ -214,6 +204,8 @@ ordered_json StatsJson(const PipelineEvaluation& e) {
   json["vio_ate_rmse_m"] = e.vio_ate_rmse_m;
   json["vio_ate_median_m"] = e.vio_ate_median_m;
   json["num_poses"] = e.num_poses;
+  json["metric"] = MetricJson(e.metric);
+  json["vio_metric"] = MetricJson(e.vio_metric);
   return json;
 }
 
@@ -271,6 +263,10 @@ std::string PipelineOptions::Validate() const {
   if (dataset.empty()) return "dataset: a dataset folder is required";
   if (output_folder.empty()) return "output_folder: an output folder is required";
   if (max_vio_time_difference_ns <= 0) return "max_vio_time_difference_ns must be positive";
+  if (vio_max_gap_ns < 0) return "vio_max_gap_ns must be >= 0";
+  if (const std::string error = vio_uncertainty.Validate(); !error.empty()) {
+    return "vio_uncertainty." + error;
+  }
   if (num_threads < 1) return "num_threads must be >= 1";
   if (const std::string error = frame_selection.Validate(); !error.empty()) {
     return "frame_selection." + error;
@@ -300,6 +296,7 @@ VerificationOptions PipelineOptions::EffectiveVerificationOptions() const {
   options.seed = seed;
   options.show_progress = show_progress;
   options.max_pose_time_difference_ns = max_vio_time_difference_ns;
+  options.vio_uncertainty = vio_uncertainty;
   return options;
 }
 
@@ -308,6 +305,7 @@ BatchedMapperOptions PipelineOptions::EffectiveMapperOptions() const {
   options.num_threads = num_threads;
   options.ba.num_threads = num_threads;
   options.show_progress = show_progress;
+  options.vio_uncertainty = vio_uncertainty;
   return options;
 }
 
@@ -322,6 +320,7 @@ std::vector<std::pair<std::string, std::string>> PipelineOptions::ToKeyValues() 
       {"vio.format", TrajectoryFormatName(vio_format)},
       {"vio.frame", VioFrameName(vio_frame)},
       {"vio.max_time_difference_ns", Text(int64_t{max_vio_time_difference_ns})},
+      {"vio.max_gap_ns", Text(int64_t{vio_max_gap_ns})},
       {"frame_selection.trim_static", Text(frame_selection.trim_static)},
       {"frame_selection.static_source", StaticSourceName(frame_selection.static_source)},
       {"frame_selection.static_window_s", Text(frame_selection.static_window_s)},
@@ -336,6 +335,9 @@ std::vector<std::pair<std::string, std::string>> PipelineOptions::ToKeyValues() 
       {"frame_selection.max_static_rotation_rad", Text(frame_selection.max_static_rotation_rad)},
       {"frame_selection.target_rate_hz", Text(frame_selection.target_rate_hz)},
   };
+  for (const auto& [key, value] : vio_uncertainty.ToKeyValues()) {
+    values.emplace_back("vio_uncertainty." + key, value);
+  }
   // viosfm's own VIO runs only without a VIO source or file.
   if (!vio_source && vio_trajectory.empty()) {
     for (const auto& [key, value] : own_vio.ToKeyValues())
@@ -379,6 +381,8 @@ std::vector<std::pair<std::string, std::string>> PipelineOptions::ToKeyValues() 
           {"mapper.ba.prior_beta", Text(m.ba.prior_beta)},
           {"mapper.ba.prior_rotation_sigma_rad", Text(m.ba.prior_rotation_sigma_rad)},
           {"mapper.ba.prior_translation_sigma_m", Text(m.ba.prior_translation_sigma_m)},
+          {"mapper.ba.prior_weighting", PriorWeightingName(m.ba.prior_weighting)},
+          {"mapper.ba.prior_loss_scale", Text(m.ba.prior_loss_scale)},
           {"mapper.ba.max_num_iterations", Text(m.ba.max_num_iterations)},
           {"mapper.ba.num_threads", Text(m.ba.num_threads)},
           {"mapper.ba.max_images_for_sparse_schur", Text(m.ba.max_images_for_sparse_schur)},
@@ -388,6 +392,17 @@ std::vector<std::pair<std::string, std::string>> PipelineOptions::ToKeyValues() 
           {"mapper.ba.parameter_tolerance", Text(m.ba.parameter_tolerance)},
           {"mapper.filter.max_reprojection_error_px", Text(m.filter.max_reprojection_error_px)},
           {"mapper.filter.min_triangulation_angle_deg", Text(m.filter.min_triangulation_angle_deg)},
+          {"mapper.registration.verify_with_images", Text(m.registration.verify_with_images)},
+          {"mapper.registration.pnp.max_error_px", Text(m.registration.pnp.max_error_px)},
+          {"mapper.registration.pnp.min_num_inliers", Text(m.registration.pnp.min_num_inliers)},
+          {"mapper.registration.min_num_correspondences",
+           Text(m.registration.min_num_correspondences)},
+          {"mapper.registration.min_predicted_inlier_ratio",
+           Text(m.registration.min_predicted_inlier_ratio)},
+          {"mapper.registration.break_sigmas", Text(m.registration.break_sigmas)},
+          {"mapper.registration.min_supporting_observations",
+           Text(m.registration.min_supporting_observations)},
+          {"mapper.registration.support_max_error_px", Text(m.registration.support_max_error_px)},
           {"mapper.retriangulate", Text(m.retriangulate)},
           {"mapper.ba_after_each_batch", Text(m.ba_after_each_batch)},
           {"mapper.final_global_ba", Text(m.final_global_ba)},
@@ -402,8 +417,14 @@ std::vector<std::pair<std::string, std::string>> PipelineOptions::ToKeyValues() 
 std::string PipelineSummary::ToString() const {
   std::ostringstream out;
   out << std::fixed << std::setprecision(3);
-  out << "frames: " << num_frames_in << " in, " << num_frames_selected << " selected, "
-      << num_frames_registered << " registered\n";
+  out << "frames: " << num_frames_in << " in, " << num_frames_selected << " selected ("
+      << num_frames_without_vio_pose << " without a VIO pose), " << num_frames_registered
+      << " registered (pose supported by the images), " << num_frames_vio_only
+      << " placed by the VIO only, " << num_frames_unposed << " without a pose\n";
+  out << "VIO: " << num_vio_segments << " segment(s), " << mapper.num_vio_segments_joined
+      << " joined; " << mapper.num_reposed << " frame(s) re-posed from the images, "
+      << mapper.num_registered_without_vio << " registered from the images without a VIO pose, "
+      << mapper.num_vio_breaks << " VIO jump(s) found\n";
   out << "pairs: " << verification.num_pairs << " candidates, " << verification.num_accepted
       << " accepted, " << verification.num_vio_rejected << " rejected by VIO, "
       << verification.num_ransac_rejected << " by RANSAC, " << verification.num_no_matches
@@ -414,6 +435,9 @@ std::string PipelineSummary::ToString() const {
     out << "ATE (Sim(3), " << evaluation->num_poses << " poses): RMSE " << evaluation->ate_rmse_m
         << " m, median " << evaluation->ate_median_m << " m; input VIO RMSE "
         << evaluation->vio_ate_rmse_m << " m, median " << evaluation->vio_ate_median_m << " m\n";
+    out << "metric: " << FormatMetricAccuracy(evaluation->metric) << "\n";
+    out << "input VIO: " << FormatMetricAccuracy(evaluation->vio_metric) << "\n";
+    out << std::fixed << std::setprecision(3);
   } else {
     out << "ATE: no ground truth\n";
   }
@@ -434,7 +458,23 @@ std::string PipelineSummaryToJson(const PipelineSummary& s) {
   json["started_utc"] = s.started_utc;
   json["frames"] = {{"in", s.num_frames_in},
                     {"selected", s.num_frames_selected},
-                    {"registered", s.num_frames_registered}};
+                    {"without_vio_pose", s.num_frames_without_vio_pose},
+                    {"registered", s.num_frames_registered},
+                    {"vio_only", s.num_frames_vio_only},
+                    {"unposed", s.num_frames_unposed},
+                    {"reposed_from_images", s.mapper.num_reposed},
+                    {"registered_without_vio", s.mapper.num_registered_without_vio}};
+  json["vio"] = {{"segments", s.num_vio_segments},
+                 {"segments_joined", s.mapper.num_vio_segments_joined},
+                 {"segment_rule", s.vio_segment_rule},
+                 {"jumps_found", s.mapper.num_vio_breaks}};
+  ordered_json unposed = ordered_json::array();
+  for (const MapperFrameStatus& frame : s.mapper.frames) {
+    if (!frame.reason.empty()) {
+      unposed.push_back({{"image_id", frame.image_id}, {"reason", frame.reason}});
+    }
+  }
+  json["unposed_frames"] = unposed;
   json["pairs"] = {{"candidates", s.verification.num_pairs},
                    {"accepted", s.verification.num_accepted},
                    {"vio_rejected", s.verification.num_vio_rejected},
@@ -493,68 +533,6 @@ Sequence ReadPipelineDataset(const fs::path& dataset, const ImageFolderOptions& 
   return sequence;
 }
 
-Trajectory RunOwnVio(const Sequence& sequence, const PipelineOptions& options) {
-  if (!sequence.has_imu()) {
-    throw InputError(sequence.root.string(), 0,
-                     "no VIO poses: the dataset has no IMU for viosfm's own VIO; pass "
-                     "--vio-trajectory FILE (the TUM trajectory of any VIO)");
-  }
-  VIOSFM_LOG(INFO) << "run: no VIO trajectory given: running viosfm's own VIO";
-  VioOptions vio_options = options.own_vio;
-  vio_options.show_progress = vio_options.show_progress && options.show_progress;
-  const VioResult result = RunVio(sequence, vio_options);
-  WriteVioResult(options.output_folder / "vio", result);
-  // The poses of the longest stretch of frames the VIO tracked (tracking or
-  // IMU-only) without a reset: a reset starts a new world frame, and the
-  // frames before the visual-inertial initialisation have no pose.
-  Trajectory best;
-  Trajectory current;
-  for (const VioFrameResult& frame : result.frames) {
-    const bool posed = frame.status == VioStatus::kTracking || frame.status == VioStatus::kImuOnly;
-    if (posed) {
-      current.poses.push_back({frame.timestamp_ns, frame.state.world_from_body});
-    } else if (!current.empty()) {
-      if (current.size() > best.size()) best = current;
-      current = Trajectory{};
-    }
-  }
-  if (current.size() > best.size()) best = current;
-  if (best.empty()) {
-    throw InputError(sequence.root.string(), 0,
-                     "viosfm's own VIO never initialised: " + result.summary.message);
-  }
-  if (best.size() + result.summary.status_counts[static_cast<int>(VioStatus::kInitializing)] <
-      result.frames.size()) {
-    VIOSFM_LOG(WARNING) << "run: the VIO was reset " << result.summary.num_resets
-                        << " time(s); using its longest tracked stretch, " << best.size() << " of "
-                        << result.frames.size() << " frames";
-  }
-  VIOSFM_LOG(INFO) << "run: own VIO: " << best.size() << " of " << result.frames.size()
-                   << " frames posed, " << result.summary.cpu_seconds << " CPU s (output in "
-                   << (options.output_folder / "vio").string() << ")";
-  return best;
-}
-
-Trajectory LoadVioTrajectory(const Sequence& sequence, const PipelineOptions& options) {
-  if (options.vio_source) {
-    Trajectory vio = options.vio_source(sequence);
-    if (vio.empty()) throw InputError("the VIO gave no poses for " + sequence.root.string());
-    return vio;
-  }
-  if (options.vio_trajectory.empty()) return RunOwnVio(sequence, options);
-  const std::string path = options.vio_trajectory.string();
-  if (!fs::is_regular_file(options.vio_trajectory)) {
-    throw InputError(path, 0, "VIO trajectory file not found");
-  }
-  Trajectory vio = ReadTrajectory(options.vio_trajectory, options.vio_format);
-  if (!vio.has_timestamps) throw InputError(path, 0, "the VIO trajectory needs timestamps");
-  if (vio.empty()) throw InputError(path, 0, "the VIO trajectory has no poses");
-  if (options.vio_frame == VioFrame::kCam) {
-    vio = CameraToBodyTrajectory(vio, sequence.rig.body_from_cam);
-  }
-  return vio;
-}
-
 PipelineSummary RunPipeline(const PipelineOptions& options) {
   if (const std::string error = options.Validate(); !error.empty()) {
     throw InputError("invalid run options: " + error);
@@ -582,9 +560,13 @@ PipelineSummary RunPipeline(const PipelineOptions& options) {
 
   // 2. VIO trajectory of the whole sequence.
   clock.Begin("vio");
-  const Trajectory vio = LoadVioTrajectory(sequence, options);
+  const VioPoses vio_poses = LoadVioPoses(sequence, options);
+  const Trajectory& vio = vio_poses.world_from_body;
+  summary.num_vio_segments = vio_poses.num_segments();
+  summary.vio_segment_rule = vio_poses.segment_rule;
   VIOSFM_LOG(INFO) << "run: " << vio.size() << " VIO poses over "
-                   << SpanText(vio.poses.front().timestamp_ns, vio.poses.back().timestamp_ns);
+                   << SpanText(vio.poses.front().timestamp_ns, vio.poses.back().timestamp_ns)
+                   << " in " << vio_poses.num_segments() << " segment(s)";
   clock.End();
 
   // 3. Frames: static trimming, downsampling, and a VIO pose for each.
@@ -596,39 +578,42 @@ PipelineSummary RunPipeline(const PipelineOptions& options) {
   }
   Sequence selected = sequence;
   selected.images.clear();
-  Trajectory vio_at_frames;  // world_from_body at the selected frames' stamps
-  size_t num_without_pose = 0;
+  // Per selected frame: the index of its VIO pose, if any.
+  std::vector<std::optional<size_t>> vio_index_of_frame;
+  Trajectory vio_at_frames;  // world_from_body at the selected frames with a VIO pose
   for (const size_t index : summary.frame_selection.kept) {
     const SequenceImage& image = sequence.images[index];
-    const int64_t pose_index =
-        NearestPoseIndex(vio, image.timestamp_ns, options.max_vio_time_difference_ns);
-    if (pose_index < 0) {
-      ++num_without_pose;
-      continue;
-    }
+    const std::optional<size_t> pose_index =
+        NearestVioPose(vio, image.timestamp_ns, options.max_vio_time_difference_ns);
     selected.images.push_back(image);
-    vio_at_frames.poses.push_back(
-        {image.timestamp_ns, vio.poses[static_cast<size_t>(pose_index)].world_from_frame});
+    vio_index_of_frame.push_back(pose_index);
+    if (pose_index) {
+      vio_at_frames.poses.push_back({image.timestamp_ns, vio.poses[*pose_index].world_from_frame});
+    } else {
+      ++summary.num_frames_without_vio_pose;
+    }
   }
-  if (selected.images.size() < 2) {
+  if (vio_at_frames.size() < 2) {
     throw InputError(
         vio_name, 0,
         "the VIO poses " + SpanText(vio.poses.front().timestamp_ns, vio.poses.back().timestamp_ns) +
             " do not overlap the selected images " +
             SpanText(sequence.images.front().timestamp_ns, sequence.images.back().timestamp_ns) +
-            " in time: " + std::to_string(selected.images.size()) + " of " +
+            " in time: " + std::to_string(vio_at_frames.size()) + " of " +
             std::to_string(summary.frame_selection.kept.size()) + " images have a pose within " +
             FormatNsAsSeconds(options.max_vio_time_difference_ns, 3) +
             " s (at least 2 are needed)");
   }
-  if (num_without_pose > 0) {
-    VIOSFM_LOG(WARNING) << "run: " << num_without_pose
-                        << " selected frames have no VIO pose within "
+  if (summary.num_frames_without_vio_pose > 0) {
+    VIOSFM_LOG(WARNING) << "run: " << summary.num_frames_without_vio_pose << " of "
+                        << selected.images.size() << " selected frames have no VIO pose within "
                         << FormatNsAsSeconds(options.max_vio_time_difference_ns, 3)
-                        << " s and are left out";
+                        << " s (VIO not initialised, lost or re-initialising): they are "
+                           "registered from the images where these allow";
   }
   summary.num_frames_selected = selected.images.size();
-  VIOSFM_LOG(INFO) << "run: " << summary.frame_selection.message << "; " << selected.images.size()
+  VIOSFM_LOG(INFO) << "run: " << summary.frame_selection.message << "; "
+                   << selected.images.size() - summary.num_frames_without_vio_pose
                    << " frames with a VIO pose";
   clock.End();
 
@@ -653,7 +638,8 @@ PipelineSummary RunPipeline(const PipelineOptions& options) {
   // 5. Pairs and the two-step verification (resumable).
   clock.Begin("verification");
   const VerificationResult verification =
-      RunVerification(selected, vio, &database, options.EffectiveVerificationOptions());
+      RunVerification(selected, vio, &database, options.EffectiveVerificationOptions(),
+                      vio_poses.segments);
   summary.verification = verification.summary;
   VIOSFM_LOG(INFO) << "run: verification " << FormatVerificationSummary(verification.summary);
   clock.End();
@@ -675,8 +661,11 @@ PipelineSummary RunPipeline(const PipelineOptions& options) {
     mapper_image.name = name;
     mapper_image.timestamp_ns = image.timestamp_ns;
     mapper_image.keypoints = database.ReadKeypoints(row->image_id);
-    mapper_image.vio_cam_from_world =
-        (vio_at_frames.poses[i].world_from_frame * selected.rig.body_from_cam).Inverse();
+    if (const std::optional<size_t> pose_index = vio_index_of_frame[i]) {
+      mapper_image.vio_cam_from_world =
+          (vio.poses[*pose_index].world_from_frame * selected.rig.body_from_cam).Inverse();
+      mapper_image.vio_odometer = vio_poses.odometers[*pose_index];
+    }
     image_paths.emplace(row->image_id, image.path);
     image_stamps.emplace(row->image_id, image.timestamp_ns);
     camera_ids[row->camera_id] = true;
@@ -705,7 +694,14 @@ PipelineSummary RunPipeline(const PipelineOptions& options) {
   Reconstruction reconstruction =
       RunBatchedMapper(input, options.EffectiveMapperOptions(), &summary.mapper);
   VIOSFM_LOG(INFO) << "run: mapper " << summary.mapper.ToString();
-  summary.num_frames_registered = reconstruction.NumRegImages();
+  summary.num_frames_registered = static_cast<size_t>(summary.mapper.num_supported);
+  summary.num_frames_vio_only = static_cast<size_t>(summary.mapper.num_vio_only);
+  summary.num_frames_unposed = static_cast<size_t>(summary.mapper.num_unposed);
+  for (size_t i = 0; i < summary.mapper.frames.size(); ++i) {
+    const MapperFrameStatus& frame = summary.mapper.frames[i];
+    if (frame.reason.empty()) continue;
+    VIOSFM_LOG(WARNING) << "run: no pose for " << input.images[i].name << ": " << frame.reason;
+  }
   summary.num_points = reconstruction.NumPoints3D();
   summary.num_observations = reconstruction.ComputeNumObservations();
   summary.mean_track_length = reconstruction.ComputeMeanTrackLength();
@@ -719,9 +715,9 @@ PipelineSummary RunPipeline(const PipelineOptions& options) {
 
   // 9. Trajectories and evaluation.
   clock.Begin("evaluation");
-  Trajectory estimated_cam;   // world_from_cam of the registered frames
+  Trajectory estimated_cam;   // world_from_cam of the posed frames
   Trajectory estimated_body;  // world_from_body
-  Trajectory vio_registered;  // the input VIO at the registered frames
+  Trajectory vio_registered;  // the input VIO at the posed frames that have a VIO pose
   const Rigid3d cam_from_body = selected.rig.body_from_cam.Inverse();
   for (size_t i = 0; i < input.images.size(); ++i) {
     const image_t image_id = input.images[i].image_id;
@@ -732,11 +728,15 @@ PipelineSummary RunPipeline(const PipelineOptions& options) {
     const Rigid3d world_from_cam = image.cam_from_world.Inverse();
     estimated_cam.poses.push_back({stamp, world_from_cam});
     estimated_body.poses.push_back({stamp, world_from_cam * cam_from_body});
-    vio_registered.poses.push_back(vio_at_frames.poses[i]);
+    if (const std::optional<size_t> pose_index = vio_index_of_frame[i]) {
+      vio_registered.poses.push_back({stamp, vio.poses[*pose_index].world_from_frame});
+    }
   }
   Trajectory ground_truth_at_frames;
   std::optional<EvaluationResult> evaluation;
   std::optional<EvaluationResult> evaluation_vio;
+  std::optional<MetricAccuracy> metric;
+  std::optional<MetricAccuracy> vio_metric;
   EvaluationOptions eval_options;
   eval_options.alignment = AlignmentMode::kSim3;
   eval_options.association = AssociationMethod::kNearest;
@@ -748,10 +748,13 @@ PipelineSummary RunPipeline(const PipelineOptions& options) {
         ground_truth_at_frames.poses.push_back({image.timestamp_ns, *pose});
       }
     }
-    if (ground_truth_at_frames.size() >= 3 && estimated_body.size() >= 3) {
+    if (ground_truth_at_frames.size() >= 3 && estimated_body.size() >= 3 &&
+        vio_registered.size() >= 3) {
       try {
         evaluation = EvaluateTrajectories(estimated_body, ground_truth_at_frames, eval_options);
         evaluation_vio = EvaluateTrajectories(vio_registered, ground_truth_at_frames, eval_options);
+        metric = EvaluateMetricAccuracy(estimated_body, ground_truth_at_frames, eval_options);
+        vio_metric = EvaluateMetricAccuracy(vio_registered, ground_truth_at_frames, eval_options);
       } catch (const InputError& error) {
         // A degenerate alignment (e.g. frames on a line) on valid input.
         VIOSFM_LOG(WARNING) << "run: no evaluation: " << error.what();
@@ -764,8 +767,10 @@ PipelineSummary RunPipeline(const PipelineOptions& options) {
                           << " registered (3 of each needed)";
     }
   }
-  if (evaluation && evaluation_vio) {
+  if (evaluation && evaluation_vio && metric && vio_metric) {
     PipelineEvaluation e;
+    e.metric = *metric;
+    e.vio_metric = *vio_metric;
     e.ate_rmse_m = evaluation->ate_translation_m.rmse;
     e.ate_median_m = evaluation->ate_translation_m.median;
     e.ate_mean_m = evaluation->ate_translation_m.mean;

@@ -8,11 +8,13 @@
 //  2. vio            the VIO trajectory (world_from_body) of the sequence,
 //                    from PipelineOptions::vio_source if set, else from the
 //                    file vio_trajectory, else from viosfm's own VIO
-//                    (vio/odometry.h) on the images and IMU (LoadVioTrajectory);
+//                    (vio/odometry.h) on the images and IMU, split into
+//                    segments at re-initialisations (vio_input.h);
 //  3. select_frames  static start/end trimming and downsampling to
-//                    target_rate_hz (matching/frame_selection.h); frames
-//                    without a VIO pose within max_vio_time_difference_ns are
-//                    dropped;
+//                    target_rate_hz (matching/frame_selection.h); a frame
+//                    without a VIO pose within max_vio_time_difference_ns
+//                    is kept without one (counted and logged) and
+//                    registered from the images where they allow;
 //  4. features       SIFT into OUT/database.db (resumable);
 //  5. verification   pairs, matching, VIO check and RANSAC (resumable);
 //  6. load_matches   the inlier matches of the accepted pairs;
@@ -53,12 +55,14 @@
 
 #include "viosfm/features/feature_extraction.h"
 #include "viosfm/features/sift.h"
+#include "viosfm/eval/metric_accuracy.h"
 #include "viosfm/io/image_folder.h"
 #include "viosfm/io/sequence.h"
 #include "viosfm/io/trajectory_io.h"
 #include "viosfm/matching/frame_selection.h"
 #include "viosfm/matching/verification_driver.h"
 #include "viosfm/scene/trajectory.h"
+#include "viosfm/scene/vio_uncertainty.h"
 #include "viosfm/sfm/batched_mapper.h"
 #include "viosfm/util/timestamp.h"
 #include "viosfm/vio/odometry.h"
@@ -92,7 +96,8 @@ struct PipelineOptions {
   VioSource vio_source;
   // Without vio_source and vio_trajectory, viosfm's own VIO (vio/odometry.h)
   // runs on the images and IMU with these options; its output goes to
-  // OUT/vio/ and the poses of its longest tracked stretch are used.
+  // OUT/vio/ and every posed frame is used, each stretch between
+  // re-initialisations a segment of its own (vio_input.h).
   VioOptions own_vio;
   std::filesystem::path vio_trajectory;                  // trajectory file; default none
   TrajectoryFormat vio_format = TrajectoryFormat::kTum;  // default TUM
@@ -102,6 +107,15 @@ struct PipelineOptions {
   // Largest gap between an image stamp and the VIO pose used for it (ns).
   // Default 5 ms.
   timestamp_ns_t max_vio_time_difference_ns = 5'000'000;
+  // A trajectory file (or vio_source) is split into segments at gaps between
+  // its stamps longer than this (ns); 0: one segment. Default 1 s
+  // (vio_input.h).
+  timestamp_ns_t vio_max_gap_ns = 1'000'000'000;
+  // How far the VIO's relative poses are trusted (scene/vio_uncertainty.h):
+  // the relative-pose priors' covariance (mapper.vio_uncertainty) and the
+  // verification's epipolar band (verification.vio_uncertainty) are set from
+  // it. Default: the model's defaults (an external VIO on EuRoC-class data).
+  VioUncertaintyModel vio_uncertainty;
 
   // Static trimming and downsampling (default: trimmed, 10 Hz, the paper).
   FrameSelectionOptions frame_selection;
@@ -137,7 +151,9 @@ struct PipelineStageTime {
   double seconds = 0.0;
 };
 
-// Sim(3)-aligned ATE against the ground truth (metres).
+// Accuracy against the ground truth (metres): the Sim(3)-aligned ATE
+// statistics, and the metric figures (eval/metric_accuracy.h) of the
+// estimate and of the input VIO on the same frames.
 struct PipelineEvaluation {
   double ate_rmse_m = 0.0;
   double ate_median_m = 0.0;
@@ -146,6 +162,8 @@ struct PipelineEvaluation {
   double vio_ate_rmse_m = 0.0;  // the input VIO on the same frames
   double vio_ate_median_m = 0.0;
   size_t num_poses = 0;  // associated poses
+  MetricAccuracy metric;      // the estimate
+  MetricAccuracy vio_metric;  // the input VIO on the same frames (one alignment over all segments)
 };
 
 struct PipelineSummary {
@@ -153,8 +171,15 @@ struct PipelineSummary {
   std::filesystem::path output_folder;
   std::string started_utc;  // "2026-11-21T07:38:16Z"
   size_t num_frames_in = 0;
-  size_t num_frames_selected = 0;  // selected and with a VIO pose
+  size_t num_frames_selected = 0;  // selected (with or without a VIO pose)
+  size_t num_frames_without_vio_pose = 0;  // selected frames without a VIO pose
+  // Posed frames whose pose the images support (registered), placed by the
+  // VIO only, and frames without any pose (mapper.frames says why).
   size_t num_frames_registered = 0;
+  size_t num_frames_vio_only = 0;
+  size_t num_frames_unposed = 0;
+  int num_vio_segments = 0;  // in the VIO input
+  std::string vio_segment_rule;
   FrameSelection frame_selection;
   FeatureExtractionSummary features;
   VerificationSummary verification;
@@ -176,8 +201,9 @@ struct PipelineSummary {
 std::string PipelineSummaryToJson(const PipelineSummary& summary);
 
 // The VIO trajectory (world_from_body, stamped) of the sequence, as the
-// options say: vio_source, else the file. Throws InputError naming the file
-// when none is given, it cannot be read, has no stamps or no poses.
+// options say: vio_source, else the file (viosfm's own VIO: LoadVioPoses,
+// vio_input.h). Throws InputError naming the file when none is given, it
+// cannot be read, has no stamps or no poses.
 Trajectory LoadVioTrajectory(const Sequence& sequence, const PipelineOptions& options);
 
 // Reads a dataset folder: EuRoC if it holds mav0/ (or is mav0), else an

@@ -25,6 +25,10 @@ struct PairDecision {
   int num_matches = 0;  // tentative (descriptor) matches
   // Both images have a VIO pose, so the VIO-prior check ran.
   bool has_vio_prior = false;
+  // The epipolar band of the EE test, pixels (T_EE, or wider where the VIO's
+  // drift between the frames allows: matching/verification_driver.h); NaN
+  // when the check did not run.
+  double vio_band_px = std::numeric_limits<double>::quiet_NaN();
   // Outliers / matches under the VIO relative pose (the paper's EE test);
   // NaN when the check did not run.
   double vio_outlier_ratio = std::numeric_limits<double>::quiet_NaN();

@@ -5,11 +5,13 @@
 #include <iomanip>
 #include <limits>
 #include <optional>
+#include <set>
 #include <sstream>
 #include <unordered_map>
 #include <unordered_set>
 
 #include "viosfm/scene/reprojection.h"
+#include "viosfm/sensor/camera_models.h"
 #include "viosfm/sfm/linear_solver_chooser.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/logging.h"
@@ -149,6 +151,12 @@ std::string BatchedMapperOptions::Validate() const {
     if (span < 2) return "bridge_spans must be >= 2 frames each";
   }
   if (bridge_max_matches < 0) return "bridge_max_matches must be >= 0";
+  if (std::string error = vio_uncertainty.Validate(); !error.empty()) {
+    return "vio_uncertainty." + error;
+  }
+  if (std::string error = registration.Validate(); !error.empty()) {
+    return "registration." + error;
+  }
   if (num_threads < 1) return "num_threads must be >= 1";
   return "";
 }
@@ -160,6 +168,12 @@ std::string BatchedMapperSummary::ToString() const {
       << " points, " << num_observations << " observations, mean track length " << mean_track_length
       << ", mean reprojection error " << mean_reprojection_error_px << " px, " << seconds_total
       << " s (tracks " << seconds_tracks << " s)\n"
+      << "  frames: " << num_supported << " supported by the images, " << num_vio_only
+      << " placed by the VIO only, " << num_unposed << " without a pose; " << num_reposed
+      << " re-posed from the images (VIO disagreed), " << num_registered_without_vio
+      << " registered from the images without a VIO prediction, " << num_without_vio_pose
+      << " without a VIO pose; VIO segments " << num_vio_segments_joined << " of "
+      << num_vio_segments << " joined, " << num_vio_breaks << " VIO jump(s) found\n"
       << "  relative-pose priors: " << num_consecutive_priors << " consecutive, "
       << num_bridging_priors << " bridging\n"
       << "  " << tracks.Summary();
@@ -212,10 +226,15 @@ void ValidateBatchedMapperInput(const BatchedMapperInput& input) {
                            DescribeImage(input.images[i - 1]) + " at " +
                            FormatNsAsSeconds(input.images[i - 1].timestamp_ns) + " s");
     }
-    if (!IsFinitePose(image.vio_cam_from_world)) {
+    if (image.vio_cam_from_world && !IsFinitePose(*image.vio_cam_from_world)) {
       throw InputError(kInputLabel, 0,
                        DescribeImage(image) + " has a non-finite or zero-rotation VIO pose");
     }
+  }
+  if (std::none_of(input.images.begin(), input.images.end(),
+                   [](const MapperImage& image) { return image.vio_cam_from_world.has_value(); })) {
+    throw InputError(kInputLabel, 0,
+                     "no image has a VIO pose (the VIO gives the world frame and the scale)");
   }
   for (size_t p = 0; p < input.verified_pairs.size(); ++p) {
     const ImagePairMatches& pair = input.verified_pairs[p];
@@ -245,60 +264,6 @@ void ValidateBatchedMapperInput(const BatchedMapperInput& input) {
   }
 }
 
-std::vector<RelativePosePrior> MakeConsecutiveRelativePosePriors(const BatchedMapperInput& input) {
-  std::unordered_map<image_pair_t, int> num_matches;
-  for (const ImagePairMatches& pair : input.verified_pairs) {
-    if (pair.image_id1 == pair.image_id2) continue;
-    int& count = num_matches[ImagePairToPairId(pair.image_id1, pair.image_id2)];
-    count = std::max(count, static_cast<int>(pair.matches.size()));
-  }
-  std::vector<RelativePosePrior> priors;
-  for (size_t i = 1; i < input.images.size(); ++i) {
-    const MapperImage& image1 = input.images[i - 1];
-    const MapperImage& image2 = input.images[i];
-    RelativePosePrior prior;
-    prior.image_id1 = image1.image_id;
-    prior.image_id2 = image2.image_id;
-    prior.cam2_from_cam1 = image2.vio_cam_from_world * image1.vio_cam_from_world.Inverse();
-    prior.cam2_from_cam1.rotation.normalize();
-    const auto it = num_matches.find(ImagePairToPairId(image1.image_id, image2.image_id));
-    prior.num_verified_matches = it == num_matches.end() ? 0 : it->second;
-    priors.push_back(prior);
-  }
-  return priors;
-}
-
-std::vector<RelativePosePrior> MakeBridgingRelativePosePriors(
-    const BatchedMapperInput& input, const std::vector<RelativePosePrior>& consecutive,
-    const std::vector<int>& spans, int max_matches) {
-  VIOSFM_CHECK(consecutive.size() + 1 == input.images.size() || input.images.empty())
-      << consecutive.size() << " consecutive priors for " << input.images.size() << " images";
-  std::vector<RelativePosePrior> priors;
-  const size_t num_images = input.images.size();
-  for (const int span_int : spans) {
-    const size_t span = static_cast<size_t>(span_int);
-    if (span < 2 || span >= num_images) continue;
-    for (size_t i = 0; i + span < num_images; ++i) {
-      int fewest = std::numeric_limits<int>::max();
-      for (size_t j = i; j < i + span; ++j) {
-        fewest = std::min(fewest, consecutive[j].num_verified_matches);
-      }
-      if (fewest >= max_matches) continue;
-      const MapperImage& image1 = input.images[i];
-      const MapperImage& image2 = input.images[i + span];
-      RelativePosePrior prior;
-      prior.image_id1 = image1.image_id;
-      prior.image_id2 = image2.image_id;
-      prior.cam2_from_cam1 = image2.vio_cam_from_world * image1.vio_cam_from_world.Inverse();
-      prior.cam2_from_cam1.rotation.normalize();
-      prior.num_verified_matches = fewest;
-      prior.rotation_only = true;
-      priors.push_back(prior);
-    }
-  }
-  return priors;
-}
-
 Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
                                 const BatchedMapperOptions& options,
                                 BatchedMapperSummary* summary_out) {
@@ -308,6 +273,7 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
   BatchedMapperSummary summary;
   const size_t num_images = input.images.size();
   summary.num_images = static_cast<int>(num_images);
+  const FrameRegistrationOptions& registration = options.registration;
 
   // 1. Tracks, and the tracks of each image.
   Timer timer;
@@ -329,17 +295,23 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
   // The model: all images, unregistered, with their keypoints.
   Reconstruction reconstruction;
   for (const Camera& camera : input.cameras) reconstruction.AddCamera(camera);
-  std::vector<Rigid3d> vio_poses(num_images);
+  std::vector<std::optional<Rigid3d>> vio_poses(num_images);
+  std::set<int> segments;
   for (size_t i = 0; i < num_images; ++i) {
     const MapperImage& input_image = input.images[i];
-    vio_poses[i] = input_image.vio_cam_from_world;
-    vio_poses[i].rotation.normalize();
+    if (input_image.vio_cam_from_world) {
+      vio_poses[i] = *input_image.vio_cam_from_world;
+      vio_poses[i]->rotation.normalize();
+      segments.insert(input_image.vio_odometer.segment);
+    } else {
+      ++summary.num_without_vio_pose;
+    }
     Image image;
     image.image_id = input_image.image_id;
     image.camera_id = input_image.camera_id;
     image.name = input_image.name;
     image.timestamp_ns = input_image.timestamp_ns;
-    image.cam_from_world = vio_poses[i];
+    image.cam_from_world = vio_poses[i].value_or(Rigid3d());
     image.points2D.resize(input_image.keypoints.size());
     for (size_t j = 0; j < input_image.keypoints.size(); ++j) {
       image.points2D[j].xy =
@@ -347,24 +319,210 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
     }
     reconstruction.AddImage(std::move(image));
   }
-  std::vector<RelativePosePrior> priors = MakeConsecutiveRelativePosePriors(input);
-  // Without the relative-pose term (w/o RPC) the BA ignores every prior: count none.
-  summary.num_consecutive_priors =
-      options.ba.use_relative_pose_priors ? static_cast<int>(priors.size()) : 0;
+  summary.num_vio_segments = static_cast<int>(segments.size());
+
+  // Relative-pose priors (none without the relative-pose term: the w/o RPC
+  // ablation).
+  RelativePosePriors all_priors;
   if (options.ba.use_relative_pose_priors) {
-    const std::vector<RelativePosePrior> bridging = MakeBridgingRelativePosePriors(
-        input, priors, options.bridge_spans, options.bridge_max_matches);
-    summary.num_bridging_priors = static_cast<int>(bridging.size());
-    priors.insert(priors.end(), bridging.begin(), bridging.end());
+    RelativePosePriorOptions prior_options;
+    prior_options.bridge_spans = options.bridge_spans;
+    prior_options.bridge_max_matches = options.bridge_max_matches;
+    prior_options.weighting = options.ba.prior_weighting;
+    prior_options.vio_uncertainty = options.vio_uncertainty;
+    all_priors = MakeRelativePosePriors(input, prior_options);
   }
+  summary.num_consecutive_priors = all_priors.num_consecutive;
+  summary.num_bridging_priors = all_priors.num_bridging;
+
+  // Registration state. A break at frame k (the VIO jumped between k and the
+  // frame before it) ends a run of frames whose VIO poses can be chained.
+  std::vector<MapperFrameStatus>& frames = summary.frames;
+  frames.resize(num_images);
+  for (size_t i = 0; i < num_images; ++i) frames[i].image_id = input.images[i].image_id;
+  std::vector<char> is_break(num_images, 0);
+  std::vector<char> is_registered(num_images, 0);
+  const size_t gauge_index = static_cast<size_t>(
+      std::find_if(vio_poses.begin(), vio_poses.end(),
+                   [](const std::optional<Rigid3d>& pose) { return pose.has_value(); }) -
+      vio_poses.begin());
+  const image_t gauge_image = input.images[gauge_index].image_id;
+  const auto same_run = [&](size_t i, size_t j) {
+    if (!vio_poses[i] || !vio_poses[j] ||
+        input.images[i].vio_odometer.segment != input.images[j].vio_odometer.segment) {
+      return false;
+    }
+    for (size_t k = std::min(i, j) + 1; k <= std::max(i, j); ++k) {
+      if (is_break[k]) return false;
+    }
+    return true;
+  };
+  // The registered frame nearest to i (earlier first) whose VIO pose chains to i's.
+  const auto find_reference = [&](size_t i) -> std::optional<size_t> {
+    for (size_t j = i; j-- > 0;) {
+      if (!same_run(i, j)) break;
+      if (is_registered[j]) return j;
+    }
+    for (size_t j = i + 1; j < num_images; ++j) {
+      if (!same_run(i, j)) break;
+      if (is_registered[j]) return j;
+    }
+    return std::nullopt;
+  };
+  std::vector<image_t> registered;  // in order of registration
+  std::vector<size_t> newly_registered;
+  const auto register_frame = [&](size_t i, const Rigid3d& cam_from_world,
+                                  FramePoseSource source) {
+    Image& image = reconstruction.GetImage(input.images[i].image_id);
+    image.cam_from_world = cam_from_world;
+    image.cam_from_world.rotation.normalize();
+    image.registered = true;
+    is_registered[i] = 1;
+    frames[i].source = source;
+    registered.push_back(image.image_id);
+    newly_registered.push_back(i);
+  };
+  // Registers frame i if the VIO or the images allow (frame_registration.h).
+  const auto try_register = [&](size_t i) -> bool {
+    MapperFrameStatus& status = frames[i];
+    std::optional<Rigid3d> predicted;
+    std::optional<size_t> reference;
+    if (vio_poses[i]) {
+      if (i == gauge_index) {
+        predicted = *vio_poses[i];
+      } else if ((reference = find_reference(i))) {
+        predicted = *vio_poses[i] * vio_poses[*reference]->Inverse() *
+                    reconstruction.GetImage(input.images[*reference].image_id).cam_from_world;
+      }
+    }
+    if (registration.verify_with_images && i != gauge_index) {
+      const FrameCorrespondences correspondences = CollectFrameCorrespondences(
+          reconstruction, tracks, tracks_of_image[i], input.images[i].image_id);
+      status.num_correspondences = static_cast<int>(correspondences.size());
+      if (static_cast<int>(correspondences.size()) >= registration.min_num_correspondences) {
+        const Camera& camera =
+            reconstruction.GetCamera(input.images[i].camera_id);
+        AbsolutePoseOptions pnp = registration.pnp;
+        pnp.seed = registration.pnp.seed + input.images[i].image_id;
+        const AbsolutePoseResult result =
+            EstimateAbsolutePose(correspondences.points_normalized,
+                                 correspondences.points_in_world, MeanFocalLength(camera), pnp,
+                                 predicted);
+        status.num_predicted_inliers = static_cast<int>(result.num_predicted_inliers);
+        status.num_pnp_inliers = result.success ? static_cast<int>(result.num_inliers) : 0;
+        if (result.success) {
+          if (predicted && static_cast<double>(result.num_predicted_inliers) >=
+                               registration.min_predicted_inlier_ratio *
+                                   static_cast<double>(result.num_inliers)) {
+            register_frame(i, *predicted, FramePoseSource::kVioVerified);
+            return true;
+          }
+          if (predicted) {
+            // Disagreement beyond what the VIO's drift allows: a jump.
+            const RelativePoseSigmas sigmas = LargestSigmas(
+                RelativePoseCovariance(options.vio_uncertainty,
+                                       VioSampleOfImage(input.images[*reference]),
+                                       VioSampleOfImage(input.images[i])));
+            const double position_difference =
+                (ProjectionCenter(result.cam_from_world) - ProjectionCenter(*predicted)).norm();
+            const double rotation_difference =
+                result.cam_from_world.rotation.angularDistance(predicted->rotation);
+            if (position_difference > registration.break_sigmas * sigmas.translation_m +
+                                          registration.break_min_translation_m ||
+                rotation_difference > registration.break_sigmas * sigmas.rotation_rad +
+                                          registration.break_min_rotation_rad) {
+              is_break[std::max(i, *reference)] = 1;
+              status.vio_break = true;
+              VIOSFM_LOG(INFO) << "batched mapper: " << DescribeImage(input.images[i])
+                               << ": the VIO's pose is " << position_difference << " m and "
+                               << rotation_difference << " rad off the images' ("
+                               << result.num_predicted_inliers << " of " << result.num_inliers
+                               << " inliers): a VIO jump, no prior crosses it";
+            }
+          }
+          register_frame(i, result.cam_from_world,
+                         predicted ? FramePoseSource::kImagesReposed
+                                   : FramePoseSource::kImagesWithoutVio);
+          return true;
+        }
+      }
+    }
+    if (predicted) {
+      register_frame(i, *predicted, FramePoseSource::kVio);
+      return true;
+    }
+    return false;
+  };
+  std::vector<size_t> pending;  // frames not registered yet, in time order
+  // Tries the pending frames again (the VIO chain, or PnP against the points
+  // triangulated since), triangulating after each round, until none is added.
+  const auto retry_pending = [&]() {
+    size_t added = 0;
+    bool changed = true;
+    while (changed && !pending.empty()) {
+      changed = false;
+      newly_registered.clear();
+      std::vector<size_t> still_pending;
+      for (const size_t i : pending) {
+        if (!try_register(i)) still_pending.push_back(i);
+      }
+      pending = std::move(still_pending);
+      if (!newly_registered.empty()) {
+        changed = true;
+        added += newly_registered.size();
+        std::vector<size_t> track_indices;
+        for (const size_t i : newly_registered) {
+          track_indices.insert(track_indices.end(), tracks_of_image[i].begin(),
+                               tracks_of_image[i].end());
+        }
+        std::sort(track_indices.begin(), track_indices.end());
+        track_indices.erase(std::unique(track_indices.begin(), track_indices.end()),
+                            track_indices.end());
+        std::vector<Track> subset;
+        for (const size_t t : track_indices) subset.push_back(tracks[t]);
+        TriangulateReconstruction(&reconstruction, subset, registered, options.triangulation);
+      }
+    }
+    return added;
+  };
+  // The priors not crossing a VIO jump found so far.
+  const auto active_priors = [&]() {
+    std::vector<int> breaks_before(num_images + 1, 0);
+    for (size_t k = 0; k < num_images; ++k) breaks_before[k + 1] = breaks_before[k] + is_break[k];
+    std::vector<RelativePosePrior> active;
+    for (size_t p = 0; p < all_priors.priors.size(); ++p) {
+      const auto [i, j] = all_priors.frame_indices[p];
+      if (breaks_before[j + 1] - breaks_before[i + 1] == 0) active.push_back(all_priors.priors[p]);
+    }
+    return active;
+  };
   BundleAdjustmentOptions ba_options = options.ba;
   ba_options.num_threads = options.num_threads;
-  const image_t gauge_image = input.images.front().image_id;
   LinearSolverChooser solver_chooser(ba_options);
+  // Bundle adjustment of the last registered images (all when window_begin
+  // is 0), the gauge held.
+  const auto adjust = [&](size_t window_begin, bool global) {
+    BundleAdjustmentSummary ba_summary;
+    if (!is_registered[gauge_index]) return ba_summary;
+    const std::vector<image_t> free_images(registered.begin() + window_begin, registered.end());
+    const image_t held_neighbour =
+        window_begin > 0 ? registered[window_begin - 1] : kInvalidImageId;
+    BundleAdjustmentOptions batch_ba_options = ba_options;
+    if (!global && options.batch_ba_max_num_iterations > 0) {
+      batch_ba_options.max_num_iterations = options.batch_ba_max_num_iterations;
+    }
+    batch_ba_options.linear_solver = solver_chooser.Next(free_images.size(), global);
+    ba_summary = AdjustImages(&reconstruction, free_images, held_neighbour, gauge_image,
+                              active_priors(), batch_ba_options);
+    solver_chooser.Record(ba_summary, free_images.size());
+    if (!ba_summary.usable && ba_summary.termination != "nothing to adjust") {
+      VIOSFM_LOG(WARNING) << "bundle adjustment: " << ba_summary.ToString();
+    }
+    return ba_summary;
+  };
 
   const size_t batch_size = static_cast<size_t>(options.batch_size);
   const size_t num_batches = (num_images + batch_size - 1) / batch_size;
-  std::vector<image_t> registered;
   ProgressBar progress(
       "batched mapping", static_cast<int64_t>(num_batches),
       options.show_progress ? ProgressBar::Mode::kAuto : ProgressBar::Mode::kNever);
@@ -377,58 +535,37 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
     stats.batch_index = static_cast<int>(b);
     stats.num_images = static_cast<int>(end - begin);
 
-    // 2. Registration: batch 0 at its VIO poses, later batches attached to the
-    // refined last image of the previous batch by the VIO relative poses.
-    Rigid3d cam_first_from_world = vio_poses[begin];
-    if (b > 0) {
-      const Rigid3d& previous =
-          reconstruction.GetImage(input.images[begin - 1].image_id).cam_from_world;
-      cam_first_from_world = vio_poses[begin] * vio_poses[begin - 1].Inverse() * previous;
-    }
-    const Rigid3d world_from_vio_first = vio_poses[begin].Inverse();
+    // 2. Registration: each frame by its VIO pose relative to the latest
+    // registered frame of its VIO segment, checked against the images.
+    newly_registered.clear();
     for (size_t i = begin; i < end; ++i) {
-      Image& image = reconstruction.GetImage(input.images[i].image_id);
-      image.cam_from_world = vio_poses[i] * world_from_vio_first * cam_first_from_world;
-      image.cam_from_world.rotation.normalize();
-      image.registered = true;
-      registered.push_back(image.image_id);
+      if (!try_register(i)) pending.push_back(i);
     }
 
-    // 3. Triangulation of the tracks seen by the batch.
+    // 3. Triangulation of the tracks seen by the batch, then the frames
+    // that the new points (or a newly registered frame of their VIO segment)
+    // allow.
     timer.Start();
     const TriangulationStatistics triangulation = TriangulateReconstruction(
         &reconstruction, TracksOfImages(tracks, tracks_of_image, begin, end), registered,
         options.triangulation);
+    retry_pending();
     stats.seconds_triangulation = timer.ElapsedSeconds();
 
     // 4. Bundle adjustment: the last batch's is the final global one.
     const bool global = last && options.final_global_ba;
-    const bool adjust = options.ba_after_each_batch || global;
     size_t window_begin = 0;
     if (!global && options.ba_window_batches > 0 &&
-        b + 1 > static_cast<size_t>(options.ba_window_batches)) {
-      window_begin = (b + 1 - options.ba_window_batches) * batch_size;
+        registered.size() > static_cast<size_t>(options.ba_window_batches) * batch_size) {
+      window_begin = registered.size() - static_cast<size_t>(options.ba_window_batches) * batch_size;
     }
-    if (adjust) {
-      const std::vector<image_t> free_images(registered.begin() + window_begin, registered.end());
-      const image_t held_neighbour =
-          window_begin > 0 ? registered[window_begin - 1] : kInvalidImageId;
-      BundleAdjustmentOptions batch_ba_options = ba_options;
-      if (!global && options.batch_ba_max_num_iterations > 0) {
-        batch_ba_options.max_num_iterations = options.batch_ba_max_num_iterations;
-      }
-      batch_ba_options.linear_solver = solver_chooser.Next(free_images.size(), global);
-      const BundleAdjustmentSummary ba_summary = AdjustImages(
-          &reconstruction, free_images, held_neighbour, gauge_image, priors, batch_ba_options);
-      solver_chooser.Record(ba_summary, free_images.size());
+    if (options.ba_after_each_batch || global) {
+      const BundleAdjustmentSummary ba_summary = adjust(window_begin, global);
       stats.seconds_ba = ba_summary.time_s;
       stats.num_ba_iterations = ba_summary.num_iterations;
       stats.ba_linear_solver = ba_summary.linear_solver;
-      stats.num_ba_free_images = static_cast<int>(free_images.size());
+      stats.num_ba_free_images = static_cast<int>(registered.size() - window_begin);
       if (global) summary.final_ba = ba_summary;
-      if (!ba_summary.usable && ba_summary.termination != "nothing to adjust") {
-        VIOSFM_LOG(WARNING) << "batch " << b << ": " << ba_summary.ToString();
-      }
     }
 
     // 5. Filtering and re-triangulation of the tracks left without a point.
@@ -438,9 +575,26 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
       if (window_begin == 0) {
         TriangulateReconstruction(&reconstruction, tracks, registered, options.triangulation);
       } else {
-        TriangulateReconstruction(&reconstruction,
-                                  TracksOfImages(tracks, tracks_of_image, window_begin, end),
-                                  registered, options.triangulation);
+        std::vector<size_t> window_tracks;
+        for (size_t r = window_begin; r < registered.size(); ++r) {
+          const std::vector<size_t>& of_image = tracks_of_image[index_of_image.at(registered[r])];
+          window_tracks.insert(window_tracks.end(), of_image.begin(), of_image.end());
+        }
+        std::sort(window_tracks.begin(), window_tracks.end());
+        window_tracks.erase(std::unique(window_tracks.begin(), window_tracks.end()),
+                            window_tracks.end());
+        std::vector<Track> subset;
+        for (const size_t t : window_tracks) subset.push_back(tracks[t]);
+        TriangulateReconstruction(&reconstruction, subset, registered, options.triangulation);
+      }
+    }
+    // 6. After the final bundle adjustment, the frames that only the final
+    // model allows to register, and another global adjustment.
+    if (last && retry_pending() > 0 && (options.ba_after_each_batch || options.final_global_ba)) {
+      summary.final_ba = adjust(0, true);
+      FilterPoints(&reconstruction, options.filter);
+      if (options.retriangulate) {
+        TriangulateReconstruction(&reconstruction, tracks, registered, options.triangulation);
       }
     }
     stats.seconds_filtering = timer.ElapsedSeconds();
@@ -462,6 +616,60 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
     progress.Update();
   }
   progress.Finish();
+
+  // 7. Every frame's verdict.
+  std::set<int> joined_segments;
+  for (size_t i = 0; i < num_images; ++i) {
+    MapperFrameStatus& status = frames[i];
+    const MapperImage& input_image = input.images[i];
+    if (is_registered[i]) {
+      status.num_supporting_observations = CountSupportingObservations(
+          reconstruction, input_image.image_id, registration.support_max_error_px);
+      status.supported =
+          status.num_supporting_observations >= registration.min_supporting_observations;
+      if (!status.supported && !vio_poses[i]) {
+        // Registered from the images, but the final model no longer
+        // supports it, and no VIO pose places it: no pose.
+        Image& image = reconstruction.GetImage(input_image.image_id);
+        for (point2D_t k = 0; k < image.points2D.size(); ++k) {
+          if (image.points2D[k].HasPoint3D()) reconstruction.DeleteObservation(image.image_id, k);
+        }
+        image.registered = false;
+        is_registered[i] = 0;
+        status.source = FramePoseSource::kNone;
+        status.reason = "registered from the images, but too few of its observations (" +
+                        std::to_string(status.num_supporting_observations) +
+                        ") agree with the final model";
+      }
+    }
+    if (is_registered[i]) {
+      if (vio_poses[i]) joined_segments.insert(input_image.vio_odometer.segment);
+      ++(status.supported ? summary.num_supported : summary.num_vio_only);
+      if (status.source == FramePoseSource::kImagesReposed) ++summary.num_reposed;
+      if (status.source == FramePoseSource::kImagesWithoutVio) ++summary.num_registered_without_vio;
+      if (status.vio_break) ++summary.num_vio_breaks;
+      continue;
+    }
+    ++summary.num_unposed;
+    if (!status.reason.empty()) continue;
+    if (!vio_poses[i]) {
+      status.reason = registration.verify_with_images
+                          ? "no VIO pose, and too few 2D-3D matches (" +
+                                std::to_string(status.num_correspondences) +
+                                ") to register it from the images"
+                          : "no VIO pose (registration from the images is off)";
+    } else {
+      status.reason = "its VIO segment " + std::to_string(input_image.vio_odometer.segment) +
+                      " was never joined to the model (none of its frames could be registered "
+                      "from the images; last try: " +
+                      std::to_string(status.num_correspondences) + " 2D-3D matches)";
+    }
+  }
+  summary.num_vio_segments_joined = static_cast<int>(joined_segments.size());
+  if (summary.num_unposed > 0) {
+    VIOSFM_LOG(WARNING) << "batched mapper: " << summary.num_unposed << " of " << num_images
+                        << " frames have no pose";
+  }
 
   summary.num_registered = static_cast<int>(reconstruction.NumRegImages());
   summary.num_points = static_cast<int>(reconstruction.NumPoints3D());

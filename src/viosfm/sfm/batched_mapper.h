@@ -5,20 +5,32 @@
 //
 //  1. tracks from the verified matches of all pairs (tracks.h);
 //  2. batch 0 = the first k images, posed by the VIO (world = the VIO's
-//     world frame: metric, gravity aligned); batch i > 0 is placed by the VIO
-//     relative pose between its first image and the last image of batch i-1
-//     (as refined so far), and each image inside it by its VIO relative pose
-//     to the batch's first image;
+//     world frame: metric, gravity aligned); in batch i > 0 each image is
+//     placed by its VIO relative pose to the latest registered image of its
+//     VIO segment (as refined so far: for the first image of the batch the
+//     last image of batch i-1, as the paper does), and, beyond the paper,
+//     verified against its 2D-3D matches (frame_registration.h): re-posed
+//     from the images where the VIO's prediction disagrees with them, and
+//     registered from the images where there is no prediction (no VIO pose,
+//     or a new VIO segment after a re-initialisation); frames that cannot be
+//     registered yet are tried again after every batch;
 //  3. triangulation of the tracks seen by the registered images (new points,
 //     and new observations of existing points), triangulator.h;
 //  4. bundle adjustment (ba/bundle_adjustment.h): Cauchy reprojection term
-//     over registered images and points plus the relative-pose term between
-//     consecutive frames, w = alpha exp(-beta c) with c the verified matches
-//     of the two frames; the first image's pose is held (gauge);
+//     over registered images and points plus the relative-pose terms
+//     (relative_pose_priors.h) between consecutive frames of a VIO segment,
+//     weighted by the VIO uncertainty model's covariance times the paper's
+//     connectivity factor exp(-beta c) under a Cauchy loss (or the paper's
+//     w = alpha exp(-beta c) with fixed sigmas: ba.prior_weighting); the
+//     first image with a VIO pose is held (gauge);
 //  5. filtering (large reprojection error, small triangulation angle) and
 //     re-triangulation of the tracks left without a point;
 //  6. after the last batch a final global bundle adjustment, filtering and
-//     re-triangulation (it replaces the last batch's own bundle adjustment).
+//     re-triangulation (it replaces the last batch's own bundle adjustment);
+//     frames that only then can be registered are, followed by another
+//     global bundle adjustment;
+//  7. every frame's verdict: supported by the images (frame_registration.h),
+//     placed by the VIO only, or not posed (and why).
 #pragma once
 
 #include <string>
@@ -30,33 +42,15 @@
 #include "viosfm/scene/reconstruction.h"
 #include "viosfm/sensor/camera.h"
 #include "viosfm/sfm/filters.h"
+#include "viosfm/sfm/frame_registration.h"
+#include "viosfm/sfm/mapper_input.h"
+#include "viosfm/sfm/relative_pose_priors.h"
 #include "viosfm/sfm/tracks.h"
 #include "viosfm/sfm/triangulator.h"
 #include "viosfm/util/timestamp.h"
 #include "viosfm/util/types.h"
 
 namespace viosfm {
-
-// One input frame.
-struct MapperImage {
-  image_t image_id = kInvalidImageId;
-  camera_t camera_id = kInvalidCameraId;
-  std::string name;  // as in the database (relative path)
-  timestamp_ns_t timestamp_ns = 0;
-  // Keypoints in raw (distorted) pixels, viosfm's convention.
-  FeatureKeypoints keypoints;
-  // The VIO pose of this frame's camera, in the VIO's world frame.
-  Rigid3d vio_cam_from_world;
-};
-
-struct BatchedMapperInput {
-  std::vector<Camera> cameras;
-  // Frames in strictly increasing time order.
-  std::vector<MapperImage> images;
-  // Inlier matches of every accepted pair (point2D_idx index the images'
-  // keypoints).
-  std::vector<ImagePairMatches> verified_pairs;
-};
 
 struct BatchedMapperOptions {
   // Frames per batch, >= 1 (the paper's k = 50). Default 50.
@@ -109,8 +103,18 @@ struct BatchedMapperOptions {
   // better than the VIO. Defaults {10, 50} frames (1 and 5 s at 10 Hz) and
   // 30 matches (twice the verification's minimum of inliers); empty spans:
   // off (the paper's terms only).
+  // With the covariance weighting (ba.prior_weighting, the default) they
+  // are full 6-DoF priors weighted by the VIO model's covariance over their
+  // span, like every other prior; with the paper weighting rotation-only,
+  // as before the covariance.
   std::vector<int> bridge_spans = {10, 50};
   int bridge_max_matches = 30;
+  // How far the VIO's relative poses are trusted (scene/vio_uncertainty.h):
+  // the priors' covariance. Default: the model's defaults (an external VIO
+  // on EuRoC-class data).
+  VioUncertaintyModel vio_uncertainty;
+  // Verified registration of each frame (frame_registration.h).
+  FrameRegistrationOptions registration;
   // Worker threads (BA, triangulation); default 2.
   int num_threads = 2;
   bool show_progress = true;
@@ -136,11 +140,28 @@ struct MapperBatchStatistics {
   double seconds_total = 0.0;  // the whole batch
 };
 
+// The verdict on one input frame.
+struct MapperFrameStatus {
+  image_t image_id = kInvalidImageId;
+  FramePoseSource source = FramePoseSource::kNone;
+  // The pose is supported by the images (frame_registration.h).
+  bool supported = false;
+  int num_correspondences = 0;        // 2D-3D matches when it was registered
+  int num_pnp_inliers = 0;            // of the images' pose (0: PnP not run or failed)
+  int num_predicted_inliers = 0;      // of the VIO's prediction
+  int num_supporting_observations = 0;
+  bool vio_break = false;  // the VIO jumped here (FrameRegistrationOptions::break_sigmas)
+  // Why a frame is not posed (empty if it is).
+  std::string reason;
+};
+
 struct BatchedMapperSummary {
   TrackStatistics tracks;
   std::vector<MapperBatchStatistics> batches;
   BundleAdjustmentSummary final_ba;
   int num_images = 0;
+  // Images registered in the model: every posed frame (num_supported +
+  // num_vio_only below).
   int num_registered = 0;
   int num_points = 0;
   int num_observations = 0;
@@ -148,6 +169,18 @@ struct BatchedMapperSummary {
   double mean_reprojection_error_px = 0.0;
   int num_consecutive_priors = 0;
   int num_bridging_priors = 0;  // BatchedMapperOptions::bridge_spans
+  // Per input frame, in input order, and the counts: posed frames are either
+  // supported by the images or placed by the VIO only.
+  std::vector<MapperFrameStatus> frames;
+  int num_supported = 0;
+  int num_vio_only = 0;
+  int num_unposed = 0;
+  int num_without_vio_pose = 0;     // input frames without a VIO pose
+  int num_reposed = 0;              // FramePoseSource::kImagesReposed
+  int num_registered_without_vio = 0;  // FramePoseSource::kImagesWithoutVio
+  int num_vio_breaks = 0;
+  int num_vio_segments = 0;         // VIO segments among the input frames
+  int num_vio_segments_joined = 0;  // of those, with a posed frame
   double seconds_tracks = 0.0;
   double seconds_total = 0.0;
   std::string ToString() const;  // a few lines for the log
@@ -156,24 +189,10 @@ struct BatchedMapperSummary {
 // Throws InputError naming the first problem of `input`: no images, a camera
 // with an invalid or duplicate id or parameters, a duplicate image id or
 // name, an empty name, an unknown camera id, images not in strictly
-// increasing time order, a non-finite VIO pose, a pair naming an unknown
-// image, or a match indexing a keypoint that does not exist.
+// increasing time order, a non-finite VIO pose, no image with a VIO pose, a
+// pair naming an unknown image, or a match indexing a keypoint that does not
+// exist.
 void ValidateBatchedMapperInput(const BatchedMapperInput& input);
-
-// The relative-pose priors between consecutive frames (time order):
-// cam2_from_cam1 from their VIO poses, num_verified_matches the number of
-// verified matches of the pair (0 if the pair was not verified; the largest
-// count if it is listed more than once).
-std::vector<RelativePosePrior> MakeConsecutiveRelativePosePriors(const BatchedMapperInput& input);
-
-// The bridging priors of BatchedMapperOptions::bridge_spans over
-// `consecutive` (MakeConsecutiveRelativePosePriors(input)): for each span s
-// and each i, frames i and i + s are joined by a rotation-only prior when
-// one of the consecutive pairs between them has fewer than `max_matches`
-// verified matches; its num_verified_matches is the fewest of those pairs.
-std::vector<RelativePosePrior> MakeBridgingRelativePosePriors(
-    const BatchedMapperInput& input, const std::vector<RelativePosePrior>& consecutive,
-    const std::vector<int>& spans, int max_matches);
 
 // Runs the batched reconstruction (see the top of this file). Throws
 // InputError for invalid options, images not in time order, an unknown

@@ -68,7 +68,7 @@ void BM_BatchedMapperCorridor(benchmark::State& state) {
     options.ba.prior_rotation_sigma_rad = 0.05;
   }
   std::vector<Rigid3d> vio;
-  for (const MapperImage& image : sequence.input.images) vio.push_back(image.vio_cam_from_world);
+  for (const MapperImage& image : sequence.input.images) vio.push_back(*image.vio_cam_from_world);
   const Alignment vio_alignment = Compare(sequence.cams_from_world, vio);
 
   BatchedMapperSummary summary;

@@ -99,6 +99,18 @@ inline Reconstruction MakeSyntheticReconstruction(const SyntheticScene& scene,
   return reconstruction;
 }
 
+// Sets the VIO odometers of `input` (one segment; distance and rotation
+// travelled along its VIO camera poses), as the pipeline does from the
+// VIO's trajectory.
+inline void SetVioOdometers(BatchedMapperInput* input) {
+  Trajectory world_from_cam;
+  for (const MapperImage& image : input->images) {
+    world_from_cam.poses.push_back({image.timestamp_ns, image.vio_cam_from_world->Inverse()});
+  }
+  const std::vector<VioOdometer> odometers = ComputeVioOdometers(world_from_cam, {});
+  for (size_t i = 0; i < input->images.size(); ++i) input->images[i].vio_odometer = odometers[i];
+}
+
 // ---- A video-like sequence for the batched mapper ----
 //
 // World: z up (gravity along -z). The camera moves along +x (step_m per
@@ -209,6 +221,7 @@ inline SyntheticSequence MakeSyntheticSequence(const SyntheticSequenceOptions& o
       }
     }
   }
+  SetVioOdometers(&sequence.input);
   return sequence;
 }
 
@@ -245,6 +258,7 @@ inline void ApplyVioDrift(const std::vector<Rigid3d>& true_cams_from_world,
     const Eigen::Matrix3d cam_from_world = world_from_cam.transpose();
     input->images[i].vio_cam_from_world = Rigid3d(cam_from_world, -cam_from_world * vio_center);
   }
+  SetVioOdometers(input);
 }
 
 // Root mean square distance (m) between the camera centres of `poses` and

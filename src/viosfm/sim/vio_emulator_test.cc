@@ -2,7 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+#include <cmath>
+
 #include "viosfm/sim/trajectory.h"
+#include "viosfm/util/random.h"
 
 namespace viosfm {
 namespace {
@@ -74,6 +78,117 @@ TEST(VioEmulator, DriftGrowsWithTheDriftLevelAndIsSeeded) {
         a.poses[k].world_from_frame.rotation.inverse() * Eigen::Vector3d::UnitZ();
     EXPECT_LT(std::acos(std::min(1.0, up_gt.dot(up_vio))), 6 * options.rotation_jitter_rad);
   }
+}
+
+}  // namespace
+}  // namespace viosfm
+
+namespace viosfm {
+namespace {
+
+// r = [Log(R_E); t_E] of the VIO's cam2_from_cam1 against the true one
+// (ba/cost_functions.h's RelativePoseError), poses world_from_cam.
+Eigen::Matrix<double, 6, 1> RelativePoseResidual(const Rigid3d& true1, const Rigid3d& true2,
+                                                 const Rigid3d& vio1, const Rigid3d& vio2) {
+  const Rigid3d p12 = true2.Inverse() * true1;
+  const Rigid3d p12_hat = vio2.Inverse() * vio1;
+  const Rigid3d error = p12 * p12_hat.Inverse();
+  const Eigen::AngleAxisd angle_axis(error.rotation);
+  Eigen::Matrix<double, 6, 1> r;
+  r.head<3>() = angle_axis.angle() * angle_axis.axis();
+  r.tail<3>() = error.translation;
+  return r;
+}
+
+VioSample FrameAt(const Trajectory& trajectory, const std::vector<VioOdometer>& odometers,
+                 size_t k) {
+  return {trajectory.poses[k].timestamp_ns, trajectory.poses[k].world_from_frame, odometers[k]};
+}
+
+// The covariance of scene/vio_uncertainty.h against a Monte-Carlo of the
+// realistic emulator drawn from the same rates (the scale error drawn per
+// run with the model's scale_sigma), for frame pairs 0.05 s to 20 s apart.
+TEST(RealisticVioEmulator, CovarianceMatchesMonteCarlo) {
+  const Trajectory gt = GroundTruth(30.0);
+  const std::vector<VioOdometer> odometers = ComputeVioOdometers(gt, {});
+  const VioUncertaintyModel model;
+  struct Span {
+    size_t first, second;
+    double tolerance;  // relative, on each standard deviation
+  };
+  // 20 Hz: 0.05 s, 1 s, 5 s and 20 s apart. The longest, over a curving
+  // walk, tests the straight-path approximation of the yaw's lever arm.
+  const std::vector<Span> spans = {
+      {100, 101, 0.08}, {100, 120, 0.08}, {200, 300, 0.1}, {100, 500, 0.2}};
+  const int num_runs = 1200;
+  std::vector<Eigen::Matrix<double, 6, 6>> sums(spans.size(),
+                                                Eigen::Matrix<double, 6, 6>::Zero());
+  Random scale_random(5);
+  for (int run = 0; run < num_runs; ++run) {
+    RealisticVioOptions options;
+    options.model = model;
+    options.scale_error = scale_random.Normal(0.0, model.scale_sigma);
+    options.seed = 1000 + run;
+    const EmulatedVio vio = EmulateRealisticVio(gt, options);
+    ASSERT_EQ(vio.world_from_frame.size(), gt.size());
+    for (size_t s = 0; s < spans.size(); ++s) {
+      const Eigen::Matrix<double, 6, 1> r = RelativePoseResidual(
+          gt.poses[spans[s].first].world_from_frame, gt.poses[spans[s].second].world_from_frame,
+          vio.world_from_frame.poses[spans[s].first].world_from_frame,
+          vio.world_from_frame.poses[spans[s].second].world_from_frame);
+      sums[s] += r * r.transpose();
+    }
+  }
+  for (size_t s = 0; s < spans.size(); ++s) {
+    const Eigen::Matrix<double, 6, 6> sampled = sums[s] / num_runs;
+    const Eigen::Matrix<double, 6, 6> predicted = RelativePoseCovariance(
+        model, FrameAt(gt, odometers, spans[s].first), FrameAt(gt, odometers, spans[s].second));
+    for (int i = 0; i < 6; ++i) {
+      const double ratio = std::sqrt(sampled(i, i) / predicted(i, i));
+      EXPECT_NEAR(ratio, 1.0, spans[s].tolerance)
+          << "span " << spans[s].first << "-" << spans[s].second << ", component " << i
+          << ": Monte-Carlo sigma " << std::sqrt(sampled(i, i)) << ", model "
+          << std::sqrt(predicted(i, i));
+    }
+    // The whole covariance: the Monte-Carlo samples' mean Mahalanobis
+    // distance under the model is the dimension (6) when the model is right.
+    const Eigen::Matrix<double, 6, 6> information = predicted.inverse();
+    const double mean_mahalanobis = (information * sampled).trace();
+    EXPECT_NEAR(mean_mahalanobis, 6.0, 6.0 * 2 * spans[s].tolerance)
+        << "span " << spans[s].first << "-" << spans[s].second;
+  }
+}
+
+TEST(RealisticVioEmulator, ReinitialisationStartsANewSegmentInANewWorldFrame) {
+  const Trajectory gt = GroundTruth(30.0);
+  RealisticVioOptions options;
+  options.reinit_times_s = {10.0, 20.0};
+  options.reinit_gap_s = 1.0;
+  const EmulatedVio vio = EmulateRealisticVio(gt, options);
+  ASSERT_EQ(vio.segments.size(), vio.world_from_frame.size());
+  // 2 s without poses (20 Hz).
+  EXPECT_EQ(vio.world_from_frame.size(), gt.size() - 40);
+  EXPECT_EQ(vio.segments.front(), 0);
+  EXPECT_EQ(vio.segments.back(), 2);
+  size_t first_of_segment_1 = 0;
+  while (vio.segments[first_of_segment_1] == 0) ++first_of_segment_1;
+  const StampedPose& restart = vio.world_from_frame.poses[first_of_segment_1];
+  EXPECT_EQ(restart.timestamp_ns - vio.world_from_frame.poses[first_of_segment_1 - 1].timestamp_ns,
+            1'050'000'000);
+  // The new world frame's origin is the body (up to the frame noise), its
+  // yaw that of the body.
+  EXPECT_LT(restart.world_from_frame.translation.norm(), 0.02);
+  const Eigen::Vector3d forward = restart.world_from_frame.rotation * Eigen::Vector3d::UnitX();
+  EXPECT_LT(std::abs(std::atan2(forward.y(), forward.x())), 0.01);
+  // Same segments from the time gaps.
+  EXPECT_EQ(SegmentsFromTimeGaps(vio.world_from_frame, 500'000'000), vio.segments);
+
+  // Without a gap the jump is invisible in the stamps.
+  options.reinit_gap_s = 0.0;
+  const EmulatedVio jumping = EmulateRealisticVio(gt, options);
+  EXPECT_EQ(jumping.world_from_frame.size(), gt.size());
+  EXPECT_EQ(jumping.segments.back(), 2);
+  EXPECT_EQ(SegmentsFromTimeGaps(jumping.world_from_frame, 500'000'000).back(), 0);
 }
 
 }  // namespace

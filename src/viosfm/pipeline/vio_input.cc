@@ -1,0 +1,119 @@
+#include "viosfm/pipeline/vio_input.h"
+
+#include <algorithm>
+#include <filesystem>
+
+#include "viosfm/io/trajectory_io.h"
+#include "viosfm/util/errors.h"
+#include "viosfm/util/logging.h"
+#include "viosfm/vio/odometry.h"
+
+namespace viosfm {
+namespace {
+
+namespace fs = std::filesystem;
+
+// viosfm's own VIO on the sequence: every posed frame, a new segment after
+// every stretch without a pose.
+VioPoses RunOwnVio(const Sequence& sequence, const PipelineOptions& options) {
+  if (!sequence.has_imu()) {
+    throw InputError(sequence.root.string(), 0,
+                     "no VIO poses: the dataset has no IMU for viosfm's own VIO; pass "
+                     "--vio-trajectory FILE (the TUM trajectory of any VIO)");
+  }
+  VIOSFM_LOG(INFO) << "run: no VIO trajectory given: running viosfm's own VIO";
+  VioOptions vio_options = options.own_vio;
+  vio_options.show_progress = vio_options.show_progress && options.show_progress;
+  const VioResult result = RunVio(sequence, vio_options);
+  WriteVioResult(options.output_folder / "vio", result);
+  VioPoses poses;
+  int segment = -1;
+  bool previous_posed = false;
+  for (const VioFrameResult& frame : result.frames) {
+    const bool posed = frame.status == VioStatus::kTracking || frame.status == VioStatus::kImuOnly;
+    if (posed) {
+      if (!previous_posed) ++segment;
+      poses.world_from_body.poses.push_back({frame.timestamp_ns, frame.state.world_from_body});
+      poses.segments.push_back(segment);
+    }
+    previous_posed = posed;
+  }
+  if (poses.world_from_body.empty()) {
+    throw InputError(sequence.root.string(), 0,
+                     "viosfm's own VIO never initialised: " + result.summary.message);
+  }
+  poses.segment_rule = "the own VIO's statuses (a new segment after every re-initialisation)";
+  VIOSFM_LOG(INFO) << "run: own VIO: " << poses.world_from_body.size() << " of "
+                   << result.frames.size() << " frames posed in " << segment + 1
+                   << " segment(s) (" << result.summary.num_resets << " reset(s)), "
+                   << result.summary.cpu_seconds << " CPU s (output in "
+                   << (options.output_folder / "vio").string() << ")";
+  return poses;
+}
+
+}  // namespace
+
+Trajectory LoadVioTrajectory(const Sequence& sequence, const PipelineOptions& options) {
+  if (options.vio_source) {
+    Trajectory vio = options.vio_source(sequence);
+    if (vio.empty()) throw InputError("the VIO gave no poses for " + sequence.root.string());
+    return vio;
+  }
+  if (options.vio_trajectory.empty()) {
+    throw InputError("no VIO trajectory given (and viosfm's own VIO is run by LoadVioPoses)");
+  }
+  const std::string path = options.vio_trajectory.string();
+  if (!fs::is_regular_file(options.vio_trajectory)) {
+    throw InputError(path, 0, "VIO trajectory file not found");
+  }
+  Trajectory vio = ReadTrajectory(options.vio_trajectory, options.vio_format);
+  if (!vio.has_timestamps) throw InputError(path, 0, "the VIO trajectory needs timestamps");
+  if (vio.empty()) throw InputError(path, 0, "the VIO trajectory has no poses");
+  if (options.vio_frame == VioFrame::kCam) {
+    vio = CameraToBodyTrajectory(vio, sequence.rig.body_from_cam);
+  }
+  return vio;
+}
+
+VioPoses LoadVioPoses(const Sequence& sequence, const PipelineOptions& options) {
+  VioPoses poses;
+  if (!options.vio_source && options.vio_trajectory.empty()) {
+    poses = RunOwnVio(sequence, options);
+  } else {
+    poses.world_from_body = LoadVioTrajectory(sequence, options);
+    poses.segments = SegmentsFromTimeGaps(poses.world_from_body, options.vio_max_gap_ns);
+    poses.segment_rule =
+        options.vio_max_gap_ns > 0
+            ? "time gaps longer than " + FormatNsAsSeconds(options.vio_max_gap_ns, 3) + " s"
+            : "none (--vio-max-gap 0)";
+  }
+  poses.odometers = ComputeVioOdometers(poses.world_from_body, poses.segments);
+  if (poses.num_segments() > 1) {
+    VIOSFM_LOG(WARNING) << "run: the VIO poses form " << poses.num_segments()
+                        << " segments (split at " << poses.segment_rule
+                        << "); no relative pose joins two segments, the images do";
+  }
+  return poses;
+}
+
+std::optional<size_t> NearestVioPose(const Trajectory& trajectory, timestamp_ns_t t,
+                                     timestamp_ns_t max_dt) {
+  const auto& poses = trajectory.poses;
+  const auto it = std::lower_bound(
+      poses.begin(), poses.end(), t,
+      [](const StampedPose& pose, timestamp_ns_t stamp) { return pose.timestamp_ns < stamp; });
+  std::optional<size_t> best;
+  timestamp_ns_t best_dt = max_dt;
+  const auto consider = [&](std::vector<StampedPose>::const_iterator candidate) {
+    const timestamp_ns_t dt = std::abs(candidate->timestamp_ns - t);
+    if (dt <= best_dt) {
+      best_dt = dt;
+      best = static_cast<size_t>(candidate - poses.begin());
+    }
+  };
+  if (it != poses.begin()) consider(std::prev(it));
+  if (it != poses.end()) consider(it);
+  return best;
+}
+
+}  // namespace viosfm

@@ -1,0 +1,44 @@
+// The VIO poses of a `viosfm run` (stage 2) and their association with the
+// selected frames (stage 3).
+//
+// Segments. A VIO that loses track and re-initialises gives no pose for a
+// while, then poses in a new world frame; a relative pose between the two
+// stretches means nothing, so every pose carries the index of its segment
+// and nothing joins two segments but the images (sfm/relative_pose_priors.h,
+// sfm/frame_registration.h). viosfm's own VIO says so itself: every posed
+// frame (tracking or IMU-only) after a frame without a pose (initialising
+// again, or lost) starts a new segment, and all its posed frames are used.
+// A trajectory file, or a VIO source, is split at every gap between
+// consecutive stamps longer than PipelineOptions::vio_max_gap_ns (default
+// 1 s: a VIO gives poses at its frame rate, 10-30 Hz; a trajectory of
+// keyframes only, tens of seconds apart, needs a larger value or 0, never
+// split).
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "viosfm/pipeline/pipeline.h"
+#include "viosfm/scene/vio_uncertainty.h"
+
+namespace viosfm {
+
+struct VioPoses {
+  Trajectory world_from_body;          // time ordered
+  std::vector<int> segments;           // per pose
+  std::vector<VioOdometer> odometers;  // per pose (ComputeVioOdometers)
+  // How the segments were found, for the log.
+  std::string segment_rule;
+  int num_segments() const { return segments.empty() ? 0 : segments.back() + 1; }
+};
+
+// The VIO poses as the options say (see LoadVioTrajectory) with their
+// segments and odometers.
+VioPoses LoadVioPoses(const Sequence& sequence, const PipelineOptions& options);
+
+// Index of the pose nearest in time to `t` within max_dt, if any.
+std::optional<size_t> NearestVioPose(const Trajectory& trajectory, timestamp_ns_t t,
+                                     timestamp_ns_t max_dt);
+
+}  // namespace viosfm

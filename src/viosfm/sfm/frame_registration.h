@@ -1,0 +1,87 @@
+// Verified registration of one frame into the batched mapper's model: its
+// pose predicted by the VIO (relative to a registered frame of the same VIO
+// segment) is checked against its 2D-3D matches (PnP-RANSAC seeded by the
+// prediction, estimators/absolute_pose.h). A prediction the images confirm
+// is kept; one they contradict is replaced by the images' pose; a frame
+// without a prediction (no VIO pose, or the first frame of a VIO segment
+// after a re-initialisation) is registered from the images when they allow.
+// After mapping, a frame's pose is "supported by the images" when enough of
+// its observations of well-established points (seen by at least two other
+// frames) reproject closely.
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "viosfm/estimators/absolute_pose.h"
+#include "viosfm/scene/reconstruction.h"
+#include "viosfm/sfm/tracks.h"
+
+namespace viosfm {
+
+struct FrameRegistrationOptions {
+  // Check every VIO-placed frame against its 2D-3D matches and register
+  // frames without a usable VIO prediction from them. Default true; false:
+  // the paper's placement by the VIO alone (frames without a VIO pose, or
+  // in a VIO segment not yet joined, are then left out).
+  bool verify_with_images = true;
+  // PnP-RANSAC (8 px, at least 15 inliers).
+  AbsolutePoseOptions pnp;
+  // PnP is tried with at least this many 2D-3D matches. Default 20.
+  int min_num_correspondences = 20;
+  // The VIO prediction agrees with the images when it has at least this
+  // share of the PnP pose's inliers (within pnp.max_error_px); otherwise the
+  // frame is re-posed from the images. Default 0.7.
+  double min_predicted_inlier_ratio = 0.7;
+  // A re-posed frame whose images' pose differs from the VIO prediction by
+  // more than break_sigmas times the VIO model's standard deviation (plus
+  // the floors below, for the PnP's own error) marks a break in the VIO
+  // (a jump or reset the stamps do not show): no relative-pose prior
+  // crosses it and later frames are predicted from the images' pose.
+  // Defaults 5, 0.1 m and 0.05 rad.
+  double break_sigmas = 5.0;
+  double break_min_translation_m = 0.1;
+  double break_min_rotation_rad = 0.05;
+  // A frame is supported by the images with at least this many observations
+  // (of points seen by two or more other frames) within support_max_error_px.
+  // Defaults 15 and 4 px.
+  int min_supporting_observations = 15;
+  double support_max_error_px = 4.0;
+
+  std::string Validate() const;  // empty if valid, else names the bad field
+  bool Check() const { return Validate().empty(); }
+};
+
+// Where a frame's pose came from.
+enum class FramePoseSource {
+  kNone,              // not registered
+  kVio,               // placed by the VIO (too few 2D-3D matches to check it)
+  kVioVerified,       // placed by the VIO, and the images agree
+  kImagesReposed,     // the VIO's prediction disagreed with the images: re-posed from them
+  kImagesWithoutVio,  // no usable VIO prediction: registered from the images
+};
+const char* FramePoseSourceName(FramePoseSource source);
+
+// A frame's 2D-3D matches: its keypoints (undistorted normalised
+// coordinates) whose tracks have a 3D point in the model, and those points.
+struct FrameCorrespondences {
+  std::vector<Eigen::Vector2d> points_normalized;
+  std::vector<Eigen::Vector3d> points_in_world;
+  size_t size() const { return points_normalized.size(); }
+};
+
+// The matches of image `image_id` through `tracks` (indices into
+// `all_tracks` of the tracks that observe it) to the points of the model's
+// registered images.
+FrameCorrespondences CollectFrameCorrespondences(const Reconstruction& reconstruction,
+                                                 const std::vector<Track>& all_tracks,
+                                                 const std::vector<size_t>& tracks,
+                                                 image_t image_id);
+
+// Observations of a registered image, of points observed by at least two
+// other registered images, that reproject within max_error_px.
+int CountSupportingObservations(const Reconstruction& reconstruction, image_t image_id,
+                                double max_error_px);
+
+}  // namespace viosfm

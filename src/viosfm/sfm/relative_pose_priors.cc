@@ -1,0 +1,125 @@
+#include "viosfm/sfm/relative_pose_priors.h"
+
+#include <algorithm>
+#include <limits>
+#include <map>
+#include <unordered_map>
+
+#include "viosfm/util/errors.h"
+
+namespace viosfm {
+namespace {
+
+// Verified matches of each pair (the largest count of a pair listed twice).
+std::unordered_map<image_pair_t, int> MatchCounts(const BatchedMapperInput& input) {
+  std::unordered_map<image_pair_t, int> num_matches;
+  for (const ImagePairMatches& pair : input.verified_pairs) {
+    if (pair.image_id1 == pair.image_id2) continue;
+    int& count = num_matches[ImagePairToPairId(pair.image_id1, pair.image_id2)];
+    count = std::max(count, static_cast<int>(pair.matches.size()));
+  }
+  return num_matches;
+}
+
+RelativePosePrior MakePrior(const MapperImage& image1, const MapperImage& image2, int matches) {
+  RelativePosePrior prior;
+  prior.image_id1 = image1.image_id;
+  prior.image_id2 = image2.image_id;
+  prior.cam2_from_cam1 = *image2.vio_cam_from_world * image1.vio_cam_from_world->Inverse();
+  prior.cam2_from_cam1.rotation.normalize();
+  prior.num_verified_matches = matches;
+  return prior;
+}
+
+// The posed frames (input indices, in time order) of each VIO segment.
+std::map<int, std::vector<size_t>> PosedFramesBySegment(const BatchedMapperInput& input) {
+  std::map<int, std::vector<size_t>> frames;
+  for (size_t i = 0; i < input.images.size(); ++i) {
+    if (input.images[i].vio_cam_from_world) {
+      frames[input.images[i].vio_odometer.segment].push_back(i);
+    }
+  }
+  return frames;
+}
+
+}  // namespace
+
+VioSample VioSampleOfImage(const MapperImage& image) {
+  VIOSFM_CHECK(image.vio_cam_from_world.has_value()) << "image " << image.image_id;
+  return {image.timestamp_ns, image.vio_cam_from_world->Inverse(), image.vio_odometer};
+}
+
+RelativePosePriors MakeRelativePosePriors(const BatchedMapperInput& input,
+                                          const RelativePosePriorOptions& options) {
+  const std::unordered_map<image_pair_t, int> num_matches = MatchCounts(input);
+  const auto matches_of = [&](size_t i, size_t j) {
+    const auto it = num_matches.find(
+        ImagePairToPairId(input.images[i].image_id, input.images[j].image_id));
+    return it == num_matches.end() ? 0 : it->second;
+  };
+  const bool covariance = options.weighting == PriorWeighting::kCovariance;
+  RelativePosePriors result;
+  const auto add = [&](size_t i, size_t j, int matches, bool bridging) {
+    RelativePosePrior prior = MakePrior(input.images[i], input.images[j], matches);
+    if (covariance) {
+      prior.sqrt_information = SqrtInformationFromCovariance(
+          RelativePoseCovariance(options.vio_uncertainty, VioSampleOfImage(input.images[i]),
+                                 VioSampleOfImage(input.images[j])));
+    }
+    prior.rotation_only = bridging && !covariance;
+    result.priors.push_back(std::move(prior));
+    result.frame_indices.emplace_back(i, j);
+    ++(bridging ? result.num_bridging : result.num_consecutive);
+  };
+  for (const auto& [segment, frames] : PosedFramesBySegment(input)) {
+    std::vector<int> consecutive_matches;
+    for (size_t k = 0; k + 1 < frames.size(); ++k) {
+      consecutive_matches.push_back(matches_of(frames[k], frames[k + 1]));
+      add(frames[k], frames[k + 1], consecutive_matches.back(), false);
+    }
+    for (const int span_int : options.bridge_spans) {
+      const size_t span = static_cast<size_t>(span_int);
+      if (span < 2 || span >= frames.size()) continue;
+      for (size_t k = 0; k + span < frames.size(); ++k) {
+        const int fewest = *std::min_element(consecutive_matches.begin() + k,
+                                             consecutive_matches.begin() + k + span);
+        if (fewest >= options.bridge_max_matches) continue;
+        add(frames[k], frames[k + span], fewest, true);
+      }
+    }
+  }
+  return result;
+}
+
+std::vector<RelativePosePrior> MakeConsecutiveRelativePosePriors(const BatchedMapperInput& input) {
+  RelativePosePriorOptions options;
+  options.bridge_spans.clear();
+  options.weighting = PriorWeighting::kPaper;
+  return MakeRelativePosePriors(input, options).priors;
+}
+
+std::vector<RelativePosePrior> MakeBridgingRelativePosePriors(
+    const BatchedMapperInput& input, const std::vector<RelativePosePrior>& consecutive,
+    const std::vector<int>& spans, int max_matches) {
+  VIOSFM_CHECK(consecutive.size() + 1 == input.images.size() || input.images.empty())
+      << consecutive.size() << " consecutive priors for " << input.images.size() << " images";
+  std::vector<RelativePosePrior> priors;
+  const size_t num_images = input.images.size();
+  for (const int span_int : spans) {
+    const size_t span = static_cast<size_t>(span_int);
+    if (span < 2 || span >= num_images) continue;
+    for (size_t i = 0; i + span < num_images; ++i) {
+      int fewest = std::numeric_limits<int>::max();
+      for (size_t j = i; j < i + span; ++j) {
+        fewest = std::min(fewest, consecutive[j].num_verified_matches);
+      }
+      if (fewest >= max_matches) continue;
+      RelativePosePrior prior = MakePrior(input.images[i], input.images[i + span], fewest);
+      prior.rotation_only = true;
+      priors.push_back(prior);
+    }
+  }
+  return priors;
+}
+
+}  // namespace viosfm
