@@ -6,6 +6,7 @@
 #include <string>
 
 #include "viosfm/cli/commands.h"
+#include "viosfm/cli/vio_uncertainty_options.h"
 #include "viosfm/io/colmap_database.h"
 #include "viosfm/io/euroc.h"
 #include "viosfm/io/trajectory_io.h"
@@ -30,6 +31,9 @@ struct MatchArguments {
   bool no_depth_check = false;
   std::string pairs_mode = "temporal_retrieval";
   double max_pose_time_difference_s = 0.005;
+  double vio_max_gap_s = 1.0;
+  bool fixed_band = false;
+  VioUncertaintyArguments vio_uncertainty;
   std::string report;
   VerificationOptions options;
 };
@@ -41,6 +45,8 @@ void RunMatch(MatchArguments args) {
   options.prior.check_depth = !args.no_depth_check;
   options.max_pose_time_difference_ns = SecondsToNs(args.max_pose_time_difference_s);
   options.retrieval.num_threads = options.num_threads;
+  options.vio_uncertainty = args.vio_uncertainty.Model();
+  options.band_follows_drift = !args.fixed_band;
   if (const std::string error = options.Validate(); !error.empty()) {
     throw InputError("invalid match options: " + error);
   }
@@ -87,7 +93,13 @@ void RunMatch(MatchArguments args) {
                                       : std::string(", no depth check")) +
                                  ") + RANSAC"
                            : std::string("RANSAC only"));
-  const VerificationResult result = RunVerification(sequence, vio, &database, options);
+  const std::vector<int> segments = SegmentsFromTimeGaps(vio, SecondsToNs(args.vio_max_gap_s));
+  if (!segments.empty() && segments.back() > 0) {
+    VIOSFM_LOG(WARNING) << "match: the VIO trajectory has " << segments.back() + 1
+                        << " segments (gaps longer than " << args.vio_max_gap_s
+                        << " s); pairs across them are verified by RANSAC only";
+  }
+  const VerificationResult result = RunVerification(sequence, vio, &database, options, segments);
   VIOSFM_LOG(INFO) << "match: " << FormatVerificationSummary(result.summary) << "; database holds "
                    << database.NumMatchedImagePairs() << " matched and "
                    << database.NumVerifiedImagePairs() << " verified pairs";
@@ -120,6 +132,15 @@ void RegisterMatch(CLI::App& app) {
                       "unless --vio-frame cam");
   command->add_option("--vio-frame", args->vio_frame, "Frame of the VIO poses: body or cam")
       ->capture_default_str();
+  command->add_flag("--fixed-band", args->fixed_band,
+                    "The paper's fixed epipolar band T_EE for every pair, instead of one that "
+                    "follows the VIO's drift between the two frames");
+  command
+      ->add_option("--vio-max-gap", args->vio_max_gap_s,
+                   "The VIO trajectory is split into segments (no VIO prior across) at time "
+                   "gaps longer than this, s (0: never)")
+      ->capture_default_str();
+  AddVioUncertaintyOptions(command, &args->vio_uncertainty);
   command->add_flag("--no-vio-prior", args->no_vio_prior,
                     "RANSAC-only verification (COLMAP's; the baseline)");
   command

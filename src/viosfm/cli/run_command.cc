@@ -6,6 +6,7 @@
 #include <string>
 
 #include "viosfm/cli/commands.h"
+#include "viosfm/cli/vio_uncertainty_options.h"
 #include "viosfm/io/trajectory_io.h"
 #include "viosfm/pipeline/pipeline.h"
 #include "viosfm/util/errors.h"
@@ -22,6 +23,11 @@ struct RunArguments {
   std::string vio_format = "tum";
   std::string vio_frame = "body";
   double max_vio_time_difference_s = 0.005;
+  double vio_max_gap_s = 1.0;
+  std::string prior_weighting = "covariance";
+  bool no_verify_registration = false;
+  bool fixed_band = false;
+  VioUncertaintyArguments vio_uncertainty;
   std::string camera_yaml;
   std::string timestamps;
   bool no_trim_static = false;
@@ -40,6 +46,11 @@ void RunRun(RunArguments args) {
   options.vio_format = ParseTrajectoryFormat(args.vio_format);
   options.vio_frame = ParseVioFrame(args.vio_frame);
   options.max_vio_time_difference_ns = SecondsToNs(args.max_vio_time_difference_s);
+  options.vio_max_gap_ns = SecondsToNs(args.vio_max_gap_s);
+  options.vio_uncertainty = args.vio_uncertainty.Model();
+  options.mapper.ba.prior_weighting = ParsePriorWeighting(args.prior_weighting);
+  options.mapper.registration.verify_with_images = !args.no_verify_registration;
+  if (args.fixed_band) options.verification.band_follows_drift = false;
   options.image_folder.camera_yaml = args.camera_yaml;
   options.image_folder.timestamps_file = args.timestamps;
   options.frame_selection.trim_static = !args.no_trim_static;
@@ -57,7 +68,12 @@ void RunRun(RunArguments args) {
                    << options.mapper.batch_size << ", max " << options.sift.max_num_features
                    << " features, "
                    << (options.verification.use_vio_prior ? "VIO prior" : "RANSAC only") << ", "
-                   << (options.mapper.ba.use_relative_pose_priors ? "RPC" : "no RPC") << ")";
+                   << (options.mapper.ba.use_relative_pose_priors
+                           ? std::string("RPC, ") +
+                                 PriorWeightingName(options.mapper.ba.prior_weighting) +
+                                 " weighting"
+                           : std::string("no RPC"))
+                   << ")";
   const PipelineSummary summary = RunPipeline(options);
   std::cout << summary.ToString() << "\n";
 }
@@ -141,6 +157,29 @@ void RegisterRun(CLI::App& app) {
                     "RANSAC-only verification (COLMAP's; the baseline)");
   command->add_flag("--no-rpc", args->no_rpc,
                     "Bundle adjustment without the relative-pose constraints (ablation)");
+  command
+      ->add_option("--prior-weighting", args->prior_weighting,
+                   "Relative-pose priors weighted by the VIO uncertainty model's covariance "
+                   "under a robust loss (covariance) or by the paper's alpha exp(-beta c) with "
+                   "fixed sigmas and rotation-only bridging priors (paper: the ablation; the "
+                   "verification is the same, see --fixed-band)")
+      ->capture_default_str();
+  command
+      ->add_option("--prior-loss-scale", args->options.mapper.ba.prior_loss_scale,
+                   "Tukey loss on the whitened priors, in standard deviations (0: none)")
+      ->capture_default_str();
+  command->add_flag("--no-verify-registration", args->no_verify_registration,
+                    "Place frames by the VIO alone (the paper's), without checking them "
+                    "against their 2D-3D matches; frames without a VIO pose stay unposed");
+  command->add_flag("--fixed-band", args->fixed_band,
+                    "The paper's fixed epipolar band T_EE for every pair, instead of one "
+                    "that follows the VIO's drift between the two frames");
+  command
+      ->add_option("--vio-max-gap", args->vio_max_gap_s,
+                   "A VIO trajectory file is split into segments (no relative pose across) "
+                   "at time gaps longer than this, s (0: never)")
+      ->capture_default_str();
+  AddVioUncertaintyOptions(command, &args->vio_uncertainty);
   command->add_flag("--guided-matching", args->options.verification.guided_matching,
                     "Match inside the VIO epipolar band instead of by brute force");
   command->add_option("--camera-yaml", args->camera_yaml,

@@ -1,5 +1,7 @@
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
+#include <limits>
 
 #include "viosfm/cli/commands.h"
 #include "viosfm/sim/sequence_simulator.h"
@@ -14,7 +16,7 @@ struct SimulateArgs {
   SimulationOptions options;
   std::string out;
   double drift_factor = 1.0;
-  double scale_error = 0.0;
+  double scale_error = std::numeric_limits<double>::quiet_NaN();  // NaN: the profile's
   bool no_imu_noise = false;
   bool no_images = false;
   bool row_parallel = false;
@@ -23,7 +25,11 @@ struct SimulateArgs {
 void RunSimulate(const SimulateArgs& args) {
   SimulationOptions options = args.options;
   options.vio_drift = options.vio_drift.Scaled(args.drift_factor);
-  options.vio_drift.scale_error = args.scale_error;
+  options.realistic_vio = options.realistic_vio.Scaled(args.drift_factor);
+  if (!std::isnan(args.scale_error)) {
+    options.vio_drift.scale_error = args.scale_error;
+    options.realistic_vio.scale_error = args.scale_error;
+  }
   options.imu.add_noise = !args.no_imu_noise;
   options.render_images = !args.no_images;
   options.threads_over_frames = !args.row_parallel;
@@ -46,10 +52,13 @@ void RunSimulate(const SimulateArgs& args) {
   const double vio_end_error = (simulated.vio_body.poses.back().world_from_frame.translation -
                                 sequence.ground_truth.back().world_from_body.translation)
                                    .norm();
+  const int num_segments = simulated.vio_segments.empty() ? 0 : simulated.vio_segments.back() + 1;
   VIOSFM_LOG(INFO) << "simulated '" << options.scenario << "': " << sequence.images.size()
-                   << " camera stamps, " << sequence.imu.size() << " IMU samples, path " << length
-                   << " m, emulated VIO end drift " << vio_end_error << " m, in "
-                   << timer.ElapsedSeconds() << " s -> " << args.out;
+                   << (options.keyframes.enabled ? " keyframes" : " camera stamps") << ", "
+                   << sequence.imu.size() << " IMU samples, path " << length << " m, "
+                   << options.vio_profile << " emulated VIO (" << simulated.vio_body.size()
+                   << " poses, " << num_segments << " segment(s)), end drift " << vio_end_error
+                   << " m, in " << timer.ElapsedSeconds() << " s -> " << args.out;
 }
 
 }  // namespace
@@ -82,7 +91,35 @@ void RegisterSimulate(CLI::App& app) {
       ->capture_default_str();
   command
       ->add_option("--vio-scale-error", args->scale_error,
-                   "Metric scale error of the emulated VIO (0.02: its displacements 2 % too long)")
+                   "Metric scale error of the emulated VIO (0.02: its displacements 2 % too "
+                   "long); default: the profile's (gentle 0, realistic 0.02)");
+  command
+      ->add_option("--vio-profile", args->options.vio_profile,
+                   "Emulated VIO: gentle (distance random walks and white jitter) or realistic "
+                   "(drift in time, distance and rotation, scale error, correlated noise, "
+                   "optional re-initialisations; the VIO uncertainty model's defaults)")
+      ->capture_default_str();
+  command
+      ->add_option("--vio-reinit-at", args->options.realistic_vio.reinit_times_s,
+                   "Realistic VIO: seconds after the start at which it loses track and "
+                   "re-initialises in a new world frame (comma-separated)")
+      ->delimiter(',');
+  command
+      ->add_option("--vio-reinit-gap", args->options.realistic_vio.reinit_gap_s,
+                   "Realistic VIO: seconds without a pose at each re-initialisation (0: a jump "
+                   "with no gap in the stamps)")
+      ->capture_default_str();
+  command->add_flag("--keyframes", args->options.keyframes.enabled,
+                    "Keyframe-like frames: irregular gaps (log-uniform in [--keyframe-min-gap, "
+                    "--keyframe-max-gap]) on the camera-rate grid; ground truth and VIO stay on "
+                    "the grid");
+  command
+      ->add_option("--keyframe-min-gap", args->options.keyframes.min_gap_s,
+                   "Shortest keyframe gap in seconds")
+      ->capture_default_str();
+  command
+      ->add_option("--keyframe-max-gap", args->options.keyframes.max_gap_s,
+                   "Longest keyframe gap in seconds")
       ->capture_default_str();
   command->add_flag("--no-imu-noise", args->no_imu_noise, "Exact IMU measurements");
   command

@@ -8,7 +8,8 @@
 //   ROOT/meta.txt                      "key: value" lines (date, machine, settings)
 //   ROOT/<sequence>/sequence/          the dataset (EuRoC layout; ground truth)
 //   ROOT/<sequence>/runs/<method>/     one run: time.txt ("seconds peak_kib
-//       [user_s system_s]"), eval.json (`viosfm eval --json`), failed (present
+//       [user_s system_s]"), eval.json (`viosfm eval --json`, Sim(3)),
+//       eval_se3.json (the same with SE(3); optional), failed (present
 //       if the run failed), reused.txt (present if the run started from
 //       another run's features and matches: what it reused), version.txt
 //       (the viosfm version that made the run, if recorded), run/ (a
@@ -37,8 +38,12 @@ struct BenchRun {
   int frames_in = 0;          // images of the sequence
   int frames_registered = 0;  // poses evaluated (0 without eval.json)
   int num_models = 0;         // COLMAP: models written (0 for others)
-  std::optional<double> ate_rmse_m;
-  std::optional<double> ate_median_m;
+  std::optional<double> ate_rmse_m;    // Sim(3)
+  std::optional<double> ate_median_m;  // Sim(3)
+  // Metric accuracy: the SE(3) ATE RMSE (eval_se3.json) and the run's scale
+  // (1 / the Sim(3) alignment's scale; 1.02: 2 % too long).
+  std::optional<double> ate_se3_rmse_m;
+  std::optional<double> scale;
   std::optional<double> seconds;          // wall clock of the whole run
   std::optional<double> cpu_seconds;      // user + system CPU time
   std::string reused;                     // what the run reused (reused.txt), or empty

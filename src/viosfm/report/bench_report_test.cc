@@ -38,7 +38,10 @@ fs::path MakeFixture() {
         "#timestamp [ns],filename\n1,1.png\n2,2.png\n3,3.png\n4,4.png\n");
   const fs::path runs = root / "room/runs";
   Write(runs / "viosfm/time.txt", "12.5 204800 10.25 1.5\n");
-  Write(runs / "viosfm/eval.json", EvalJson(0.0123, 0.0101, 4));
+  Write(runs / "viosfm/eval.json",
+        "{\"num_pairs\": 4, \"alignment\": {\"scale\": 0.98}, \"ate\": {\"translation_m\": "
+        "{\"rmse\": 0.0123, \"median\": 0.0101}}}");
+  Write(runs / "viosfm/eval_se3.json", EvalJson(0.0456, 0.04, 4));
   Write(runs / "viosfm/run/summary.json",
         "{\"frames\": {\"in\": 4, \"selected\": 4, \"registered\": 4},"
         " \"stages\": [{\"name\": \"mapper\", \"seconds\": 3.25}]}");
@@ -69,6 +72,8 @@ TEST(BenchReport, ReadsRunsInMethodOrder) {
   EXPECT_EQ(viosfm.frames_in, 4);
   EXPECT_EQ(viosfm.frames_registered, 4);
   EXPECT_NEAR(*viosfm.ate_rmse_m, 0.0123, 1e-9);
+  EXPECT_NEAR(*viosfm.ate_se3_rmse_m, 0.0456, 1e-9);
+  EXPECT_NEAR(*viosfm.scale, 1.0 / 0.98, 1e-9);
   EXPECT_NEAR(*viosfm.seconds, 12.5, 1e-9);
   EXPECT_NEAR(*viosfm.peak_memory_mb, 200.0, 1e-9);
   EXPECT_NEAR(*viosfm.mapping_seconds, 3.25, 1e-9);
@@ -91,14 +96,15 @@ TEST(BenchReport, ReadsRunsInMethodOrder) {
 TEST(BenchReport, MarkdownHasTheNumbers) {
   const std::string md = FormatBenchMarkdown(ReadBenchResults(MakeFixture()), "images");
   EXPECT_THAT(md, HasSubstr("- mode: quick"));
-  EXPECT_THAT(md, HasSubstr("| viosfm | 4 / 4 | 12.30 | 10.10 | 12.5 | 11.8 | 200 |"));
-  EXPECT_THAT(md, HasSubstr("| viosfm w/o relative-pose term [1] | 4 / 4 | 40.00 | 30.00 | 4.0 "
-                            "| n/a | 200 |"));
+  EXPECT_THAT(md,
+              HasSubstr("| viosfm | 4 / 4 | 12.30 | 10.10 | 45.60 | 1.0204 | 12.5 | 11.8 | 200 |"));
+  EXPECT_THAT(md, HasSubstr("| viosfm w/o relative-pose term [1] | 4 / 4 | 40.00 | 30.00 | n/a "
+                            "| n/a | 4.0 | n/a | 200 |"));
   EXPECT_THAT(md, HasSubstr("[1] viosfm w/o relative-pose term: started from the features and "
                             "verified matches of viosfm;"));
   EXPECT_THAT(md,
               HasSubstr("| COLMAP 3.8, sequential matcher | 3 / 4 (2 models) | 500.00 | 250.00 |"));
-  EXPECT_THAT(md, HasSubstr("| input VIO (emulated) | - | 200.00 | 150.00 | - | - | - |"));
+  EXPECT_THAT(md, HasSubstr("| input VIO (emulated) | - | 200.00 | 150.00 | n/a | n/a | - | - | - |"));
   EXPECT_THAT(md, HasSubstr("| 10 | 4 | 20.00 | 8.0 |"));
   // The version of each sweep run: its version.txt, else meta.txt's.
   EXPECT_THAT(md, HasSubstr("| 10 | 4 | 20.00 | 8.0 | n/a | n/a | abc1234 |"));

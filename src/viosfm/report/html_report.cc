@@ -294,7 +294,14 @@ void SummarySection(const RunData& run, Page* page) {
   std::vector<std::pair<std::string, std::string>> rows = {
       {"frames in", Integer(frames_in)},
       {"frames selected", Integer(Number(s, "frames/selected"))},
-      {"frames registered", registered_text},
+      {"frames registered (pose supported by the images)", registered_text},
+      {"frames placed by the VIO only", Integer(Number(s, "frames/vio_only"))},
+      {"frames without a pose", Integer(Number(s, "frames/unposed"))},
+      {"selected frames without a VIO pose", Integer(Number(s, "frames/without_vio_pose"))},
+      {"frames re-posed from the images (the VIO disagreed)",
+       Integer(Number(s, "frames/reposed_from_images"))},
+      {"VIO segments (joined)", Integer(Number(s, "vio/segments")) + " (" +
+                                    Integer(Number(s, "vio/segments_joined")) + ")"},
       {"3D points", Integer(Number(s, "points"))},
       {"observations", Integer(Number(s, "observations"))},
       {"mean track length", Fixed(Number(s, "mean_track_length"), 2)},
@@ -315,6 +322,14 @@ void SummarySection(const RunData& run, Page* page) {
   rows.push_back({"total time (s)", Fixed(Number(s, "total_seconds"), 2)});
   rows.push_back({"peak memory (MB)", Fixed(Number(s, "peak_memory_mb"), 1)});
   page->KeyValueTable("summary-table", rows);
+  if (const Json* unposed = Find(s, "unposed_frames"); unposed && unposed->is_array() &&
+                                                        !unposed->empty()) {
+    std::vector<std::vector<std::string>> unposed_rows;
+    for (const Json& frame : *unposed) {
+      unposed_rows.push_back({Integer(Number(frame, "image_id")), Text(frame, "reason")});
+    }
+    page->Table("unposed-table", {"frame without a pose (image id)", "why"}, unposed_rows);
+  }
 }
 
 void AccuracySection(const RunData& run, Page* page, TrajectoryFigures* figures_out) {
@@ -335,6 +350,29 @@ void AccuracySection(const RunData& run, Page* page, TrajectoryFigures* figures_
     page->Table("ate-table",
                 {"trajectory", "ATE RMSE (m)", "mean (m)", "median (m)", "max (m)", "poses",
                  "alignment", "from"},
+                rows);
+  }
+
+  // Metric accuracy (summary.json): what the IMU buys beyond the shape.
+  if (Find(run.summary, "eval/metric")) {
+    std::vector<std::vector<std::string>> rows;
+    for (const auto& [name, key] :
+         {std::pair{"viosfm", "eval/metric"}, std::pair{"input VIO", "eval/vio_metric"}}) {
+      const std::string k = key;
+      const std::optional<double> scale_error = Number(run.summary, k + "/scale_error");
+      rows.push_back({name, Fixed(Number(run.summary, k + "/ate_sim3_rmse_m"), 4),
+                      Fixed(Number(run.summary, k + "/ate_se3_rmse_m"), 4),
+                      Fixed(Number(run.summary, k + "/ate_posyaw_rmse_m"), 4),
+                      Fixed(Number(run.summary, k + "/scale"), 4),
+                      scale_error ? Fixed(100.0 * *scale_error, 2) : std::string("n/a")});
+    }
+    page->Paragraph(
+        "Metric accuracy: the ATE RMSE after each alignment (Sim(3): the shape; SE(3): shape "
+        "and metric scale; position + yaw: also the gravity direction) and the scale of the "
+        "trajectory (1 / the Sim(3) alignment's scale).");
+    page->Table("metric-table",
+                {"trajectory", "ATE Sim(3) (m)", "ATE SE(3) (m)", "ATE pos+yaw (m)", "scale",
+                 "scale error (%)"},
                 rows);
   }
 

@@ -1,6 +1,7 @@
 #include "viosfm/sim/sequence_simulator.h"
 
 #include <algorithm>
+#include <cmath>
 #include <atomic>
 #include <exception>
 #include <iomanip>
@@ -14,6 +15,7 @@
 #include "viosfm/util/errors.h"
 #include "viosfm/util/file_util.h"
 #include "viosfm/util/progress.h"
+#include "viosfm/util/random.h"
 
 namespace viosfm {
 namespace fs = std::filesystem;
@@ -39,6 +41,13 @@ Rigid3d SimulationOptions::DefaultBodyFromCam() {
   return Rigid3d(body_from_cam, Eigen::Vector3d(0.05, -0.02, 0.01));
 }
 
+std::string KeyframeSelectionOptions::Validate() const {
+  if (!(min_gap_s > 0.0) || !(max_gap_s >= min_gap_s)) {
+    return "keyframes: need 0 < min_gap_s <= max_gap_s";
+  }
+  return "";
+}
+
 std::string SimulationOptions::Validate() const {
   ScenarioOptions scenario_options;
   scenario_options.name = scenario;
@@ -58,6 +67,15 @@ std::string SimulationOptions::Validate() const {
   if (!camera.HasValidParams()) return "camera has the wrong number of parameters";
   if (const std::string error = imu.Validate(); !error.empty()) return "imu: " + error;
   if (const std::string error = vio_drift.Validate(); !error.empty()) return "vio_drift: " + error;
+  if (vio_profile != "gentle" && vio_profile != "realistic") {
+    return "vio_profile must be 'gentle' or 'realistic'";
+  }
+  if (const std::string error = realistic_vio.Validate(); !error.empty()) {
+    return "realistic_vio: " + error;
+  }
+  if (keyframes.enabled) {
+    if (const std::string error = keyframes.Validate(); !error.empty()) return error;
+  }
   return "";
 }
 
@@ -107,14 +125,28 @@ SimulatedSequence SimulateSequence(const SimulationOptions& options) {
   sequence.imu = imu.samples;
 
   const double period_ns = 1e9 / options.camera_rate_hz;
-  std::vector<timestamp_ns_t> stamps;
+  std::vector<timestamp_ns_t> grid;  // every frame of the camera rate
   for (int64_t k = 0;; ++k) {
     const timestamp_ns_t t = start + static_cast<timestamp_ns_t>(std::llround(k * period_ns));
     if (t > end) break;
-    stamps.push_back(t);
-    std::ostringstream name;
-    name << t << ".png";
-    sequence.images.push_back({t, fs::path(name.str())});
+    grid.push_back(t);
+  }
+  // The frames: the whole grid, or keyframe-like irregular gaps on it.
+  std::vector<size_t> frames;
+  if (options.keyframes.enabled) {
+    Random random(options.seed * 3 + 2 + 1000);
+    const double log_min = std::log(options.keyframes.min_gap_s);
+    const double log_max = std::log(options.keyframes.max_gap_s);
+    for (size_t k = 0; k < grid.size();) {
+      frames.push_back(k);
+      const double gap_s = std::exp(random.Uniform(log_min, log_max));
+      k += std::max<size_t>(1, static_cast<size_t>(std::llround(gap_s * 1e9 / period_ns)));
+    }
+  } else {
+    for (size_t k = 0; k < grid.size(); ++k) frames.push_back(k);
+  }
+  for (size_t k = 0; k < grid.size(); ++k) {
+    const timestamp_ns_t t = grid[k];
     GroundTruthState state;
     state.timestamp_ns = t;
     state.world_from_body = out.motion.WorldFromBody(t);
@@ -123,10 +155,26 @@ SimulatedSequence SimulateSequence(const SimulationOptions& options) {
     state.accel_bias = imu.AccelBiasAt(t);
     state.has_velocity_and_biases = true;
     sequence.ground_truth.push_back(state);
+  }
+  for (const size_t k : frames) {
+    const timestamp_ns_t t = grid[k];
+    std::ostringstream name;
+    name << t << ".png";
+    sequence.images.push_back({t, fs::path(name.str())});
     out.frame_regions.push_back(
         out.scenario->RegionIndex(ProjectionCenter(SimulatedCamFromWorld(out, t))));
   }
-  out.vio_body = EmulateVioDrift(out.motion.Sample(stamps), drift);
+  const Trajectory truth = out.motion.Sample(grid);
+  if (options.vio_profile == "realistic") {
+    RealisticVioOptions realistic = options.realistic_vio;
+    realistic.seed = options.seed * 3 + 2;
+    EmulatedVio emulated = EmulateRealisticVio(truth, realistic);
+    out.vio_body = std::move(emulated.world_from_frame);
+    out.vio_segments = std::move(emulated.segments);
+  } else {
+    out.vio_body = EmulateVioDrift(truth, drift);
+    out.vio_segments.assign(out.vio_body.size(), 0);
+  }
   return out;
 }
 
@@ -258,7 +306,23 @@ void WriteSimulatedSequence(const fs::path& out, const SimulatedSequence& simula
            << "  yaw_walk_rad_per_sqrt_m: " << options.vio_drift.yaw_walk_rad_per_sqrt_m << "\n"
            << "  scale_error: " << options.vio_drift.scale_error << "\n"
            << "  position_jitter_m: " << options.vio_drift.position_jitter_m << "\n"
-           << "  rotation_jitter_rad: " << options.vio_drift.rotation_jitter_rad << "\n";
+           << "  rotation_jitter_rad: " << options.vio_drift.rotation_jitter_rad << "\n"
+           << "vio_profile: " << options.vio_profile << "\n"
+           << "realistic_vio:\n"
+           << "  scale_error: " << options.realistic_vio.scale_error << "\n"
+           << "  reinit_gap_s: " << options.realistic_vio.reinit_gap_s << "\n"
+           << "  reinit_times_s: [";
+    for (size_t i = 0; i < options.realistic_vio.reinit_times_s.size(); ++i) {
+      stream << (i > 0 ? ", " : "") << options.realistic_vio.reinit_times_s[i];
+    }
+    stream << "]\n";
+    for (const auto& [key, value] : options.realistic_vio.model.ToKeyValues()) {
+      stream << "  " << key << ": " << value << "\n";
+    }
+    stream << "keyframes:\n"
+           << "  enabled: " << (options.keyframes.enabled ? "true" : "false") << "\n"
+           << "  min_gap_s: " << options.keyframes.min_gap_s << "\n"
+           << "  max_gap_s: " << options.keyframes.max_gap_s << "\n";
   });
 }
 

@@ -108,3 +108,51 @@ TEST(SequenceSimulator, IsReproducibleAndRejectsUnknownScenarios) {
 
 }  // namespace
 }  // namespace viosfm
+
+namespace viosfm {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Keyframe-like frames with the realistic VIO: irregular gaps within the
+// bounds, ground truth and VIO on the dense grid, a re-initialisation's
+// gap and segments in the written trajectory.
+TEST(SequenceSimulator, KeyframesWithARealisticReinitialisingVio) {
+  SimulationOptions options;
+  options.scenario = "room";
+  options.duration_s = 40.0;
+  options.camera_rate_hz = 20.0;
+  options.render_images = false;
+  options.keyframes.enabled = true;
+  options.vio_profile = "realistic";
+  options.realistic_vio.reinit_times_s = {20.0};
+  options.realistic_vio.reinit_gap_s = 1.0;
+  const SimulatedSequence simulated = SimulateSequence(options);
+  const Sequence& sequence = simulated.sequence;
+  ASSERT_GT(sequence.images.size(), 15u);
+  ASSERT_LT(sequence.images.size(), 60u);  // 40 s / 1.4 s mean gap ~ 28
+  double shortest = 1e9, longest = 0.0;
+  for (size_t k = 1; k < sequence.images.size(); ++k) {
+    const double gap =
+        static_cast<double>(sequence.images[k].timestamp_ns - sequence.images[k - 1].timestamp_ns) *
+        1e-9;
+    shortest = std::min(shortest, gap);
+    longest = std::max(longest, gap);
+  }
+  EXPECT_GE(shortest, 0.05 - 1e-9);
+  EXPECT_LE(longest, 7.0 + 0.05);
+  EXPECT_GT(longest / shortest, 5.0);
+  EXPECT_EQ(sequence.ground_truth.size(), 801u);  // the 20 Hz grid
+  EXPECT_EQ(simulated.vio_body.size(), 801u - 20u);  // 1 s re-initialising
+  EXPECT_EQ(simulated.vio_segments.back(), 1);
+  EXPECT_EQ(simulated.frame_regions.size(), sequence.images.size());
+
+  const fs::path folder = testing::MakeScratchFolder("sim_keyframes");
+  WriteSimulatedSequence(folder, simulated, options);
+  const Trajectory vio = ReadTumTrajectory(folder / "vio_emulated.tum");
+  EXPECT_EQ(vio.size(), simulated.vio_body.size());
+  EXPECT_EQ(SegmentsFromTimeGaps(vio, 500'000'000), simulated.vio_segments);
+}
+
+}  // namespace
+}  // namespace viosfm

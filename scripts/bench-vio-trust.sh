@@ -1,0 +1,86 @@
+#!/usr/bin/env bash
+# How far viosfm trusts the VIO (issue 15): the default run against its
+# ablations on sequences with the realistic emulated VIO (drift in time,
+# distance and rotation, a 2 % scale error, correlated noise).
+#
+# Usage: scripts/bench-vio-trust.sh OUT [CASE...]
+#   CASE = NAME:SCENARIO:DURATION_S:MODE[:EXTRA_SIMULATE_FLAGS]
+#   MODE = kf (keyframe-like frames, gaps 0.05-7 s, every keyframe used) or
+#          a frame rate in Hz (every frame of the grid, used at that rate)
+# Default cases: room, two_floors and corridor as keyframes over 144 s (as
+# EuRoC V1_01's 100 keyframes in 144 s) and at 10 Hz over 40 s.
+#
+# For each case: `viosfm simulate --vio-profile realistic`, then
+#   default      viosfm run (covariance-weighted priors, verified registration)
+#   no_rpc       --no-rpc (no relative-pose term)
+#   paper        --prior-weighting paper (the paper's w = alpha exp(-beta c))
+#   no_bridging  --no-bridging (consecutive priors only)
+# The variants map the default run's stored features and verified matches
+# (a copy of its database), so they differ in the mapping only. Settings of
+# the sweeps of docs/benchmarks.md: N1 10, N2 5, 1500 SIFT features.
+# Prints one table row per case (ATE after Sim(3), mm) and writes OUT/table.md.
+set -euo pipefail
+here=$(cd "$(dirname "$0")/.." && pwd)
+VIOSFM=${VIOSFM:-$here/build/src/viosfm/cli/viosfm}
+out=${1:?usage: scripts/bench-vio-trust.sh OUT [CASE...]}
+shift
+cases=("$@")
+if [ ${#cases[@]} = 0 ]; then
+  cases=(room_kf:room:144:kf two_floors_kf:two_floors:144:kf corridor_kf:corridor:144:kf
+         room_10hz:room:40:10 two_floors_10hz:two_floors:40:10 corridor_10hz:corridor:40:10)
+fi
+mkdir -p "$out"
+run_flags=(--n1 10 --n2 5 --max-features 1500 --no-progress)
+
+metric() {  # summary.json key path -> value
+  jq -r "$2 // \"-\"" "$1/summary.json" 2>/dev/null || echo -
+}
+
+for case in "${cases[@]}"; do
+  IFS=: read -r name scenario duration mode extra <<< "$case"
+  seq=$out/seq/$name
+  if [ ! -d "$seq" ]; then
+    sim_flags=(--scenario "$scenario" --duration "$duration" --seed 0 --vio-profile realistic)
+    if [ "$mode" = kf ]; then sim_flags+=(--keyframes --rate 20); else sim_flags+=(--rate "$mode"); fi
+    # shellcheck disable=SC2086
+    "$VIOSFM" simulate "${sim_flags[@]}" $extra --out "$seq" > "$out/$name.simulate.log" 2>&1
+  fi
+  rate_flags=(--rate 0)
+  [ "$mode" != kf ] && rate_flags=(--rate "$mode")
+  runs=$out/runs/$name
+  mkdir -p "$runs"
+  if [ ! -f "$runs/default/summary.json" ]; then
+    "$VIOSFM" run "$seq" --out "$runs/default" --vio-trajectory "$seq/vio_emulated.tum" \
+      "${rate_flags[@]}" "${run_flags[@]}" > "$runs/default.log" 2>&1
+  fi
+  for variant in no_rpc paper no_bridging; do
+    [ -f "$runs/$variant/summary.json" ] && continue
+    case $variant in
+      no_rpc) flags=(--no-rpc) ;;
+      paper) flags=(--prior-weighting paper) ;;
+      no_bridging) flags=(--no-bridging) ;;
+    esac
+    rm -rf "$runs/$variant"
+    mkdir -p "$runs/$variant"
+    cp "$runs/default/database.db" "$runs/default/options.json" "$runs/$variant/"
+    "$VIOSFM" run "$seq" --out "$runs/$variant" --vio-trajectory "$seq/vio_emulated.tum" \
+      "${rate_flags[@]}" "${run_flags[@]}" "${flags[@]}" > "$runs/$variant.log" 2>&1
+  done
+done
+
+{
+  echo "| sequence | frames (registered / VIO only / unposed) | input VIO | **default** | --no-rpc | --prior-weighting paper | --no-bridging | default / VIO | SE(3) ATE default (VIO) | scale default (VIO) |"
+  echo "|---|---|---|---|---|---|---|---|---|---|"
+  for case in "${cases[@]}"; do
+    IFS=: read -r name _ <<< "$case"
+    runs=$out/runs/$name
+    mm() { awk -v v="$1" 'BEGIN { if (v == "-") print "-"; else printf "%.2f", 1000 * v }'; }
+    vio=$(metric "$runs/default" .eval.vio_metric.ate_sim3_rmse_m)
+    d=$(metric "$runs/default" .eval.metric.ate_sim3_rmse_m)
+    frames="$(metric "$runs/default" .frames.registered) / $(metric "$runs/default" .frames.vio_only) / $(metric "$runs/default" .frames.unposed) of $(metric "$runs/default" .frames.selected)"
+    ratio=$(awk -v a="$d" -v b="$vio" 'BEGIN { if (a == "-" || b == "-") print "-"; else printf "1/%.0f", b / a }')
+    se3="$(mm "$(metric "$runs/default" .eval.metric.ate_se3_rmse_m)") ($(mm "$(metric "$runs/default" .eval.vio_metric.ate_se3_rmse_m)"))"
+    scale="$(metric "$runs/default" .eval.metric.scale | cut -c1-6) ($(metric "$runs/default" .eval.vio_metric.scale | cut -c1-6))"
+    echo "| $name | $frames | $(mm "$vio") | **$(mm "$d")** | $(mm "$(metric "$runs/no_rpc" .eval.metric.ate_sim3_rmse_m)") | $(mm "$(metric "$runs/paper" .eval.metric.ate_sim3_rmse_m)") | $(mm "$(metric "$runs/no_bridging" .eval.metric.ate_sim3_rmse_m)") | $ratio | $se3 | $scale |"
+  done
+} | tee "$out/table.md"
