@@ -27,6 +27,7 @@ struct RunArguments {
   std::string prior_weighting = "covariance";
   bool no_verify_registration = false;
   bool fixed_band = false;
+  bool no_imu_scale = false;
   VioUncertaintyArguments vio_uncertainty;
   std::string camera_yaml;
   std::string timestamps;
@@ -51,6 +52,7 @@ void RunRun(RunArguments args) {
   options.mapper.ba.prior_weighting = ParsePriorWeighting(args.prior_weighting);
   options.mapper.registration.verify_with_images = !args.no_verify_registration;
   if (args.fixed_band) options.verification.band_follows_drift = false;
+  options.use_imu_scale = !args.no_imu_scale;
   options.image_folder.camera_yaml = args.camera_yaml;
   options.image_folder.timestamps_file = args.timestamps;
   options.frame_selection.trim_static = !args.no_trim_static;
@@ -171,6 +173,9 @@ void RegisterRun(CLI::App& app) {
   command->add_flag("--no-verify-registration", args->no_verify_registration,
                     "Place frames by the VIO alone (the paper's), without checking them "
                     "against their 2D-3D matches; frames without a VIO pose stay unposed");
+  command->add_flag("--no-imu-scale", args->no_imu_scale,
+                    "Keep the VIO's metric scale instead of estimating it from the dataset's "
+                    "IMU over the registered frames");
   command->add_flag("--fixed-band", args->fixed_band,
                     "The paper's fixed epipolar band T_EE for every pair, instead of one "
                     "that follows the VIO's drift between the two frames");

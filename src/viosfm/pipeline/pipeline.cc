@@ -267,6 +267,9 @@ std::string PipelineOptions::Validate() const {
   if (const std::string error = vio_uncertainty.Validate(); !error.empty()) {
     return "vio_uncertainty." + error;
   }
+  if (const std::string error = imu_scale.Validate(); !error.empty()) {
+    return "imu_scale." + error;
+  }
   if (num_threads < 1) return "num_threads must be >= 1";
   if (const std::string error = frame_selection.Validate(); !error.empty()) {
     return "frame_selection." + error;
@@ -399,11 +402,15 @@ std::vector<std::pair<std::string, std::string>> PipelineOptions::ToKeyValues() 
            Text(m.registration.min_num_correspondences)},
           {"mapper.registration.min_predicted_inlier_ratio",
            Text(m.registration.min_predicted_inlier_ratio)},
+          {"mapper.registration.min_reposing_inliers", Text(m.registration.min_reposing_inliers)},
           {"mapper.registration.break_sigmas", Text(m.registration.break_sigmas)},
           {"mapper.registration.min_supporting_observations",
            Text(m.registration.min_supporting_observations)},
           {"mapper.registration.support_max_error_px", Text(m.registration.support_max_error_px)},
           {"mapper.retriangulate", Text(m.retriangulate)},
+          {"use_imu_scale", Text(use_imu_scale)},
+          {"imu_scale.bias_window_s", Text(imu_scale.bias_window_s)},
+          {"imu_scale.max_scale_sigma", Text(imu_scale.max_scale_sigma)},
           {"mapper.ba_after_each_batch", Text(m.ba_after_each_batch)},
           {"mapper.final_global_ba", Text(m.final_global_ba)},
           {"mapper.num_threads", Text(m.num_threads)},
@@ -425,6 +432,7 @@ std::string PipelineSummary::ToString() const {
       << " joined; " << mapper.num_reposed << " frame(s) re-posed from the images, "
       << mapper.num_registered_without_vio << " registered from the images without a VIO pose, "
       << mapper.num_vio_breaks << " VIO jump(s) found\n";
+  if (!metric_scale.message.empty()) out << "metric scale: " << metric_scale.message << "\n";
   out << "pairs: " << verification.num_pairs << " candidates, " << verification.num_accepted
       << " accepted, " << verification.num_vio_rejected << " rejected by VIO, "
       << verification.num_ransac_rejected << " by RANSAC, " << verification.num_no_matches
@@ -464,6 +472,12 @@ std::string PipelineSummaryToJson(const PipelineSummary& s) {
                     {"unposed", s.num_frames_unposed},
                     {"reposed_from_images", s.mapper.num_reposed},
                     {"registered_without_vio", s.mapper.num_registered_without_vio}};
+  json["imu_scale"] = {{"estimated", s.metric_scale.estimated},
+                       {"usable", s.metric_scale.imu.usable},
+                       {"imu_scale", s.metric_scale.imu.scale},
+                       {"imu_scale_sigma", s.metric_scale.imu.scale_sigma},
+                       {"applied_scale", s.metric_scale.applied_scale},
+                       {"message", s.metric_scale.message}};
   json["vio"] = {{"segments", s.num_vio_segments},
                  {"segments_joined", s.mapper.num_vio_segments_joined},
                  {"segment_rule", s.vio_segment_rule},
@@ -694,6 +708,11 @@ PipelineSummary RunPipeline(const PipelineOptions& options) {
   Reconstruction reconstruction =
       RunBatchedMapper(input, options.EffectiveMapperOptions(), &summary.mapper);
   VIOSFM_LOG(INFO) << "run: mapper " << summary.mapper.ToString();
+  if (options.use_imu_scale) {
+    summary.metric_scale = ApplyImuMetricScale(
+        sequence, options.vio_uncertainty.scale_sigma, options.imu_scale, &reconstruction);
+    VIOSFM_LOG(INFO) << "run: metric scale: " << summary.metric_scale.message;
+  }
   summary.num_frames_registered = static_cast<size_t>(summary.mapper.num_supported);
   summary.num_frames_vio_only = static_cast<size_t>(summary.mapper.num_vio_only);
   summary.num_frames_unposed = static_cast<size_t>(summary.mapper.num_unposed);

@@ -18,7 +18,8 @@
 //  4. features       SIFT into OUT/database.db (resumable);
 //  5. verification   pairs, matching, VIO check and RANSAC (resumable);
 //  6. load_matches   the inlier matches of the accepted pairs;
-//  7. mapper         sfm/batched_mapper.h;
+//  7. mapper         sfm/batched_mapper.h, then the IMU's metric scale
+//                    (metric_scale.h) when the dataset has an IMU;
 //  8. colors         each point's colour: the mean over its observations of
 //                    the image value at the keypoint (grey images give grey);
 //  9. evaluation     with ground truth only: Sim(3) ATE of the estimated body
@@ -61,6 +62,7 @@
 #include "viosfm/io/trajectory_io.h"
 #include "viosfm/matching/frame_selection.h"
 #include "viosfm/matching/verification_driver.h"
+#include "viosfm/pipeline/metric_scale.h"
 #include "viosfm/scene/trajectory.h"
 #include "viosfm/scene/vio_uncertainty.h"
 #include "viosfm/sfm/batched_mapper.h"
@@ -125,6 +127,10 @@ struct PipelineOptions {
   VerificationOptions verification;
   // Batched mapper (k = 50, relative-pose priors on).
   BatchedMapperOptions mapper;
+  // The metric scale from the IMU (metric_scale.h), when the dataset has
+  // one. Default true.
+  bool use_imu_scale = true;
+  ImuScaleOptions imu_scale;
 
   // Worker threads of every stage (replaces the stages' own num_threads),
   // >= 1. Default 2.
@@ -182,6 +188,7 @@ struct PipelineSummary {
   std::string vio_segment_rule;
   FrameSelection frame_selection;
   FeatureExtractionSummary features;
+  MetricScaleSummary metric_scale;
   VerificationSummary verification;
   BatchedMapperSummary mapper;
   size_t num_points = 0;

@@ -417,7 +417,13 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
             register_frame(i, *predicted, FramePoseSource::kVioVerified);
             return true;
           }
-          if (predicted) {
+          if (predicted && static_cast<int>(result.num_inliers) < registration.min_reposing_inliers) {
+            // Too weak to overrule the VIO.
+            register_frame(i, *predicted, FramePoseSource::kVio);
+            return true;
+          }
+          if (predicted && static_cast<int>(result.num_inliers) >=
+                               2 * registration.min_reposing_inliers) {
             // Disagreement beyond what the VIO's drift allows: a jump.
             const RelativePoseSigmas sigmas = LargestSigmas(
                 RelativePoseCovariance(options.vio_uncertainty,

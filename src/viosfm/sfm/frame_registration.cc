@@ -12,6 +12,7 @@ std::string FrameRegistrationOptions::Validate() const {
   if (!(min_predicted_inlier_ratio >= 0.0 && min_predicted_inlier_ratio <= 1.0)) {
     return "min_predicted_inlier_ratio must be in [0, 1]";
   }
+  if (min_reposing_inliers < 0) return "min_reposing_inliers must be >= 0";
   if (!(break_sigmas > 0.0)) return "break_sigmas must be > 0";
   if (!(break_min_translation_m >= 0.0)) return "break_min_translation_m must be >= 0";
   if (!(break_min_rotation_rad >= 0.0)) return "break_min_rotation_rad must be >= 0";

@@ -71,19 +71,53 @@ RelativePosePriors MakeRelativePosePriors(const BatchedMapperInput& input,
     result.frame_indices.emplace_back(i, j);
     ++(bridging ? result.num_bridging : result.num_consecutive);
   };
+  // With the covariance weighting, a stretch is poorly connected where few
+  // verified matches cross it: the matches of every pair (i, j) count for
+  // each cut between two consecutive frames i <= k < j (not only those of
+  // the consecutive pair: keyframes seconds apart may share nothing while
+  // their neighbours hold them together).
+  std::vector<int64_t> crossing(input.images.size() + 1, 0);
+  if (covariance) {
+    std::unordered_map<image_t, size_t> index_of;
+    for (size_t i = 0; i < input.images.size(); ++i) index_of[input.images[i].image_id] = i;
+    std::vector<int64_t> difference(input.images.size() + 1, 0);
+    for (const ImagePairMatches& pair : input.verified_pairs) {
+      const auto it1 = index_of.find(pair.image_id1);
+      const auto it2 = index_of.find(pair.image_id2);
+      if (it1 == index_of.end() || it2 == index_of.end() || it1->second == it2->second) continue;
+      const size_t a = std::min(it1->second, it2->second);
+      const size_t b = std::max(it1->second, it2->second);
+      difference[a] += static_cast<int64_t>(pair.matches.size());
+      difference[b] -= static_cast<int64_t>(pair.matches.size());
+    }
+    int64_t running = 0;
+    for (size_t k = 0; k < input.images.size(); ++k) crossing[k] = running += difference[k];
+  }
   for (const auto& [segment, frames] : PosedFramesBySegment(input)) {
     std::vector<int> consecutive_matches;
+    std::vector<int> connectivity;  // per cut between posed frames k and k + 1
     for (size_t k = 0; k + 1 < frames.size(); ++k) {
       consecutive_matches.push_back(matches_of(frames[k], frames[k + 1]));
       add(frames[k], frames[k + 1], consecutive_matches.back(), false);
+      if (covariance) {
+        int64_t fewest = std::numeric_limits<int64_t>::max();
+        for (size_t cut = frames[k]; cut < frames[k + 1]; ++cut) {
+          fewest = std::min(fewest, crossing[cut]);
+        }
+        connectivity.push_back(static_cast<int>(std::min<int64_t>(fewest, 1 << 30)));
+      } else {
+        connectivity.push_back(consecutive_matches.back());
+      }
     }
     for (const int span_int : options.bridge_spans) {
       const size_t span = static_cast<size_t>(span_int);
       if (span < 2 || span >= frames.size()) continue;
       for (size_t k = 0; k + span < frames.size(); ++k) {
+        const int weakest = *std::min_element(connectivity.begin() + k,
+                                              connectivity.begin() + k + span);
+        if (weakest >= options.bridge_max_matches) continue;
         const int fewest = *std::min_element(consecutive_matches.begin() + k,
                                              consecutive_matches.begin() + k + span);
-        if (fewest >= options.bridge_max_matches) continue;
         add(frames[k], frames[k + span], fewest, true);
       }
     }

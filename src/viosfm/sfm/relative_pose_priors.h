@@ -25,6 +25,9 @@ struct RelativePosePriorOptions {
   // empty: none. Default {10, 50}.
   std::vector<int> bridge_spans = {10, 50};
   // A consecutive pair with fewer verified matches is bridged. Default 30.
+  // With the covariance weighting the matches that cross the cut between
+  // the two frames count (those of every verified pair (i, j) with i <= k
+  // < j), not only the consecutive pair's.
   int bridge_max_matches = 30;
   // kCovariance: every prior carries the square-root information of the
   // model's covariance and the bridging priors are full 6-DoF ones;

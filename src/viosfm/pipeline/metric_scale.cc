@@ -1,0 +1,53 @@
+#include "viosfm/pipeline/metric_scale.h"
+
+#include <algorithm>
+#include <iomanip>
+#include <sstream>
+
+#include "viosfm/util/errors.h"
+
+namespace viosfm {
+
+MetricScaleSummary ApplyImuMetricScale(const Sequence& sequence, double vio_scale_sigma,
+                                       const ImuScaleOptions& options,
+                                       Reconstruction* reconstruction) {
+  VIOSFM_CHECK(reconstruction != nullptr);
+  MetricScaleSummary summary;
+  if (!sequence.has_imu()) {
+    summary.message = "no IMU in the dataset: the scale is the VIO's";
+    return summary;
+  }
+  const Rigid3d cam_from_body = sequence.rig.body_from_cam.Inverse();
+  Trajectory body;
+  for (const image_t image_id : reconstruction->RegImageIds()) {
+    const Image& image = reconstruction->GetImage(image_id);
+    if (!image.timestamp_ns) continue;
+    body.poses.push_back({*image.timestamp_ns, image.cam_from_world.Inverse() * cam_from_body});
+  }
+  std::sort(body.poses.begin(), body.poses.end(),
+            [](const StampedPose& a, const StampedPose& b) { return a.timestamp_ns < b.timestamp_ns; });
+  summary.estimated = true;
+  summary.imu = EstimateImuScale(body, sequence.imu, sequence.rig.imu_noise, options);
+  std::ostringstream message;
+  message << summary.imu.message;
+  if (summary.imu.usable) {
+    // Inverse-variance fusion with the VIO's scale (1 +- vio_scale_sigma).
+    const double imu_variance = std::pow(summary.imu.scale_sigma * summary.imu.scale, 2);
+    const double vio_variance = std::max(1e-12, vio_scale_sigma * vio_scale_sigma);
+    summary.applied_scale = (summary.imu.scale / imu_variance + 1.0 / vio_variance) /
+                            (1.0 / imu_variance + 1.0 / vio_variance);
+    const double s = summary.applied_scale;
+    for (const image_t image_id : reconstruction->ImageIds()) {
+      reconstruction->GetImage(image_id).cam_from_world.translation *= s;
+    }
+    for (const point3D_t point3D_id : reconstruction->Point3DIds()) {
+      reconstruction->GetPoint3D(point3D_id).xyz *= s;
+    }
+    message << std::fixed << std::setprecision(5) << "; applied " << s
+            << " (fused with the VIO's scale, +- " << vio_scale_sigma << ")";
+  }
+  summary.message = message.str();
+  return summary;
+}
+
+}  // namespace viosfm

@@ -1,0 +1,36 @@
+// The metric scale of a `viosfm run` from the IMU (sfm/imu_scale.h), applied
+// to the reconstruction at the end of the mapper stage.
+//
+// The mapped shape carries the VIO's scale (through the relative-pose
+// priors and the first batch's placement), off by the VIO's scale error.
+// With an IMU in the dataset, the scale of the registered frames' body
+// trajectory is estimated from it; when usable, it is fused with the VIO's
+// (1, with the VIO uncertainty model's scale_sigma) by inverse variance and
+// the reconstruction (points and camera positions, about the world origin)
+// is scaled by the result.
+#pragma once
+
+#include <string>
+
+#include "viosfm/io/sequence.h"
+#include "viosfm/scene/reconstruction.h"
+#include "viosfm/sfm/imu_scale.h"
+
+namespace viosfm {
+
+struct MetricScaleSummary {
+  bool estimated = false;  // the dataset had an IMU and enough frames were posed
+  ImuScaleResult imu;      // the IMU's estimate
+  double applied_scale = 1.0;  // what the reconstruction was multiplied by
+  std::string message;
+};
+
+// Estimates and, when usable, applies the IMU's metric scale to the
+// registered images of `reconstruction` (cam_from_world; body_from_cam of
+// the sequence's rig). vio_scale_sigma: the VIO's relative scale
+// uncertainty.
+MetricScaleSummary ApplyImuMetricScale(const Sequence& sequence, double vio_scale_sigma,
+                                       const ImuScaleOptions& options,
+                                       Reconstruction* reconstruction);
+
+}  // namespace viosfm

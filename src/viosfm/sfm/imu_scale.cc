@@ -1,0 +1,272 @@
+#include "viosfm/sfm/imu_scale.h"
+
+#include <Eigen/Cholesky>
+#include <Eigen/Geometry>
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <memory>
+#include <sstream>
+
+#include "viosfm/geometry/lie.h"
+#include "viosfm/util/errors.h"
+#include "viosfm/vio/imu_preintegration.h"
+
+namespace viosfm {
+namespace {
+
+struct Pair {
+  size_t i = 0;
+  size_t j = 0;
+  int window = 0;
+  std::unique_ptr<ImuPreintegration> preintegration;
+};
+
+}  // namespace
+
+std::string ImuScaleOptions::Validate() const {
+  if (!(bias_window_s > 0.0)) return "bias_window_s must be > 0";
+  if (!(position_sigma_m > 0.0)) return "position_sigma_m must be > 0";
+  if (!(rotation_sigma_rad >= 0.0)) return "rotation_sigma_rad must be >= 0";
+  if (gravity_iterations < 1) return "gravity_iterations must be >= 1";
+  if (!(max_scale_sigma > 0.0)) return "max_scale_sigma must be > 0";
+  if (!(max_scale_factor > 1.0)) return "max_scale_factor must be > 1";
+  if (!(max_residual_ratio > 0.0)) return "max_residual_ratio must be > 0";
+  return "";
+}
+
+ImuScaleResult EstimateImuScale(const Trajectory& world_from_body,
+                                const std::vector<ImuSample>& imu, const ImuNoise& noise,
+                                const ImuScaleOptions& options) {
+  VIOSFM_CHECK(options.Check()) << options.Validate();
+  ImuScaleResult result;
+  const std::vector<StampedPose>& poses = world_from_body.poses;
+  for (size_t k = 1; k < poses.size(); ++k) {
+    VIOSFM_CHECK_LT(poses[k - 1].timestamp_ns, poses[k].timestamp_ns);
+  }
+  if (imu.size() < 2) {
+    result.message = "no IMU samples";
+    return result;
+  }
+  // Frames covered by the IMU, and the consecutive pairs between them.
+  std::vector<size_t> frames;
+  for (size_t k = 0; k < poses.size(); ++k) {
+    if (poses[k].timestamp_ns >= imu.front().timestamp_ns &&
+        poses[k].timestamp_ns <= imu.back().timestamp_ns) {
+      frames.push_back(k);
+    }
+  }
+  if (frames.size() < 4) {
+    result.message = "fewer than 4 frames within the IMU's time span";
+    return result;
+  }
+  const timestamp_ns_t t0 = poses[frames.front()].timestamp_ns;
+  const auto window_of = [&](timestamp_ns_t t) {
+    return static_cast<int>(static_cast<double>(t - t0) * 1e-9 / options.bias_window_s);
+  };
+  std::vector<Pair> pairs;
+  for (size_t f = 0; f + 1 < frames.size(); ++f) {
+    Pair pair;
+    pair.i = f;
+    pair.j = f + 1;
+    pair.window = window_of(poses[frames[f]].timestamp_ns);
+    pair.preintegration = std::make_unique<ImuPreintegration>(Eigen::Vector3d::Zero(),
+                                                              Eigen::Vector3d::Zero(), noise);
+    if (!pair.preintegration->IntegrateRange(imu, poses[frames[f]].timestamp_ns,
+                                             poses[frames[f + 1]].timestamp_ns)) {
+      continue;
+    }
+    pairs.push_back(std::move(pair));
+  }
+  const int num_windows = window_of(poses[frames.back()].timestamp_ns) + 1;
+  const auto rotation = [&](size_t f) {
+    return poses[frames[f]].world_from_frame.rotation.toRotationMatrix();
+  };
+  const auto position = [&](size_t f) { return poses[frames[f]].world_from_frame.translation; };
+
+  // 1. Gyro bias per window: dR_dbg bg = Log(dR^T R_i^T R_j).
+  std::vector<Eigen::Vector3d> gyro_bias(num_windows, Eigen::Vector3d::Zero());
+  {
+    std::vector<Eigen::Matrix3d> normal(num_windows, Eigen::Matrix3d::Zero());
+    std::vector<Eigen::Vector3d> rhs(num_windows, Eigen::Vector3d::Zero());
+    for (const Pair& pair : pairs) {
+      const Eigen::Matrix3d measured = rotation(pair.i).transpose() * rotation(pair.j);
+      const Eigen::Vector3d error = QuaternionLog(Eigen::Quaterniond(
+          pair.preintegration->delta_R().toRotationMatrix().transpose() * measured));
+      const Eigen::Matrix3d jacobian = pair.preintegration->dR_dbg();
+      const double dt = pair.preintegration->delta_t_s();
+      // Rotation noise of the preintegration and of the two frames.
+      const double sigma2 = pair.preintegration->covariance().topLeftCorner<3, 3>().trace() / 3.0 +
+                            2.0 * options.rotation_sigma_rad * options.rotation_sigma_rad + 1e-12 +
+                            std::pow(noise.gyro_random_walk, 2) * dt * dt * dt / 3.0;
+      normal[pair.window] += jacobian.transpose() * jacobian / sigma2;
+      rhs[pair.window] += jacobian.transpose() * error / sigma2;
+    }
+    for (int w = 0; w < num_windows; ++w) {
+      const Eigen::LDLT<Eigen::Matrix3d> ldlt(normal[w]);
+      if (ldlt.info() == Eigen::Success && normal[w].trace() > 0.0) gyro_bias[w] = ldlt.solve(rhs[w]);
+    }
+    for (Pair& pair : pairs) {
+      pair.preintegration->Repropagate(gyro_bias[pair.window], Eigen::Vector3d::Zero());
+    }
+  }
+
+  // 2. Scale, gravity direction, accel biases and velocities: whitened linear
+  // least squares on the normal equations (sparse: a velocity meets only its
+  // two pairs), iterated on the gravity direction.
+  const int num_frames = static_cast<int>(frames.size());
+  const int col_scale = 0;
+  const int col_gravity = 1;                 // 2: tangent correction of the gravity direction
+  const int col_bias = 3;                    // 3 per window
+  const int col_velocity = 3 + 3 * num_windows;  // 3 per frame
+  const int num_unknowns = col_velocity + 3 * num_frames;
+  const double g_norm = kStandardGravity;
+  Eigen::Vector3d gravity = GravityInWorld();
+  const double rotation_sigma = options.rotation_sigma_rad;
+  double scale = 1.0;
+  Eigen::VectorXd solution;
+  Eigen::SparseMatrix<double> normal_matrix;
+  for (int iteration = 0; iteration < options.gravity_iterations; ++iteration) {
+    const Eigen::Vector3d up = -gravity.normalized();
+    Eigen::Vector3d t1 = up.cross(Eigen::Vector3d::UnitX());
+    if (t1.norm() < 0.1) t1 = up.cross(Eigen::Vector3d::UnitY());
+    t1.normalize();
+    const Eigen::Vector3d t2 = up.cross(t1);
+    Eigen::Matrix<double, 3, 2> tangent;
+    tangent << g_norm * t1, g_norm * t2;
+    std::vector<Eigen::Triplet<double>> triplets;
+    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(num_unknowns);
+    double whitened_b2 = 0.0;
+    int num_rows = 0;
+    const auto accumulate = [&](const std::vector<std::pair<int, Eigen::Matrix<double, 6, 3>>>& blocks,
+                                const Eigen::Matrix<double, 6, 1>& b,
+                                const Eigen::Matrix<double, 6, 6>& whiten) {
+      // Rows whitened: W A x = W b; normal equations (W A)^T (W A), (W A)^T W b.
+      std::vector<std::pair<int, Eigen::Matrix<double, 6, 3>>> white;
+      for (const auto& [col, block] : blocks) white.emplace_back(col, whiten * block);
+      const Eigen::Matrix<double, 6, 1> wb = whiten * b;
+      whitened_b2 += wb.squaredNorm();
+      for (const auto& [col_a, a] : white) {
+        rhs.segment<3>(col_a) += a.transpose() * wb;
+        for (const auto& [col_b, bb] : white) {
+          const Eigen::Matrix3d product = a.transpose() * bb;
+          for (int r = 0; r < 3; ++r) {
+            for (int c = 0; c < 3; ++c) {
+              if (product(r, c) != 0.0) triplets.emplace_back(col_a + r, col_b + c, product(r, c));
+            }
+          }
+        }
+      }
+    };
+    for (const Pair& pair : pairs) {
+      const ImuPreintegration& p = *pair.preintegration;
+      const double dt = p.delta_t_s();
+      const Eigen::Matrix3d ri = rotation(pair.i);
+      const Eigen::Vector3d dp = ri * p.delta_p();
+      const Eigen::Vector3d dv = ri * p.delta_v();
+      // Residual rows [velocity (3); position (3)], unknown blocks of 3
+      // columns (the scale and gravity columns padded into one 3-wide block).
+      Eigen::Matrix<double, 6, 3> globals = Eigen::Matrix<double, 6, 3>::Zero();
+      globals.block<3, 1>(3, 0) = position(pair.j) - position(pair.i);  // scale
+      globals.block<3, 2>(0, 1) = -dt * tangent;
+      globals.block<3, 2>(3, 1) = -0.5 * dt * dt * tangent;
+      Eigen::Matrix<double, 6, 3> bias;
+      bias.topRows<3>() = -ri * p.dv_dba();
+      bias.bottomRows<3>() = -ri * p.dp_dba();
+      Eigen::Matrix<double, 6, 3> velocity_i;
+      velocity_i.topRows<3>() = -Eigen::Matrix3d::Identity();
+      velocity_i.bottomRows<3>() = -dt * Eigen::Matrix3d::Identity();
+      Eigen::Matrix<double, 6, 3> velocity_j = Eigen::Matrix<double, 6, 3>::Zero();
+      velocity_j.topRows<3>() = Eigen::Matrix3d::Identity();
+      Eigen::Matrix<double, 6, 1> b;
+      b.head<3>() = dv + gravity * dt;
+      b.tail<3>() = dp + 0.5 * gravity * dt * dt;
+      // Covariance: the preintegration's [v, p] block (rotated into the
+      // world), the bias walking away from its window's value, the frames'
+      // rotations (turning dv and dp) and positions.
+      Eigen::Matrix<double, 6, 6> covariance;
+      const Matrix9d& c = p.covariance();
+      covariance.topLeftCorner<3, 3>() = ri * c.block<3, 3>(3, 3) * ri.transpose();
+      covariance.topRightCorner<3, 3>() = ri * c.block<3, 3>(3, 6) * ri.transpose();
+      covariance.bottomLeftCorner<3, 3>() = covariance.topRightCorner<3, 3>().transpose();
+      covariance.bottomRightCorner<3, 3>() = ri * c.block<3, 3>(6, 6) * ri.transpose();
+      const double walk2 = std::pow(noise.accel_random_walk, 2) * (0.5 * options.bias_window_s + dt);
+      const Eigen::Matrix3d eye = Eigen::Matrix3d::Identity();
+      covariance.topLeftCorner<3, 3>() += walk2 * dt * dt * eye;
+      covariance.topRightCorner<3, 3>() += walk2 * 0.5 * dt * dt * dt * eye;
+      covariance.bottomLeftCorner<3, 3>() += walk2 * 0.5 * dt * dt * dt * eye;
+      covariance.bottomRightCorner<3, 3>() += walk2 * 0.25 * dt * dt * dt * dt * eye;
+      const double rotation2 = rotation_sigma * rotation_sigma + std::pow(1e-4 * dt, 2);
+      covariance.topLeftCorner<3, 3>() += rotation2 * dv.squaredNorm() * eye;
+      covariance.bottomRightCorner<3, 3>() +=
+          (rotation2 * dp.squaredNorm() + 2.0 * options.position_sigma_m * options.position_sigma_m) *
+          eye;
+      const Eigen::LLT<Eigen::Matrix<double, 6, 6>> llt(covariance);
+      if (llt.info() != Eigen::Success) continue;
+      const Eigen::Matrix<double, 6, 6> whiten = llt.matrixL().solve(
+          Eigen::Matrix<double, 6, 6>::Identity());
+      num_rows += 6;
+      accumulate({{col_scale, globals},
+                  {col_bias + 3 * pair.window, bias},
+                  {col_velocity + 3 * static_cast<int>(pair.i), velocity_i},
+                  {col_velocity + 3 * static_cast<int>(pair.j), velocity_j}},
+                 b, whiten);
+    }
+    // A weak prior on every unknown keeps unobserved ones (a window without
+    // pairs) determined: 10 m/s, 1 m/s^2, 1 rad, scale 10.
+    for (int k = 0; k < num_unknowns; ++k) triplets.emplace_back(k, k, 1e-8);
+    normal_matrix = Eigen::SparseMatrix<double>(num_unknowns, num_unknowns);
+    normal_matrix.setFromTriplets(triplets.begin(), triplets.end());
+    const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(normal_matrix);
+    if (solver.info() != Eigen::Success) {
+      result.message = "the least squares is singular";
+      return result;
+    }
+    solution = solver.solve(rhs);
+    scale = solution[col_scale];
+    const Eigen::Vector3d corrected =
+        gravity + tangent * solution.segment<2>(col_gravity);
+    gravity = g_norm * corrected.normalized();
+    if (iteration + 1 == options.gravity_iterations) {
+      // The scale's variance: (A^T A)^-1 at (0, 0).
+      Eigen::VectorXd unit = Eigen::VectorXd::Zero(num_unknowns);
+      unit[col_scale] = 1.0;
+      const Eigen::VectorXd column = solver.solve(unit);
+      result.scale_sigma = std::sqrt(std::max(0.0, column[col_scale])) / std::abs(scale);
+      // The whitened residual at the optimum, |W b|^2 - x^T A^T W^T W b:
+      // when the equations disagree more than their covariance says (the
+      // trajectory's shape or rotations are worse than assumed), the
+      // scale's uncertainty grows with them.
+      const double sse = std::max(0.0, whitened_b2 - solution.dot(rhs));
+      const int dof = std::max(1, num_rows - num_unknowns);
+      result.residual_ratio = std::sqrt(sse / dof);
+      result.scale_sigma *= std::max(1.0, result.residual_ratio);
+    }
+  }
+  result.scale = scale;
+  result.gravity_in_world = gravity;
+  result.num_frames = num_frames;
+  result.num_pairs = static_cast<int>(pairs.size());
+  std::ostringstream message;
+  message << std::fixed << std::setprecision(5) << "IMU scale " << scale << " +- "
+          << result.scale_sigma * scale << " from " << result.num_pairs
+          << " frame pairs (residual " << std::setprecision(2) << result.residual_ratio
+          << " times the expected)";
+  if (!(scale > 1.0 / options.max_scale_factor && scale < options.max_scale_factor)) {
+    message << ": outside [1/" << options.max_scale_factor << ", " << options.max_scale_factor
+            << "], not used";
+  } else if (!(result.residual_ratio <= options.max_residual_ratio)) {
+    message << ": the trajectory's shape disagrees with the IMU more than expected, not used";
+  } else if (!(result.scale_sigma <= options.max_scale_sigma)) {
+    message << ": too uncertain (more than " << options.max_scale_sigma * 100
+            << " %; too little motion or IMU), not used";
+  } else {
+    result.usable = true;
+  }
+  result.message = message.str();
+  return result;
+}
+
+}  // namespace viosfm

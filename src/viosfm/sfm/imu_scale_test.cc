@@ -1,0 +1,113 @@
+#include "viosfm/sfm/imu_scale.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <vector>
+
+#include "viosfm/util/random.h"
+
+namespace viosfm {
+namespace {
+
+// A hand-held-like motion with closed-form derivatives: position a sum of
+// sinusoids (about 0.5 m/s, 0.5 m/s^2), rotation yaw-pitch-roll sinusoids.
+Eigen::Vector3d Position(double t) {
+  return {1.5 * std::sin(0.6 * t) + 0.3 * std::sin(1.7 * t),
+          1.2 * std::cos(0.45 * t) + 0.2 * std::sin(2.3 * t), 1.2 + 0.2 * std::sin(0.9 * t)};
+}
+Eigen::Vector3d Acceleration(double t) {
+  return {-1.5 * 0.36 * std::sin(0.6 * t) - 0.3 * 2.89 * std::sin(1.7 * t),
+          -1.2 * 0.2025 * std::cos(0.45 * t) - 0.2 * 5.29 * std::sin(2.3 * t),
+          -0.2 * 0.81 * std::sin(0.9 * t)};
+}
+Eigen::Matrix3d Rotation(double t) {
+  return (Eigen::AngleAxisd(0.8 * std::sin(0.3 * t) + 0.05 * t, Eigen::Vector3d::UnitZ()) *
+          Eigen::AngleAxisd(0.1 * std::sin(0.7 * t), Eigen::Vector3d::UnitY()) *
+          Eigen::AngleAxisd(0.05 * std::sin(1.1 * t), Eigen::Vector3d::UnitX()))
+      .toRotationMatrix();
+}
+
+struct Data {
+  std::vector<ImuSample> imu;
+  ImuNoise noise;
+};
+
+// 200 Hz IMU over [0, duration] with EuRoC-like noise and constant biases.
+Data MakeImu(double duration_s, uint64_t seed) {
+  Data data;
+  Random random(seed);
+  const Eigen::Vector3d gyro_bias(0.002, -0.001, 0.003);
+  const Eigen::Vector3d accel_bias(0.05, -0.03, 0.04);
+  const double dt = 1.0 / data.noise.rate_hz;
+  const double h = 1e-5;
+  for (int k = 0; k * dt <= duration_s; ++k) {
+    const double t = k * dt;
+    const Eigen::Matrix3d rotation = Rotation(t);
+    const Eigen::AngleAxisd turn(Rotation(t - h).transpose() * Rotation(t + h));
+    const Eigen::Vector3d omega = turn.angle() * turn.axis() / (2 * h);
+    const Eigen::Vector3d force =
+        rotation.transpose() * (Acceleration(t) - Eigen::Vector3d(0, 0, -kStandardGravity));
+    ImuSample sample;
+    sample.timestamp_ns = static_cast<timestamp_ns_t>(std::llround(t * 1e9));
+    for (int a = 0; a < 3; ++a) {
+      sample.gyro[a] = omega[a] + gyro_bias[a] + random.Normal(0, data.noise.GyroSampleStddev());
+      sample.accel[a] = force[a] + accel_bias[a] + random.Normal(0, data.noise.AccelSampleStddev());
+    }
+    data.imu.push_back(sample);
+  }
+  return data;
+}
+
+// Body poses at the stamps, positions divided by `true_scale` (the
+// reconstruction's units), with 1 mm / 0.5 mrad noise.
+Trajectory Reconstruction(const std::vector<double>& stamps_s, double true_scale, uint64_t seed) {
+  Random random(seed);
+  Trajectory trajectory;
+  for (const double t : stamps_s) {
+    const Eigen::Vector3d noise_angle(random.Normal(0, 5e-4), random.Normal(0, 5e-4),
+                                      random.Normal(0, 5e-4));
+    const Eigen::Matrix3d rotation =
+        Rotation(t) * Eigen::AngleAxisd(noise_angle.norm(), noise_angle.normalized()).toRotationMatrix();
+    const Eigen::Vector3d position =
+        Position(t) / true_scale +
+        Eigen::Vector3d(random.Normal(0, 0.001), random.Normal(0, 0.001), random.Normal(0, 0.001));
+    trajectory.poses.push_back({static_cast<timestamp_ns_t>(std::llround(t * 1e9)),
+                                Rigid3d(Eigen::Quaterniond(rotation), position)});
+  }
+  return trajectory;
+}
+
+TEST(ImuScale, RecoversTheScaleOfA10HzTrajectory) {
+  const Data data = MakeImu(62.0, 1);
+  std::vector<double> stamps;
+  for (int k = 0; k <= 600; ++k) stamps.push_back(1.0 + 0.1 * k);
+  const ImuScaleResult result = EstimateImuScale(Reconstruction(stamps, 1.02, 2), data.imu, data.noise);
+  ASSERT_TRUE(result.usable) << result.message;
+  EXPECT_NEAR(result.scale, 1.02, 0.002) << result.message;
+  EXPECT_LT(result.scale_sigma, 0.002);  // (measured 0.1 %)
+  EXPECT_LT((result.gravity_in_world - Eigen::Vector3d(0, 0, -kStandardGravity)).norm(), 0.02);
+  EXPECT_EQ(result.num_pairs, 600);
+}
+
+TEST(ImuScale, RecoversTheScaleOfKeyframesWithIrregularGaps) {
+  const Data data = MakeImu(150.0, 3);
+  Random random(4);
+  std::vector<double> stamps;
+  for (double t = 1.0; t < 149.0; t += std::exp(random.Uniform(std::log(0.05), std::log(7.0)))) {
+    stamps.push_back(t);
+  }
+  const ImuScaleResult result = EstimateImuScale(Reconstruction(stamps, 0.985, 5), data.imu, data.noise);
+  ASSERT_TRUE(result.usable) << result.message;  // (sigma 0.35 %)
+  EXPECT_NEAR(result.scale, 0.985, 0.003) << result.message;
+}
+
+TEST(ImuScale, TooFewFramesOrNoImuIsNotUsable) {
+  const Data data = MakeImu(5.0, 6);
+  EXPECT_FALSE(EstimateImuScale(Reconstruction({1.0, 2.0, 3.0}, 1.0, 7), data.imu, data.noise).usable);
+  EXPECT_FALSE(EstimateImuScale(Reconstruction({1.0, 2.0, 3.0, 4.0}, 1.0, 7), {}, data.noise).usable);
+}
+
+}  // namespace
+}  // namespace viosfm
