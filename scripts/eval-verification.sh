@@ -6,22 +6,27 @@
 # 752x480, seed 0; at most 2000 SIFT features a frame; N1 6 temporal + N2 10
 # retrieval pairs):
 #  1. viosfm simulate, viosfm features;
-#  2. viosfm match three ways on the same candidate pairs and the same
+#  2. viosfm match four ways on the same candidate pairs and the same
 #     tentative matches: RANSAC only (--no-vio-prior, the baseline; it
 #     matches every pair), then on copies of its database with --reverify
 #     (stored matches verified again): the paper's VIO-aided check
-#     (--no-depth-check) and the VIO-aided check with the depth check;
+#     (--no-depth-check --fixed-band), the VIO-aided check with the depth
+#     check and the fixed band (--fixed-band, the default until issue 15) and
+#     the default (the depth check and the band that follows the VIO's drift);
 #  3. viosfm check-pairs against the simulator's ground truth;
 #  4. drift sweep: the emulated VIO regenerated (--no-images, same seed, so
-#     the same motion) with --vio-drift X, and both VIO-aided variants
-#     re-verified with it; prints drift -> accepted wrong, correct kept %.
+#     the same motion) with --vio-drift X, and the three VIO-aided variants
+#     re-verified with it (the VIO model's rates at their defaults: the
+#     verification is not told the drift); prints drift -> accepted wrong,
+#     correct kept %.
 # Prints Markdown tables; everything is kept in WORK_DIR.
 #
 # Usage: scripts/eval-verification.sh [WORK_DIR]
 # Environment: VIOSFM (binary, default build/src/viosfm/cli/viosfm),
 #   SCENARIOS ("two_floors corridor"), DURATION (s, 60), RATE (Hz, 2),
 #   MAX_FEATURES (2000), N1 (6), N2 (10), SEED (0),
-#   DRIFTS ("0 1 2 5 10 20", multiples of the default drift), THREADS (2).
+#   DRIFTS ("0 1 2 5 10 20", multiples of the default drift), THREADS (2),
+#   VIO_PROFILE (gentle; or realistic: sim/vio_emulator.h).
 set -euo pipefail
 
 VIOSFM=$(realpath "${VIOSFM:-build/src/viosfm/cli/viosfm}")
@@ -35,6 +40,7 @@ N2=${N2:-10}
 SEED=${SEED:-0}
 DRIFTS=${DRIFTS:-"0 1 2 5 10 20"}
 THREADS=${THREADS:-2}
+VIO_PROFILE=${VIO_PROFILE:-gentle}
 
 mkdir -p "$WORK"
 start=$(date +%s)
@@ -64,7 +70,8 @@ for scenario in $SCENARIOS; do
   echo "== $scenario: $DURATION s at $RATE Hz, seed $SEED"
   rm -rf "$seq"
   "$VIOSFM" simulate --scenario "$scenario" --duration "$DURATION" --rate "$RATE" \
-    --seed "$SEED" --threads "$THREADS" --out "$seq" > "$dir/simulate.log" 2>&1
+    --seed "$SEED" --threads "$THREADS" --vio-profile "$VIO_PROFILE" --out "$seq" \
+    > "$dir/simulate.log" 2>&1
   rm -f "$dir"/*.db "$dir"/*.db-*
   "$VIOSFM" features "$seq" --database "$dir/features.db" --max-features "$MAX_FEATURES" \
     --threads "$THREADS" > "$dir/features.log" 2>&1
@@ -73,11 +80,14 @@ for scenario in $SCENARIOS; do
   cp "$dir/features.db" "$dir/ransac.db"
   match ransac_only "$seq" "$dir/ransac.db" "$vio" --no-vio-prior
   cp "$dir/ransac.db" "$dir/paper.db"
-  match vio_paper "$seq" "$dir/paper.db" "$vio" --reverify --no-depth-check
+  match vio_paper "$seq" "$dir/paper.db" "$vio" --reverify --no-depth-check --fixed-band
+  cp "$dir/ransac.db" "$dir/fixed.db"
+  match vio_depth_fixed_band "$seq" "$dir/fixed.db" "$vio" --reverify --fixed-band
   cp "$dir/ransac.db" "$dir/depth.db"
   match vio_depth "$seq" "$dir/depth.db" "$vio" --reverify
   "$VIOSFM" check-pairs "$seq" --report "$dir/ransac_only" --report "$dir/vio_paper" \
-    --report "$dir/vio_depth" --json "$dir/check_pairs.json" > "$dir/check_pairs.txt" \
+    --report "$dir/vio_depth_fixed_band" --report "$dir/vio_depth" \
+    --json "$dir/check_pairs.json" > "$dir/check_pairs.txt" \
     2> "$dir/check_pairs.log"
   echo
   echo "### $scenario ($(ls "$seq/mav0/cam0/data" | wc -l) frames)"
@@ -88,29 +98,33 @@ for scenario in $SCENARIOS; do
   echo
   echo "### $scenario: VIO drift sweep (multiple of the default emulated drift)"
   echo
-  echo "| drift | VIO end error (m) | paper: accepted wrong | paper: correct kept | with depth check: accepted wrong | with depth check: correct kept |"
-  echo "|---|---|---|---|---|---|"
+  echo "| drift | VIO end error (m) | paper: accepted wrong | paper: correct kept | depth check, fixed band: accepted wrong | correct kept | depth check, drift band (default): accepted wrong | correct kept |"
+  echo "|---|---|---|---|---|---|---|---|"
   for drift in $DRIFTS; do
     dseq="$dir/drift_$drift"
     rm -rf "$dseq"
     "$VIOSFM" simulate --scenario "$scenario" --duration "$DURATION" --rate "$RATE" \
-      --seed "$SEED" --vio-drift "$drift" --no-images --out "$dseq" > "$dseq.log" 2>&1
-    end_error=$(grep -o 'emulated VIO end drift [0-9.e+-]*' "$dseq.log" | awk '{print $5}')
-    for variant in paper depth; do
+      --seed "$SEED" --vio-drift "$drift" --vio-profile "$VIO_PROFILE" --no-images \
+      --out "$dseq" > "$dseq.log" 2>&1
+    end_error=$(grep -o 'end drift [0-9.e+-]*' "$dseq.log" | awk '{print $3}')
+    for variant in paper fixed depth; do
       extra=(--reverify)
-      [ "$variant" = paper ] && extra+=(--no-depth-check)
+      [ "$variant" = paper ] && extra+=(--no-depth-check --fixed-band)
+      [ "$variant" = fixed ] && extra+=(--fixed-band)
       cp "$dir/ransac.db" "$dir/drift_${drift}_$variant.db"
       match "drift_${drift}_$variant" "$seq" "$dir/drift_${drift}_$variant.db" \
         "$dseq/vio_emulated.tum" "${extra[@]}"
     done
     "$VIOSFM" check-pairs "$seq" --report "$dir/ransac_only" --report "$dir/drift_${drift}_paper" \
-      --report "$dir/drift_${drift}_depth" > "$dir/drift_${drift}_check.txt" \
-      2> "$dir/drift_${drift}_check.log"
+      --report "$dir/drift_${drift}_fixed" --report "$dir/drift_${drift}_depth" \
+      > "$dir/drift_${drift}_check.txt" 2> "$dir/drift_${drift}_check.log"
     paper_line=$(grep "^| drift_${drift}_paper " "$dir/drift_${drift}_check.txt")
+    fixed_line=$(grep "^| drift_${drift}_fixed " "$dir/drift_${drift}_check.txt")
     depth_line=$(grep "^| drift_${drift}_depth " "$dir/drift_${drift}_check.txt")
     p=$(row x "$paper_line" | awk -F'|' '{print $3 "|" $4}')
+    f=$(row x "$fixed_line" | awk -F'|' '{print $3 "|" $4}')
     d=$(row x "$depth_line" | awk -F'|' '{print $3 "|" $4}')
-    echo "| $drift | $end_error |$p|$d|"
+    echo "| $drift | $end_error |$p|$f|$d|"
   done
 done
 echo
