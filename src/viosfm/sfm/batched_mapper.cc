@@ -410,45 +410,59 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
                                  predicted);
         status.num_predicted_inliers = static_cast<int>(result.num_predicted_inliers);
         status.num_pnp_inliers = result.success ? static_cast<int>(result.num_inliers) : 0;
+        if (result.success && !predicted) {
+          register_frame(i, result.cam_from_world, FramePoseSource::kImagesWithoutVio);
+          return true;
+        }
         if (result.success) {
-          if (predicted && static_cast<double>(result.num_predicted_inliers) >=
-                               registration.min_predicted_inlier_ratio *
-                                   static_cast<double>(result.num_inliers)) {
+          const int pnp_inliers = static_cast<int>(result.num_inliers);
+          const int predicted_inliers = static_cast<int>(result.num_predicted_inliers);
+          const bool prediction_supported = predicted_inliers >= registration.pnp.min_num_inliers;
+          if (prediction_supported && static_cast<double>(predicted_inliers) >=
+                                          registration.min_predicted_inlier_ratio * pnp_inliers) {
             register_frame(i, *predicted, FramePoseSource::kVioVerified);
             return true;
           }
-          if (predicted && static_cast<int>(result.num_inliers) < registration.min_reposing_inliers) {
-            // Too weak to overrule the VIO.
-            register_frame(i, *predicted, FramePoseSource::kVio);
+          // How far the images' pose is from the VIO's, against the drift
+          // the model allows between the frame and its reference.
+          const RelativePoseSigmas sigmas = LargestSigmas(
+              RelativePoseCovariance(options.vio_uncertainty,
+                                     VioSampleOfImage(input.images[*reference]),
+                                     VioSampleOfImage(input.images[i])));
+          const double position_difference =
+              (ProjectionCenter(result.cam_from_world) - ProjectionCenter(*predicted)).norm();
+          const double rotation_difference =
+              result.cam_from_world.rotation.angularDistance(predicted->rotation);
+          const bool beyond_drift =
+              position_difference > registration.break_sigmas * sigmas.translation_m +
+                                        registration.break_min_translation_m ||
+              rotation_difference > registration.break_sigmas * sigmas.rotation_rad +
+                                        registration.break_min_rotation_rad;
+          if (pnp_inliers >= registration.min_reposing_inliers && !beyond_drift) {
+            // The images refine a drifted prediction.
+            register_frame(i, result.cam_from_world, FramePoseSource::kImagesReposed);
             return true;
           }
-          if (predicted && static_cast<int>(result.num_inliers) >=
-                               2 * registration.min_reposing_inliers) {
-            // Disagreement beyond what the VIO's drift allows: a jump.
-            const RelativePoseSigmas sigmas = LargestSigmas(
-                RelativePoseCovariance(options.vio_uncertainty,
-                                       VioSampleOfImage(input.images[*reference]),
-                                       VioSampleOfImage(input.images[i])));
-            const double position_difference =
-                (ProjectionCenter(result.cam_from_world) - ProjectionCenter(*predicted)).norm();
-            const double rotation_difference =
-                result.cam_from_world.rotation.angularDistance(predicted->rotation);
-            if (position_difference > registration.break_sigmas * sigmas.translation_m +
-                                          registration.break_min_translation_m ||
-                rotation_difference > registration.break_sigmas * sigmas.rotation_rad +
-                                          registration.break_min_rotation_rad) {
-              is_break[std::max(i, *reference)] = 1;
-              status.vio_break = true;
-              VIOSFM_LOG(INFO) << "batched mapper: " << DescribeImage(input.images[i])
-                               << ": the VIO's pose is " << position_difference << " m and "
-                               << rotation_difference << " rad off the images' ("
-                               << result.num_predicted_inliers << " of " << result.num_inliers
-                               << " inliers): a VIO jump, no prior crosses it";
-            }
+          if (!prediction_supported && beyond_drift &&
+              pnp_inliers >= 2 * registration.min_reposing_inliers) {
+            // The images do not support the VIO's pose at all and strongly
+            // support one far beyond its drift: the VIO jumped.
+            is_break[std::max(i, *reference)] = 1;
+            status.vio_break = true;
+            VIOSFM_LOG(INFO) << "batched mapper: " << DescribeImage(input.images[i])
+                             << ": the VIO's pose is " << position_difference << " m and "
+                             << rotation_difference << " rad off the images' ("
+                             << predicted_inliers << " of " << pnp_inliers
+                             << " inliers): a VIO jump, no prior crosses it";
+            register_frame(i, result.cam_from_world, FramePoseSource::kImagesReposed);
+            return true;
           }
-          register_frame(i, result.cam_from_world,
-                         predicted ? FramePoseSource::kImagesReposed
-                                   : FramePoseSource::kImagesWithoutVio);
+          // A weak PnP, or an ambiguous one (repeated structure: the images
+          // support the VIO's pose too, and another far from it): the VIO's
+          // pose stands.
+          register_frame(i, *predicted,
+                         prediction_supported ? FramePoseSource::kVioVerified
+                                              : FramePoseSource::kVio);
           return true;
         }
       }
