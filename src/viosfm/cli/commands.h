@@ -16,5 +16,6 @@ void RegisterVio(CLI::App& app);
 void RegisterRun(CLI::App& app);
 void RegisterReport(CLI::App& app);
 void RegisterBenchReport(CLI::App& app);
+void RegisterConvert(CLI::App& app);
 
 }  // namespace viosfm::cli

@@ -645,9 +645,15 @@ void RosbagWriter::FlushChunk() {
     VIOSFM_CHECK_EQ(status, BZ_OK) << "bzip2 compression failed";
     compressed.resize(size);
   } else if (options_.compression == RosbagCompression::kLz4) {
-    compressed.resize(LZ4F_compressFrameBound(chunk_data_.size(), nullptr));
+    // ROS's own decompressor (roslz4) reads only frames with independent
+    // blocks, a content checksum, no block checksums and no content size.
+    LZ4F_preferences_t preferences = LZ4F_INIT_PREFERENCES;
+    preferences.frameInfo.blockMode = LZ4F_blockIndependent;
+    preferences.frameInfo.contentChecksumFlag = LZ4F_contentChecksumEnabled;
+    preferences.frameInfo.blockSizeID = LZ4F_max1MB;
+    compressed.resize(LZ4F_compressFrameBound(chunk_data_.size(), &preferences));
     const size_t size = LZ4F_compressFrame(compressed.data(), compressed.size(),
-                                           chunk_data_.data(), chunk_data_.size(), nullptr);
+                                           chunk_data_.data(), chunk_data_.size(), &preferences);
     VIOSFM_CHECK(!LZ4F_isError(size)) << "lz4 compression failed: " << LZ4F_getErrorName(size);
     compressed.resize(size);
   }

@@ -147,6 +147,17 @@ TEST(Rosbag, WriterRoundTripsInEveryCompression) {
       for (const ReadMessage& m : written) writer.Write(ids[m.topic], m.time_ns, m.data);
       writer.Close();
     }
+    if (compression == RosbagCompression::kLz4) {
+      // roslz4, ROS's reader, takes only LZ4 frames whose FLG byte is 0x64
+      // (version 1, independent blocks, content checksum) with a block size
+      // id of 4 to 7 in the BD byte.
+      const std::string bytes = ReadFileBytes(path);
+      const size_t magic = bytes.find(std::string("\x04\x22\x4d\x18", 4));
+      ASSERT_NE(magic, std::string::npos);
+      EXPECT_EQ(static_cast<uint8_t>(bytes[magic + 4]), 0x64);
+      const int block_size_id = (static_cast<uint8_t>(bytes[magic + 5]) >> 4) & 7;
+      EXPECT_GE(block_size_id, 4);
+    }
     RosbagReader reader(path);
     EXPECT_TRUE(reader.has_index());
     ASSERT_EQ(reader.connections().size(), 3u);
