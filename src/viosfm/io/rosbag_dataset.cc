@@ -270,7 +270,7 @@ std::string DescribeRosbagTopics(const RosbagReader& reader) {
     uint64_t count = 0;
     for (const RosbagConnection* connection : connections) count += connection->num_messages;
     out << (first ? "" : "\n") << "  " << topic << " (" << connections.front()->type << ", "
-        << count << " messages)";
+        << count << (count == 1 ? " message)" : " messages)");
     first = false;
   }
   return out.str();

@@ -125,7 +125,7 @@ const char* kViewerScript = R"JS(
   var r = d.radius;
   var camera = new THREE.PerspectiveCamera(50, d.width / d.height, r / 1000, r * 100);
   camera.up.set(0, 0, 1);  // the world is gravity-aligned, z up
-  camera.position.set(1.3 * r, -1.7 * r, 1.2 * r);
+  camera.position.set(1.0 * r, -1.35 * r, 0.95 * r);
   var controls = new THREE.OrbitControls(camera, canvas);
   controls.target.set(0, 0, 0);
   controls.screenSpacePanning = true;
