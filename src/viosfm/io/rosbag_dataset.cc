@@ -404,7 +404,11 @@ Sequence ReadRosbagDataset(const fs::path& bag, const RosbagDatasetOptions& opti
             throw InputError(where + ": ground-truth pose with a quaternion of norm " +
                              std::to_string(norm) + " (expected 1) or a non-finite position");
           }
-          world_from_body.rotation.normalize();
+          // As the trajectory readers do: a quaternion already of unit norm
+          // (to rounding) is kept as it is, so a pose survives a bag exactly.
+          if (std::abs(world_from_body.rotation.squaredNorm() - 1.0) > 2e-15) {
+            world_from_body.rotation.normalize();
+          }
           ground_truth.push_back({{stamp_of(header), message.location}, world_from_body});
         } else if (connection.topic == kCameraCalibrationTopic) {
           camera_yaml_text = DeserializeRosString(message.data, where);
@@ -500,7 +504,9 @@ Sequence ReadRosbagDataset(const fs::path& bag, const RosbagDatasetOptions& opti
   for (const auto& [located, world_from_body] : ground_truth) {
     GroundTruthState state;
     state.timestamp_ns = located.stamp_ns;
-    state.world_from_body = world_from_body * body_from_imu;
+    // (Composed only when needed: composing normalises the quaternion.)
+    state.world_from_body =
+        IsIdentity(body_from_imu) ? world_from_body : world_from_body * body_from_imu;
     sequence.ground_truth.push_back(state);
   }
   if (!(sequence.rig.camera_rate_hz > 0)) {

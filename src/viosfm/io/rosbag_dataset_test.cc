@@ -112,6 +112,10 @@ TEST(RosbagDataset, RoundTripsWithoutOptions) {
     const Sequence read = ReadRosbagDataset(bag, Extract(folder / (compressed ? "xc" : "xr")));
     ExpectSameSequence(original, read);
     EXPECT_EQ(read.root, bag);
+    for (size_t i = 0; i < read.ground_truth.size(); ++i) {  // bit for bit
+      EXPECT_EQ(read.ground_truth[i].world_from_body.rotation.coeffs(),
+                original.ground_truth[i].world_from_body.rotation.coeffs());
+    }
     // The extract folder is a EuRoC folder of the same recording.
     EurocReadOptions euroc;
     ExpectSameSequence(original, ReadEurocDataset(folder / (compressed ? "xc" : "xr"), euroc));
@@ -318,6 +322,29 @@ TEST(RosbagDataset, RealEurocExcerptRoundTrips) {
   WriteRosbagDataset(original, folder / "v101.bag");
   const Sequence read = ReadRosbagDataset(folder / "v101.bag", Extract(folder / "x"));
   ExpectSameSequence(original, read);
+}
+
+// The real RealSense recording (JPEG images) as sensor_msgs/CompressedImage
+// holding the JPEG bytes: the grey pixels read from the bag are the ones
+// OpenCV decodes from the files (first 30 images, to stay fast).
+TEST(RosbagDataset, RealJpegRecordingAsCompressedImages) {
+  VIOSFM_REQUIRE_DATASET(root, "realsense_room_30s");
+  Sequence original = ReadEurocDataset(root);
+  original.images.resize(30);
+  const fs::path folder = testing::MakeScratchFolder("rosbag_dataset_realsense");
+  RosbagWriteOptions write;
+  write.compressed_images = true;
+  write.writer.compression = RosbagCompression::kLz4;
+  WriteRosbagDataset(original, folder / "rs.bag", write);
+  const Sequence read = ReadRosbagDataset(folder / "rs.bag", Extract(folder / "x"));
+  ASSERT_EQ(read.images.size(), 30u);
+  for (size_t i = 0; i < read.images.size(); ++i) {
+    EXPECT_EQ(read.images[i].timestamp_ns, original.images[i].timestamp_ns);
+    EXPECT_EQ(ReadGreyImage(read.images[i].path).pixels,
+              ReadGreyImage(original.images[i].path).pixels);
+  }
+  EXPECT_EQ(read.imu.size(), original.imu.size());
+  EXPECT_EQ(read.rig.camera.params, original.rig.camera.params);
 }
 
 }  // namespace
