@@ -54,8 +54,8 @@ class Connection {
   std::unique_ptr<Statement> Prepare(const std::string& sql) {
     auto statement = std::make_unique<Statement>();
     if (sqlite3_prepare_v2(db_, sql.c_str(), -1, &statement->stmt, nullptr) != SQLITE_OK) {
-      throw InputError(path_, 0,
-                       std::string("SQL failed (") + sqlite3_errmsg(db_) + "): " + sql.substr(0, 80));
+      throw InputError(
+          path_, 0, std::string("SQL failed (") + sqlite3_errmsg(db_) + "): " + sql.substr(0, 80));
     }
     return statement;
   }
@@ -109,10 +109,12 @@ void WriteColmapPosePriors(const fs::path& database, const std::vector<ColmapPos
     const std::string what = "pose prior of image " + std::to_string(prior.image_id);
     if (!prior.position.allFinite()) throw InputError(p, 0, what + ": non-finite position");
     const Eigen::Matrix3d& c = prior.position_covariance;
-    if (!c.allFinite() || (c - c.transpose()).cwiseAbs().maxCoeff() > 1e-12 * c.cwiseAbs().maxCoeff()) {
+    if (!c.allFinite() ||
+        (c - c.transpose()).cwiseAbs().maxCoeff() > 1e-12 * c.cwiseAbs().maxCoeff()) {
       throw InputError(p, 0, what + ": the position covariance is not a finite symmetric matrix");
     }
-    const Eigen::Vector3d eigenvalues = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(c).eigenvalues();
+    const Eigen::Vector3d eigenvalues =
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(c).eigenvalues();
     if (eigenvalues.minCoeff() < -1e-12 * std::max(1.0, eigenvalues.maxCoeff())) {
       throw InputError(p, 0, what + ": the position covariance is not positive semi-definite");
     }
@@ -143,8 +145,8 @@ void WriteColmapPosePriors(const fs::path& database, const std::vector<ColmapPos
                       SQLITE_TRANSIENT);
     connection.Step(insert->stmt, SQLITE_DONE);
     const Eigen::Quaterniond& q = prior.cam_from_world_rotation;
-    const double values[7] = {q.w(), q.x(), q.y(), q.z(),
-                              prior.position.x(), prior.position.y(), prior.position.z()};
+    const double values[7] = {
+        q.w(), q.x(), q.y(), q.z(), prior.position.x(), prior.position.y(), prior.position.z()};
     sqlite3_reset(update->stmt);
     for (int i = 0; i < 7; ++i) sqlite3_bind_double(update->stmt, i + 1, values[i]);
     sqlite3_bind_int64(update->stmt, 8, static_cast<sqlite3_int64>(prior.image_id));
@@ -179,14 +181,12 @@ std::vector<ColmapPosePrior> ReadColmapPosePriors(const fs::path& database) {
     prior.position = ReadBlob<Eigen::Vector3d>(select->stmt, 1, connection.path(), id, "position");
     prior.coordinate_system =
         static_cast<ColmapCoordinateSystem>(sqlite3_column_int64(select->stmt, 2));
-    prior.position_covariance = ReadBlob<Eigen::Matrix3d>(select->stmt, 3, connection.path(), id,
-                                                          "position_covariance");
+    prior.position_covariance =
+        ReadBlob<Eigen::Matrix3d>(select->stmt, 3, connection.path(), id, "position_covariance");
     if (sqlite3_column_type(select->stmt, 4) != SQLITE_NULL) {
-      prior.cam_from_world_rotation =
-          Eigen::Quaterniond(sqlite3_column_double(select->stmt, 4),
-                             sqlite3_column_double(select->stmt, 5),
-                             sqlite3_column_double(select->stmt, 6),
-                             sqlite3_column_double(select->stmt, 7));
+      prior.cam_from_world_rotation = Eigen::Quaterniond(
+          sqlite3_column_double(select->stmt, 4), sqlite3_column_double(select->stmt, 5),
+          sqlite3_column_double(select->stmt, 6), sqlite3_column_double(select->stmt, 7));
     }
     priors.push_back(prior);
   }

@@ -160,23 +160,27 @@ TEST(ColmapPosePriors, BadPriorsAreInputErrors) {
   const fs::path path = MakeDatabase(folder);
   std::vector<ColmapPosePrior> priors = MakePriors();
   priors[1].image_id = 7;
-  EXPECT_NE(testing::InputErrorMessage([&] { WriteColmapPosePriors(path, priors); })
-                .find("image 7, which the images table does not have"),
+  EXPECT_NE(testing::InputErrorMessage([&] {
+              WriteColmapPosePriors(path, priors);
+            }).find("image 7, which the images table does not have"),
             std::string::npos);
   EXPECT_TRUE(ReadColmapPosePriors(path).empty());  // rolled back
   priors = MakePriors();
   priors[0].position_covariance(0, 1) = 0.5;
-  EXPECT_NE(testing::InputErrorMessage([&] { WriteColmapPosePriors(path, priors); })
-                .find("not a finite symmetric matrix"),
+  EXPECT_NE(testing::InputErrorMessage([&] {
+              WriteColmapPosePriors(path, priors);
+            }).find("not a finite symmetric matrix"),
             std::string::npos);
   priors = MakePriors();
   priors[0].position_covariance(2, 2) = -1.0;
-  EXPECT_NE(testing::InputErrorMessage([&] { WriteColmapPosePriors(path, priors); })
-                .find("not positive semi-definite"),
+  EXPECT_NE(testing::InputErrorMessage([&] {
+              WriteColmapPosePriors(path, priors);
+            }).find("not positive semi-definite"),
             std::string::npos);
   testing::WriteTextFile(folder / "empty.db", "");
-  EXPECT_NE(testing::InputErrorMessage([&] { WriteColmapPosePriors(folder / "empty.db", {}); })
-                .find("not a COLMAP database"),
+  EXPECT_NE(testing::InputErrorMessage([&] {
+              WriteColmapPosePriors(folder / "empty.db", {});
+            }).find("not a COLMAP database"),
             std::string::npos);
 }
 
@@ -186,8 +190,9 @@ TEST(ColmapPosePriors, CopyIsConsistent) {
   CopyColmapDatabase(path, folder / "copy.db");
   ColmapDatabase copy = ColmapDatabase::Open(folder / "copy.db");
   EXPECT_EQ(copy.NumImages(), 3u);
-  EXPECT_NE(testing::InputErrorMessage([&] { CopyColmapDatabase(path, folder / "copy.db"); })
-                .find("exists already"),
+  EXPECT_NE(testing::InputErrorMessage([&] {
+              CopyColmapDatabase(path, folder / "copy.db");
+            }).find("exists already"),
             std::string::npos);
 }
 

@@ -4,8 +4,8 @@
 // time is uint32 seconds, uint32 nanoseconds; nested messages are inlined.
 //
 //   sensor_msgs/Image            header, height, width, encoding, is_bigendian, step, data
-//   sensor_msgs/CompressedImage  header, format ("jpeg", "png", "mono8; jpeg compressed mono8"), data
-//   sensor_msgs/Imu              header, orientation, orientation_covariance[9],
+//   sensor_msgs/CompressedImage  header, format ("jpeg", "png", "mono8; jpeg compressed mono8"),
+//   data sensor_msgs/Imu              header, orientation, orientation_covariance[9],
 //                                angular_velocity, .._covariance[9],
 //                                linear_acceleration, .._covariance[9]
 //   geometry_msgs/PoseStamped    header, pose (position, orientation x y z w)

@@ -18,6 +18,7 @@ TEST(RosMessages, ImageBytesFollowRosSerialization) {
   image.encoding = "mono8";
   image.step = 2;
   image.data = {0xAA, 0xBB};
+  // clang-format off
   const std::vector<uint8_t> expected = {
       7,    0,    0,    0,                                  // seq
       3,    0,    0,    0,    5, 0, 0, 0,                   // stamp 3 s 5 ns
@@ -28,6 +29,7 @@ TEST(RosMessages, ImageBytesFollowRosSerialization) {
       0,                                                    // is_bigendian
       2,    0,    0,    0,                                  // step
       2,    0,    0,    0,    0xAA, 0xBB};                  // data
+  // clang-format on
   EXPECT_EQ(SerializeRosImage(image), expected);
   const RosImage back = DeserializeRosImage(expected, "test");
   EXPECT_EQ(back.header.stamp_ns, 3'000'000'005);
@@ -85,13 +87,13 @@ TEST(RosMessages, MalformedBytesNameTheFieldAndWhere) {
   longer.push_back(0);
   const std::string long_message =
       testing::InputErrorMessage([&] { DeserializeRosString(longer, "w"); });
-  EXPECT_NE(long_message.find("1 bytes left after the message"), std::string::npos)
-      << long_message;
+  EXPECT_NE(long_message.find("1 bytes left after the message"), std::string::npos) << long_message;
 
   // An Imu read as an Image: the encoding length runs past the end.
   const std::vector<uint8_t> imu = SerializeRosImu(RosImu());
-  EXPECT_NE(testing::InputErrorMessage([&] { DeserializeRosPoseStamped(imu, "w"); })
-                .find("geometry_msgs/PoseStamped"),
+  EXPECT_NE(testing::InputErrorMessage([&] {
+              DeserializeRosPoseStamped(imu, "w");
+            }).find("geometry_msgs/PoseStamped"),
             std::string::npos);
 }
 

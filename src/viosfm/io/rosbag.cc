@@ -154,7 +154,9 @@ class RecordHeader {
   std::string location_;
 };
 
-std::string ByteOffset(uint64_t offset) { return "byte offset " + std::to_string(offset); }
+std::string ByteOffset(uint64_t offset) {
+  return "byte offset " + std::to_string(offset);
+}
 
 }  // namespace
 
@@ -164,12 +166,9 @@ bool HasRosbagExtension(const fs::path& path) {
 
 std::string RosbagCompressionName(RosbagCompression compression) {
   switch (compression) {
-    case RosbagCompression::kNone:
-      return "none";
-    case RosbagCompression::kBz2:
-      return "bz2";
-    case RosbagCompression::kLz4:
-      return "lz4";
+    case RosbagCompression::kNone: return "none";
+    case RosbagCompression::kBz2: return "bz2";
+    case RosbagCompression::kLz4: return "lz4";
   }
   return "none";
 }
@@ -212,10 +211,10 @@ std::vector<uint8_t> Decompress(const RecordHeader& header, const std::string& c
   std::vector<uint8_t> out(size);
   if (compression == "bz2") {
     unsigned int out_size = size;
-    const int status = BZ2_bzBuffToBuffDecompress(
-        reinterpret_cast<char*>(out.data()), &out_size,
-        const_cast<char*>(reinterpret_cast<const char*>(data.data())),
-        static_cast<unsigned int>(data.size()), 0, 0);
+    const int status =
+        BZ2_bzBuffToBuffDecompress(reinterpret_cast<char*>(out.data()), &out_size,
+                                   const_cast<char*>(reinterpret_cast<const char*>(data.data())),
+                                   static_cast<unsigned int>(data.size()), 0, 0);
     if (status != BZ_OK || out_size != size) {
       header.Fail("bz2 chunk does not decompress to the " + std::to_string(size) +
                   " bytes its header states (bzip2 status " + std::to_string(status) + ")");
@@ -233,8 +232,8 @@ std::vector<uint8_t> Decompress(const RecordHeader& header, const std::string& c
     while (status != 0 && in_offset < data.size()) {
       size_t in_size = data.size() - in_offset;
       size_t out_size = out.size() - out_offset;
-      status = LZ4F_decompress(context, out.data() + out_offset, &out_size,
-                               data.data() + in_offset, &in_size, nullptr);
+      status = LZ4F_decompress(context, out.data() + out_offset, &out_size, data.data() + in_offset,
+                               &in_size, nullptr);
       if (LZ4F_isError(status)) {
         const std::string name = LZ4F_getErrorName(status);
         LZ4F_freeDecompressionContext(context);
@@ -303,8 +302,7 @@ RosbagReader::RosbagReader(const fs::path& path) : path_(path) {
                          std::to_string(file_size_ - offset - 4) + " (the bag is truncated)");
   }
   std::vector<uint8_t> header_bytes(header_length);
-  ReadAt(file_, p, file_size_, offset + 4, header_bytes.data(), header_length,
-         "bag header record");
+  ReadAt(file_, p, file_size_, offset + 4, header_bytes.data(), header_length, "bag header record");
   HeaderFields fields;
   if (const std::string problem = ParseHeaderFields(header_bytes, &fields); !problem.empty()) {
     throw InputError(p, 0, ByteOffset(offset) + ": bag header record: " + problem);
@@ -324,7 +322,8 @@ RosbagReader::RosbagReader(const fs::path& path) : path_(path) {
   }
   if (index_pos_ != 0 && index_pos_ > file_size_) {
     header.Fail("the index starts at byte offset " + std::to_string(index_pos_) +
-                " but the file has " + std::to_string(file_size_) + " bytes (the bag is truncated)");
+                " but the file has " + std::to_string(file_size_) +
+                " bytes (the bag is truncated)");
   }
   has_index_ = index_pos_ >= first_record_offset_;
 
@@ -349,9 +348,9 @@ void RosbagReader::AddConnection(RosbagConnection connection, const std::string&
     return;
   }
   // Keep connections_ ordered by id.
-  const auto position = std::lower_bound(
-      connections_.begin(), connections_.end(), connection.id,
-      [](const RosbagConnection& c, uint32_t id) { return c.id < id; });
+  const auto position =
+      std::lower_bound(connections_.begin(), connections_.end(), connection.id,
+                       [](const RosbagConnection& c, uint32_t id) { return c.id < id; });
   connections_.insert(position, std::move(connection));
   connection_index_.clear();
   for (size_t i = 0; i < connections_.size(); ++i) connection_index_[connections_[i].id] = i;
@@ -390,11 +389,12 @@ void RosbagReader::ScanRecords(Scan& scan) {
                   std::to_string(bytes.size() - data_length_at - 4) + " left)");
     }
     return {RecordHeader(std::move(fields), p, location),
-            bytes.subspan(data_length_at + 4, data_length), 8 + size_t{header_length} + data_length};
+            bytes.subspan(data_length_at + 4, data_length),
+            8 + size_t{header_length} + data_length};
   };
 
   const auto parse_connection = [&](const RecordHeader& header, std::span<const uint8_t> data,
-                                     const std::string& location) {
+                                    const std::string& location) {
     RosbagConnection connection;
     connection.id = header.U32("conn");
     connection.topic = header.Bytes("topic");
@@ -465,7 +465,8 @@ void RosbagReader::ScanRecords(Scan& scan) {
     if (header_length > file_size_ - offset - 4) {
       throw InputError(p, 0,
                        location + ": record header of " + std::to_string(header_length) +
-                           " bytes, the file ends after " + std::to_string(file_size_ - offset - 4) +
+                           " bytes, the file ends after " +
+                           std::to_string(file_size_ - offset - 4) +
                            " (the bag is truncated or corrupt)");
     }
     header_bytes.resize(header_length);
@@ -476,8 +477,7 @@ void RosbagReader::ScanRecords(Scan& scan) {
     }
     const RecordHeader header(std::move(fields), p, location);
     const uint8_t op = header.Op();
-    ReadAt(file_, p, file_size_, offset + 4 + header_length, length_bytes, 4,
-           "record data length");
+    ReadAt(file_, p, file_size_, offset + 4 + header_length, length_bytes, 4, "record data length");
     const uint32_t data_length = LoadU32(length_bytes);
     const uint64_t data_offset = offset + 8 + header_length;
     const uint64_t next = data_offset + data_length;
@@ -592,10 +592,10 @@ uint32_t RosbagWriter::AddConnection(const std::string& topic, const std::string
                                                       {"message_definition", message_definition}});
   Connection connection;
   connection.topic = topic;
-  connection.record = EncodeRecord(
-      {{"op", std::string(1, static_cast<char>(kOpConnection))}, {"conn", U32Bytes(id)},
-       {"topic", topic}},
-      connection_header);
+  connection.record = EncodeRecord({{"op", std::string(1, static_cast<char>(kOpConnection))},
+                                    {"conn", U32Bytes(id)},
+                                    {"topic", topic}},
+                                   connection_header);
   connections_.push_back(std::move(connection));
   return id;
 }
@@ -605,9 +605,9 @@ void RosbagWriter::Write(uint32_t connection_id, timestamp_ns_t time_ns,
   VIOSFM_CHECK(!closed_) << "bag already closed";
   VIOSFM_CHECK_LT(connection_id, connections_.size());
   if (time_ns < 0 || time_ns / 1'000'000'000 > 0xffffffffLL) {
-    throw InputError(path_.string(), 0,
-                     "message time " + std::to_string(time_ns) +
-                         " ns is outside ROS time (0 to 2^32 s)");
+    throw InputError(
+        path_.string(), 0,
+        "message time " + std::to_string(time_ns) + " ns is outside ROS time (0 to 2^32 s)");
   }
   Connection& connection = connections_[connection_id];
   if (!connection.written_in_chunk) {
@@ -622,11 +622,11 @@ void RosbagWriter::Write(uint32_t connection_id, timestamp_ns_t time_ns,
   chunk_.end_ns = std::max(chunk_.end_ns, time_ns);
   ++chunk_.counts[connection_id];
   chunk_index_[connection_id].emplace_back(time_ns, static_cast<uint32_t>(chunk_data_.size()));
-  chunk_data_ += EncodeRecord({{"op", std::string(1, static_cast<char>(kOpMessageData))},
-                               {"conn", U32Bytes(connection_id)},
-                               {"time", TimeBytes(time_ns)}},
-                              std::string_view(reinterpret_cast<const char*>(data.data()),
-                                               data.size()));
+  chunk_data_ +=
+      EncodeRecord({{"op", std::string(1, static_cast<char>(kOpMessageData))},
+                    {"conn", U32Bytes(connection_id)},
+                    {"time", TimeBytes(time_ns)}},
+                   std::string_view(reinterpret_cast<const char*>(data.data()), data.size()));
   if (chunk_data_.size() >= options_.chunk_threshold_bytes) FlushChunk();
 }
 
@@ -637,11 +637,12 @@ void RosbagWriter::FlushChunk() {
   std::string compressed;
   const std::string compression = RosbagCompressionName(options_.compression);
   if (options_.compression == RosbagCompression::kBz2) {
-    unsigned int size = static_cast<unsigned int>(chunk_data_.size() + chunk_data_.size() / 100 + 600);
+    unsigned int size =
+        static_cast<unsigned int>(chunk_data_.size() + chunk_data_.size() / 100 + 600);
     compressed.resize(size);
-    const int status = BZ2_bzBuffToBuffCompress(compressed.data(), &size, chunk_data_.data(),
-                                                static_cast<unsigned int>(chunk_data_.size()), 9,
-                                                0, 0);
+    const int status =
+        BZ2_bzBuffToBuffCompress(compressed.data(), &size, chunk_data_.data(),
+                                 static_cast<unsigned int>(chunk_data_.size()), 9, 0, 0);
     VIOSFM_CHECK_EQ(status, BZ_OK) << "bzip2 compression failed";
     compressed.resize(size);
   } else if (options_.compression == RosbagCompression::kLz4) {
@@ -652,8 +653,8 @@ void RosbagWriter::FlushChunk() {
     preferences.frameInfo.contentChecksumFlag = LZ4F_contentChecksumEnabled;
     preferences.frameInfo.blockSizeID = LZ4F_max1MB;
     compressed.resize(LZ4F_compressFrameBound(chunk_data_.size(), &preferences));
-    const size_t size = LZ4F_compressFrame(compressed.data(), compressed.size(),
-                                           chunk_data_.data(), chunk_data_.size(), &preferences);
+    const size_t size = LZ4F_compressFrame(compressed.data(), compressed.size(), chunk_data_.data(),
+                                           chunk_data_.size(), &preferences);
     VIOSFM_CHECK(!LZ4F_isError(size)) << "lz4 compression failed: " << LZ4F_getErrorName(size);
     compressed.resize(size);
   }

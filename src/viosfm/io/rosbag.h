@@ -64,7 +64,7 @@ struct RosbagConnection {
 
 struct RosbagMessage {
   const RosbagConnection* connection = nullptr;
-  timestamp_ns_t time_ns = 0;  // the record time (when the message was recorded)
+  timestamp_ns_t time_ns = 0;     // the record time (when the message was recorded)
   std::span<const uint8_t> data;  // the serialized message, valid during the callback
   // Where the message record is, for error messages: "byte offset 5012" or
   // "chunk at byte offset 4117 (lz4), offset 920 of its data".

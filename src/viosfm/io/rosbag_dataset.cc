@@ -92,9 +92,9 @@ std::string ChooseTopic(const RosbagReader& reader, const TopicMap& topics,
   if (candidates.size() == 1) return candidates.front();
   if (candidates.empty()) {
     if (!required) return "";
-    throw InputError(p, 0,
-                     "no " + what + " topic (" + type_list + "); the bag has:\n" +
-                         DescribeRosbagTopics(reader));
+    throw InputError(
+        p, 0,
+        "no " + what + " topic (" + type_list + "); the bag has:\n" + DescribeRosbagTopics(reader));
   }
   if (std::find(candidates.begin(), candidates.end(), preferred) != candidates.end()) {
     VIOSFM_LOG(INFO) << p << ": " << candidates.size() << " " << what << " topics, reading "
@@ -214,8 +214,9 @@ struct Located {
 template <typename T>
 void SortByStamp(std::vector<std::pair<Located, T>>* items, const std::string& bag,
                  const std::string& topic) {
-  std::stable_sort(items->begin(), items->end(),
-                   [](const auto& a, const auto& b) { return a.first.stamp_ns < b.first.stamp_ns; });
+  std::stable_sort(items->begin(), items->end(), [](const auto& a, const auto& b) {
+    return a.first.stamp_ns < b.first.stamp_ns;
+  });
   for (size_t i = 1; i < items->size(); ++i) {
     if ((*items)[i].first.stamp_ns == (*items)[i - 1].first.stamp_ns) {
       throw InputError(bag, 0,
@@ -284,13 +285,12 @@ Sequence ReadRosbagDataset(const fs::path& bag, const RosbagDatasetOptions& opti
   const std::string p = bag.string();
   const TopicMap topics = GroupByTopic(reader);
 
-  const std::string image_topic =
-      ChooseTopic(reader, topics, options.image_topic,
-                  {kRosImageType.name, kRosCompressedImageType.name}, kEurocImageTopic, "image",
-                  "--image-topic", /*required=*/true);
-  const std::string imu_topic = ChooseTopic(reader, topics, options.imu_topic, {kRosImuType.name},
-                                            kEurocImuTopic, "IMU", "--imu-topic",
-                                            options.require_imu);
+  const std::string image_topic = ChooseTopic(
+      reader, topics, options.image_topic, {kRosImageType.name, kRosCompressedImageType.name},
+      kEurocImageTopic, "image", "--image-topic", /*required=*/true);
+  const std::string imu_topic =
+      ChooseTopic(reader, topics, options.imu_topic, {kRosImuType.name}, kEurocImuTopic, "IMU",
+                  "--imu-topic", options.require_imu);
   std::string groundtruth_topic = options.groundtruth_topic;
   if (groundtruth_topic.empty() && topics.count(kGroundTruthTopic) > 0) {
     groundtruth_topic = kGroundTruthTopic;
@@ -310,8 +310,8 @@ Sequence ReadRosbagDataset(const fs::path& bag, const RosbagDatasetOptions& opti
     const auto it = topics.find(topic);
     return it != topics.end() && it->second.front()->type == kRosStringType.name;
   };
-  const bool read_embedded = !options.rig && options.camera_yaml.empty() &&
-                             embedded(kCameraCalibrationTopic);
+  const bool read_embedded =
+      !options.rig && options.camera_yaml.empty() && embedded(kCameraCalibrationTopic);
 
   const fs::path mav0 = options.extract_folder / "mav0";
   const fs::path image_folder = mav0 / "cam0" / "data";
@@ -382,8 +382,9 @@ Sequence ReadRosbagDataset(const fs::path& bag, const RosbagDatasetOptions& opti
           sample.gyro = message_imu.angular_velocity;
           sample.accel = message_imu.linear_acceleration;
           if (!sample.gyro.allFinite() || !sample.accel.allFinite()) {
-            throw InputError(where + ": sensor_msgs/Imu with a non-finite angular velocity or "
-                                     "linear acceleration");
+            throw InputError(where +
+                             ": sensor_msgs/Imu with a non-finite angular velocity or "
+                             "linear acceleration");
           }
           imu.push_back({{sample.timestamp_ns, message.location}, sample});
         } else if (connection.topic == groundtruth_topic) {
@@ -580,10 +581,10 @@ void WriteRosbagDataset(const Sequence& sequence, const fs::path& bag,
   if (options.embed_calibration) {
     const uint32_t camera = writer.AddConnection(kCameraCalibrationTopic, kRosStringType.name,
                                                  kRosStringType.md5sum, kRosStringType.definition);
-    writer.Write(camera, first,
-                 SerializeRosString(EurocCameraYamlText(sequence.rig.camera,
-                                                        sequence.rig.body_from_cam,
-                                                        sequence.rig.camera_rate_hz)));
+    writer.Write(
+        camera, first,
+        SerializeRosString(EurocCameraYamlText(sequence.rig.camera, sequence.rig.body_from_cam,
+                                               sequence.rig.camera_rate_hz)));
     if (sequence.has_imu()) {
       const uint32_t imu = writer.AddConnection(kImuCalibrationTopic, kRosStringType.name,
                                                 kRosStringType.md5sum, kRosStringType.definition);
@@ -598,7 +599,8 @@ void WriteRosbagDataset(const Sequence& sequence, const fs::path& bag,
          i_gt < sequence.ground_truth.size()) {
     const timestamp_ns_t t_image =
         i_image < sequence.images.size() ? sequence.images[i_image].timestamp_ns : kEnd;
-    const timestamp_ns_t t_imu = i_imu < sequence.imu.size() ? sequence.imu[i_imu].timestamp_ns : kEnd;
+    const timestamp_ns_t t_imu =
+        i_imu < sequence.imu.size() ? sequence.imu[i_imu].timestamp_ns : kEnd;
     const timestamp_ns_t t_gt =
         i_gt < sequence.ground_truth.size() ? sequence.ground_truth[i_gt].timestamp_ns : kEnd;
     if (t_image <= t_imu && t_image <= t_gt) {

@@ -42,9 +42,8 @@ Sequence MakeSequence(const fs::path& folder) {
     sequence.images.push_back({stamp, path});
     GroundTruthState state;
     state.timestamp_ns = stamp;
-    state.world_from_body =
-        Rigid3d(Eigen::Quaterniond(1, 0.01 * i, 0.02, -0.03 * i).normalized(),
-                Eigen::Vector3d(0.1 * i + 1.0 / 3.0, -0.2 * i, 1.5));
+    state.world_from_body = Rigid3d(Eigen::Quaterniond(1, 0.01 * i, 0.02, -0.03 * i).normalized(),
+                                    Eigen::Vector3d(0.1 * i + 1.0 / 3.0, -0.2 * i, 1.5));
     sequence.ground_truth.push_back(state);
   }
   for (int k = -4; k < 60; ++k) {
@@ -131,8 +130,8 @@ TEST(RosbagDataset, TakesTheCalibrationFromTheEurocFolderBesideTheBag) {
   write.embed_calibration = false;
   const fs::path bag = folder / "data" / "seq.bag";
   WriteRosbagDataset(original, bag, write);
-  const std::string no_calibration = testing::InputErrorMessage(
-      [&] { ReadRosbagDataset(bag, Extract(folder / "x1")); });
+  const std::string no_calibration =
+      testing::InputErrorMessage([&] { ReadRosbagDataset(bag, Extract(folder / "x1")); });
   EXPECT_NE(no_calibration.find("no camera calibration"), std::string::npos) << no_calibration;
   WriteEurocCameraYaml(folder / "data" / "mav0" / "cam0" / "sensor.yaml", original.rig.camera,
                        original.rig.body_from_cam, original.rig.camera_rate_hz);
@@ -251,7 +250,8 @@ TEST(RosbagDataset, BadImagesGiveClearErrors) {
       << size;
 
   image.data.assign(8, 0);
-  const std::string md5 = ReadOneImage(folder, "md5.bag", image, "0123456789abcdef0123456789abcdef");
+  const std::string md5 =
+      ReadOneImage(folder, "md5.bag", image, "0123456789abcdef0123456789abcdef");
   EXPECT_NE(md5.find("sensor_msgs/Image with MD5 sum 0123456789abcdef0123456789abcdef"),
             std::string::npos)
       << md5;

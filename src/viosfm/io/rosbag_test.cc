@@ -25,11 +25,11 @@ struct ReadMessage {
 std::vector<ReadMessage> ReadAll(const fs::path& path) {
   RosbagReader reader(path);
   std::vector<ReadMessage> messages;
-  reader.ReadMessages([](const RosbagConnection&) { return true; },
-                      [&](const RosbagMessage& m) {
-                        messages.push_back({m.connection->topic, m.time_ns,
-                                            Bytes(m.data.begin(), m.data.end())});
-                      });
+  reader.ReadMessages(
+      [](const RosbagConnection&) { return true; },
+      [&](const RosbagMessage& m) {
+        messages.push_back({m.connection->topic, m.time_ns, Bytes(m.data.begin(), m.data.end())});
+      });
   return messages;
 }
 
@@ -67,26 +67,25 @@ TEST(Rosbag, ReadsBagsWrittenByRosInEveryCompression) {
     std::vector<RosImage> images;
     std::vector<RosPoseStamped> poses;
     std::vector<std::string> notes;
-    reader.ReadMessages(
-        [](const RosbagConnection&) { return true; },
-        [&](const RosbagMessage& m) {
-          const std::string& type = m.connection->type;
-          const Bytes bytes(m.data.begin(), m.data.end());
-          if (type == kRosImuType.name) {
-            imu.push_back(DeserializeRosImu(m.data, m.location));
-            EXPECT_EQ(SerializeRosImu(imu.back()), bytes);
-            EXPECT_EQ(m.time_ns, imu.back().header.stamp_ns);
-          } else if (type == kRosImageType.name) {
-            images.push_back(DeserializeRosImage(m.data, m.location));
-            EXPECT_EQ(SerializeRosImage(images.back()), bytes);
-          } else if (type == kRosPoseStampedType.name) {
-            poses.push_back(DeserializeRosPoseStamped(m.data, m.location));
-            EXPECT_EQ(SerializeRosPoseStamped(poses.back()), bytes);
-          } else if (type == kRosStringType.name) {
-            notes.push_back(DeserializeRosString(m.data, m.location));
-            EXPECT_EQ(SerializeRosString(notes.back()), bytes);
-          }
-        });
+    reader.ReadMessages([](const RosbagConnection&) { return true; },
+                        [&](const RosbagMessage& m) {
+                          const std::string& type = m.connection->type;
+                          const Bytes bytes(m.data.begin(), m.data.end());
+                          if (type == kRosImuType.name) {
+                            imu.push_back(DeserializeRosImu(m.data, m.location));
+                            EXPECT_EQ(SerializeRosImu(imu.back()), bytes);
+                            EXPECT_EQ(m.time_ns, imu.back().header.stamp_ns);
+                          } else if (type == kRosImageType.name) {
+                            images.push_back(DeserializeRosImage(m.data, m.location));
+                            EXPECT_EQ(SerializeRosImage(images.back()), bytes);
+                          } else if (type == kRosPoseStampedType.name) {
+                            poses.push_back(DeserializeRosPoseStamped(m.data, m.location));
+                            EXPECT_EQ(SerializeRosPoseStamped(poses.back()), bytes);
+                          } else if (type == kRosStringType.name) {
+                            notes.push_back(DeserializeRosString(m.data, m.location));
+                            EXPECT_EQ(SerializeRosString(notes.back()), bytes);
+                          }
+                        });
     ASSERT_EQ(imu.size(), 5u);
     for (int i = 0; i < 5; ++i) {
       EXPECT_EQ(imu[i].header.seq, static_cast<uint32_t>(i));
@@ -217,11 +216,9 @@ TEST(Rosbag, TruncatedBagsNameTheOffset) {
   WriteFileBytes(cut_chunk, no_index);
   const std::string chunk_message = testing::InputErrorMessage([&] {
     RosbagReader reader(cut_chunk);
-    reader.ReadMessages([](const RosbagConnection&) { return true; },
-                        [](const RosbagMessage&) {});
+    reader.ReadMessages([](const RosbagConnection&) { return true; }, [](const RosbagMessage&) {});
   });
-  EXPECT_NE(chunk_message.find("cut_chunk.bag: byte offset "), std::string::npos)
-      << chunk_message;
+  EXPECT_NE(chunk_message.find("cut_chunk.bag: byte offset "), std::string::npos) << chunk_message;
   EXPECT_NE(chunk_message.find("the file ends after"), std::string::npos) << chunk_message;
 
   // Only the version line.
@@ -246,8 +243,9 @@ TEST(Rosbag, RejectsFilesThatAreNotRos1Bags) {
             std::string::npos);
   EXPECT_NE(message("old.bag", "#ROSBAG V1.2\n" + std::string(100, 'x')).find("V1.2"),
             std::string::npos);
-  EXPECT_NE(testing::InputErrorMessage([&] { RosbagReader reader(folder / "missing.bag"); })
-                .find("not found"),
+  EXPECT_NE(testing::InputErrorMessage([&] {
+              RosbagReader reader(folder / "missing.bag");
+            }).find("not found"),
             std::string::npos);
 }
 
@@ -262,8 +260,7 @@ TEST(Rosbag, CorruptCompressedChunkIsAnError) {
   WriteFileBytes(path, bytes);
   const std::string message = testing::InputErrorMessage([&] {
     RosbagReader reader(path);
-    reader.ReadMessages([](const RosbagConnection&) { return true; },
-                        [](const RosbagMessage&) {});
+    reader.ReadMessages([](const RosbagConnection&) { return true; }, [](const RosbagMessage&) {});
   });
   EXPECT_NE(message.find("corrupt.bag: byte offset "), std::string::npos) << message;
   EXPECT_NE(message.find("lz4"), std::string::npos) << message;

@@ -126,14 +126,13 @@ TransformsJson ReadTransformsJson(const fs::path& path) {
     transforms.camera = MakeCamera(CameraModelId::kPinhole, static_cast<uint64_t>(w),
                                    static_cast<uint64_t>(h), {fx, fy, cx, cy});
   } else if (model == "OPENCV") {
-    transforms.camera =
-        MakeCamera(CameraModelId::kOpenCV, static_cast<uint64_t>(w), static_cast<uint64_t>(h),
-                   {fx, fy, cx, cy, optional("k1"), optional("k2"), optional("p1"), optional("p2")});
+    transforms.camera = MakeCamera(
+        CameraModelId::kOpenCV, static_cast<uint64_t>(w), static_cast<uint64_t>(h),
+        {fx, fy, cx, cy, optional("k1"), optional("k2"), optional("p1"), optional("p2")});
   } else if (model == "OPENCV_FISHEYE") {
-    transforms.camera =
-        MakeCamera(CameraModelId::kOpenCVFisheye, static_cast<uint64_t>(w),
-                   static_cast<uint64_t>(h),
-                   {fx, fy, cx, cy, optional("k1"), optional("k2"), optional("k3"), optional("k4")});
+    transforms.camera = MakeCamera(
+        CameraModelId::kOpenCVFisheye, static_cast<uint64_t>(w), static_cast<uint64_t>(h),
+        {fx, fy, cx, cy, optional("k1"), optional("k2"), optional("k3"), optional("k4")});
   } else {
     throw InputError(p, 0,
                      "camera_model \"" + model + "\" (expected PINHOLE, OPENCV or OPENCV_FISHEYE)");

@@ -27,8 +27,8 @@ TEST(TransformsJson, FollowsNerfstudiosConventions) {
   transforms.camera = MakeCamera(CameraModelId::kOpenCV, 752, 480,
                                  {458.654, 457.296, 367.215, 248.375, -0.28, 0.07, 1e-4, 2e-5});
   transforms.frames.push_back(
-      {"images/1.png", Rigid3d(Eigen::Quaterniond(world_from_cam), Eigen::Vector3d(1, 2, 3))
-                           .Inverse()});
+      {"images/1.png",
+       Rigid3d(Eigen::Quaterniond(world_from_cam), Eigen::Vector3d(1, 2, 3)).Inverse()});
   transforms.ply_file_path = "sparse_pc.ply";
   WriteTransformsJson(folder / "transforms.json", transforms);
 
@@ -63,8 +63,8 @@ TEST(TransformsJson, RoundTripsPoses) {
   Random random(5);
   for (const Camera& camera :
        {MakeCamera(CameraModelId::kPinhole, 640, 480, {500, 501, 319.5, 239.5}),
-        MakeCamera(CameraModelId::kOpenCVFisheye, 848, 800, {286, 287, 425, 398, -0.01, 0.05,
-                                                             -0.05, 0.01}),
+        MakeCamera(CameraModelId::kOpenCVFisheye, 848, 800,
+                   {286, 287, 425, 398, -0.01, 0.05, -0.05, 0.01}),
         MakeCamera(CameraModelId::kOpenCV, 752, 480, {458, 457, 367, 248, -0.28, 0.07, 1e-4, 0})}) {
     TransformsJson transforms;
     transforms.camera = camera;
@@ -97,19 +97,22 @@ TEST(TransformsJson, RejectsWhatItCannotRepresentOrRead) {
   const fs::path folder = testing::MakeScratchFolder("transforms_bad");
   TransformsJson transforms;
   transforms.camera = MakeCamera(CameraModelId::kFOV, 10, 10, {5, 5, 5, 5, 0.1});
-  EXPECT_NE(testing::InputErrorMessage([&] { WriteTransformsJson(folder / "a.json", transforms); })
-                .find("no transforms.json equivalent"),
+  EXPECT_NE(testing::InputErrorMessage([&] {
+              WriteTransformsJson(folder / "a.json", transforms);
+            }).find("no transforms.json equivalent"),
             std::string::npos);
   testing::WriteTextFile(folder / "b.json",
                          R"({"fl_x": 1, "fl_y": 1, "cx": 1, "cy": 1, "w": 2, "h": 2,
                              "frames": [{"file_path": "x.png",
                                          "transform_matrix": [[2,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]}]})");
-  EXPECT_NE(testing::InputErrorMessage([&] { ReadTransformsJson(folder / "b.json"); })
-                .find("frame 0: transform_matrix is not a rigid"),
+  EXPECT_NE(testing::InputErrorMessage([&] {
+              ReadTransformsJson(folder / "b.json");
+            }).find("frame 0: transform_matrix is not a rigid"),
             std::string::npos);
   testing::WriteTextFile(folder / "c.json", R"({"fl_x": 1, "frames": []})");
-  EXPECT_NE(testing::InputErrorMessage([&] { ReadTransformsJson(folder / "c.json"); })
-                .find("expected a number \"fl_y\""),
+  EXPECT_NE(testing::InputErrorMessage([&] {
+              ReadTransformsJson(folder / "c.json");
+            }).find("expected a number \"fl_y\""),
             std::string::npos);
 }
 

@@ -28,8 +28,7 @@ namespace fs = std::filesystem;
 
 // A 3 s walk in the simulated room at 10 Hz, a quarter of EuRoC's
 // resolution, the simulator's emulated VIO, and small settings.
-PipelineOptions SmallOptions(const fs::path& dataset, const fs::path& vio,
-                             const fs::path& out) {
+PipelineOptions SmallOptions(const fs::path& dataset, const fs::path& vio, const fs::path& out) {
   PipelineOptions options;
   options.dataset = dataset;
   options.vio_trajectory = vio;
@@ -78,10 +77,9 @@ TEST(RosbagPipeline, BagGivesTheFolderResultByteForByte) {
   ASSERT_TRUE(from_folder.evaluation.has_value());
   ASSERT_TRUE(from_bag.evaluation.has_value());
   EXPECT_EQ(from_bag.evaluation->ate_rmse_m, from_folder.evaluation->ate_rmse_m);
-  for (const std::string file :
-       {"trajectory_body.tum", "trajectory_cam.tum", "vio_body.tum", "groundtruth_body.tum",
-        "model/cameras.bin", "model/images.bin", "model/points3D.bin", "points.ply",
-        "verification/pairs.csv"}) {
+  for (const std::string file : {"trajectory_body.tum", "trajectory_cam.tum", "vio_body.tum",
+                                 "groundtruth_body.tum", "model/cameras.bin", "model/images.bin",
+                                 "model/points3D.bin", "points.ply", "verification/pairs.csv"}) {
     SCOPED_TRACE(file);
     const std::string a = ReadTextFile(folder / "out_folder" / file);
     ASSERT_FALSE(a.empty());

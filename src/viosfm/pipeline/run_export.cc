@@ -40,7 +40,8 @@ fs::path ImageFolderOfRun(const fs::path& run_folder) {
   std::vector<fs::path> candidates;
   if (HasRosbagExtension(dataset)) {
     const fs::path extract = text("rosbag.extract_folder");
-    candidates = {extract / "mav0" / "cam0" / "data", run_folder / "bag" / "mav0" / "cam0" / "data"};
+    candidates = {extract / "mav0" / "cam0" / "data",
+                  run_folder / "bag" / "mav0" / "cam0" / "data"};
   } else {
     candidates = {dataset / "mav0" / "cam0" / "data", dataset / "cam0" / "data", dataset};
   }
@@ -104,9 +105,9 @@ RunExportSummary ExportRun(const RunExportOptions& options) {
     transforms.frames.push_back({"images/" + image.name, image.cam_from_world});
   }
   if (model.NumCameras() != 1) {
-    throw InputError((run / "model").string(), 0,
-                     "transforms.json holds one camera; the model has " +
-                         std::to_string(model.NumCameras()));
+    throw InputError(
+        (run / "model").string(), 0,
+        "transforms.json holds one camera; the model has " + std::to_string(model.NumCameras()));
   }
   transforms.camera = model.Cameras().begin()->second;
   transforms.ply_file_path = "sparse_pc.ply";
@@ -129,7 +130,9 @@ RunExportSummary ExportRun(const RunExportOptions& options) {
   VIOSFM_LOG(INFO) << "export: " << summary.num_images << " images, " << summary.num_points
                    << " points -> " << summary.output_folder.string()
                    << " (database.db with pose priors, sparse/0, transforms.json, sparse_pc.ply"
-                   << (summary.image_folder.empty() ? "" : ", images -> " + summary.image_folder.string())
+                   << (summary.image_folder.empty()
+                           ? ""
+                           : ", images -> " + summary.image_folder.string())
                    << ")";
   return summary;
 }

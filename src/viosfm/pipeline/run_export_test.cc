@@ -112,7 +112,8 @@ TEST(RunExport, WritesEveryFileWithTheModelsPoses) {
     const Image* image = model.ImageByName(fs::path(frame.file_path).filename().string());
     ASSERT_NE(image, nullptr);
     EXPECT_LT(frame.cam_from_world.rotation.angularDistance(image->cam_from_world.rotation), 1e-9);
-    EXPECT_LT((frame.cam_from_world.Inverse().translation - image->ProjectionCenter()).norm(), 1e-9);
+    EXPECT_LT((frame.cam_from_world.Inverse().translation - image->ProjectionCenter()).norm(),
+              1e-9);
   }
 }
 
@@ -155,18 +156,17 @@ TEST(RunExport, TransformsJsonPassesTheLoaderScript) {
   if (std::system("python3 --version > /dev/null 2>&1") != 0) {
     GTEST_SKIP() << "python3 not installed (apt-get install python3); skipping";
   }
-  const std::string command = "python3 " +
-                              std::string(VIOSFM_SOURCE_DIR) + "/scripts/check_transforms_json.py" +
-                              " " + (f.run / "export" / "transforms.json").string() +
-                              " --colmap-model " + (f.run / "model_txt").string() + " > " +
-                              (f.folder / "check.log").string() + " 2>&1";
+  const std::string command =
+      "python3 " + std::string(VIOSFM_SOURCE_DIR) + "/scripts/check_transforms_json.py" + " " +
+      (f.run / "export" / "transforms.json").string() + " --colmap-model " +
+      (f.run / "model_txt").string() + " > " + (f.folder / "check.log").string() + " 2>&1";
   EXPECT_EQ(std::system(command.c_str()), 0) << ReadTextFile(f.folder / "check.log");
 }
 
 // Runs `colmap ARGS` (COLMAP 3.8, Debian's, headless) and returns its output.
 std::string RunColmap(const Fixture& f, const std::string& args, const std::string& log) {
-  const std::string command = "QT_QPA_PLATFORM=offscreen colmap " + args + " > " +
-                              (f.folder / log).string() + " 2>&1";
+  const std::string command =
+      "QT_QPA_PLATFORM=offscreen colmap " + args + " > " + (f.folder / log).string() + " 2>&1";
   EXPECT_EQ(std::system(command.c_str()), 0) << ReadTextFile(f.folder / log);
   return ReadTextFile(f.folder / log);
 }
@@ -187,8 +187,8 @@ TEST(RunExport, Colmap38OpensTheExportAndReproducesThePoints) {
     GTEST_SKIP() << "colmap not installed (apt-get install colmap); skipping";
   }
   const fs::path e = f.run / "export";
-  const size_t ours = PointsOf(RunColmap(f, "model_analyzer --path " + e.string() + "/sparse/0",
-                                         "analyzer_ours.log"));
+  const size_t ours = PointsOf(
+      RunColmap(f, "model_analyzer --path " + e.string() + "/sparse/0", "analyzer_ours.log"));
   EXPECT_EQ(ours, f.summary.num_points);
   // A copy of the database, since COLMAP writes to the one it opens.
   fs::copy_file(e / "database.db", f.folder / "colmap.db", fs::copy_options::overwrite_existing);

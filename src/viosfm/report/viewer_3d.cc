@@ -20,8 +20,7 @@ const char* kThreeFile = "three.min.js";
 const char* kOrbitControlsFile = "examples/js/controls/OrbitControls.js";
 
 std::string Base64(const std::vector<uint8_t>& bytes) {
-  static const char* kAlphabet =
-      "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  static const char* kAlphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
   std::string out;
   out.reserve((bytes.size() + 2) / 3 * 4);
   for (size_t i = 0; i < bytes.size(); i += 3) {
