@@ -9,7 +9,10 @@ packages=(
   libeigen3-dev libceres-dev libopencv-dev libsqlite3-dev libcli11-dev
   libyaml-cpp-dev nlohmann-json3-dev libtbb-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  libbz2-dev liblz4-dev  # bz2- and lz4-compressed chunks of ROS bags
+  libjs-three  # three.js, copied into the report's 3D view
   chromium  # headless, for the test that opens `viosfm report` pages
+  python3  # scripts/check_transforms_json.py (standard library only)
 )
 # The baseline the benchmarks compare against (not needed to build or test).
 if [[ "${VIOSFM_WITH_COLMAP:-0}" == "1" ]]; then

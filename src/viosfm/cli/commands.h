@@ -16,5 +16,7 @@ void RegisterVio(CLI::App& app);
 void RegisterRun(CLI::App& app);
 void RegisterReport(CLI::App& app);
 void RegisterBenchReport(CLI::App& app);
+void RegisterConvert(CLI::App& app);
+void RegisterExport(CLI::App& app);
 
 }  // namespace viosfm::cli

@@ -5,6 +5,7 @@
 #include <memory>
 #include <string>
 
+#include "viosfm/cli/bag_options.h"
 #include "viosfm/cli/commands.h"
 #include "viosfm/features/feature_extraction.h"
 #include "viosfm/io/colmap_database.h"
@@ -25,8 +26,8 @@ struct FeaturesArguments {
   std::string database;
   SiftOptions sift;
   bool no_root_sift = false;
-  std::string camera_yaml;
   std::string camera;
+  BagArguments bag;
   std::string timestamps;
 };
 
@@ -63,6 +64,11 @@ bool IsEurocDataset(const fs::path& root) {
 
 Sequence ReadDataset(const FeaturesArguments& args) {
   const fs::path root = args.dataset;
+  if (HasRosbagExtension(root)) {
+    // The images go beside the database, as a EuRoC folder (OUT/bag).
+    const fs::path database = fs::absolute(args.database);
+    return ReadRosbagDataset(root, MakeRosbagOptions(args.bag, database.parent_path() / "bag"));
+  }
   if (!fs::is_directory(root)) throw InputError(args.dataset, 0, "dataset folder not found");
   if (IsEurocDataset(root)) {
     EurocReadOptions options;
@@ -71,7 +77,7 @@ Sequence ReadDataset(const FeaturesArguments& args) {
   }
   ImageFolderOptions options;
   options.timestamps_file = args.timestamps;
-  options.camera_yaml = args.camera_yaml;
+  options.camera_yaml = args.bag.camera_yaml;
   if (!args.camera.empty()) options.camera = ParseCameraOption(args.camera);
   if (const std::string error = options.Validate(); !error.empty()) {
     throw InputError(args.dataset, 0,
@@ -111,7 +117,7 @@ void RegisterFeatures(CLI::App& app) {
       "skips the images already stored");
   command
       ->add_option("dataset", args->dataset,
-                   "EuRoC dataset (folder containing mav0/) or a folder of images")
+                   "EuRoC dataset (folder containing mav0/), a folder of images or a ROS 1 bag")
       ->required();
   command->add_option("--database", args->database, "COLMAP database (created if missing)")
       ->required();
@@ -125,8 +131,9 @@ void RegisterFeatures(CLI::App& app) {
       ->add_option("--peak-threshold", args->sift.peak_threshold,
                    "Minimum DoG response (intensities in [0, 1])")
       ->capture_default_str();
-  command->add_option("--camera-yaml", args->camera_yaml,
-                      "Image folder: Kalibr/EuRoC camera sensor.yaml");
+  command->add_option("--camera-yaml", args->bag.camera_yaml,
+                      "Image folder or bag: Kalibr/EuRoC camera sensor.yaml");
+  AddBagOptions(command, &args->bag, /*add_camera_yaml=*/false);
   command->add_option("--camera", args->camera,
                       "Image folder: MODEL,WIDTH,HEIGHT,PARAMS... (COLMAP model and order)");
   command->add_option("--timestamps", args->timestamps,

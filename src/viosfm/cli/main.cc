@@ -25,6 +25,8 @@ int main(int argc, char** argv) {
   viosfm::cli::RegisterReport(app);
   viosfm::cli::RegisterBenchReport(app);
   viosfm::cli::RegisterEval(app);
+  viosfm::cli::RegisterConvert(app);
+  viosfm::cli::RegisterExport(app);
 
   try {
     app.parse(argc, argv);

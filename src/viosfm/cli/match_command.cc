@@ -5,6 +5,7 @@
 #include <memory>
 #include <string>
 
+#include "viosfm/cli/bag_options.h"
 #include "viosfm/cli/commands.h"
 #include "viosfm/cli/vio_uncertainty_options.h"
 #include "viosfm/io/colmap_database.h"
@@ -36,6 +37,7 @@ struct MatchArguments {
   VioUncertaintyArguments vio_uncertainty;
   std::string report;
   VerificationOptions options;
+  BagArguments bag;
 };
 
 void RunMatch(MatchArguments args) {
@@ -59,10 +61,17 @@ void RunMatch(MatchArguments args) {
   }
 
   const fs::path root = args.dataset;
-  if (!fs::is_directory(root)) throw InputError(args.dataset, 0, "dataset folder not found");
-  EurocReadOptions read_options;
-  read_options.require_imu = false;  // matching needs the camera and its extrinsics
-  const Sequence sequence = ReadEurocDataset(root, read_options);
+  Sequence sequence;
+  if (HasRosbagExtension(root)) {
+    // As `viosfm features` does: the images go beside the database (OUT/bag).
+    const fs::path database = fs::absolute(args.database);
+    sequence = ReadRosbagDataset(root, MakeRosbagOptions(args.bag, database.parent_path() / "bag"));
+  } else {
+    if (!fs::is_directory(root)) throw InputError(args.dataset, 0, "dataset folder not found");
+    EurocReadOptions read_options;
+    read_options.require_imu = false;  // matching needs the camera and its extrinsics
+    sequence = ReadEurocDataset(root, read_options);
+  }
 
   Trajectory vio;
   if (options.use_vio_prior) {
@@ -124,9 +133,11 @@ void RegisterMatch(CLI::App& app) {
                          "check (step 1), then RANSAC (step 2); writes matches and "
                          "verified geometries to the "
                          "database; a re-run skips the pairs already stored");
-  command->add_option("dataset", args->dataset, "EuRoC dataset (folder containing mav0/)")
+  command->add_option("dataset", args->dataset,
+                      "EuRoC dataset (folder containing mav0/) or a ROS 1 bag")
       ->required();
   command->add_option("--database", args->database, "COLMAP database with features")->required();
+  AddBagOptions(command, &args->bag, /*add_camera_yaml=*/true);
   command->add_option("--vio-trajectory", args->vio_trajectory,
                       "VIO trajectory (TUM, EuRoC or KITTI-with-stamps file), world_from_body "
                       "unless --vio-frame cam");

@@ -5,6 +5,7 @@
 #include <memory>
 #include <string>
 
+#include "viosfm/cli/bag_options.h"
 #include "viosfm/cli/commands.h"
 #include "viosfm/cli/vio_uncertainty_options.h"
 #include "viosfm/io/trajectory_io.h"
@@ -29,8 +30,8 @@ struct RunArguments {
   bool fixed_band = false;
   bool no_imu_scale = false;
   VioUncertaintyArguments vio_uncertainty;
-  std::string camera_yaml;
   std::string timestamps;
+  BagArguments bag;
   bool no_trim_static = false;
   bool no_vio_prior = false;
   bool no_rpc = false;
@@ -53,7 +54,8 @@ void RunRun(RunArguments args) {
   options.mapper.registration.verify_with_images = !args.no_verify_registration;
   if (args.fixed_band) options.verification.band_follows_drift = false;
   options.use_imu_scale = !args.no_imu_scale;
-  options.image_folder.camera_yaml = args.camera_yaml;
+  options.image_folder.camera_yaml = args.bag.camera_yaml;
+  options.rosbag = MakeRosbagOptions(args.bag, {});  // extract folder: OUT/bag
   options.image_folder.timestamps_file = args.timestamps;
   options.frame_selection.trim_static = !args.no_trim_static;
   options.verification.use_vio_prior = !args.no_vio_prior;
@@ -92,7 +94,7 @@ void RegisterRun(CLI::App& app) {
       "re-run on the same folder reuses the stored features and matches");
   command
       ->add_option("dataset", args->dataset,
-                   "EuRoC dataset (folder containing mav0/) or a folder of images")
+                   "EuRoC dataset (folder containing mav0/), a folder of images or a ROS 1 bag")
       ->required();
   command->add_option("--out", args->out, "Output folder (created if missing)")->required();
   command->add_option("--vio-trajectory", args->vio_trajectory,
@@ -187,8 +189,9 @@ void RegisterRun(CLI::App& app) {
   AddVioUncertaintyOptions(command, &args->vio_uncertainty);
   command->add_flag("--guided-matching", args->options.verification.guided_matching,
                     "Match inside the VIO epipolar band instead of by brute force");
-  command->add_option("--camera-yaml", args->camera_yaml,
-                      "Image folder: Kalibr/EuRoC camera sensor.yaml");
+  command->add_option("--camera-yaml", args->bag.camera_yaml,
+                      "Image folder or bag: Kalibr/EuRoC camera sensor.yaml");
+  AddBagOptions(command, &args->bag, /*add_camera_yaml=*/false);
   command->add_option("--timestamps", args->timestamps,
                       "Image folder: file of 'filename timestamp' lines");
   command->add_option("--threads", args->options.num_threads, "Worker threads of every stage")

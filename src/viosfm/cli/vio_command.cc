@@ -5,6 +5,7 @@
 #include <memory>
 #include <string>
 
+#include "viosfm/cli/bag_options.h"
 #include "viosfm/cli/commands.h"
 #include "viosfm/io/euroc.h"
 #include "viosfm/util/errors.h"
@@ -20,17 +21,28 @@ struct VioArguments {
   std::string dataset;
   std::string out;
   VioOptions options;
+  BagArguments bag;
 };
 
 void RunVioCommand(VioArguments args) {
   const fs::path root = args.dataset;
-  if (!fs::is_directory(root)) throw InputError(args.dataset, 0, "dataset folder not found");
+  const bool is_bag = HasRosbagExtension(root);
+  if (!is_bag && !fs::is_directory(root)) {
+    throw InputError(args.dataset, 0, "dataset folder not found");
+  }
   if (const std::string error = args.options.Validate(); !error.empty()) {
     throw InputError("invalid vio options: " + error);
   }
-  EurocReadOptions read_options;
-  read_options.require_imu = true;
-  const Sequence sequence = ReadEurocDataset(root, read_options);
+  Sequence sequence;
+  if (is_bag) {
+    RosbagDatasetOptions bag_options = MakeRosbagOptions(args.bag, fs::path(args.out) / "bag");
+    bag_options.require_imu = true;
+    sequence = ReadRosbagDataset(root, bag_options);
+  } else {
+    EurocReadOptions read_options;
+    read_options.require_imu = true;
+    sequence = ReadEurocDataset(root, read_options);
+  }
   VIOSFM_LOG(INFO) << "vio: " << sequence.images.size() << " images, " << sequence.imu.size()
                    << " IMU samples from " << args.dataset;
   const VioResult result = RunVio(sequence, args.options);
@@ -52,7 +64,8 @@ void RegisterVio(CLI::App& app) {
       "vio",
       "Monocular visual-inertial odometry (KLT front end, sliding-window back end with IMU "
       "preintegration and marginalisation): a pose, velocity, biases and status for every frame");
-  command->add_option("dataset", args->dataset, "EuRoC dataset (folder containing mav0/)")
+  command->add_option("dataset", args->dataset,
+                      "EuRoC dataset (folder containing mav0/) or a ROS 1 bag")
       ->required();
   command->add_option("--out", args->out, "Output folder")->required();
   command
@@ -71,6 +84,7 @@ void RegisterVio(CLI::App& app) {
       ->add_option("--iterations", args->options.window.max_num_iterations,
                    "Solver iterations per frame")
       ->capture_default_str();
+  AddBagOptions(command, &args->bag, /*add_camera_yaml=*/true);
   command->callback([args] { RunVioCommand(*args); });
 }
 

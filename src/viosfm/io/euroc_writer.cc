@@ -2,6 +2,7 @@
 
 #include <iomanip>
 #include <ostream>
+#include <sstream>
 
 #include "viosfm/util/errors.h"
 #include "viosfm/util/file_util.h"
@@ -82,8 +83,8 @@ void WriteEurocGroundTruth(const fs::path& csv, const std::vector<GroundTruthSta
   });
 }
 
-void WriteEurocCameraYaml(const fs::path& yaml, const Camera& camera, const Rigid3d& body_from_cam,
-                          double rate_hz) {
+std::string EurocCameraYamlText(const Camera& camera, const Rigid3d& body_from_cam,
+                                double rate_hz) {
   const auto& p = camera.params;
   std::string distortion_model;
   std::vector<double> coefficients;
@@ -92,42 +93,55 @@ void WriteEurocCameraYaml(const fs::path& yaml, const Camera& camera, const Rigi
     case CameraModelId::kOpenCV: distortion_model = "radial-tangential"; break;
     case CameraModelId::kOpenCVFisheye: distortion_model = "equidistant"; break;
     default:
-      throw InputError(yaml.string(), 0,
-                       "camera model " + camera.ModelName() +
-                           " has no EuRoC equivalent (PINHOLE, OPENCV or OPENCV_FISHEYE)");
+      throw InputError("camera model " + camera.ModelName() +
+                       " has no EuRoC equivalent (PINHOLE, OPENCV or OPENCV_FISHEYE)");
   }
-  if (!camera.HasValidParams()) {
-    throw InputError(yaml.string(), 0, "camera has the wrong number of parameters");
-  }
+  if (!camera.HasValidParams()) throw InputError("camera has the wrong number of parameters");
   coefficients.assign(p.begin() + 4, p.end());
-  WriteFileAtomically(yaml, [&](std::ostream& out) {
-    FullPrecision(out);
-    out << "# Camera calibration (Kalibr / EuRoC format), written by viosfm\n"
-        << "sensor_type: camera\n";
-    WriteTransformYaml(out, body_from_cam);
-    out << "rate_hz: " << rate_hz << "\n"
-        << "resolution: [" << camera.width << ", " << camera.height << "]\n"
-        << "camera_model: pinhole\n"
-        << "intrinsics: [" << p[0] << ", " << p[1] << ", " << p[2] << ", " << p[3] << "]\n"
-        << "distortion_model: " << distortion_model << "\n"
-        << "distortion_coefficients: [";
-    for (size_t i = 0; i < coefficients.size(); ++i) out << (i ? ", " : "") << coefficients[i];
-    out << "]\n";
-  });
+  std::ostringstream out;
+  FullPrecision(out);
+  out << "# Camera calibration (Kalibr / EuRoC format), written by viosfm\n"
+      << "sensor_type: camera\n";
+  WriteTransformYaml(out, body_from_cam);
+  out << "rate_hz: " << rate_hz << "\n"
+      << "resolution: [" << camera.width << ", " << camera.height << "]\n"
+      << "camera_model: pinhole\n"
+      << "intrinsics: [" << p[0] << ", " << p[1] << ", " << p[2] << ", " << p[3] << "]\n"
+      << "distortion_model: " << distortion_model << "\n"
+      << "distortion_coefficients: [";
+  for (size_t i = 0; i < coefficients.size(); ++i) out << (i ? ", " : "") << coefficients[i];
+  out << "]\n";
+  return out.str();
+}
+
+std::string EurocImuYamlText(const ImuNoise& noise) {
+  std::ostringstream out;
+  FullPrecision(out);
+  out << "# IMU noise model (Kalibr / EuRoC format), written by viosfm\n"
+      << "sensor_type: imu\n";
+  WriteTransformYaml(out, Rigid3d());
+  out << "rate_hz: " << noise.rate_hz << "\n"
+      << "gyroscope_noise_density: " << noise.gyro_noise_density << "\n"
+      << "gyroscope_random_walk: " << noise.gyro_random_walk << "\n"
+      << "accelerometer_noise_density: " << noise.accel_noise_density << "\n"
+      << "accelerometer_random_walk: " << noise.accel_random_walk << "\n";
+  return out.str();
+}
+
+void WriteEurocCameraYaml(const fs::path& yaml, const Camera& camera, const Rigid3d& body_from_cam,
+                          double rate_hz) {
+  std::string text;
+  try {
+    text = EurocCameraYamlText(camera, body_from_cam, rate_hz);
+  } catch (const InputError& e) {
+    throw InputError(yaml.string(), 0, e.what());
+  }
+  WriteFileAtomically(yaml, [&](std::ostream& out) { out << text; });
 }
 
 void WriteEurocImuYaml(const fs::path& yaml, const ImuNoise& noise) {
-  WriteFileAtomically(yaml, [&](std::ostream& out) {
-    FullPrecision(out);
-    out << "# IMU noise model (Kalibr / EuRoC format), written by viosfm\n"
-        << "sensor_type: imu\n";
-    WriteTransformYaml(out, Rigid3d());
-    out << "rate_hz: " << noise.rate_hz << "\n"
-        << "gyroscope_noise_density: " << noise.gyro_noise_density << "\n"
-        << "gyroscope_random_walk: " << noise.gyro_random_walk << "\n"
-        << "accelerometer_noise_density: " << noise.accel_noise_density << "\n"
-        << "accelerometer_random_walk: " << noise.accel_random_walk << "\n";
-  });
+  const std::string text = EurocImuYamlText(noise);
+  WriteFileAtomically(yaml, [&](std::ostream& out) { out << text; });
 }
 
 void WriteEurocDataset(const fs::path& root, const Sequence& sequence) {

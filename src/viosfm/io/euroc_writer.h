@@ -4,6 +4,7 @@
 #pragma once
 
 #include <filesystem>
+#include <string>
 #include <vector>
 
 #include "viosfm/io/sequence.h"
@@ -20,6 +21,11 @@ void WriteEurocGroundTruth(const std::filesystem::path& csv,
 void WriteEurocCameraYaml(const std::filesystem::path& yaml, const Camera& camera,
                           const Rigid3d& body_from_cam, double rate_hz);
 void WriteEurocImuYaml(const std::filesystem::path& yaml, const ImuNoise& noise);
+// The texts of those two files (InputError for a camera model without a
+// EuRoC equivalent).
+std::string EurocCameraYamlText(const Camera& camera, const Rigid3d& body_from_cam,
+                                double rate_hz);
+std::string EurocImuYamlText(const ImuNoise& noise);
 
 // Writes <root>/mav0/{cam0/{data.csv,sensor.yaml}, imu0/{data.csv,sensor.yaml},
 // state_groundtruth_estimate0/data.csv} for what the sequence has (cam0 only

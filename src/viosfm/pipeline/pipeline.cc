@@ -283,7 +283,18 @@ std::string PipelineOptions::Validate() const {
   if (const std::string error = EffectiveMapperOptions().Validate(); !error.empty()) {
     return "mapper." + error;
   }
+  if (HasRosbagExtension(dataset)) {
+    if (const std::string error = EffectiveRosbagOptions().Validate(); !error.empty()) {
+      return "rosbag." + error;
+    }
+  }
   return "";
+}
+
+RosbagDatasetOptions PipelineOptions::EffectiveRosbagOptions() const {
+  RosbagDatasetOptions options = rosbag;
+  if (options.extract_folder.empty()) options.extract_folder = output_folder / "bag";
+  return options;
 }
 
 SiftOptions PipelineOptions::EffectiveSiftOptions() const {
@@ -338,6 +349,16 @@ std::vector<std::pair<std::string, std::string>> PipelineOptions::ToKeyValues() 
       {"frame_selection.max_static_rotation_rad", Text(frame_selection.max_static_rotation_rad)},
       {"frame_selection.target_rate_hz", Text(frame_selection.target_rate_hz)},
   };
+  if (HasRosbagExtension(dataset)) {
+    const RosbagDatasetOptions r = EffectiveRosbagOptions();
+    values.insert(values.end(), {{"rosbag.image_topic", r.image_topic},
+                                 {"rosbag.imu_topic", r.imu_topic},
+                                 {"rosbag.groundtruth_topic", r.groundtruth_topic},
+                                 {"rosbag.camera_yaml", r.camera_yaml.string()},
+                                 {"rosbag.imu_yaml", r.imu_yaml.string()},
+                                 {"rosbag.rig", r.rig ? "given in code" : ""},
+                                 {"rosbag.extract_folder", r.extract_folder.string()}});
+  }
   for (const auto& [key, value] : vio_uncertainty.ToKeyValues()) {
     values.emplace_back("vio_uncertainty." + key, value);
   }
@@ -564,7 +585,10 @@ PipelineSummary RunPipeline(const PipelineOptions& options) {
 
   // 1. Dataset.
   clock.Begin("read_dataset");
-  const Sequence sequence = ReadPipelineDataset(options.dataset, options.image_folder);
+  const Sequence sequence =
+      HasRosbagExtension(options.dataset)
+          ? ReadRosbagDataset(options.dataset, options.EffectiveRosbagOptions())
+          : ReadPipelineDataset(options.dataset, options.image_folder);
   summary.num_frames_in = sequence.images.size();
   VIOSFM_LOG(INFO) << "run: " << sequence.images.size() << " images"
                    << (sequence.has_imu() ? ", IMU" : "")

@@ -4,7 +4,7 @@
 // relative-pose-constrained bundle adjustment, then evaluation and outputs.
 //
 // Stages (each timed, reported in summary.json "stages"):
-//  1. read_dataset   EuRoC ASL folder (mav0/) or an image folder;
+//  1. read_dataset   EuRoC ASL folder (mav0/), an image folder or a ROS 1 bag;
 //  2. vio            the VIO trajectory (world_from_body) of the sequence,
 //                    from PipelineOptions::vio_source if set, else from the
 //                    file vio_trajectory, else from viosfm's own VIO
@@ -58,6 +58,7 @@
 #include "viosfm/features/sift.h"
 #include "viosfm/eval/metric_accuracy.h"
 #include "viosfm/io/image_folder.h"
+#include "viosfm/io/rosbag_dataset.h"
 #include "viosfm/io/sequence.h"
 #include "viosfm/io/trajectory_io.h"
 #include "viosfm/matching/frame_selection.h"
@@ -90,6 +91,10 @@ struct PipelineOptions {
   std::filesystem::path dataset;
   // Used only when `dataset` is not a EuRoC folder.
   ImageFolderOptions image_folder;
+  // Used only when `dataset` is a ROS 1 bag (".bag"): topics and calibration.
+  // Its images are extracted to rosbag.extract_folder, default OUT/bag (a
+  // EuRoC folder of what was read, see io/rosbag_dataset.h).
+  RosbagDatasetOptions rosbag;
   // The output folder (created if missing). Required.
   std::filesystem::path output_folder;
 
@@ -150,6 +155,8 @@ struct PipelineOptions {
   SiftOptions EffectiveSiftOptions() const;
   VerificationOptions EffectiveVerificationOptions() const;
   BatchedMapperOptions EffectiveMapperOptions() const;
+  // rosbag with the default extract folder applied.
+  RosbagDatasetOptions EffectiveRosbagOptions() const;
 };
 
 struct PipelineStageTime {

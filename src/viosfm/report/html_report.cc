@@ -10,10 +10,12 @@
 #include <utility>
 #include <vector>
 
+#include "viosfm/io/ply.h"
 #include "viosfm/io/trajectory_io.h"
 #include "viosfm/report/json_file.h"
 #include "viosfm/report/run_plots.h"
 #include "viosfm/report/svg_plot.h"
+#include "viosfm/report/viewer_3d.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/file_util.h"
 #include "viosfm/util/string_util.h"
@@ -399,6 +401,58 @@ void AccuracySection(const RunData& run, Page* page, TrajectoryFigures* figures_
   page->Figures({RenderSvg(figures_out->top_view), RenderSvg(figures_out->side_view)});
 }
 
+// The 3D view (report/viewer_3d.h): the points of RUN/points.ply and the
+// estimated path, coloured by its error when the estimate was aligned to the
+// ground truth (which is then drawn in the estimate's frame).
+void View3dSection(const RunData& run, const TrajectoryFigures& figures, Page* page) {
+  page->Heading("3D view", "view3d");
+  Viewer3dOptions options;
+#ifdef VIOSFM_THREE_JS_DIR
+  options.three_js_dir = VIOSFM_THREE_JS_DIR;
+#endif
+  if (!HasThreeJs(options)) {
+    page->Note("no 3D view: three.js was not found in " + options.three_js_dir.string() +
+               " (apt-get install libjs-three).");
+    return;
+  }
+  Viewer3dScene scene;
+  const fs::path ply = run.run_dir / "points.ply";
+  std::error_code error;
+  if (fs::is_regular_file(ply, error)) {
+    PlyPoints points = ReadPly(ply);
+    scene.points = std::move(points.xyz);
+    scene.colors = std::move(points.rgb);
+  }
+  if (run.has_estimate) {
+    if (figures.estimate_evaluation) {
+      // The associated poses in the estimate's order, with their errors.
+      const EvaluationResult& result = *figures.estimate_evaluation;
+      std::vector<std::pair<size_t, double>> errors;
+      for (size_t k = 0; k < result.pairs.size(); ++k) {
+        errors.emplace_back(result.pairs[k].est_index, result.translation_errors_m[k]);
+      }
+      std::sort(errors.begin(), errors.end());
+      for (const auto& [index, e] : errors) {
+        scene.path.push_back(run.estimate.poses[index].world_from_frame.translation);
+        scene.path_errors_m.push_back(e);
+      }
+      const Sim3d est_from_ref = result.ref_from_est.Inverse();
+      for (const StampedPose& pose : run.ground_truth.poses) {
+        scene.ground_truth_path.push_back(est_from_ref * pose.world_from_frame.translation);
+      }
+    } else {
+      for (const StampedPose& pose : run.estimate.poses) {
+        scene.path.push_back(pose.world_from_frame.translation);
+      }
+    }
+  }
+  if (scene.points.empty() && scene.path.empty()) {
+    page->Note("no 3D view: points.ply and trajectory_body.tum are missing or empty.");
+    return;
+  }
+  page->out() << RenderViewer3d(scene, options);
+}
+
 double OutlierRatioThreshold(const RunData& run) {
   if (run.verification) {
     if (const Json* options = Find(*run.verification, "options"); options && options->is_object()) {
@@ -591,6 +645,7 @@ std::string RenderRunReport(const fs::path& run_dir) {
   SummarySection(run, &page);
   TrajectoryFigures figures;
   AccuracySection(run, &page, &figures);
+  View3dSection(run, figures, &page);
   VerificationSection(run, &page);
   TimingSection(run, &page);
   OptionsSection(run, &page);

@@ -1,5 +1,5 @@
 // The HTML report of a `viosfm run` folder: one self-contained page (inline
-// CSS and SVG, no scripts, no external files).
+// CSS and SVG, the 3D view's three.js and data embedded, no external files).
 //
 // Reads from RUN (only summary.json is required):
 //   summary.json                 counts, timings, per-batch numbers, ATE summary
@@ -11,8 +11,10 @@
 //                                estimate / the VIO against the ground truth
 //   verification/verification.json, verification/pairs.csv
 //                                io/verification_report.h
+//   points.ply                   the points of the 3D view (report/viewer_3d.h)
 // Sections: summary numbers, accuracy, trajectory views coloured by position
-// error (Sim(3)-aligned to the ground truth), pair verification (decisions,
+// error (Sim(3)-aligned to the ground truth), a 3D view of the points and the
+// camera path (report/viewer_3d.h), pair verification (decisions,
 // histogram of the VIO outlier ratio with its threshold), per-stage timings,
 // per-batch bundle adjustment, options. A section whose files are missing
 // says so ("no ground truth", ...).

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -12,6 +13,7 @@
 #include "viosfm/eval/report.h"
 #include "viosfm/eval/traj_eval.h"
 #include "viosfm/io/image_io.h"
+#include "viosfm/io/ply.h"
 #include "viosfm/io/trajectory_io.h"
 #include "viosfm/io/verification_report.h"
 #include "viosfm/util/file_util.h"
@@ -47,12 +49,14 @@ Trajectory MakeGroundTruth(int n) {
   return trajectory;
 }
 
+// The estimate's frame: a similarity away from the ground truth's.
+const Sim3d kEstFromRef(0.5, Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ())),
+                        Eigen::Vector3d(1.0, 2.0, 0.0));
+
 // Every second ground-truth pose in another similarity frame, with a
 // deterministic wobble (m, in the ground truth's scale) that grows along the loop.
 Trajectory MakeEstimate(const Trajectory& truth) {
-  const Sim3d est_from_ref(0.5,
-                           Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ())),
-                           Eigen::Vector3d(1.0, 2.0, 0.0));
+  const Sim3d& est_from_ref = kEstFromRef;
   Trajectory estimate;
   for (size_t i = 0; i < truth.size(); i += 2) {
     StampedPose pose = truth.poses[i];
@@ -162,6 +166,18 @@ Fixture BuildFixture(const fs::path& run_dir) {
   WriteTumTrajectory(run_dir / "groundtruth_body.tum", truth);
   WriteTumTrajectory(run_dir / "trajectory_body.tum", estimate);
   WriteTumTrajectory(run_dir / "vio_body.tum", MakeVio(truth));
+  // The points of a room around the loop (walls of an ellipse, 0 to 2.5 m
+  // high, striped), in the estimate's frame.
+  std::vector<Eigen::Vector3d> points;
+  std::vector<Vector3ub> colors;
+  for (int i = 0; i < 20000; ++i) {
+    const double a = 2.0 * M_PI * (i % 400) / 400.0;
+    const double z = 2.5 * (i / 400) / 50.0;
+    points.push_back(kEstFromRef * Eigen::Vector3d(6.0 * std::cos(a), 4.0 * std::sin(a), z));
+    const uint8_t v = static_cast<uint8_t>((i / 400) % 2 == 0 ? 230 : 120);
+    colors.push_back(Vector3ub(v, v, v));
+  }
+  WritePlyPoints(run_dir / "points.ply", points, colors);
   EvaluationOptions options;
   options.alignment = AlignmentMode::kSim3;
   fixture.estimate_eval = EvaluateTrajectories(estimate, truth, options);
@@ -234,11 +250,20 @@ TEST(RenderRunReport, ShowsTheRunsNumbersAndFigures) {
   // Options, escaped.
   EXPECT_TRUE(Contains(html, "<th>mapper.batch_size</th><td class=\"num\">40</td>"));
   EXPECT_TRUE(Contains(html, "/data/&lt;loop&gt;&amp;co"));
-  // Nothing is fetched: no scripts, no links, no URLs besides the SVG namespace.
-  EXPECT_FALSE(Contains(html, "<script"));
-  EXPECT_FALSE(Contains(html, "src="));
-  EXPECT_FALSE(Contains(html, "href="));
-  EXPECT_EQ(Count(html, "http"), Count(html, "xmlns=\"http://www.w3.org/2000/svg\""));
+  // Nothing is fetched: outside the embedded scripts of the 3D view (three.js
+  // and its data, see HtmlReport.ThreeDViewIsSelfContained) no element loads
+  // anything, and no URLs but the SVG namespace.
+  std::string outside = html;
+  for (size_t start = outside.find("<script>"); start != std::string::npos;
+       start = outside.find("<script>", start + 1)) {
+    const size_t end = outside.find("</script>", start);
+    ASSERT_NE(end, std::string::npos);
+    outside.erase(start + 8, end - start - 8);
+  }
+  EXPECT_FALSE(Contains(outside, "<script src"));
+  EXPECT_FALSE(Contains(outside, "src="));
+  EXPECT_FALSE(Contains(outside, "href="));
+  EXPECT_EQ(Count(outside, "http"), Count(outside, "xmlns=\"http://www.w3.org/2000/svg\""));
   EXPECT_FALSE(Contains(html, "no ground truth"));
   // Deterministic.
   EXPECT_EQ(html, RenderRunReport(fixture.run_dir));
@@ -313,13 +338,15 @@ constexpr const char* kChromium = "/usr/bin/chromium";
 
 // Runs Chromium with `arguments` on `html`, its stdout to `stdout_path`
 // (stderr, which carries its log noise, to a file beside it). Returns the exit status.
+// WebGL runs on SwiftShader, Chromium's software renderer (--disable-gpu;
+// --enable-unsafe-swiftshader lets versions that ask for it use it).
 int RunChromium(const fs::path& scratch, const std::string& arguments, const fs::path& html,
-                const fs::path& stdout_path) {
+                const fs::path& stdout_path, const std::string& fragment = "") {
   const std::string command = "timeout 60 " + std::string(kChromium) +
-                              " --headless --no-sandbox --disable-gpu --no-first-run"
-                              " --user-data-dir='" +
+                              " --headless --no-sandbox --disable-gpu --enable-unsafe-swiftshader"
+                              " --no-first-run --user-data-dir='" +
                               (scratch / "chromium_profile").string() + "' " + arguments +
-                              " 'file://" + fs::absolute(html).string() + "' > '" +
+                              " 'file://" + fs::absolute(html).string() + fragment + "' > '" +
                               stdout_path.string() + "' 2> '" +
                               (scratch / "chromium_stderr.txt").string() + "'";
   return std::system(command.c_str());
@@ -374,6 +401,90 @@ TEST(ChromiumRendering, DomHoldsNumbersAndScreenshotIsNonTrivial) {
   EXPECT_GT(dark, image.pixels.size() / 200);
   if (keep != nullptr)
     fs::copy_file(png, fs::path(keep) / "report.png", fs::copy_options::overwrite_existing);
+}
+
+std::vector<uint8_t> DecodeBase64(const std::string& text) {
+  static const std::string kAlphabet =
+      "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::vector<uint8_t> out;
+  uint32_t buffer = 0;
+  int bits = 0;
+  for (const char c : text) {
+    const size_t value = kAlphabet.find(c);
+    if (value == std::string::npos) continue;  // '=' padding, line breaks
+    buffer = (buffer << 6) | static_cast<uint32_t>(value);
+    bits += 6;
+    if (bits >= 8) {
+      bits -= 8;
+      out.push_back(static_cast<uint8_t>((buffer >> bits) & 0xff));
+    }
+  }
+  return out;
+}
+
+// The page is still one file: the 3D view carries three.js and its data.
+TEST(HtmlReport, ThreeDViewIsSelfContained) {
+  const Fixture fixture = BuildFixture(testing::MakeScratchFolder("report_3d") / "run");
+  const std::string html = RenderRunReport(fixture.run_dir);
+  if (!Contains(html, "id=\"viewer3d-canvas\"")) {
+    ASSERT_TRUE(Contains(html, "no 3D view: three.js was not found"));
+    GTEST_SKIP() << "libjs-three not installed (apt-get install libjs-three); skipping";
+  }
+  EXPECT_TRUE(Contains(html, "REVISION=\"111\""));  // Debian's three.js
+  EXPECT_TRUE(Contains(html, "OrbitControls"));
+  EXPECT_TRUE(Contains(html, "num_points: 20000"));
+  EXPECT_TRUE(Contains(html, "Camera path coloured by position error"));
+  EXPECT_FALSE(Contains(html, "<script src"));
+  EXPECT_FALSE(Contains(html, "<link "));
+  EXPECT_EQ(Count(html, "<script>"), 3u);
+}
+
+// Headless Chromium draws the 3D view with WebGL: the canvas the page hands
+// back (report.html#viewer-selftest) is a PNG with the points and the path
+// on the dark background.
+TEST(ChromiumRendering, ThreeDViewDrawsWithWebGl) {
+  if (!fs::exists(kChromium)) {
+    GTEST_SKIP() << kChromium << " not found (apt-get install chromium); skipping the browser test";
+  }
+  const char* keep = std::getenv("VIOSFM_REPORT_FIXTURE_DIR");
+  const fs::path scratch = testing::MakeScratchFolder("report_chromium_3d");
+  const Fixture fixture = BuildFixture(keep != nullptr ? fs::path(keep) : scratch / "run");
+  const fs::path html = fixture.run_dir / "report.html";
+  WriteRunReport(fixture.run_dir, html);
+  if (!Contains(ReadTextFile(html), "id=\"viewer3d-canvas\"")) {
+    GTEST_SKIP() << "libjs-three not installed (apt-get install libjs-three); skipping";
+  }
+  const fs::path dom_path = scratch / "dom_3d.html";
+  ASSERT_EQ(RunChromium(scratch, "--dump-dom", html, dom_path, "#viewer-selftest"), 0)
+      << ReadTextFile(scratch / "chromium_stderr.txt");
+  const std::string dom = ReadTextFile(dom_path);
+  EXPECT_TRUE(Contains(dom, "20000 of 20000 points, 200 poses")) << "status line missing";
+  const std::string prefix = "data:image/png;base64,";
+  const size_t start = dom.find(prefix);
+  ASSERT_NE(start, std::string::npos) << "no canvas data in the DOM (WebGL unavailable?)";
+  const size_t end = dom.find('<', start);
+  const std::vector<uint8_t> png = DecodeBase64(dom.substr(start + prefix.size(), end - start - prefix.size()));
+  const fs::path png_path = scratch / "view3d.png";
+  {
+    std::ofstream out(png_path, std::ios::binary);
+    out.write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
+  }
+  const GreyImage canvas = ReadGreyImage(png_path);
+  EXPECT_EQ(canvas.width, 1100);
+  EXPECT_EQ(canvas.height, 600);
+  // The background is grey 30; points are 120 and 230, the path is coloured.
+  size_t drawn = 0, bright = 0;
+  for (const uint8_t v : canvas.pixels) {
+    drawn += std::abs(static_cast<int>(v) - 30) > 10;
+    bright += v > 180;
+  }
+  const size_t total = canvas.pixels.size();
+  EXPECT_GT(drawn, total / 100) << drawn << " of " << total << " pixels drawn";
+  EXPECT_LT(drawn, total * 9 / 10);
+  EXPECT_GT(bright, total / 1000);
+  if (keep != nullptr) {
+    fs::copy_file(png_path, fs::path(keep) / "view3d.png", fs::copy_options::overwrite_existing);
+  }
 }
 
 }  // namespace

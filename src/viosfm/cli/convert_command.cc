@@ -1,0 +1,100 @@
+// `viosfm convert IN OUT`: a EuRoC folder to a ROS 1 bag or a bag to a EuRoC
+// folder, by the extension of IN and OUT (see io/rosbag_dataset.h).
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#include "viosfm/cli/bag_options.h"
+#include "viosfm/cli/commands.h"
+#include "viosfm/io/euroc.h"
+#include "viosfm/io/rosbag.h"
+#include "viosfm/io/rosbag_dataset.h"
+#include "viosfm/util/errors.h"
+#include "viosfm/util/logging.h"
+#include "viosfm/util/string_util.h"
+
+namespace viosfm::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct ConvertArguments {
+  std::string in;
+  std::string out;
+  BagArguments bag;
+  std::string compression = "none";
+  bool compressed_images = false;
+  bool no_calibration = false;
+};
+
+RosbagCompression ParseCompression(const std::string& name) {
+  const std::string lower = ToLower(name);
+  if (lower == "none") return RosbagCompression::kNone;
+  if (lower == "bz2") return RosbagCompression::kBz2;
+  if (lower == "lz4") return RosbagCompression::kLz4;
+  throw InputError("--compression '" + name + "': expected none, bz2 or lz4");
+}
+
+void RunConvert(const ConvertArguments& args) {
+  const fs::path in = args.in;
+  const fs::path out = args.out;
+  if (HasRosbagExtension(in) && !HasRosbagExtension(out)) {
+    {
+      const RosbagReader reader(in);
+      VIOSFM_LOG(INFO) << "convert: " << in.string() << " holds\n" << DescribeRosbagTopics(reader);
+    }
+    const Sequence sequence = ReadRosbagDataset(in, MakeRosbagOptions(args.bag, out));
+    VIOSFM_LOG(INFO) << "convert: wrote the EuRoC folder " << out.string() << " ("
+                     << sequence.images.size() << " images, " << sequence.imu.size()
+                     << " IMU samples, " << sequence.ground_truth.size() << " ground-truth poses)";
+    return;
+  }
+  if (!HasRosbagExtension(in) && HasRosbagExtension(out)) {
+    if (!fs::is_directory(in)) throw InputError(args.in, 0, "dataset folder not found");
+    EurocReadOptions read_options;
+    read_options.require_imu = false;
+    const Sequence sequence = ReadEurocDataset(in, read_options);
+    RosbagWriteOptions options;
+    if (!args.bag.image_topic.empty()) options.image_topic = args.bag.image_topic;
+    if (!args.bag.imu_topic.empty()) options.imu_topic = args.bag.imu_topic;
+    if (!args.bag.groundtruth_topic.empty()) options.groundtruth_topic = args.bag.groundtruth_topic;
+    options.compressed_images = args.compressed_images;
+    options.embed_calibration = !args.no_calibration;
+    options.writer.compression = ParseCompression(args.compression);
+    if (const std::string error = options.Validate(); !error.empty()) {
+      throw InputError("invalid convert options: " + error);
+    }
+    if (out.has_parent_path()) fs::create_directories(out.parent_path());
+    WriteRosbagDataset(sequence, out, options);
+    return;
+  }
+  throw InputError("convert " + args.in + " " + args.out +
+                   ": expected a EuRoC folder and a .bag file (one of each, in either order)");
+}
+
+}  // namespace
+
+void RegisterConvert(CLI::App& app) {
+  auto args = std::make_shared<ConvertArguments>();
+  CLI::App* command = app.add_subcommand(
+      "convert",
+      "Convert between a EuRoC folder and a ROS 1 bag, by extension: FOLDER -> X.bag writes "
+      "sensor_msgs/Image mono8 on /cam0/image_raw, sensor_msgs/Imu on /imu0, the ground truth on "
+      "/groundtruth/pose and the calibration; X.bag -> FOLDER writes what viosfm reads from the "
+      "bag as a EuRoC folder");
+  command->add_option("in", args->in, "EuRoC folder or .bag")->required();
+  command->add_option("out", args->out, ".bag or folder (written)")->required();
+  AddBagOptions(command, &args->bag, /*add_camera_yaml=*/true);
+  command
+      ->add_option("--compression", args->compression,
+                   "Writing a bag: chunk compression, none, bz2 or lz4")
+      ->capture_default_str();
+  command->add_flag("--compressed-images", args->compressed_images,
+                    "Writing a bag: sensor_msgs/CompressedImage holding the image files' bytes");
+  command->add_flag("--no-calibration", args->no_calibration,
+                    "Writing a bag: leave out the calibration (/viosfm/cam0/sensor_yaml, "
+                    "/viosfm/imu0/sensor_yaml)");
+  command->callback([args] { RunConvert(*args); });
+}
+
+}  // namespace viosfm::cli

@@ -1,0 +1,664 @@
+#include "viosfm/io/rosbag_dataset.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <set>
+#include <sstream>
+
+#include "viosfm/io/euroc.h"
+#include "viosfm/io/euroc_writer.h"
+#include "viosfm/io/image_io.h"
+#include "viosfm/io/ros_messages.h"
+#include "viosfm/util/errors.h"
+#include "viosfm/util/file_util.h"
+#include "viosfm/util/logging.h"
+#include "viosfm/util/string_util.h"
+
+namespace viosfm {
+namespace {
+
+namespace fs = std::filesystem;
+
+bool IsIdentity(const Rigid3d& transform) {
+  return transform.rotation.angularDistance(Eigen::Quaterniond::Identity()) < 1e-12 &&
+         transform.translation.norm() < 1e-12;
+}
+
+std::string Join(const std::vector<std::string>& parts, const std::string& separator) {
+  std::string out;
+  for (size_t i = 0; i < parts.size(); ++i) out += (i ? separator : "") + parts[i];
+  return out;
+}
+
+const RosMessageType* KnownType(const std::string& type) {
+  for (const RosMessageType* known :
+       {&kRosImageType, &kRosCompressedImageType, &kRosImuType, &kRosPoseStampedType,
+        &kRosTransformStampedType, &kRosStringType}) {
+    if (type == known->name) return known;
+  }
+  return nullptr;
+}
+
+// The connections of each topic.
+using TopicMap = std::map<std::string, std::vector<const RosbagConnection*>>;
+
+TopicMap GroupByTopic(const RosbagReader& reader) {
+  TopicMap topics;
+  for (const RosbagConnection& connection : reader.connections()) {
+    topics[connection.topic].push_back(&connection);
+  }
+  return topics;
+}
+
+// Picks a topic: the requested one (which must exist and have an accepted
+// type), else the only topic of an accepted type, else `preferred` among
+// several. Returns "" when the bag has none and `required` is false.
+std::string ChooseTopic(const RosbagReader& reader, const TopicMap& topics,
+                        const std::string& requested, const std::vector<std::string>& types,
+                        const std::string& preferred, const std::string& what,
+                        const std::string& flag, bool required) {
+  const std::string p = reader.path().string();
+  const std::string type_list = Join(types, " or ");
+  const auto accepted = [&types](const std::string& type) {
+    return std::find(types.begin(), types.end(), type) != types.end();
+  };
+  if (!requested.empty()) {
+    const auto it = topics.find(requested);
+    if (it == topics.end()) {
+      throw InputError(p, 0,
+                       "no topic '" + requested + "' (" + flag + "); the bag has:\n" +
+                           DescribeRosbagTopics(reader));
+    }
+    for (const RosbagConnection* connection : it->second) {
+      if (!accepted(connection->type)) {
+        throw InputError(p, 0,
+                         "topic '" + requested + "' (" + flag + ") has type " + connection->type +
+                             ", expected " + type_list);
+      }
+    }
+    return requested;
+  }
+  std::vector<std::string> candidates;
+  for (const auto& [topic, connections] : topics) {
+    if (accepted(connections.front()->type)) candidates.push_back(topic);
+  }
+  if (candidates.size() == 1) return candidates.front();
+  if (candidates.empty()) {
+    if (!required) return "";
+    throw InputError(
+        p, 0,
+        "no " + what + " topic (" + type_list + "); the bag has:\n" + DescribeRosbagTopics(reader));
+  }
+  if (std::find(candidates.begin(), candidates.end(), preferred) != candidates.end()) {
+    VIOSFM_LOG(INFO) << p << ": " << candidates.size() << " " << what << " topics, reading "
+                     << preferred << " (EuRoC's name; choose another with " << flag << ")";
+    return preferred;
+  }
+  throw InputError(p, 0,
+                   std::to_string(candidates.size()) + " " + what + " topics (" +
+                       Join(candidates, ", ") + "): choose one with " + flag);
+}
+
+void CheckMd5(const RosbagReader& reader, const TopicMap& topics, const std::string& topic) {
+  if (topic.empty()) return;
+  for (const RosbagConnection* connection : topics.at(topic)) {
+    const RosMessageType* known = KnownType(connection->type);
+    VIOSFM_CHECK(known != nullptr) << connection->type;
+    if (connection->md5sum != "*" && connection->md5sum != known->md5sum) {
+      throw InputError(reader.path().string(), 0,
+                       "topic '" + topic + "': " + connection->type + " with MD5 sum " +
+                           connection->md5sum + ", expected " + known->md5sum +
+                           " (a different definition of the message)");
+    }
+  }
+}
+
+// Converts a sensor_msgs/Image to grey; InputError for encodings viosfm
+// does not read or sizes that do not add up.
+GreyImage ImageToGrey(const RosImage& image, const std::string& where) {
+  const std::string encoding = ToLower(image.encoding);
+  int channels = 0;
+  int conversion = -1;
+  if (encoding == "mono8" || encoding == "8uc1") {
+    channels = 1;
+  } else if (encoding == "bgr8" || encoding == "8uc3") {
+    channels = 3;
+    conversion = cv::COLOR_BGR2GRAY;
+  } else if (encoding == "rgb8") {
+    channels = 3;
+    conversion = cv::COLOR_RGB2GRAY;
+  } else if (encoding == "bgra8" || encoding == "8uc4") {
+    channels = 4;
+    conversion = cv::COLOR_BGRA2GRAY;
+  } else if (encoding == "rgba8") {
+    channels = 4;
+    conversion = cv::COLOR_RGBA2GRAY;
+  } else {
+    throw InputError(where + ": sensor_msgs/Image encoding '" + image.encoding +
+                     "' is not supported (expected mono8, bgr8, rgb8, bgra8 or rgba8)");
+  }
+  if (image.width == 0 || image.height == 0 || image.width > 100000 || image.height > 100000) {
+    throw InputError(where + ": sensor_msgs/Image of " + std::to_string(image.width) + "x" +
+                     std::to_string(image.height) + " pixels");
+  }
+  const uint64_t row_bytes = uint64_t{image.width} * channels;
+  if (image.step < row_bytes) {
+    throw InputError(where + ": sensor_msgs/Image step " + std::to_string(image.step) +
+                     " is shorter than a row of " + std::to_string(image.width) + " " + encoding +
+                     " pixels (" + std::to_string(row_bytes) + " bytes)");
+  }
+  if (image.data.size() != uint64_t{image.step} * image.height) {
+    throw InputError(where + ": sensor_msgs/Image data has " + std::to_string(image.data.size()) +
+                     " bytes, expected step x height = " + std::to_string(image.step) + " x " +
+                     std::to_string(image.height));
+  }
+  const int width = static_cast<int>(image.width);
+  const int height = static_cast<int>(image.height);
+  const cv::Mat source(height, width, CV_8UC(channels), const_cast<uint8_t*>(image.data.data()),
+                       image.step);
+  cv::Mat grey;
+  if (conversion < 0) {
+    grey = source;
+  } else {
+    cv::cvtColor(source, grey, conversion);
+  }
+  GreyImage out(width, height);
+  for (int y = 0; y < height; ++y) {
+    const uint8_t* row = grey.ptr<uint8_t>(y);
+    std::copy(row, row + width, out.pixels.begin() + static_cast<size_t>(y) * width);
+  }
+  return out;
+}
+
+GreyImage CompressedImageToGrey(const RosCompressedImage& image, const std::string& where) {
+  const std::string format = ToLower(image.format);
+  if (format.find("compresseddepth") != std::string::npos) {
+    throw InputError(where + ": sensor_msgs/CompressedImage format '" + image.format +
+                     "' is a depth image, not a camera image");
+  }
+  cv::Mat grey;
+  try {
+    const cv::Mat bytes(1, static_cast<int>(image.data.size()), CV_8UC1,
+                        const_cast<uint8_t*>(image.data.data()));
+    grey = cv::imdecode(bytes, cv::IMREAD_GRAYSCALE);
+  } catch (const cv::Exception& e) {
+    throw InputError(where + ": sensor_msgs/CompressedImage (format '" + image.format +
+                     "') cannot be decoded: " + e.what());
+  }
+  if (grey.empty() || grey.type() != CV_8UC1) {
+    throw InputError(where + ": sensor_msgs/CompressedImage (format '" + image.format + "', " +
+                     std::to_string(image.data.size()) +
+                     " bytes) cannot be decoded (expected JPEG or PNG data)");
+  }
+  GreyImage out(grey.cols, grey.rows);
+  for (int y = 0; y < grey.rows; ++y) {
+    const uint8_t* row = grey.ptr<uint8_t>(y);
+    std::copy(row, row + grey.cols, out.pixels.begin() + static_cast<size_t>(y) * grey.cols);
+  }
+  return out;
+}
+
+struct Located {
+  timestamp_ns_t stamp_ns = 0;
+  std::string location;
+};
+
+// Sorts by stamp; equal stamps are an error naming both messages.
+template <typename T>
+void SortByStamp(std::vector<std::pair<Located, T>>* items, const std::string& bag,
+                 const std::string& topic) {
+  std::stable_sort(items->begin(), items->end(), [](const auto& a, const auto& b) {
+    return a.first.stamp_ns < b.first.stamp_ns;
+  });
+  for (size_t i = 1; i < items->size(); ++i) {
+    if ((*items)[i].first.stamp_ns == (*items)[i - 1].first.stamp_ns) {
+      throw InputError(bag, 0,
+                       "topic '" + topic + "': two messages with the stamp " +
+                           std::to_string((*items)[i].first.stamp_ns) + " ns (" +
+                           (*items)[i - 1].first.location + " and " + (*items)[i].first.location +
+                           ")");
+    }
+  }
+}
+
+}  // namespace
+
+std::string RosbagDatasetOptions::Validate() const {
+  if (extract_folder.empty()) return "extract_folder must be given (where the images are written)";
+  if (!imu_yaml.empty() && camera_yaml.empty()) {
+    return "imu_yaml needs camera_yaml (the camera calibration) too";
+  }
+  if (rig && !camera_yaml.empty()) return "give either rig or camera_yaml, not both";
+  if (rig) {
+    if (const std::string problem = rig->Validate(); !problem.empty()) return "rig: " + problem;
+  }
+  return "";
+}
+
+std::string RosbagWriteOptions::Validate() const {
+  const auto valid_topic = [](const std::string& topic) {
+    if (topic.empty()) return false;
+    return std::all_of(topic.begin(), topic.end(), [](char c) {
+      return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '/' || c == '~';
+    });
+  };
+  if (!valid_topic(image_topic)) return "image_topic '" + image_topic + "' is not a ROS topic name";
+  if (!valid_topic(imu_topic)) return "imu_topic '" + imu_topic + "' is not a ROS topic name";
+  if (!valid_topic(groundtruth_topic)) {
+    return "groundtruth_topic '" + groundtruth_topic + "' is not a ROS topic name";
+  }
+  if (image_topic == imu_topic || image_topic == groundtruth_topic ||
+      imu_topic == groundtruth_topic) {
+    return "the image, IMU and ground-truth topics must differ";
+  }
+  if (writer.chunk_threshold_bytes == 0) return "writer.chunk_threshold_bytes must be positive";
+  return "";
+}
+
+std::string DescribeRosbagTopics(const RosbagReader& reader) {
+  std::ostringstream out;
+  const TopicMap topics = GroupByTopic(reader);
+  if (topics.empty()) return "  (no topics)";
+  bool first = true;
+  for (const auto& [topic, connections] : topics) {
+    uint64_t count = 0;
+    for (const RosbagConnection* connection : connections) count += connection->num_messages;
+    out << (first ? "" : "\n") << "  " << topic << " (" << connections.front()->type << ", "
+        << count << (count == 1 ? " message)" : " messages)");
+    first = false;
+  }
+  return out.str();
+}
+
+Sequence ReadRosbagDataset(const fs::path& bag, const RosbagDatasetOptions& options) {
+  if (const std::string problem = options.Validate(); !problem.empty()) {
+    throw InputError("bag read options: " + problem);
+  }
+  RosbagReader reader(bag);
+  const std::string p = bag.string();
+  const TopicMap topics = GroupByTopic(reader);
+
+  const std::string image_topic = ChooseTopic(
+      reader, topics, options.image_topic, {kRosImageType.name, kRosCompressedImageType.name},
+      kEurocImageTopic, "image", "--image-topic", /*required=*/true);
+  const std::string imu_topic =
+      ChooseTopic(reader, topics, options.imu_topic, {kRosImuType.name}, kEurocImuTopic, "IMU",
+                  "--imu-topic", options.require_imu);
+  std::string groundtruth_topic = options.groundtruth_topic;
+  if (groundtruth_topic.empty() && topics.count(kGroundTruthTopic) > 0) {
+    groundtruth_topic = kGroundTruthTopic;
+  }
+  if (!groundtruth_topic.empty()) {
+    ChooseTopic(reader, topics, groundtruth_topic,
+                {kRosPoseStampedType.name, kRosTransformStampedType.name}, "", "ground-truth",
+                "--groundtruth-topic", true);
+  }
+  for (const std::string& topic : {image_topic, imu_topic, groundtruth_topic}) {
+    CheckMd5(reader, topics, topic);
+  }
+  if (imu_topic.empty()) {
+    VIOSFM_LOG(WARNING) << p << ": no sensor_msgs/Imu topic: a sequence without IMU";
+  }
+  const auto embedded = [&topics](const char* topic) {
+    const auto it = topics.find(topic);
+    return it != topics.end() && it->second.front()->type == kRosStringType.name;
+  };
+  const bool read_embedded =
+      !options.rig && options.camera_yaml.empty() && embedded(kCameraCalibrationTopic);
+
+  const fs::path mav0 = options.extract_folder / "mav0";
+  const fs::path image_folder = mav0 / "cam0" / "data";
+  std::error_code error;
+  fs::create_directories(image_folder, error);
+  if (error) {
+    throw InputError(image_folder.string(), 0, "cannot create the folder: " + error.message());
+  }
+
+  std::vector<std::pair<Located, fs::path>> images;
+  std::vector<std::pair<Located, ImuSample>> imu;
+  std::vector<std::pair<Located, Rigid3d>> ground_truth;
+  std::set<timestamp_ns_t> image_stamps;
+  std::string camera_yaml_text, imu_yaml_text;
+  int image_width = 0, image_height = 0;
+  std::string first_image_location;
+  size_t num_unstamped = 0;
+
+  reader.ReadMessages(
+      [&](const RosbagConnection& connection) {
+        return connection.topic == image_topic || connection.topic == imu_topic ||
+               connection.topic == groundtruth_topic ||
+               (read_embedded && (connection.topic == kCameraCalibrationTopic ||
+                                  connection.topic == kImuCalibrationTopic));
+      },
+      [&](const RosbagMessage& message) {
+        const RosbagConnection& connection = *message.connection;
+        const std::string where = p + ": " + message.location + " (" + connection.topic + ")";
+        // A message without a header stamp is stamped with its record time.
+        const auto stamp_of = [&](const RosHeader& header) {
+          if (header.stamp_ns != 0) return header.stamp_ns;
+          ++num_unstamped;
+          return message.time_ns;
+        };
+        if (connection.topic == image_topic) {
+          GreyImage grey;
+          timestamp_ns_t stamp = 0;
+          if (connection.type == kRosImageType.name) {
+            const RosImage image = DeserializeRosImage(message.data, where);
+            stamp = stamp_of(image.header);
+            grey = ImageToGrey(image, where);
+          } else {
+            const RosCompressedImage image = DeserializeRosCompressedImage(message.data, where);
+            stamp = stamp_of(image.header);
+            grey = CompressedImageToGrey(image, where);
+          }
+          if (first_image_location.empty()) {
+            image_width = grey.width;
+            image_height = grey.height;
+            first_image_location = message.location;
+          } else if (grey.width != image_width || grey.height != image_height) {
+            throw InputError(where + ": image of " + std::to_string(grey.width) + "x" +
+                             std::to_string(grey.height) + " pixels, the first one (" +
+                             first_image_location + ") has " + std::to_string(image_width) + "x" +
+                             std::to_string(image_height));
+          }
+          if (!image_stamps.insert(stamp).second) {
+            throw InputError(where + ": a second image with the stamp " + std::to_string(stamp) +
+                             " ns");
+          }
+          const fs::path path = image_folder / (std::to_string(stamp) + ".png");
+          WriteGreyPng(path, grey);
+          images.push_back({{stamp, message.location}, path});
+        } else if (connection.topic == imu_topic) {
+          const RosImu message_imu = DeserializeRosImu(message.data, where);
+          ImuSample sample;
+          sample.timestamp_ns = stamp_of(message_imu.header);
+          sample.gyro = message_imu.angular_velocity;
+          sample.accel = message_imu.linear_acceleration;
+          if (!sample.gyro.allFinite() || !sample.accel.allFinite()) {
+            throw InputError(where +
+                             ": sensor_msgs/Imu with a non-finite angular velocity or "
+                             "linear acceleration");
+          }
+          imu.push_back({{sample.timestamp_ns, message.location}, sample});
+        } else if (connection.topic == groundtruth_topic) {
+          RosHeader header;
+          Rigid3d world_from_body;
+          if (connection.type == kRosPoseStampedType.name) {
+            const RosPoseStamped pose = DeserializeRosPoseStamped(message.data, where);
+            header = pose.header;
+            world_from_body = pose.pose;
+          } else {
+            const RosTransformStamped transform =
+                DeserializeRosTransformStamped(message.data, where);
+            header = transform.header;
+            world_from_body = transform.transform;
+          }
+          const double norm = world_from_body.rotation.norm();
+          if (!(std::abs(norm - 1.0) <= 1e-3) || !world_from_body.translation.allFinite()) {
+            throw InputError(where + ": ground-truth pose with a quaternion of norm " +
+                             std::to_string(norm) + " (expected 1) or a non-finite position");
+          }
+          // As the trajectory readers do: a quaternion already of unit norm
+          // (to rounding) is kept as it is, so a pose survives a bag exactly.
+          if (std::abs(world_from_body.rotation.squaredNorm() - 1.0) > 2e-15) {
+            world_from_body.rotation.normalize();
+          }
+          ground_truth.push_back({{stamp_of(header), message.location}, world_from_body});
+        } else if (connection.topic == kCameraCalibrationTopic) {
+          camera_yaml_text = DeserializeRosString(message.data, where);
+        } else if (connection.topic == kImuCalibrationTopic) {
+          imu_yaml_text = DeserializeRosString(message.data, where);
+        }
+      });
+
+  if (images.empty()) {
+    throw InputError(p, 0, "topic '" + image_topic + "' has no messages");
+  }
+  if (num_unstamped > 0) {
+    VIOSFM_LOG(WARNING) << p << ": " << num_unstamped
+                        << " messages without a header stamp were stamped with their record time";
+  }
+  SortByStamp(&images, p, image_topic);
+  SortByStamp(&imu, p, imu_topic);
+  SortByStamp(&ground_truth, p, groundtruth_topic);
+
+  Sequence sequence;
+  sequence.root = bag;
+  for (const auto& [located, path] : images) sequence.images.push_back({located.stamp_ns, path});
+  for (const auto& [located, sample] : imu) sequence.imu.push_back(sample);
+
+  // Calibration.
+  std::string calibration_source;
+  Rigid3d body_from_imu;
+  bool has_imu_calibration = false;
+  const auto read_yaml_pair = [&](const fs::path& camera_yaml, const fs::path& imu_yaml) {
+    const EurocCameraCalibration camera = ReadEurocCameraYaml(camera_yaml);
+    sequence.rig.camera = camera.camera;
+    sequence.rig.body_from_cam = camera.body_from_cam;
+    sequence.rig.camera_rate_hz = camera.rate_hz;
+    if (!imu_yaml.empty()) {
+      const EurocImuCalibration imu_calibration = ReadEurocImuYaml(imu_yaml);
+      sequence.rig.imu_noise = imu_calibration.noise;
+      body_from_imu = imu_calibration.body_from_imu;
+      has_imu_calibration = true;
+    }
+  };
+  const fs::path beside = bag.parent_path() / "mav0";
+  if (options.rig) {
+    sequence.rig = *options.rig;
+    has_imu_calibration = true;
+    calibration_source = "the calibration given in code";
+  } else if (!options.camera_yaml.empty()) {
+    read_yaml_pair(options.camera_yaml, options.imu_yaml);
+    calibration_source = options.camera_yaml.string() +
+                         (options.imu_yaml.empty() ? "" : " and " + options.imu_yaml.string());
+  } else if (!camera_yaml_text.empty()) {
+    const fs::path camera_yaml = mav0 / "cam0" / "sensor.yaml";
+    const fs::path imu_yaml = mav0 / "imu0" / "sensor.yaml";
+    WriteFileAtomically(camera_yaml, [&](std::ostream& out) { out << camera_yaml_text; });
+    if (!imu_yaml_text.empty()) {
+      fs::create_directories(imu_yaml.parent_path());
+      WriteFileAtomically(imu_yaml, [&](std::ostream& out) { out << imu_yaml_text; });
+    }
+    read_yaml_pair(camera_yaml, imu_yaml_text.empty() ? fs::path() : imu_yaml);
+    calibration_source = std::string("the bag's ") + kCameraCalibrationTopic +
+                         (imu_yaml_text.empty() ? "" : std::string(" and ") + kImuCalibrationTopic);
+  } else if (fs::is_regular_file(beside / "cam0" / "sensor.yaml")) {
+    const fs::path imu_yaml = beside / "imu0" / "sensor.yaml";
+    read_yaml_pair(beside / "cam0" / "sensor.yaml",
+                   fs::is_regular_file(imu_yaml) ? imu_yaml : fs::path());
+    calibration_source = "the EuRoC folder beside the bag (" + beside.string() + ")";
+  } else {
+    throw InputError(p, 0,
+                     "no camera calibration: give the EuRoC/Kalibr sensor.yaml files "
+                     "(--camera-yaml cam0/sensor.yaml --imu-yaml imu0/sensor.yaml), or put the "
+                     "EuRoC folder's mav0/ beside the bag (" +
+                         beside.string() + ")");
+  }
+  if (sequence.has_imu() && !has_imu_calibration) {
+    // The noise densities keep their defaults; the rate is the IMU's.
+    std::vector<timestamp_ns_t> intervals;
+    for (size_t i = 1; i < sequence.imu.size(); ++i) {
+      intervals.push_back(sequence.imu[i].timestamp_ns - sequence.imu[i - 1].timestamp_ns);
+    }
+    if (!intervals.empty()) {
+      std::nth_element(intervals.begin(), intervals.begin() + intervals.size() / 2,
+                       intervals.end());
+      sequence.rig.imu_noise.rate_hz = 1e9 / static_cast<double>(intervals[intervals.size() / 2]);
+    }
+    VIOSFM_LOG(WARNING) << p << ": no IMU calibration (imu0/sensor.yaml): the IMU noise densities "
+                        << "keep their defaults (EuRoC's ADIS16448), rate "
+                        << sequence.rig.imu_noise.rate_hz << " Hz from the stamps";
+  }
+  if (!IsIdentity(body_from_imu)) {
+    VIOSFM_LOG(WARNING) << p << ": the IMU calibration's T_BS is not the identity; camera "
+                        << "extrinsics and ground-truth poses are re-expressed in the IMU frame";
+    sequence.rig.body_from_cam = body_from_imu.Inverse() * sequence.rig.body_from_cam;
+  }
+  for (const auto& [located, world_from_body] : ground_truth) {
+    GroundTruthState state;
+    state.timestamp_ns = located.stamp_ns;
+    // (Composed only when needed: composing normalises the quaternion.)
+    state.world_from_body =
+        IsIdentity(body_from_imu) ? world_from_body : world_from_body * body_from_imu;
+    sequence.ground_truth.push_back(state);
+  }
+  if (!(sequence.rig.camera_rate_hz > 0)) {
+    sequence.rig.camera_rate_hz = EstimateFrameRateHz(sequence.images);
+  }
+  if (static_cast<int64_t>(sequence.rig.camera.width) != image_width ||
+      static_cast<int64_t>(sequence.rig.camera.height) != image_height) {
+    throw InputError(p, 0,
+                     "the images on '" + image_topic + "' have " + std::to_string(image_width) +
+                         "x" + std::to_string(image_height) + " pixels, the calibration (" +
+                         calibration_source + ") states " +
+                         std::to_string(sequence.rig.camera.width) + "x" +
+                         std::to_string(sequence.rig.camera.height));
+  }
+  if (const std::string problem = sequence.rig.Validate(); !problem.empty()) {
+    throw InputError(p, 0, "calibration (" + calibration_source + "): " + problem);
+  }
+  if (sequence.has_imu()) {
+    const timestamp_ns_t first_image = sequence.images.front().timestamp_ns;
+    const timestamp_ns_t last_image = sequence.images.back().timestamp_ns;
+    const timestamp_ns_t first_imu = sequence.imu.front().timestamp_ns;
+    const timestamp_ns_t last_imu = sequence.imu.back().timestamp_ns;
+    const std::string spans = "images span [" + std::to_string(first_image) + ", " +
+                              std::to_string(last_image) + "] ns, IMU samples span [" +
+                              std::to_string(first_imu) + ", " + std::to_string(last_imu) + "] ns";
+    if (last_imu < first_image || first_imu > last_image) {
+      throw InputError(p, 0, "topic '" + imu_topic + "': no IMU sample over the images: " + spans);
+    }
+    if (first_imu > first_image || last_imu < last_image) {
+      VIOSFM_LOG(WARNING) << p << ": the IMU does not cover the whole image time span: " << spans;
+    }
+  }
+
+  // The extract folder is a EuRoC folder of what was read.
+  WriteEurocDataset(options.extract_folder, sequence);
+  VIOSFM_LOG(INFO) << "bag " << p << ": " << sequence.images.size() << " images on " << image_topic
+                   << " (" << sequence.rig.camera.ModelName() << " " << image_width << "x"
+                   << image_height << "), " << sequence.imu.size() << " IMU samples"
+                   << (imu_topic.empty() ? "" : " on " + imu_topic) << ", "
+                   << sequence.ground_truth.size() << " ground-truth poses; calibration from "
+                   << calibration_source << "; images in " << image_folder.string();
+  return sequence;
+}
+
+void WriteRosbagDataset(const Sequence& sequence, const fs::path& bag,
+                        const RosbagWriteOptions& options) {
+  if (const std::string problem = options.Validate(); !problem.empty()) {
+    throw InputError("bag write options: " + problem);
+  }
+  if (sequence.images.empty()) throw InputError(bag.string(), 0, "no images to write");
+  RosbagWriter writer(bag, options.writer);
+  const RosMessageType& image_type =
+      options.compressed_images ? kRosCompressedImageType : kRosImageType;
+  const uint32_t image_connection = writer.AddConnection(options.image_topic, image_type.name,
+                                                         image_type.md5sum, image_type.definition);
+  const uint32_t imu_connection =
+      sequence.has_imu() ? writer.AddConnection(options.imu_topic, kRosImuType.name,
+                                                kRosImuType.md5sum, kRosImuType.definition)
+                         : 0;
+  const uint32_t groundtruth_connection =
+      sequence.has_ground_truth()
+          ? writer.AddConnection(options.groundtruth_topic, kRosPoseStampedType.name,
+                                 kRosPoseStampedType.md5sum, kRosPoseStampedType.definition)
+          : 0;
+
+  timestamp_ns_t first = sequence.images.front().timestamp_ns;
+  if (sequence.has_imu()) first = std::min(first, sequence.imu.front().timestamp_ns);
+  if (sequence.has_ground_truth()) {
+    first = std::min(first, sequence.ground_truth.front().timestamp_ns);
+  }
+  if (options.embed_calibration) {
+    const uint32_t camera = writer.AddConnection(kCameraCalibrationTopic, kRosStringType.name,
+                                                 kRosStringType.md5sum, kRosStringType.definition);
+    writer.Write(
+        camera, first,
+        SerializeRosString(EurocCameraYamlText(sequence.rig.camera, sequence.rig.body_from_cam,
+                                               sequence.rig.camera_rate_hz)));
+    if (sequence.has_imu()) {
+      const uint32_t imu = writer.AddConnection(kImuCalibrationTopic, kRosStringType.name,
+                                                kRosStringType.md5sum, kRosStringType.definition);
+      writer.Write(imu, first, SerializeRosString(EurocImuYamlText(sequence.rig.imu_noise)));
+    }
+  }
+
+  // Merge the three streams by stamp (images first on ties, then IMU).
+  size_t i_image = 0, i_imu = 0, i_gt = 0;
+  constexpr timestamp_ns_t kEnd = std::numeric_limits<timestamp_ns_t>::max();
+  while (i_image < sequence.images.size() || i_imu < sequence.imu.size() ||
+         i_gt < sequence.ground_truth.size()) {
+    const timestamp_ns_t t_image =
+        i_image < sequence.images.size() ? sequence.images[i_image].timestamp_ns : kEnd;
+    const timestamp_ns_t t_imu =
+        i_imu < sequence.imu.size() ? sequence.imu[i_imu].timestamp_ns : kEnd;
+    const timestamp_ns_t t_gt =
+        i_gt < sequence.ground_truth.size() ? sequence.ground_truth[i_gt].timestamp_ns : kEnd;
+    if (t_image <= t_imu && t_image <= t_gt) {
+      const SequenceImage& image = sequence.images[i_image];
+      RosHeader header{static_cast<uint32_t>(i_image), image.timestamp_ns, "cam0"};
+      std::vector<uint8_t> bytes;
+      if (options.compressed_images) {
+        RosCompressedImage message;
+        message.header = header;
+        const std::string extension = ToLower(image.path.extension().string());
+        if (extension == ".png") {
+          message.format = "png";
+        } else if (extension == ".jpg" || extension == ".jpeg") {
+          message.format = "jpeg";
+        } else {
+          throw InputError(image.path.string(), 0,
+                           "expected a .png or .jpg image to store as sensor_msgs/CompressedImage");
+        }
+        const std::string file = ReadTextFile(image.path);
+        message.data.assign(file.begin(), file.end());
+        bytes = SerializeRosCompressedImage(message);
+      } else {
+        const GreyImage grey = ReadGreyImage(image.path);
+        RosImage message;
+        message.header = header;
+        message.height = static_cast<uint32_t>(grey.height);
+        message.width = static_cast<uint32_t>(grey.width);
+        message.encoding = "mono8";
+        message.step = static_cast<uint32_t>(grey.width);
+        message.data = grey.pixels;
+        bytes = SerializeRosImage(message);
+      }
+      writer.Write(image_connection, image.timestamp_ns, bytes);
+      ++i_image;
+    } else if (t_imu <= t_gt) {
+      const ImuSample& sample = sequence.imu[i_imu];
+      RosImu message;
+      message.header = {static_cast<uint32_t>(i_imu), sample.timestamp_ns, "imu0"};
+      message.angular_velocity = sample.gyro;
+      message.linear_acceleration = sample.accel;
+      // ROS: orientation_covariance[0] = -1 says "no orientation estimate".
+      message.orientation_covariance(0, 0) = -1.0;
+      writer.Write(imu_connection, sample.timestamp_ns, SerializeRosImu(message));
+      ++i_imu;
+    } else {
+      const GroundTruthState& state = sequence.ground_truth[i_gt];
+      RosPoseStamped message;
+      message.header = {static_cast<uint32_t>(i_gt), state.timestamp_ns, "world"};
+      message.pose = state.world_from_body;
+      writer.Write(groundtruth_connection, state.timestamp_ns, SerializeRosPoseStamped(message));
+      ++i_gt;
+    }
+  }
+  writer.Close();
+  VIOSFM_LOG(INFO) << "bag " << bag.string() << ": wrote " << sequence.images.size()
+                   << " images on " << options.image_topic << ", " << sequence.imu.size()
+                   << " IMU samples on " << options.imu_topic << ", "
+                   << sequence.ground_truth.size() << " ground-truth poses";
+}
+
+}  // namespace viosfm

@@ -1,0 +1,110 @@
+// A visual-inertial recording in a ROS 1 bag (rosbag.h, ros_messages.h) read
+// as a Sequence, and a Sequence written as a bag (`viosfm convert`).
+//
+// Reading
+//   images   sensor_msgs/Image (mono8 or 8UC1; bgr8, rgb8, bgra8, rgba8
+//            converted to grey) or sensor_msgs/CompressedImage (any format
+//            OpenCV decodes: jpeg, png), stamped by header.stamp. Each image
+//            is written to <extract_folder>/mav0/cam0/data/<stamp ns>.png (the
+//            EuRoC layout, so the names are the ones a EuRoC folder of the same
+//            recording has), because every stage of viosfm reads images from
+//            files.
+//   IMU      sensor_msgs/Imu: angular_velocity (rad/s), linear_acceleration
+//            (m/s^2), header.stamp; orientation and covariances are ignored.
+//   ground truth (optional)  geometry_msgs/PoseStamped or TransformStamped,
+//            world_from_body; the topic /groundtruth/pose is read when present.
+// Topics: given, or found by type when the bag has one topic of that type;
+// with several, the EuRoC names /cam0/image_raw and /imu0 are taken when
+// present. Stamps are sorted; two messages with the same stamp are an error.
+//
+// Calibration (camera intrinsics, body_from_cam, IMU noise), the first that
+// applies:
+//   1. `rig`, given in code. This is the hook for calibration files viosfm
+//      reads elsewhere (a Kalibr camchain.yaml + imu.yaml reader fills a
+//      SensorRig and passes it here);
+//   2. `camera_yaml` (+ `imu_yaml`): EuRoC/Kalibr sensor.yaml files (euroc.h);
+//   3. the calibration `viosfm convert` embeds in the bags it writes: the
+//      EuRoC sensor.yaml texts as std_msgs/String on /viosfm/cam0/sensor_yaml
+//      and /viosfm/imu0/sensor_yaml (written to the extract folder as
+//      mav0/cam0/sensor.yaml, mav0/imu0/sensor.yaml and read from there);
+//   4. a EuRoC folder beside the bag: <bag folder>/mav0/cam0/sensor.yaml and
+//      mav0/imu0/sensor.yaml (EuRoC ships V1_01_easy.bag next to the zip of
+//      the same sequence).
+// Without an IMU calibration (2 without imu_yaml, 4 without imu0/) the IMU
+// noise keeps ImuNoise's defaults, with a warning.
+//
+// Errors (InputError naming the bag, the byte offset of the record and the
+// topic): not a bag, a truncated or corrupt record, a missing topic (the
+// message lists the bag's topics), a topic of the wrong type or message MD5,
+// an unsupported image encoding, an image whose size differs from the
+// calibration, duplicate stamps, no calibration.
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string>
+
+#include "viosfm/io/rosbag.h"
+#include "viosfm/io/sequence.h"
+
+namespace viosfm {
+
+// The topics `viosfm convert` writes and EuRoC's bags use.
+inline constexpr char kEurocImageTopic[] = "/cam0/image_raw";
+inline constexpr char kEurocImuTopic[] = "/imu0";
+inline constexpr char kGroundTruthTopic[] = "/groundtruth/pose";
+inline constexpr char kCameraCalibrationTopic[] = "/viosfm/cam0/sensor_yaml";
+inline constexpr char kImuCalibrationTopic[] = "/viosfm/imu0/sensor_yaml";
+
+struct RosbagDatasetOptions {
+  // Image topic; empty: found by type (see above). Default empty.
+  std::string image_topic;
+  // IMU topic; empty: found by type. Default empty.
+  std::string imu_topic;
+  // Ground-truth topic; empty: /groundtruth/pose when present. Default empty.
+  std::string groundtruth_topic;
+  // Calibration given in code (see above, 1). Default none.
+  std::optional<SensorRig> rig;
+  // EuRoC/Kalibr camera and IMU sensor.yaml (see above, 2). Default none.
+  std::filesystem::path camera_yaml;
+  std::filesystem::path imu_yaml;
+  // Where the images (and an embedded calibration) are written, in the EuRoC
+  // layout. Required.
+  std::filesystem::path extract_folder;
+  // A bag without an IMU topic is an error (true) or gives a sequence
+  // without IMU (false). Default false.
+  bool require_imu = false;
+
+  // Empty if valid; otherwise names the bad field.
+  std::string Validate() const;
+  bool Check() const { return Validate().empty(); }
+};
+
+// "topic (type, N messages)" lines of a bag, for messages and `viosfm convert`.
+std::string DescribeRosbagTopics(const RosbagReader& reader);
+
+Sequence ReadRosbagDataset(const std::filesystem::path& bag, const RosbagDatasetOptions& options);
+
+struct RosbagWriteOptions {
+  std::string image_topic = kEurocImageTopic;
+  std::string imu_topic = kEurocImuTopic;
+  std::string groundtruth_topic = kGroundTruthTopic;
+  // sensor_msgs/CompressedImage holding each image file's bytes unchanged
+  // (format "png" or "jpeg" from the extension) instead of
+  // sensor_msgs/Image mono8 (EuRoC's). Default false.
+  bool compressed_images = false;
+  // Embed the calibration as sensor.yaml texts (see above, 3). Default true.
+  bool embed_calibration = true;
+  RosbagWriterOptions writer;
+
+  std::string Validate() const;
+  bool Check() const { return Validate().empty(); }
+};
+
+// Writes the sequence's images (read from their files), IMU samples, ground
+// truth (world_from_body only: velocities and biases are not carried) and
+// calibration, in time order; every message's record time is its stamp.
+void WriteRosbagDataset(const Sequence& sequence, const std::filesystem::path& bag,
+                        const RosbagWriteOptions& options = {});
+
+}  // namespace viosfm
