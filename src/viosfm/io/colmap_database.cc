@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "viosfm/io/colmap_convention.h"
+#include "viosfm/io/rotation_checks.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/logging.h"
 
@@ -278,8 +279,15 @@ TwoViewGeometry TwoViewGeometryFromRow(const ColmapDatabase::Impl& impl, const Q
   const auto tvec = ReadFixedBlob(impl, query, col + 8, 3, where + ", tvec");
   if (qvec) {
     const Eigen::Quaterniond rotation((*qvec)[0], (*qvec)[1], (*qvec)[2], (*qvec)[3]);
-    // A zero quaternion (a row without a pose) stays the identity.
-    if (rotation.norm() > 0.0) geometry.cam2_from_cam1.rotation = rotation.normalized();
+    // A zero quaternion (a row without a pose) stays the identity; others
+    // must be unit within the tolerance of every reader (rotation_checks.h).
+    if (rotation.coeffs() != Eigen::Vector4d::Zero()) {
+      if (const std::string problem = CheckFileQuaternion(rotation); !problem.empty()) {
+        throw InputError(impl.path.string(), 0,
+                         where + ", qvec: expected a unit quaternion: " + problem);
+      }
+      geometry.cam2_from_cam1.rotation = rotation.normalized();
+    }
   }
   if (tvec) geometry.cam2_from_cam1.translation = Eigen::Map<const Eigen::Vector3d>(tvec->data());
   return geometry;

@@ -15,6 +15,7 @@
 
 #include "viosfm/io/binary_io.h"
 #include "viosfm/io/colmap_convention.h"
+#include "viosfm/io/rotation_checks.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/file_util.h"
 #include "viosfm/util/string_util.h"
@@ -42,15 +43,15 @@ std::string SupportedModelNames() {
   return names;
 }
 
-// Unit quaternion from a file: kept bit for bit when unit to rounding (as
-// COLMAP writes them), normalised otherwise.
+// Unit quaternion from a file: within kFileRotationTolerance of unit
+// (io/rotation_checks.h), as every reader; kept bit for bit when unit to
+// rounding (as COLMAP writes them), normalised otherwise.
 Eigen::Quaterniond QuaternionFromFile(double w, double x, double y, double z, const FailFn& fail) {
   Eigen::Quaterniond q(w, x, y, z);
-  const double squared_norm = q.squaredNorm();
-  if (!std::isfinite(squared_norm) || squared_norm < 1e-12) {
-    Throw(fail, "expected a non-zero quaternion QW QX QY QZ");
+  if (const std::string problem = CheckFileQuaternion(q); !problem.empty()) {
+    Throw(fail, "expected a unit quaternion QW QX QY QZ: " + problem);
   }
-  if (std::abs(squared_norm - 1.0) > 1e-12) q.normalize();
+  if (std::abs(q.squaredNorm() - 1.0) > 1e-12) q.normalize();
   return q;
 }
 

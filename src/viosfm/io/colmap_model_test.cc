@@ -280,6 +280,11 @@ TEST(ColmapModelTest, GarbledTextLinesNameFileAndLine) {
   EXPECT_THAT(message, HasSubstr((folder / "images.txt").string() + ":5: expected QX"));
   EXPECT_THAT(message, HasSubstr("'abc'"));
 
+  // A quaternion far from unit: the tolerance of every reader (1e-3).
+  ReplaceLine(folder / "images.txt", 5, "3 0.5 0 0 0 1 2 3 1 0006.jpg");
+  EXPECT_THAT(ReadError([&] { ReadColmapModelText(folder); }),
+              HasSubstr("images.txt:5: expected a unit quaternion QW QX QY QZ: its norm is 0.5"));
+
   WriteBytes(folder / "images.txt", images);
   ReplaceLine(folder / "images.txt", 6, "1.5 2.5 -1 7");
   EXPECT_THAT(ReadError([&] { ReadColmapModelText(folder); }),

@@ -21,9 +21,11 @@ timestamp_ns_t SecondsToNs(double seconds);
 
 // Parses decimal seconds ("1305031102.175304", "-0.5", "12") into ns exactly
 // from the digits (no detour through double). Digits beyond 1 ns are rounded
-// half away from zero. Returns nullopt if the text is not such a number.
+// half away from zero. Returns nullopt if the text is not such a number or
+// if it does not fit an int64 count of ns (beyond +-9223372036.854775807 s).
 std::optional<timestamp_ns_t> ParseSecondsToNs(std::string_view text);
-// Parses an integer count of nanoseconds ("1403715273262142976").
+// Parses an integer count of nanoseconds ("1403715273262142976"); nullopt if
+// it does not fit an int64.
 std::optional<timestamp_ns_t> ParseNs(std::string_view text);
 
 // Writes ns as decimal seconds with exactly `decimals` fractional digits
