@@ -24,6 +24,7 @@ namespace fs = std::filesystem;
 struct MatchArguments {
   std::string dataset;
   std::string database;
+  CalibrationFiles calibration;
   std::string vio_trajectory;
   std::string vio_frame = "body";
   bool no_vio_prior = false;
@@ -56,7 +57,8 @@ void RunMatch(MatchArguments args) {
   if (!fs::is_directory(root)) throw InputError(args.dataset, 0, "dataset folder not found");
   EurocReadOptions read_options;
   read_options.require_imu = false;  // matching needs the camera and its extrinsics
-  const Sequence sequence = ReadEurocDataset(root, read_options);
+  Sequence sequence = ReadEurocDataset(root, read_options);
+  ApplyCalibrationFiles(args.calibration, &sequence);
 
   Trajectory vio;
   if (options.use_vio_prior) {
@@ -115,6 +117,7 @@ void RegisterMatch(CLI::App& app) {
   command->add_option("dataset", args->dataset, "EuRoC dataset (folder containing mav0/)")
       ->required();
   command->add_option("--database", args->database, "COLMAP database with features")->required();
+  AddCalibrationOptions(command, &args->calibration);
   command->add_option("--vio-trajectory", args->vio_trajectory,
                       "VIO trajectory (TUM, EuRoC or KITTI-with-stamps file), world_from_body "
                       "unless --vio-frame cam");

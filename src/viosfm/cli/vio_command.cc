@@ -19,6 +19,7 @@ namespace fs = std::filesystem;
 struct VioArguments {
   std::string dataset;
   std::string out;
+  CalibrationFiles calibration;
   VioOptions options;
 };
 
@@ -30,7 +31,8 @@ void RunVioCommand(VioArguments args) {
   }
   EurocReadOptions read_options;
   read_options.require_imu = true;
-  const Sequence sequence = ReadEurocDataset(root, read_options);
+  Sequence sequence = ReadEurocDataset(root, read_options);
+  ApplyCalibrationFiles(args.calibration, &sequence);
   VIOSFM_LOG(INFO) << "vio: " << sequence.images.size() << " images, " << sequence.imu.size()
                    << " IMU samples from " << args.dataset;
   const VioResult result = RunVio(sequence, args.options);
@@ -55,6 +57,7 @@ void RegisterVio(CLI::App& app) {
   command->add_option("dataset", args->dataset, "EuRoC dataset (folder containing mav0/)")
       ->required();
   command->add_option("--out", args->out, "Output folder")->required();
+  AddCalibrationOptions(command, &args->calibration);
   command
       ->add_option("--max-frames", args->options.max_frames,
                    "Process only the first N images (0: all)")

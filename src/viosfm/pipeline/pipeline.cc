@@ -272,6 +272,9 @@ std::string PipelineOptions::Validate() const {
   if (output_folder.empty()) return "output_folder: an output folder is required";
   if (max_vio_time_difference_ns <= 0) return "max_vio_time_difference_ns must be positive";
   if (num_threads < 1) return "num_threads must be >= 1";
+  if (const std::string error = calibration.Validate(); !error.empty()) {
+    return "calibration." + error;
+  }
   if (const std::string error = frame_selection.Validate(); !error.empty()) {
     return "frame_selection." + error;
   }
@@ -316,6 +319,8 @@ std::vector<std::pair<std::string, std::string>> PipelineOptions::ToKeyValues() 
       {"dataset", dataset.string()},
       {"image_folder.timestamps_file", image_folder.timestamps_file.string()},
       {"image_folder.camera_yaml", image_folder.camera_yaml.string()},
+      {"calibration.camchain", calibration.camchain.string()},
+      {"calibration.imu", calibration.imu.string()},
       {"output_folder", output_folder.string()},
       {"vio.source", vio_source ? "function" : "file"},
       {"vio.trajectory", vio_trajectory.string()},
@@ -470,7 +475,8 @@ std::string PipelineSummaryToJson(const PipelineSummary& s) {
   return json.dump(2);
 }
 
-Sequence ReadPipelineDataset(const fs::path& dataset, const ImageFolderOptions& image_folder) {
+Sequence ReadPipelineDataset(const fs::path& dataset, const ImageFolderOptions& image_folder,
+                             const CalibrationFiles& calibration) {
   if (!fs::is_directory(dataset)) {
     throw InputError(dataset.string(), 0, "dataset folder not found");
   }
@@ -490,6 +496,7 @@ Sequence ReadPipelineDataset(const fs::path& dataset, const ImageFolderOptions& 
   if (sequence.images.empty()) {
     throw InputError(dataset.string(), 0, "the dataset has no images");
   }
+  ApplyCalibrationFiles(calibration, &sequence);
   return sequence;
 }
 
@@ -572,7 +579,8 @@ PipelineSummary RunPipeline(const PipelineOptions& options) {
 
   // 1. Dataset.
   clock.Begin("read_dataset");
-  const Sequence sequence = ReadPipelineDataset(options.dataset, options.image_folder);
+  const Sequence sequence =
+      ReadPipelineDataset(options.dataset, options.image_folder, options.calibration);
   summary.num_frames_in = sequence.images.size();
   VIOSFM_LOG(INFO) << "run: " << sequence.images.size() << " images"
                    << (sequence.has_imu() ? ", IMU" : "")
