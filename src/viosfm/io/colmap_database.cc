@@ -192,8 +192,15 @@ void ReadMatrixBlob(const ColmapDatabase::Impl& impl, const Query& query, int co
   *rows = query.ColumnInt64(col);
   *cols = query.ColumnInt64(col + 1);
   const auto [data, num_bytes] = query.ColumnBlob(col + 2);
-  if (*rows < 0 || *cols < 0 ||
-      static_cast<size_t>(*rows) * static_cast<size_t>(*cols) * sizeof(Scalar) != num_bytes) {
+  // The size check is overflow-safe (a hostile rows x cols must not wrap
+  // around to the blob's size), and rows without columns are no matrix
+  // (they would pass with an empty blob and size a huge result).
+  size_t expected_bytes = 0;
+  if (*rows < 0 || *cols < 0 || (*rows > 0 && *cols == 0) ||
+      __builtin_mul_overflow(static_cast<size_t>(*rows), static_cast<size_t>(*cols),
+                             &expected_bytes) ||
+      __builtin_mul_overflow(expected_bytes, sizeof(Scalar), &expected_bytes) ||
+      expected_bytes != num_bytes) {
     std::ostringstream message;
     message << where << ": blob of " << num_bytes << " bytes does not hold " << *rows << " x "
             << *cols << " values of " << sizeof(Scalar) << " bytes";

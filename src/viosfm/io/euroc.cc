@@ -41,6 +41,12 @@ timestamp_ns_t ParseStampField(const fs::path& path, int64_t line, std::string_v
         path.string(), line,
         "expected an integer timestamp in nanoseconds in the first column, got " + Quoted(field));
   }
+  if (!IsTimestampInRange(*stamp)) {
+    throw InputError(path.string(), line,
+                     "timestamp " + Quoted(field) +
+                         " is out of range: expected nanoseconds within +-2^62 (146 years) of "
+                         "the epoch");
+  }
   return *stamp;
 }
 
@@ -111,7 +117,9 @@ std::vector<GroundTruthState> ReadEurocGroundTruth(const fs::path& csv) {
           csv.string(), line,
           "expected a unit quaternion (q_w, q_x, q_y, q_z in columns 5-8): " + problem);
     }
-    rotation.normalize();
+    // A quaternion already unit to rounding is kept bit for bit, so that
+    // write -> read is lossless (as the TUM reader does).
+    if (std::abs(rotation.squaredNorm() - 1.0) > 2e-15) rotation.normalize();
     state.world_from_body = Rigid3d(rotation, Eigen::Vector3d(values[1], values[2], values[3]));
     if (fields.size() == 17) {
       state.velocity_in_world = Eigen::Vector3d(values[8], values[9], values[10]);

@@ -456,6 +456,24 @@ TEST(ReadEurocImageList, RejectsNamesOutsideTheImageFolder) {
   EXPECT_EQ(images[0].path, folder / "cam0/data/sub/c.png");
 }
 
+// Stamps must lie within +-2^62 ns, so that no difference of two overflows
+// (the frame-rate estimate of two stamps 2^63 ns apart was undefined
+// behaviour).
+TEST(ReadEurocImageList, StampsOutOfRangeAndFarApart) {
+  const fs::path folder = testing::MakeScratchFolder("euroc_stamp_range");
+  const fs::path csv = folder / "data.csv";
+  WriteTextFile(csv, "1000,a.png\n9223372036854775807,b.png\n");
+  const InputError error = ExpectInputError([&] { ReadEurocImageList(csv, folder, false); });
+  EXPECT_EQ(error.line(), 2);
+  EXPECT_THAT(error.what(), HasSubstr("timestamp '9223372036854775807' is out of range"));
+  WriteTextFile(csv, "-4611686018427387904,a.png\n4611686018427387904,b.png\n");
+  const std::vector<SequenceImage> images = ReadEurocImageList(csv, folder, false);
+  ASSERT_EQ(images.size(), 2u);
+  // 2^63 ns apart: one frame in 292 years (computed without overflow).
+  EXPECT_NEAR(EstimateFrameRateHz(images), 1e9 / 9223372036854775807.0, 1e-22);
+  EXPECT_EQ(EstimateFrameRateHz({{INT64_MIN, ""}, {INT64_MAX, ""}}), 1e9 / 9223372036854775807.0);
+}
+
 // The ground truth of a dataset only serves evaluation: a malformed one is a
 // warning (the run goes on without evaluation), unless asked to be strict.
 TEST(ReadEurocDataset, MalformedOptionalGroundTruthIsSkipped) {

@@ -134,10 +134,12 @@ Trajectory ReadTumTrajectory(const fs::path& path) {
                            std::to_string(fields.size()));
     }
     const std::optional<timestamp_ns_t> stamp = ParseSecondsToNs(fields[0]);
-    if (!stamp) {
+    if (!stamp || !IsTimestampInRange(*stamp)) {
       throw InputError(
           path.string(), line,
-          "column 1 (timestamp): expected decimal seconds, got '" + std::string(fields[0]) + "'");
+          "column 1 (timestamp): expected decimal seconds within +-2^62 ns (146 years) of the "
+          "epoch, got '" +
+              std::string(fields[0]) + "'");
     }
     double values[8];
     for (size_t i = 1; i < 8; ++i) values[i] = ParseField(path, line, fields[i], i, kNames[i]);

@@ -243,6 +243,35 @@ TEST(EurocTrajectory, ErrorNamesFileAndLine) {
   EXPECT_THAT(message, HasSubstr("bad.csv:3"));
 }
 
+// Found by fuzz/fuzz_euroc_trajectory: the EuRoC reader normalised every
+// quaternion, so read -> write -> read changed the last bits of one that
+// was already unit; it now keeps those bit for bit, as the TUM reader does.
+TEST(EurocTrajectory, WriteReadKeepsQuaternionsBitForBit) {
+  const fs::path folder = testing::MakeScratchFolder("euroc_bits");
+  WriteTextFile(folder / "in.csv", "200, 4, 5, 6, 0, 0, 1, 0.0047\n300,1,2,3,0.5,0.5,0.5,0.5\n");
+  const Trajectory first = ReadEurocTrajectory(folder / "in.csv");
+  WriteEurocTrajectory(folder / "out.csv", first);
+  const Trajectory second = ReadEurocTrajectory(folder / "out.csv");
+  ASSERT_EQ(second.size(), 2u);
+  for (size_t i = 0; i < 2; ++i) {
+    for (int k = 0; k < 4; ++k) {
+      EXPECT_EQ(first.poses[i].world_from_frame.rotation.coeffs()[k],
+                second.poses[i].world_from_frame.rotation.coeffs()[k])
+          << i << " " << k;
+    }
+  }
+}
+
+// Stamps beyond +-2^62 ns would overflow when two of them are subtracted.
+TEST(TumTrajectory, StampsBeyondTheRangeAreRejected) {
+  const fs::path folder = testing::MakeScratchFolder("tum_range");
+  WriteTextFile(folder / "far.txt", "1 0 0 0 0 0 0 1\n9223372036 0 0 0 0 0 0 1\n");
+  EXPECT_THAT(InputErrorMessage([&] { ReadTumTrajectory(folder / "far.txt"); }),
+              HasSubstr("far.txt:2: column 1 (timestamp): expected decimal seconds within"));
+  WriteTextFile(folder / "near.txt", "-4611686018.427387904 0 0 0 0 0 0 1\n4611686018 0 0 0 0 0 0 1\n");
+  EXPECT_EQ(ReadTumTrajectory(folder / "near.txt").poses[0].timestamp_ns, -kMaxAbsTimestampNs);
+}
+
 TEST(TrajectoryFormat, NamesParseAndGuessFailures) {
   EXPECT_EQ(ParseTrajectoryFormat("TUM"), TrajectoryFormat::kTum);
   EXPECT_EQ(ParseTrajectoryFormat("euroc"), TrajectoryFormat::kEuroc);

@@ -13,6 +13,15 @@ using timestamp_ns_t = int64_t;
 
 inline constexpr int64_t kNanosecondsPerSecond = 1'000'000'000;
 
+// The stamps viosfm accepts from files: |t| <= 2^62 ns, about 146 years
+// either side of the epoch, so that the difference of any two stamps and a
+// stamp moved by a clock offset fit an int64 (readers reject others with an
+// InputError rather than let a later subtraction overflow).
+inline constexpr timestamp_ns_t kMaxAbsTimestampNs = timestamp_ns_t{1} << 62;
+inline bool IsTimestampInRange(timestamp_ns_t ns) {
+  return ns >= -kMaxAbsTimestampNs && ns <= kMaxAbsTimestampNs;
+}
+
 inline double NsToSeconds(timestamp_ns_t ns) {
   return static_cast<double>(ns) * 1e-9;
 }
