@@ -207,6 +207,34 @@ def colmap_database():
     write("colmap_database", "structured_rows.bin", b"\x00" + bytes(range(256)))
 
 
+def io_other(sim):
+    # PLY as viosfm writes it (binary doubles + colours) and an ASCII one
+    # with float coordinates and an extra property (as COLMAP's fused.ply).
+    binary = (b"ply\nformat binary_little_endian 1.0\nelement vertex 2\nproperty double x\n"
+              b"property double y\nproperty double z\nproperty uchar red\nproperty uchar green\n"
+              b"property uchar blue\nend_header\n" +
+              struct.pack("<3d3B", 1, 2, 3, 255, 0, 0) + struct.pack("<3d3B", -1.5, 0, 1e6, 0, 9, 99))
+    write("io_other", "points_binary.ply", binary)
+    write("io_other", "points_ascii.ply",
+          b"ply\nformat ascii 1.0\ncomment made by hand\nelement vertex 2\nproperty float x\n"
+          b"property float y\nproperty float z\nproperty float nx\nend_header\n"
+          b"1 2 3 0.5\n4 5 6 -0.5\n")
+    # A vocabulary tree of depth 1: the root and two words, 4-dimensional.
+    vocabulary = b"VIOSFMVT" + struct.pack("<I4iQ", 1, 2, 1, 4, 2, 3)
+    vocabulary += struct.pack("<3i", 1, 2, -1) + struct.pack("<3i", -1, 0, 0)
+    vocabulary += struct.pack("<3i", -1, 0, 1)
+    vocabulary += struct.pack("<12f", 0.5, 0.5, 0.5, 0.5, 1, 0, 0, 0, 0, 1, 0, 0)
+    write("io_other", "vocabulary.bin", vocabulary)
+    write("io_other", "pairs.txt", b"# pairs\n1.png 2.png\n2.png 3.png\n")
+    write("io_other", "pairs.csv",
+          b"image_id1,image_id2,name1,name2,source,num_matches,has_vio_prior,vio_outlier_ratio,"
+          b"vio_rotation_only,vio_rejected,num_inliers,accepted,resumed,reason,vio_depth_applied,"
+          b"vio_depth_inconsistent_ratio,vio_depth_rejected\n"
+          b"1,2,1.png,2.png,temporal,120,1,0.050000,0,0,110,1,0,accepted,1,0.010000,0\n"
+          b"1,3,1.png,3.png,retrieval,40,0,nan,0,0,0,0,0,ransac,0,nan,0\n")
+    write("io_other", "scene.csv", head(os.path.join(sim, "scene.csv"), 6))
+
+
 def main():
     if len(sys.argv) != 2:
         sys.exit(__doc__)
@@ -220,6 +248,7 @@ def main():
             shutil.rmtree(os.path.join(CORPUS, parser))
         ground_truth = trajectories(sim)
         euroc(sim, ground_truth)
+        io_other(sim)
     kalibr()
     colmap_models()
     colmap_database()
