@@ -3,7 +3,7 @@ BUILD_DIR ?= build
 JOBS ?= $(shell nproc)
 CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Release
 
-.PHONY: deps configure build test demo bench clean
+.PHONY: deps configure build test demo bench fuzz test-sanitize clean
 
 deps:
 	./scripts/install-deps.sh
@@ -26,6 +26,17 @@ demo: build
 bench: configure
 	cmake --build $(BUILD_DIR) -j $(JOBS) --target viosfm_benchmarks viosfm
 	./scripts/run-benchmarks.sh $(BUILD_DIR)
+
+# Fuzzes every parser of io/ with libFuzzer (clang, ASan + UBSan, build-fuzz/),
+# FUZZ_SECONDS (default 60) each; see docs/robustness.md. Not part of `make test`.
+fuzz: deps
+	./scripts/fuzz.sh build-fuzz
+
+# Builds and runs the whole test suite with AddressSanitizer and
+# UndefinedBehaviorSanitizer (build-sanitize/); see docs/robustness.md.
+# Not part of `make test`.
+test-sanitize: deps
+	JOBS=$(JOBS) ./scripts/test-sanitize.sh build-sanitize
 
 clean:
 	rm -rf $(BUILD_DIR)

@@ -5,6 +5,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include "viosfm/io/kalibr.h"
+
 namespace viosfm::cli {
 
 void RegisterEval(CLI::App& app);
@@ -18,5 +20,9 @@ void RegisterReport(CLI::App& app);
 void RegisterBenchReport(CLI::App& app);
 void RegisterConvert(CLI::App& app);
 void RegisterExport(CLI::App& app);
+
+// --calibration FILE and --imu-calibration FILE (Kalibr camchain.yaml and
+// imu.yaml, io/kalibr.h) of the subcommands that read a dataset's rig.
+void AddCalibrationOptions(CLI::App* command, CalibrationFiles* files);
 
 }  // namespace viosfm::cli

@@ -29,6 +29,7 @@ struct FeaturesArguments {
   std::string camera;
   BagArguments bag;
   std::string timestamps;
+  CalibrationFiles calibration;
 };
 
 // "MODEL,WIDTH,HEIGHT,p1,p2,..." e.g. "PINHOLE,752,480,458.6,457.3,367.2,248.4".
@@ -67,13 +68,18 @@ Sequence ReadDataset(const FeaturesArguments& args) {
   if (HasRosbagExtension(root)) {
     // The images go beside the database, as a EuRoC folder (OUT/bag).
     const fs::path database = fs::absolute(args.database);
-    return ReadRosbagDataset(root, MakeRosbagOptions(args.bag, database.parent_path() / "bag"));
+    Sequence sequence =
+        ReadRosbagDataset(root, MakeRosbagOptions(args.bag, database.parent_path() / "bag"));
+    ApplyCalibrationFiles(args.calibration, &sequence);
+    return sequence;
   }
   if (!fs::is_directory(root)) throw InputError(args.dataset, 0, "dataset folder not found");
   if (IsEurocDataset(root)) {
     EurocReadOptions options;
     options.require_imu = false;  // features need only the camera
-    return ReadEurocDataset(root, options);
+    Sequence sequence = ReadEurocDataset(root, options);
+    ApplyCalibrationFiles(args.calibration, &sequence);
+    return sequence;
   }
   ImageFolderOptions options;
   options.timestamps_file = args.timestamps;
@@ -84,7 +90,9 @@ Sequence ReadDataset(const FeaturesArguments& args) {
                      "not a EuRoC dataset (no mav0/), so read as an image folder: " + error +
                          " (give --camera-yaml or --camera)");
   }
-  return ReadImageFolder(root, options);
+  Sequence sequence = ReadImageFolder(root, options);
+  ApplyCalibrationFiles(args.calibration, &sequence);
+  return sequence;
 }
 
 void RunFeatures(const FeaturesArguments& args) {
@@ -121,6 +129,7 @@ void RegisterFeatures(CLI::App& app) {
       ->required();
   command->add_option("--database", args->database, "COLMAP database (created if missing)")
       ->required();
+  AddCalibrationOptions(command, &args->calibration);
   command->add_option("--max-features", args->sift.max_num_features, "Features kept per image")
       ->capture_default_str();
   command->add_flag("--no-root-sift", args->no_root_sift,

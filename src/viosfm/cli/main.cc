@@ -32,12 +32,11 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
-  } catch (const viosfm::InputError& e) {
-    std::cerr << "error: " << e.what() << "\n";
-    return 2;
   } catch (const std::exception& e) {
-    std::cerr << "internal error: " << e.what() << "\n";
-    return 3;
+    // Bad input and filesystem errors (naming the path) exit with 2, bugs with 3.
+    const viosfm::TopLevelError error = viosfm::DescribeTopLevelError(e);
+    std::cerr << error.message << "\n";
+    return error.exit_code;
   }
   return 0;
 }

@@ -26,6 +26,7 @@ namespace fs = std::filesystem;
 struct MatchArguments {
   std::string dataset;
   std::string database;
+  CalibrationFiles calibration;
   std::string vio_trajectory;
   std::string vio_frame = "body";
   bool no_vio_prior = false;
@@ -72,6 +73,7 @@ void RunMatch(MatchArguments args) {
     read_options.require_imu = false;  // matching needs the camera and its extrinsics
     sequence = ReadEurocDataset(root, read_options);
   }
+  ApplyCalibrationFiles(args.calibration, &sequence);
 
   Trajectory vio;
   if (options.use_vio_prior) {
@@ -138,6 +140,7 @@ void RegisterMatch(CLI::App& app) {
       ->required();
   command->add_option("--database", args->database, "COLMAP database with features")->required();
   AddBagOptions(command, &args->bag, /*add_camera_yaml=*/true);
+  AddCalibrationOptions(command, &args->calibration);
   command->add_option("--vio-trajectory", args->vio_trajectory,
                       "VIO trajectory (TUM, EuRoC or KITTI-with-stamps file), world_from_body "
                       "unless --vio-frame cam");

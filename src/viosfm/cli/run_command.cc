@@ -97,6 +97,7 @@ void RegisterRun(CLI::App& app) {
                    "EuRoC dataset (folder containing mav0/), a folder of images or a ROS 1 bag")
       ->required();
   command->add_option("--out", args->out, "Output folder (created if missing)")->required();
+  AddCalibrationOptions(command, &args->options.calibration);
   command->add_option("--vio-trajectory", args->vio_trajectory,
                       "VIO trajectory (TUM by default), world_from_body unless --vio-frame cam; "
                       "without it viosfm's own VIO runs on the images and IMU");

@@ -20,6 +20,7 @@ namespace fs = std::filesystem;
 struct VioArguments {
   std::string dataset;
   std::string out;
+  CalibrationFiles calibration;
   VioOptions options;
   BagArguments bag;
 };
@@ -43,6 +44,7 @@ void RunVioCommand(VioArguments args) {
     read_options.require_imu = true;
     sequence = ReadEurocDataset(root, read_options);
   }
+  ApplyCalibrationFiles(args.calibration, &sequence);
   VIOSFM_LOG(INFO) << "vio: " << sequence.images.size() << " images, " << sequence.imu.size()
                    << " IMU samples from " << args.dataset;
   const VioResult result = RunVio(sequence, args.options);
@@ -68,6 +70,7 @@ void RegisterVio(CLI::App& app) {
                       "EuRoC dataset (folder containing mav0/) or a ROS 1 bag")
       ->required();
   command->add_option("--out", args->out, "Output folder")->required();
+  AddCalibrationOptions(command, &args->calibration);
   command
       ->add_option("--max-frames", args->options.max_frames,
                    "Process only the first N images (0: all)")

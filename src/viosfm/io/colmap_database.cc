@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "viosfm/io/colmap_convention.h"
+#include "viosfm/io/rotation_checks.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/logging.h"
 
@@ -191,8 +192,15 @@ void ReadMatrixBlob(const ColmapDatabase::Impl& impl, const Query& query, int co
   *rows = query.ColumnInt64(col);
   *cols = query.ColumnInt64(col + 1);
   const auto [data, num_bytes] = query.ColumnBlob(col + 2);
-  if (*rows < 0 || *cols < 0 ||
-      static_cast<size_t>(*rows) * static_cast<size_t>(*cols) * sizeof(Scalar) != num_bytes) {
+  // The size check is overflow-safe (a hostile rows x cols must not wrap
+  // around to the blob's size), and rows without columns are no matrix
+  // (they would pass with an empty blob and size a huge result).
+  size_t expected_bytes = 0;
+  if (*rows < 0 || *cols < 0 || (*rows > 0 && *cols == 0) ||
+      __builtin_mul_overflow(static_cast<size_t>(*rows), static_cast<size_t>(*cols),
+                             &expected_bytes) ||
+      __builtin_mul_overflow(expected_bytes, sizeof(Scalar), &expected_bytes) ||
+      expected_bytes != num_bytes) {
     std::ostringstream message;
     message << where << ": blob of " << num_bytes << " bytes does not hold " << *rows << " x "
             << *cols << " values of " << sizeof(Scalar) << " bytes";
@@ -278,8 +286,15 @@ TwoViewGeometry TwoViewGeometryFromRow(const ColmapDatabase::Impl& impl, const Q
   const auto tvec = ReadFixedBlob(impl, query, col + 8, 3, where + ", tvec");
   if (qvec) {
     const Eigen::Quaterniond rotation((*qvec)[0], (*qvec)[1], (*qvec)[2], (*qvec)[3]);
-    // A zero quaternion (a row without a pose) stays the identity.
-    if (rotation.norm() > 0.0) geometry.cam2_from_cam1.rotation = rotation.normalized();
+    // A zero quaternion (a row without a pose) stays the identity; others
+    // must be unit within the tolerance of every reader (rotation_checks.h).
+    if (rotation.coeffs() != Eigen::Vector4d::Zero()) {
+      if (const std::string problem = CheckFileQuaternion(rotation); !problem.empty()) {
+        throw InputError(impl.path.string(), 0,
+                         where + ", qvec: expected a unit quaternion: " + problem);
+      }
+      geometry.cam2_from_cam1.rotation = rotation.normalized();
+    }
   }
   if (tvec) geometry.cam2_from_cam1.translation = Eigen::Map<const Eigen::Vector3d>(tvec->data());
   return geometry;

@@ -303,6 +303,38 @@ TEST(ColmapDatabase, ReadsOtherKeypointLayoutsAndRejectsBadBlobs) {
   EXPECT_THROW(database.ReadCamera(9), InputError);
 }
 
+// Found by fuzz/fuzz_colmap_database: rows x cols of a blob is checked
+// without overflow, and rows without columns are no matrix (they used to
+// pass with an empty blob and size a vector of 2^40 keypoints:
+// std::length_error, an internal error instead of bad input).
+TEST(ColmapDatabase, HostileBlobSizesAreInputErrors) {
+  const fs::path path = testing::MakeScratchFolder("db_hostile_sizes") / "db.db";
+  { ColmapDatabase::Open(path); }
+  ExecuteRaw(path,
+             "INSERT INTO keypoints VALUES(1, 1099511627776, 0, NULL);"
+             // 2^62 x 4 float32 = 2^66 bytes, 0 modulo 2^64: an empty blob.
+             "INSERT INTO keypoints VALUES(2, 4611686018427387904, 4, NULL);"
+             "INSERT INTO descriptors VALUES(3, 1099511627776, 0, NULL);"
+             "INSERT INTO descriptors VALUES(4, -1, 128, NULL);"
+             "INSERT INTO matches VALUES(2147483649, 4611686018427387904, 2, NULL);");
+  ColmapDatabase database = ColmapDatabase::Open(path);
+  const auto expect_error = [&](const auto& read, const std::string& where) {
+    try {
+      read();
+      ADD_FAILURE() << "expected an InputError for " << where;
+    } catch (const InputError& e) {
+      EXPECT_THAT(e.what(), ::testing::HasSubstr(path.string() + ": " + where));
+      EXPECT_THAT(e.what(), ::testing::HasSubstr("does not hold"));
+    }
+  };
+  expect_error([&] { database.ReadKeypoints(1); }, "table keypoints, image_id 1");
+  expect_error([&] { database.ReadKeypoints(2); }, "table keypoints, image_id 2");
+  expect_error([&] { database.ReadDescriptors(3); }, "table descriptors, image_id 3");
+  expect_error([&] { database.ReadDescriptors(4); }, "table descriptors, image_id 4");
+  expect_error([&] { database.ReadMatches(1, 2); }, "table matches, pair (1, 2)");
+  expect_error([&] { database.ReadAllMatches(); }, "table matches, pair (1, 2)");
+}
+
 TEST(ColmapDatabase, MatchesAreStoredInPairIdOrder) {
   const fs::path path = testing::MakeScratchFolder("db_matches") / "db.db";
   const FeatureMatches matches = {{1, 10}, {2, 20}, {3, 30}};

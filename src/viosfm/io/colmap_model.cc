@@ -15,6 +15,7 @@
 
 #include "viosfm/io/binary_io.h"
 #include "viosfm/io/colmap_convention.h"
+#include "viosfm/io/rotation_checks.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/file_util.h"
 #include "viosfm/util/string_util.h"
@@ -42,16 +43,33 @@ std::string SupportedModelNames() {
   return names;
 }
 
-// Unit quaternion from a file: kept bit for bit when unit to rounding (as
-// COLMAP writes them), normalised otherwise.
+// Unit quaternion from a file: within kFileRotationTolerance of unit
+// (io/rotation_checks.h), as every reader; kept bit for bit when unit to
+// rounding (as COLMAP writes them), normalised otherwise.
 Eigen::Quaterniond QuaternionFromFile(double w, double x, double y, double z, const FailFn& fail) {
   Eigen::Quaterniond q(w, x, y, z);
-  const double squared_norm = q.squaredNorm();
-  if (!std::isfinite(squared_norm) || squared_norm < 1e-12) {
-    Throw(fail, "expected a non-zero quaternion QW QX QY QZ");
+  if (const std::string problem = CheckFileQuaternion(q); !problem.empty()) {
+    Throw(fail, "expected a unit quaternion QW QX QY QZ: " + problem);
   }
-  if (std::abs(squared_norm - 1.0) > 1e-12) q.normalize();
+  if (std::abs(q.squaredNorm() - 1.0) > 1e-12) q.normalize();
   return q;
+}
+
+// Image names are file names: non-empty, without control characters (a NUL
+// ends a binary name, a line break a text line) and without spaces at either
+// end (the text reader trims them), so that both formats hold every name.
+std::string ImageNameProblem(const std::string& name) {
+  if (name.empty()) return "expected an image name, found an empty one";
+  for (const char c : name) {
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) {
+      return "image name has a control character (byte " +
+             std::to_string(static_cast<unsigned char>(c)) + ")";
+    }
+  }
+  if (name.front() == ' ' || name.back() == ' ') {
+    return "image name '" + name + "' starts or ends with a space";
+  }
+  return "";
 }
 
 // Builds a Reconstruction from records in file order and checks the
@@ -70,6 +88,9 @@ class ModelAssembler {
   // `fail_keypoints` locates the image's keypoint data.
   void AddImage(Image image, std::vector<point3D_t> declared, const FailFn& fail,
                 FailFn fail_keypoints) {
+    if (const std::string problem = ImageNameProblem(image.name); !problem.empty()) {
+      Throw(fail, "image " + std::to_string(image.image_id) + ": " + problem);
+    }
     if (reconstruction_.ExistsImage(image.image_id)) {
       Throw(fail, "duplicate image id " + std::to_string(image.image_id));
     }
@@ -165,7 +186,9 @@ T ParseUnsignedField(std::string_view token, const FailFn& fail, const std::stri
 
 double ParseDoubleField(std::string_view token, const FailFn& fail, const std::string& what) {
   const std::optional<double> value = ParseDouble(token);
-  if (!value) Throw(fail, "expected " + what + " (a number), found '" + std::string(token) + "'");
+  if (!value || !std::isfinite(*value)) {
+    Throw(fail, "expected " + what + " (a finite number), found '" + std::string(token) + "'");
+  }
   return *value;
 }
 
@@ -324,6 +347,16 @@ FailFn FailerAt(const LittleEndianReader& reader) {
   };
 }
 
+// A double that must be finite (COLMAP never writes NaN or infinity; a model
+// holding them is corrupt, and they would not survive a text round trip).
+double ReadFinite(LittleEndianReader& reader, const std::string& what) {
+  const double value = reader.Read<double>(what);
+  if (!std::isfinite(value)) {
+    reader.Fail("expected a finite number as " + what + ", found " + std::to_string(value));
+  }
+  return value;
+}
+
 std::string RecordName(const char* kind, uint64_t index, uint64_t count) {
   return std::string(kind) + " record " + std::to_string(index + 1) + " of " +
          std::to_string(count);
@@ -347,9 +380,9 @@ void ReadCamerasBinary(const fs::path& path, ModelAssembler* assembler) {
     camera.height = reader.Read<uint64_t>("the height (uint64)");
     const int num_params = CameraModelNumParams(camera.model_id);
     for (int k = 0; k < num_params; ++k) {
-      camera.params.push_back(reader.Read<double>("parameter " + std::to_string(k + 1) + " of " +
-                                                  std::to_string(num_params) + " of a " +
-                                                  camera.ModelName() + " camera (double)"));
+      camera.params.push_back(ReadFinite(reader, "parameter " + std::to_string(k + 1) + " of " +
+                                                     std::to_string(num_params) + " of a " +
+                                                     camera.ModelName() + " camera (double)"));
     }
     assembler->AddCamera(std::move(camera), fail);
   }
@@ -368,7 +401,7 @@ void ReadImagesBinary(const fs::path& path, ModelAssembler* assembler) {
     double pose[7];
     const char* kPoseNames[7] = {"qw", "qx", "qy", "qz", "tx", "ty", "tz"};
     for (int k = 0; k < 7; ++k)
-      pose[k] = reader.Read<double>(std::string(kPoseNames[k]) + " (double)");
+      pose[k] = ReadFinite(reader, std::string(kPoseNames[k]) + " (double)");
     image.cam_from_world.rotation = QuaternionFromFile(pose[0], pose[1], pose[2], pose[3], fail);
     image.cam_from_world.translation = Eigen::Vector3d(pose[4], pose[5], pose[6]);
     image.camera_id = reader.Read<camera_t>("the camera id (uint32)");
@@ -381,8 +414,8 @@ void ReadImagesBinary(const fs::path& path, ModelAssembler* assembler) {
     image.points2D.resize(num_points2D);
     std::vector<point3D_t> declared(num_points2D);
     for (uint64_t k = 0; k < num_points2D; ++k) {
-      image.points2D[k].xy.x() = reader.Read<double>("keypoint x (double)") - kColmapPixelOffset;
-      image.points2D[k].xy.y() = reader.Read<double>("keypoint y (double)") - kColmapPixelOffset;
+      image.points2D[k].xy.x() = ReadFinite(reader, "keypoint x (double)") - kColmapPixelOffset;
+      image.points2D[k].xy.y() = ReadFinite(reader, "keypoint y (double)") - kColmapPixelOffset;
       declared[k] = reader.Read<point3D_t>("keypoint 3D point id (uint64)");
     }
     assembler->AddImage(std::move(image), std::move(declared), fail, fail_points);
@@ -399,9 +432,9 @@ void ReadPoints3DBinary(const fs::path& path, ModelAssembler* assembler) {
     const FailFn fail = FailerAt(reader);
     const point3D_t point3D_id = reader.Read<point3D_t>("the 3D point id (uint64)");
     Point3D point3D;
-    for (int k = 0; k < 3; ++k) point3D.xyz[k] = reader.Read<double>("a coordinate (double)");
+    for (int k = 0; k < 3; ++k) point3D.xyz[k] = ReadFinite(reader, "a coordinate (double)");
     for (int k = 0; k < 3; ++k) point3D.color[k] = reader.Read<uint8_t>("a colour (uint8)");
-    point3D.error = reader.Read<double>("the error (double)");
+    point3D.error = ReadFinite(reader, "the error (double)");
     const uint64_t track_length = reader.Read<uint64_t>("the track length (uint64)");
     reader.RequireCount(track_length, 8, "track elements");
     point3D.track.resize(track_length);

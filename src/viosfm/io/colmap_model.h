@@ -45,7 +45,9 @@
 //  - Quaternions: COLMAP normalises qvec when reading and writing. Files
 //    written at 17 digits are unit to the last bit, so the readers here keep
 //    the values as read (normalising only if the norm is off by more than
-//    1e-12, e.g. a hand-written file), which keeps round trips exact.
+//    1e-12, e.g. a hand-written file), which keeps round trips exact. A norm
+//    off by more than kFileRotationTolerance (1e-3, the tolerance of every
+//    reader, io/rotation_checks.h) is an error.
 //
 // Readers throw InputError naming the file and the line (text) or byte offset
 // and record (binary) and what was expected: unknown camera model, wrong

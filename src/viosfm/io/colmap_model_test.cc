@@ -3,8 +3,10 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <string>
 
 #include "viosfm/util/errors.h"
@@ -280,6 +282,11 @@ TEST(ColmapModelTest, GarbledTextLinesNameFileAndLine) {
   EXPECT_THAT(message, HasSubstr((folder / "images.txt").string() + ":5: expected QX"));
   EXPECT_THAT(message, HasSubstr("'abc'"));
 
+  // A quaternion far from unit: the tolerance of every reader (1e-3).
+  ReplaceLine(folder / "images.txt", 5, "3 0.5 0 0 0 1 2 3 1 0006.jpg");
+  EXPECT_THAT(ReadError([&] { ReadColmapModelText(folder); }),
+              HasSubstr("images.txt:5: expected a unit quaternion QW QX QY QZ: its norm is 0.5"));
+
   WriteBytes(folder / "images.txt", images);
   ReplaceLine(folder / "images.txt", 6, "1.5 2.5 -1 7");
   EXPECT_THAT(ReadError([&] { ReadColmapModelText(folder); }),
@@ -309,6 +316,43 @@ TEST(ColmapModelTest, GarbledTextLinesNameFileAndLine) {
                         "it"));
   WriteBytes(folder / "points3D.txt", points);
   EXPECT_EQ(ReadColmapModelText(folder).NumPoints3D(), 174u);
+}
+
+// Found by fuzz/fuzz_colmap_text: a text image name with a NUL was read,
+// and writing the model as binary then failed a CHECK (internal error).
+// Names are file names: no control characters, no spaces at either end.
+TEST(ColmapModelTest, ImageNamesBothFormatsCannotHoldAreRejected) {
+  const fs::path folder = CopyModel("colmap_fountain_txt");
+  for (const std::string& name :
+       {std::string("00\0006.jpg", 8), std::string("0006\x01.jpg"), std::string("a\tb.jpg")}) {
+    ReplaceLine(folder / "images.txt", 5, "3 1 0 0 0 1 2 3 1 " + name);
+    EXPECT_THAT(ReadError([&] { ReadColmapModelText(folder); }),
+                HasSubstr("images.txt:5: image 3: image name has a control character"))
+        << name;
+  }
+}
+
+// Found by fuzz/fuzz_colmap_binary: a NaN keypoint coordinate was read from
+// a binary model and did not survive a conversion to text and back. COLMAP
+// never writes non-finite numbers; a model holding them is corrupt.
+TEST(ColmapModelTest, NonFiniteNumbersAreRejected) {
+  const fs::path folder = CopyModel("colmap_multicam_bin");
+  const std::string images = ReadBytes(folder / "images.bin");
+  // The first image's first keypoint x: after the count (8), id (4), pose
+  // (56), camera id (4), the name and its NUL, and the keypoint count (8).
+  const size_t name_end = images.find('\0', 8 + 4 + 56 + 4);
+  ASSERT_NE(name_end, std::string::npos);
+  std::string corrupt = images;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  std::memcpy(&corrupt[name_end + 1 + 8], &nan, sizeof(nan));
+  WriteBytes(folder / "images.bin", corrupt);
+  EXPECT_THAT(ReadError([&] { ReadColmapModelBinary(folder); }),
+              HasSubstr("expected a finite number as keypoint x (double), found nan"));
+
+  const fs::path text = CopyModel("colmap_fountain_txt");
+  ReplaceLine(text / "points3D.txt", 4, "127 -6.4 inf 21.3 152 100 117 1.6 3 497 1 374 2 445");
+  EXPECT_THAT(ReadError([&] { ReadColmapModelText(text); }),
+              HasSubstr("points3D.txt:4: expected Y (a finite number), found 'inf'"));
 }
 
 TEST(ColmapModelTest, MissingFolderOrFile) {

@@ -8,6 +8,8 @@
 #include <sstream>
 #include <string_view>
 
+#include "viosfm/io/kalibr_yaml.h"
+#include "viosfm/io/rotation_checks.h"
 #include "viosfm/io/text_lines.h"
 #include "viosfm/io/yaml_util.h"
 #include "viosfm/util/errors.h"
@@ -39,6 +41,12 @@ timestamp_ns_t ParseStampField(const fs::path& path, int64_t line, std::string_v
         path.string(), line,
         "expected an integer timestamp in nanoseconds in the first column, got " + Quoted(field));
   }
+  if (!IsTimestampInRange(*stamp)) {
+    throw InputError(path.string(), line,
+                     "timestamp " + Quoted(field) +
+                         " is out of range: expected nanoseconds within +-2^62 (146 years) of "
+                         "the epoch");
+  }
   return *stamp;
 }
 
@@ -62,34 +70,27 @@ void CheckIncreasing(const fs::path& path, int64_t line, timestamp_ns_t stamp,
   }
 }
 
-// body_from_sensor from a T_BS entry; the bottom row must be (0 0 0 1) and
-// the top-left 3x3 block a rotation.
-Rigid3d ReadTransform(const YamlMap& yaml, const std::string& key) {
-  const Eigen::Matrix4d matrix = yaml.GetMatrix4(key);
-  if ((matrix.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).cwiseAbs().maxCoeff() > 1e-9) {
-    yaml.Fail(key, "expected a homogeneous transform whose last row is 0 0 0 1");
-  }
-  const Eigen::Matrix3d rotation = matrix.topLeftCorner<3, 3>();
-  if ((rotation.transpose() * rotation - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() >
-          1e-3 ||
-      rotation.determinant() <= 0.0) {
-    yaml.Fail(key, "expected the top-left 3x3 block to be a rotation matrix");
-  }
-  return Rigid3d::FromMatrix(matrix.topRows<3>());
-}
-
 bool IsIdentity(const Rigid3d& transform) {
   return transform.rotation.angularDistance(Eigen::Quaterniond::Identity()) < 1e-9 &&
          transform.translation.norm() < 1e-9;
 }
 
-constexpr char kSupportedDistortionModels[] =
-    "radial-tangential (or radtan), equidistant (or equi), none";
+// A relative path without '..' components (nor a NUL, which would end the
+// name early): joined to a folder it stays inside that folder.
+bool IsPathInsideFolder(std::string_view name) {
+  if (name.find('\0') != std::string_view::npos) return false;
+  const fs::path path{std::string(name)};
+  if (path.has_root_path()) return false;
+  for (const fs::path& part : path) {
+    if (part == "..") return false;
+  }
+  return true;
+}
 
 }  // namespace
 
 Rigid3d ReadEurocSensorTransform(const fs::path& yaml_path) {
-  return ReadTransform(YamlMap::Load(yaml_path), "T_BS");
+  return ReadRigidTransform(YamlMap::Load(yaml_path), "T_BS");
 }
 
 std::vector<GroundTruthState> ReadEurocGroundTruth(const fs::path& csv) {
@@ -111,14 +112,14 @@ std::vector<GroundTruthState> ReadEurocGroundTruth(const fs::path& csv) {
     for (size_t i = 1; i < fields.size(); ++i)
       values[i] = ParseNumberField(csv, line, i, fields[i]);
     Eigen::Quaterniond rotation(values[4], values[5], values[6], values[7]);
-    const double norm = rotation.norm();
-    if (std::abs(norm - 1.0) > 1e-3) {
-      std::ostringstream message;
-      message << "expected a unit quaternion (q_w, q_x, q_y, q_z in columns 5-8), its norm is "
-              << norm;
-      throw InputError(csv.string(), line, message.str());
+    if (const std::string problem = CheckFileQuaternion(rotation); !problem.empty()) {
+      throw InputError(
+          csv.string(), line,
+          "expected a unit quaternion (q_w, q_x, q_y, q_z in columns 5-8): " + problem);
     }
-    rotation.normalize();
+    // A quaternion already unit to rounding is kept bit for bit, so that
+    // write -> read is lossless (as the TUM reader does).
+    if (std::abs(rotation.squaredNorm() - 1.0) > 2e-15) rotation.normalize();
     state.world_from_body = Rigid3d(rotation, Eigen::Vector3d(values[1], values[2], values[3]));
     if (fields.size() == 17) {
       state.velocity_in_world = Eigen::Vector3d(values[8], values[9], values[10]);
@@ -134,68 +135,22 @@ std::vector<GroundTruthState> ReadEurocGroundTruth(const fs::path& csv) {
   return states;
 }
 
+GroundTruthReadResult TryReadEurocGroundTruth(const fs::path& csv) {
+  GroundTruthReadResult result;
+  try {
+    result.states = ReadEurocGroundTruth(csv);
+  } catch (const InputError& error) {
+    result.error = error.what();
+  }
+  return result;
+}
+
 EurocCameraCalibration ReadEurocCameraYaml(const fs::path& yaml_path) {
   const YamlMap yaml = YamlMap::Load(yaml_path);
   EurocCameraCalibration calibration;
-  Camera& camera = calibration.camera;
-  camera.camera_id = 1;
-
-  if (yaml.Has("camera_model")) {
-    const std::string model = yaml.GetString("camera_model");
-    if (ToLower(model) != "pinhole") {
-      yaml.Fail("camera_model", "unknown camera model '" + model + "'; supported: pinhole");
-    }
-  }
-  const std::vector<double> resolution = yaml.GetDoubles("resolution", 2);
-  for (double value : resolution) {
-    if (value < 1.0 || value != std::floor(value) || value > 1e6) {
-      yaml.Fail("resolution", "expected [width, height] as positive integers (pixels)");
-    }
-  }
-  camera.width = static_cast<uint64_t>(resolution[0]);
-  camera.height = static_cast<uint64_t>(resolution[1]);
-  const std::vector<double> intrinsics = yaml.GetDoubles("intrinsics", 4);
-  if (intrinsics[0] <= 0.0 || intrinsics[1] <= 0.0) {
-    yaml.Fail("intrinsics", "expected [fu, fv, cu, cv] with positive focal lengths");
-  }
-
-  std::string distortion = "none";
-  if (yaml.Has("distortion_model")) distortion = ToLower(yaml.GetString("distortion_model"));
-  std::vector<double> coefficients;
-  if (yaml.Has("distortion_coefficients")) {
-    coefficients = yaml.GetDoubles("distortion_coefficients");
-  }
-  const auto require_coefficients = [&](size_t count, const std::string& names) {
-    if (coefficients.size() != count) {
-      yaml.Fail("distortion_coefficients", "distortion_model '" + distortion + "' expects " +
-                                               std::to_string(count) + " coefficients (" + names +
-                                               "), got " + std::to_string(coefficients.size()));
-    }
-  };
-  camera.params = intrinsics;
-  if (distortion == "radial-tangential" || distortion == "radtan") {
-    require_coefficients(4, "k1, k2, p1, p2");
-    camera.model_id = CameraModelId::kOpenCV;
-    camera.params.insert(camera.params.end(), coefficients.begin(), coefficients.end());
-  } else if (distortion == "equidistant" || distortion == "equi") {
-    require_coefficients(4, "k1, k2, k3, k4");
-    camera.model_id = CameraModelId::kOpenCVFisheye;
-    camera.params.insert(camera.params.end(), coefficients.begin(), coefficients.end());
-  } else if (distortion == "none") {
-    for (double value : coefficients) {
-      if (value != 0.0) {
-        yaml.Fail("distortion_coefficients",
-                  "distortion_model 'none' expects no (or only zero) coefficients");
-      }
-    }
-    camera.model_id = CameraModelId::kPinhole;
-  } else {
-    yaml.Fail("distortion_model", "unknown distortion model '" + distortion +
-                                      "'; supported: " + kSupportedDistortionModels);
-  }
-  VIOSFM_CHECK(camera.HasValidParams());
-
-  calibration.body_from_cam = ReadTransform(yaml, "T_BS");
+  calibration.camera = ReadKalibrCameraIntrinsics(yaml, "distortion_coefficients");
+  calibration.camera.camera_id = 1;
+  calibration.body_from_cam = ReadRigidTransform(yaml, "T_BS");
   if (yaml.Has("rate_hz")) {
     calibration.rate_hz = yaml.GetDouble("rate_hz");
     if (calibration.rate_hz <= 0.0) yaml.Fail("rate_hz", "expected a positive rate in Hz");
@@ -217,7 +172,7 @@ EurocImuCalibration ReadEurocImuYaml(const fs::path& yaml_path) {
   noise.accel_noise_density = positive("accelerometer_noise_density");
   noise.accel_random_walk = positive("accelerometer_random_walk");
   if (yaml.Has("rate_hz")) noise.rate_hz = positive("rate_hz");
-  if (yaml.Has("T_BS")) calibration.body_from_imu = ReadTransform(yaml, "T_BS");
+  if (yaml.Has("T_BS")) calibration.body_from_imu = ReadRigidTransform(yaml, "T_BS");
   if (const std::string problem = noise.Validate(); !problem.empty()) {
     throw InputError(yaml_path.string(), 0, "invalid IMU noise model: " + problem);
   }
@@ -239,6 +194,12 @@ std::vector<SequenceImage> ReadEurocImageList(const fs::path& csv, const fs::pat
     image.timestamp_ns = ParseStampField(csv, line, fields[0]);
     CheckIncreasing(csv, line, image.timestamp_ns, previous, previous_line);
     if (fields[1].empty()) throw InputError(csv.string(), line, "expected a filename in column 2");
+    if (!IsPathInsideFolder(fields[1])) {
+      throw InputError(csv.string(), line,
+                       "image filename " + Quoted(fields[1]) +
+                           " must be a relative path inside the image folder " +
+                           image_folder.string() + " (not absolute, no '..')");
+    }
     image.path = image_folder / std::string(fields[1]);
     if (check_images_exist && !fs::is_regular_file(image.path)) {
       throw InputError(
@@ -358,7 +319,17 @@ Sequence ReadEurocDataset(const fs::path& root, const EurocReadOptions& options)
 
   const fs::path ground_truth_csv = mav0 / "state_groundtruth_estimate0" / "data.csv";
   if (options.read_ground_truth && fs::exists(ground_truth_csv)) {
-    sequence.ground_truth = ReadEurocGroundTruth(ground_truth_csv);
+    if (options.strict_ground_truth) {
+      sequence.ground_truth = ReadEurocGroundTruth(ground_truth_csv);
+    } else {
+      GroundTruthReadResult ground_truth = TryReadEurocGroundTruth(ground_truth_csv);
+      if (!ground_truth.ok()) {
+        VIOSFM_LOG(WARNING) << "ignoring the dataset's ground truth, which cannot be read (no "
+                               "evaluation): "
+                            << ground_truth.error;
+      }
+      sequence.ground_truth = std::move(ground_truth.states);
+    }
     if (!IsIdentity(body_from_imu)) {
       for (GroundTruthState& state : sequence.ground_truth) {
         state.world_from_body = state.world_from_body * body_from_imu;

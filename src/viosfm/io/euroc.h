@@ -56,10 +56,21 @@ namespace viosfm {
 //    b_a_RS_S_x [m s^-2], .._y, .._z"
 // The quaternion is w first and is world_from_body (R = world, S = body).
 // Each row has either the first 8 columns or all 17. A quaternion whose norm
-// is off 1 by more than 1e-3 is an error; others are normalised. Throws
+// is off 1 by more than kFileRotationTolerance (1e-3, io/rotation_checks.h)
+// is an error; others are normalised. Throws
 // InputError (file and line) on a wrong column count, a non-numeric field, a
 // non-increasing timestamp, a non-unit quaternion or a file without rows.
 std::vector<GroundTruthState> ReadEurocGroundTruth(const std::filesystem::path& csv);
+
+// For ground truth that is optional (a dataset's, used only to evaluate):
+// the states, or the InputError's message ("path:line: what") in `error`
+// with no states. Never throws InputError.
+struct GroundTruthReadResult {
+  std::vector<GroundTruthState> states;
+  std::string error;  // empty if the file was read
+  bool ok() const { return error.empty(); }
+};
+GroundTruthReadResult TryReadEurocGroundTruth(const std::filesystem::path& csv);
 
 // Camera calibration from a Kalibr/EuRoC camera sensor.yaml (format above).
 struct EurocCameraCalibration {
@@ -83,7 +94,10 @@ struct EurocImuCalibration {
 EurocImuCalibration ReadEurocImuYaml(const std::filesystem::path& yaml);
 
 // Reads "#timestamp [ns],filename" rows; paths are image_folder/filename.
-// With check_images_exist, a listed file that does not exist is an error.
+// A filename must stay inside image_folder: an absolute path or one with a
+// '..' component is an error (a dataset cannot make viosfm open files
+// elsewhere). With check_images_exist, a listed file that does not exist is
+// an error.
 std::vector<SequenceImage> ReadEurocImageList(const std::filesystem::path& csv,
                                               const std::filesystem::path& image_folder,
                                               bool check_images_exist);
@@ -104,6 +118,10 @@ struct EurocReadOptions {
   bool require_imu_coverage = false;
   // Read state_groundtruth_estimate0/data.csv when present. Default true.
   bool read_ground_truth = true;
+  // A malformed ground-truth file is an InputError (true), or (false) a
+  // warning naming its file and line, and the sequence has no ground truth:
+  // it only serves evaluation, so a run goes on without it. Default false.
+  bool strict_ground_truth = false;
 
   // Empty if valid; otherwise names the bad field.
   std::string Validate() const;

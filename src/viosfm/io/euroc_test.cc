@@ -271,13 +271,19 @@ TEST(ReadEurocDataset, GarbledGroundTruthRow) {
   const fs::path root = CopyDataset(source, "euroc_garbled_gt");
   const fs::path csv = root / "mav0/state_groundtruth_estimate0/data.csv";
   ReplaceLine(csv, 10, "1403715273712143104,0.878895,2.18?34,0.948427,0.069433,-0.824237");
-  const InputError error = ExpectInputError([&] { ReadEurocDataset(root); });
+  EurocReadOptions strict;
+  strict.strict_ground_truth = true;
+  const InputError error = ExpectInputError([&] { ReadEurocDataset(root, strict); });
   EXPECT_EQ(error.path(), csv.string());
   EXPECT_EQ(error.line(), 10);
   EXPECT_THAT(error.what(), HasSubstr("got 6"));
   ReplaceLine(csv, 10, "1403715273712143104,0.878895,2.18?34,0.948427,0.069433,-0.824237,0,0");
-  EXPECT_THAT(ExpectInputError([&] { ReadEurocDataset(root); }).what(),
+  EXPECT_THAT(ExpectInputError([&] { ReadEurocDataset(root, strict); }).what(),
               HasSubstr(csv.string() + ":10: expected a finite number in column 3, got '2.18?34'"));
+  // By default the dataset is read without its (optional) ground truth.
+  const Sequence sequence = ReadEurocDataset(root);
+  EXPECT_EQ(sequence.images.size(), 95u);
+  EXPECT_FALSE(sequence.has_ground_truth());
   // Not read at all when not asked for.
   EurocReadOptions options;
   options.read_ground_truth = false;
@@ -417,6 +423,100 @@ TEST(ReadEurocDataset, MissingPiecesAndEmptyList) {
   fs::remove(root / "mav0/cam0/sensor.yaml");
   EXPECT_THAT(ExpectInputError([&] { ReadEurocDataset(root, options); }).what(),
               HasSubstr("sensor.yaml: file does not exist"));
+}
+
+// A data.csv of a dataset cannot make the reader open files outside its
+// image folder.
+TEST(ReadEurocImageList, RejectsNamesOutsideTheImageFolder) {
+  const fs::path folder = testing::MakeScratchFolder("euroc_escape");
+  fs::create_directories(folder / "cam0/data/sub");
+  WriteTextFile(folder / "cam0/data/sub/c.png", "x");
+  WriteTextFile(folder / "cam0/secret.png", "x");
+  const fs::path csv = folder / "cam0/data.csv";
+  for (const std::string& name :
+       {std::string("../secret.png"), std::string("sub/../../secret.png"),
+        (folder / "cam0/secret.png").string(), std::string("/etc/passwd"), std::string("sub/..")}) {
+    WriteTextFile(csv, "#timestamp [ns],filename\n1000,sub/c.png\n2000," + name + "\n");
+    for (const bool check_exist : {true, false}) {
+      const InputError error =
+          ExpectInputError([&] { ReadEurocImageList(csv, folder / "cam0/data", check_exist); });
+      EXPECT_EQ(error.path(), csv.string()) << name;
+      EXPECT_EQ(error.line(), 3) << name;
+      EXPECT_THAT(error.what(), HasSubstr("'" + name + "' must be a relative path inside")) << name;
+    }
+  }
+  // A name with a NUL would be cut short when the file is opened.
+  WriteTextFile(csv, std::string("1000,sub/c.png\0../../x\n", 23));
+  EXPECT_EQ(ExpectInputError([&] { ReadEurocImageList(csv, folder / "cam0/data", false); }).line(),
+            1);
+  // Sub-folders (and names merely containing dots) are fine.
+  WriteTextFile(csv, "1000,sub/c.png\n2000,sub/..c.png\n");
+  const std::vector<SequenceImage> images = ReadEurocImageList(csv, folder / "cam0/data", false);
+  ASSERT_EQ(images.size(), 2u);
+  EXPECT_EQ(images[0].path, folder / "cam0/data/sub/c.png");
+}
+
+// Stamps must lie within +-2^62 ns, so that no difference of two overflows
+// (the frame-rate estimate of two stamps 2^63 ns apart was undefined
+// behaviour).
+TEST(ReadEurocImageList, StampsOutOfRangeAndFarApart) {
+  const fs::path folder = testing::MakeScratchFolder("euroc_stamp_range");
+  const fs::path csv = folder / "data.csv";
+  WriteTextFile(csv, "1000,a.png\n9223372036854775807,b.png\n");
+  const InputError error = ExpectInputError([&] { ReadEurocImageList(csv, folder, false); });
+  EXPECT_EQ(error.line(), 2);
+  EXPECT_THAT(error.what(), HasSubstr("timestamp '9223372036854775807' is out of range"));
+  WriteTextFile(csv, "-4611686018427387904,a.png\n4611686018427387904,b.png\n");
+  const std::vector<SequenceImage> images = ReadEurocImageList(csv, folder, false);
+  ASSERT_EQ(images.size(), 2u);
+  // 2^63 ns apart: one frame in 292 years (computed without overflow).
+  EXPECT_NEAR(EstimateFrameRateHz(images), 1e9 / 9223372036854775807.0, 1e-22);
+  EXPECT_EQ(EstimateFrameRateHz({{INT64_MIN, ""}, {INT64_MAX, ""}}), 1e9 / 9223372036854775807.0);
+}
+
+// The ground truth of a dataset only serves evaluation: a malformed one is a
+// warning (the run goes on without evaluation), unless asked to be strict.
+TEST(ReadEurocDataset, MalformedOptionalGroundTruthIsSkipped) {
+  const fs::path root = MakeSyntheticEuroc("euroc_bad_gt", "", 1000, 2000);
+  const fs::path csv = root / "mav0/state_groundtruth_estimate0/data.csv";
+  fs::create_directories(csv.parent_path());
+  WriteTextFile(csv, "#t,x,y,z,qw,qx,qy,qz\n1000,0,0,0,1,0,0,0\n1500,0,0,0,2,0,0,0\n");
+  const Sequence sequence = ReadEurocDataset(root);
+  EXPECT_EQ(sequence.images.size(), 2u);
+  EXPECT_EQ(sequence.imu.size(), 11u);
+  EXPECT_FALSE(sequence.has_ground_truth());
+
+  const GroundTruthReadResult result = TryReadEurocGroundTruth(csv);
+  EXPECT_FALSE(result.ok());
+  EXPECT_TRUE(result.states.empty());
+  EXPECT_THAT(result.error, HasSubstr(csv.string() + ":3: expected a unit quaternion"));
+
+  EurocReadOptions strict;
+  strict.strict_ground_truth = true;
+  const InputError error = ExpectInputError([&] { ReadEurocDataset(root, strict); });
+  EXPECT_EQ(error.path(), csv.string());
+  EXPECT_EQ(error.line(), 3);
+
+  // A good file is read either way.
+  WriteTextFile(csv, "#t,x,y,z,qw,qx,qy,qz\n1000,0,0,0,1,0,0,0\n1500,0,0,1,1,0,0,0\n");
+  EXPECT_EQ(ReadEurocDataset(root).ground_truth.size(), 2u);
+  EXPECT_EQ(ReadEurocDataset(root, strict).ground_truth.size(), 2u);
+  EXPECT_TRUE(TryReadEurocGroundTruth(csv).ok());
+}
+
+// T_BS must be a proper rotation: a mirrored frame is rejected.
+TEST(ReadEurocDataset, MirroredExtrinsicsAreRejected) {
+  const fs::path root = MakeSyntheticEuroc("euroc_mirror", "", 1000, 2000);
+  const fs::path yaml = root / "mav0/cam0/sensor.yaml";
+  WriteTextFile(yaml,
+                "%YAML:1.0\n"
+                "T_BS:\n  cols: 4\n  rows: 4\n"
+                "  data: [1, 0, 0, 0.1, 0, 1, 0, 0.2, 0, 0, -1, 0.3, 0, 0, 0, 1]\n"
+                "resolution: [640, 480]\nintrinsics: [500, 501, 320, 240]\n");
+  const InputError error = ExpectInputError([&] { ReadEurocDataset(root); });
+  EXPECT_EQ(error.path(), yaml.string());
+  EXPECT_EQ(error.line(), 3);
+  EXPECT_THAT(error.what(), HasSubstr("determinant is -1 (a reflection"));
 }
 
 }  // namespace

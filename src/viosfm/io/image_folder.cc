@@ -40,7 +40,7 @@ std::vector<StampedImage> ImagesFromNames(const fs::path& folder) {
     const std::string stem = entry.path().stem().string();
     const std::optional<timestamp_ns_t> stamp =
         IsAllDigits(stem) ? ParseNs(stem) : std::optional<timestamp_ns_t>();
-    if (!stamp) {
+    if (!stamp || !IsTimestampInRange(*stamp)) {
       throw InputError(entry.path().string(), 0,
                        "expected the image file name to be its timestamp in integer nanoseconds "
                        "(e.g. 1403715273262142976.png), or give a timestamps file");
@@ -75,10 +75,10 @@ std::vector<StampedImage> ImagesFromTimestampsFile(const fs::path& folder, const
                (stamp_text.front() == '-' && IsAllDigits(stamp_text.substr(1)))) {
       stamp = ParseNs(stamp_text);
     }
-    if (!stamp) {
+    if (!stamp || !IsTimestampInRange(*stamp)) {
       throw InputError(file.string(), line_number,
                        "expected a timestamp in integer ns or in seconds with a decimal point in "
-                       "column 2, got '" +
+                       "column 2, within +-2^62 ns (146 years) of the epoch, got '" +
                            std::string(stamp_text) + "'");
     }
     const fs::path path = folder / std::string(fields[0]);

@@ -1,6 +1,7 @@
 #include "viosfm/io/sequence.h"
 
 #include <algorithm>
+#include <cstdint>
 
 namespace viosfm {
 
@@ -9,7 +10,12 @@ double EstimateFrameRateHz(const std::vector<SequenceImage>& images) {
   std::vector<timestamp_ns_t> intervals;
   intervals.reserve(images.size() - 1);
   for (size_t i = 1; i < images.size(); ++i) {
-    intervals.push_back(images[i].timestamp_ns - images[i - 1].timestamp_ns);
+    // In uint64, so that stamps of any range (however far apart) cannot
+    // overflow; the readers keep stamps within +-2^62 ns anyway.
+    const uint64_t interval = static_cast<uint64_t>(images[i].timestamp_ns) -
+                              static_cast<uint64_t>(images[i - 1].timestamp_ns);
+    intervals.push_back(static_cast<timestamp_ns_t>(
+        std::min<uint64_t>(interval, static_cast<uint64_t>(INT64_MAX))));
   }
   std::nth_element(intervals.begin(), intervals.begin() + intervals.size() / 2, intervals.end());
   const timestamp_ns_t median = intervals[intervals.size() / 2];

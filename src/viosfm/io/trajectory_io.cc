@@ -9,6 +9,7 @@
 
 #include "viosfm/io/colmap_model.h"
 #include "viosfm/io/euroc.h"
+#include "viosfm/io/rotation_checks.h"
 #include "viosfm/io/text_lines.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/file_util.h"
@@ -31,14 +32,15 @@ double ParseField(const fs::path& path, int64_t line, std::string_view field, si
   return *value;
 }
 
-// Normalises a quaternion read from a file. An already unit quaternion is
-// kept bit for bit, so that write -> read is lossless.
+// A quaternion read from a file: a unit quaternion within
+// kFileRotationTolerance (io/rotation_checks.h), normalised. An already unit
+// quaternion is kept bit for bit, so that write -> read is lossless.
 Eigen::Quaterniond UnitQuaternion(const fs::path& path, int64_t line, Eigen::Quaterniond q) {
-  const double squared_norm = q.squaredNorm();
-  if (!(squared_norm > 1e-20)) {
-    throw InputError(path.string(), line, "expected a non-zero quaternion, got (0, 0, 0, 0)");
+  if (const std::string problem = CheckFileQuaternion(q); !problem.empty()) {
+    throw InputError(path.string(), line,
+                     "expected a unit quaternion (qx qy qz qw in columns 5-8): " + problem);
   }
-  if (std::abs(squared_norm - 1.0) > 2e-15) q.normalize();
+  if (std::abs(q.squaredNorm() - 1.0) > 2e-15) q.normalize();
   return q;
 }
 
@@ -132,10 +134,12 @@ Trajectory ReadTumTrajectory(const fs::path& path) {
                            std::to_string(fields.size()));
     }
     const std::optional<timestamp_ns_t> stamp = ParseSecondsToNs(fields[0]);
-    if (!stamp) {
+    if (!stamp || !IsTimestampInRange(*stamp)) {
       throw InputError(
           path.string(), line,
-          "column 1 (timestamp): expected decimal seconds, got '" + std::string(fields[0]) + "'");
+          "column 1 (timestamp): expected decimal seconds within +-2^62 ns (146 years) of the "
+          "epoch, got '" +
+              std::string(fields[0]) + "'");
     }
     double values[8];
     for (size_t i = 1; i < 8; ++i) values[i] = ParseField(path, line, fields[i], i, kNames[i]);
@@ -176,10 +180,10 @@ Trajectory ReadKittiTrajectory(const fs::path& path) {
     for (size_t i = 0; i < 12; ++i) {
       matrix(i / 4, i % 4) = ParseField(path, line, fields[i], i, "pose matrix entry");
     }
-    if (!(std::abs(matrix.leftCols<3>().determinant()) > 1e-6)) {
+    if (const std::string problem = CheckFileRotationMatrix(matrix.leftCols<3>());
+        !problem.empty()) {
       throw InputError(path.string(), line,
-                       "expected a rotation in the left 3x3 block, got a "
-                       "singular matrix");
+                       "expected a rotation matrix in the left 3x3 block: " + problem);
     }
     StampedPose pose;
     pose.timestamp_ns = static_cast<timestamp_ns_t>(trajectory.poses.size());
@@ -314,7 +318,9 @@ Rigid3d ParsePoseTxyzQxyzw(std::string_view text, const std::string& what) {
     values[i] = *value;
   }
   const Eigen::Quaterniond q(values[6], values[3], values[4], values[5]);
-  if (!(q.squaredNorm() > 1e-20)) throw InputError(what + ": expected a non-zero quaternion");
+  if (const std::string problem = CheckFileQuaternion(q); !problem.empty()) {
+    throw InputError(what + ": expected a unit quaternion qx qy qz qw: " + problem);
+  }
   return Rigid3d(q.normalized(), Eigen::Vector3d(values[0], values[1], values[2]));
 }
 

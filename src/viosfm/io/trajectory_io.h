@@ -15,8 +15,10 @@
 //         names (EuRoC-style "<ns>.png", see TimestampFromImageName).
 //
 // Every reader requires non-decreasing stamps (a repeated stamp is kept, with
-// a warning, as evo keeps it: the TUM fr2/desk ground truth has one) and a
-// non-zero quaternion (which it normalises). Writers use enough digits (17 significant, 9 decimal
+// a warning, as evo keeps it: the TUM fr2/desk ground truth has one) and
+// rotations within the one tolerance of every reader (io/rotation_checks.h):
+// a quaternion of norm 1 +- 1e-3 (then normalised), a KITTI rotation block
+// orthonormal to 1e-3 with determinant +1 (a mirrored frame is rejected). Writers use enough digits (17 significant, 9 decimal
 // places of seconds for TUM) that write -> read reproduces every number.
 #pragma once
 

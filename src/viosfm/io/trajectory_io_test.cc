@@ -3,8 +3,10 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
 #include <random>
+#include <sstream>
 #include <string>
 
 #include "viosfm/io/euroc.h"
@@ -78,14 +80,14 @@ TEST(TumTrajectory, ParsesCommentsBlankLinesAndStampsDigitExactly) {
                 "\n"
                 "1311868164.363181 1 2 3 0 0 0 1\n"
                 "  1311868164.3632\t-1e-3 2.5 3 0 0 0.7071067811865476 0.7071067811865476  \n"
-                "1311868164.4 0 0 0 0 0 0 2\n");
+                "1311868164.4 0 0 0 0 0 0 1.0008\n");
   const Trajectory trajectory = ReadTumTrajectory(folder / "t.txt");
   ASSERT_EQ(trajectory.size(), 3u);
   EXPECT_EQ(trajectory.poses[0].timestamp_ns, 1311868164363181000);
   EXPECT_EQ(trajectory.poses[1].timestamp_ns, 1311868164363200000);
   EXPECT_EQ(trajectory.poses[1].world_from_frame.translation, Eigen::Vector3d(-1e-3, 2.5, 3));
   EXPECT_NEAR(trajectory.poses[1].world_from_frame.rotation.z(), std::sqrt(0.5), 1e-16);
-  // qx qy qz qw order: (0, 0, 0, 2) is the identity after normalisation.
+  // qx qy qz qw order: (0, 0, 0, 1.0008) is the identity after normalisation.
   EXPECT_EQ(trajectory.poses[2].world_from_frame.rotation.w(), 1.0);
   EXPECT_EQ(GuessTrajectoryFormat(folder / "t.txt"), TrajectoryFormat::kTum);
 }
@@ -122,7 +124,26 @@ TEST(TumTrajectory, ErrorsNameFileLineAndExpectation) {
   WriteTextFile(folder / "quat.txt", "1 0 0 0 0 0 0 0\n");
   message = InputErrorMessage([&] { ReadTumTrajectory(folder / "quat.txt"); });
   EXPECT_THAT(message, HasSubstr("quat.txt:1"));
-  EXPECT_THAT(message, HasSubstr("non-zero quaternion"));
+  EXPECT_THAT(message, HasSubstr("expected a unit quaternion (qx qy qz qw in columns 5-8): its "
+                                 "norm is 0"));
+
+  // The same tolerance as every reader (EuRoC, COLMAP, KITTI): 1e-3 on the
+  // norm. A TUM file printed with 4 decimals passes; a scaled quaternion
+  // does not (it used to be normalised silently).
+  WriteTextFile(folder / "scaled.txt", "1 0 0 0 0 0 0 1\n2 0 0 0 0.6 0 0 0.8\n3 0 0 0 0 0 0 2\n");
+  const InputError error =
+      testing::ExpectInputError([&] { ReadTumTrajectory(folder / "scaled.txt"); });
+  EXPECT_EQ(error.line(), 3);
+  EXPECT_THAT(error.what(), HasSubstr("its norm is 2"));
+  WriteTextFile(folder / "rounded.txt",
+                "1 0 0 0 0.6132 0.5962 -0.3311 -0.3986\n2 0 0 0 0 0 0 1.0009\n");
+  const Trajectory rounded = ReadTumTrajectory(folder / "rounded.txt");
+  ASSERT_EQ(rounded.size(), 2u);
+  EXPECT_NEAR(rounded.poses[0].world_from_frame.rotation.norm(), 1.0, 1e-15);
+  EXPECT_EQ(rounded.poses[1].world_from_frame.rotation.w(), 1.0);
+  WriteTextFile(folder / "off.txt", "1 0 0 0 0 0 0 1.0011\n");
+  EXPECT_THAT(InputErrorMessage([&] { ReadTumTrajectory(folder / "off.txt"); }),
+              HasSubstr("off.txt:1: expected a unit quaternion"));
 
   WriteTextFile(folder / "empty.txt", "# nothing\n");
   message = InputErrorMessage([&] { ReadTumTrajectory(folder / "empty.txt"); });
@@ -161,6 +182,33 @@ TEST(KittiTrajectory, ErrorsNameFileLineAndExpectation) {
   message = InputErrorMessage([&] { ReadKittiTrajectory(folder / "zero.txt"); });
   EXPECT_THAT(message, HasSubstr("zero.txt:1"));
   EXPECT_THAT(message, HasSubstr("expected a rotation"));
+
+  // A mirrored frame (determinant -1) is not a pose; it used to be turned
+  // into some rotation silently.
+  WriteTextFile(folder / "mirror.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 -1 0\n");
+  message = InputErrorMessage([&] { ReadKittiTrajectory(folder / "mirror.txt"); });
+  EXPECT_THAT(message, HasSubstr("mirror.txt:2: expected a rotation matrix in the left 3x3 block: "
+                                 "its determinant is -1 (a reflection"));
+  // Scaled or sheared blocks are not rotations either.
+  WriteTextFile(folder / "scaled.txt", "2 0 0 0 0 2 0 0 0 0 2 0\n");
+  message = InputErrorMessage([&] { ReadKittiTrajectory(folder / "scaled.txt"); });
+  EXPECT_THAT(message, HasSubstr("scaled.txt:1"));
+  EXPECT_THAT(message, HasSubstr("not orthonormal: R^T R differs from the identity by up to 3"));
+  WriteTextFile(folder / "shear.txt", "1 0.01 0 0 0 1 0 0 0 0 1 0\n");
+  EXPECT_THAT(InputErrorMessage([&] { ReadKittiTrajectory(folder / "shear.txt"); }),
+              HasSubstr("not orthonormal"));
+  // Rounding to 6 digits (as KITTI files are written) is within tolerance.
+  const double c = std::cos(0.3);
+  const double s = std::sin(0.3);
+  std::ostringstream text;
+  text.precision(6);
+  text << c << " " << -s << " 0 1 " << s << " " << c << " 0 2 0 0 1 3\n";
+  WriteTextFile(folder / "rounded.txt", text.str());
+  const Trajectory rounded = ReadKittiTrajectory(folder / "rounded.txt");
+  ASSERT_EQ(rounded.size(), 1u);
+  EXPECT_NEAR(rounded.poses[0].world_from_frame.rotation.angularDistance(
+                  Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()))),
+              0.0, 1e-5);
 }
 
 TEST(EurocTrajectory, RoundTripAndFullStateFile) {
@@ -195,6 +243,35 @@ TEST(EurocTrajectory, ErrorNamesFileAndLine) {
   EXPECT_THAT(message, HasSubstr("bad.csv:3"));
 }
 
+// Found by fuzz/fuzz_euroc_trajectory: the EuRoC reader normalised every
+// quaternion, so read -> write -> read changed the last bits of one that
+// was already unit; it now keeps those bit for bit, as the TUM reader does.
+TEST(EurocTrajectory, WriteReadKeepsQuaternionsBitForBit) {
+  const fs::path folder = testing::MakeScratchFolder("euroc_bits");
+  WriteTextFile(folder / "in.csv", "200, 4, 5, 6, 0, 0, 1, 0.0047\n300,1,2,3,0.5,0.5,0.5,0.5\n");
+  const Trajectory first = ReadEurocTrajectory(folder / "in.csv");
+  WriteEurocTrajectory(folder / "out.csv", first);
+  const Trajectory second = ReadEurocTrajectory(folder / "out.csv");
+  ASSERT_EQ(second.size(), 2u);
+  for (size_t i = 0; i < 2; ++i) {
+    for (int k = 0; k < 4; ++k) {
+      EXPECT_EQ(first.poses[i].world_from_frame.rotation.coeffs()[k],
+                second.poses[i].world_from_frame.rotation.coeffs()[k])
+          << i << " " << k;
+    }
+  }
+}
+
+// Stamps beyond +-2^62 ns would overflow when two of them are subtracted.
+TEST(TumTrajectory, StampsBeyondTheRangeAreRejected) {
+  const fs::path folder = testing::MakeScratchFolder("tum_range");
+  WriteTextFile(folder / "far.txt", "1 0 0 0 0 0 0 1\n9223372036 0 0 0 0 0 0 1\n");
+  EXPECT_THAT(InputErrorMessage([&] { ReadTumTrajectory(folder / "far.txt"); }),
+              HasSubstr("far.txt:2: column 1 (timestamp): expected decimal seconds within"));
+  WriteTextFile(folder / "near.txt", "-4611686018.427387904 0 0 0 0 0 0 1\n4611686018 0 0 0 0 0 0 1\n");
+  EXPECT_EQ(ReadTumTrajectory(folder / "near.txt").poses[0].timestamp_ns, -kMaxAbsTimestampNs);
+}
+
 TEST(TrajectoryFormat, NamesParseAndGuessFailures) {
   EXPECT_EQ(ParseTrajectoryFormat("TUM"), TrajectoryFormat::kTum);
   EXPECT_EQ(ParseTrajectoryFormat("euroc"), TrajectoryFormat::kEuroc);
@@ -224,9 +301,11 @@ TEST(TrajectoryWriters, RoundTripAcrossFormats) {
 }
 
 TEST(ParsePoseTxyzQxyzw, ParsesAndRejects) {
-  const Rigid3d pose = ParsePoseTxyzQxyzw("1 2 3 0 0 0 2", "--body-from-cam");
+  const Rigid3d pose = ParsePoseTxyzQxyzw("1 2 3 0 0 0 1.0005", "--body-from-cam");
   EXPECT_EQ(pose.translation, Eigen::Vector3d(1, 2, 3));
   EXPECT_EQ(pose.rotation.w(), 1.0);
+  EXPECT_THAT(InputErrorMessage([] { ParsePoseTxyzQxyzw("1 2 3 0 0 0 2", "--body-from-cam"); }),
+              HasSubstr("--body-from-cam: expected a unit quaternion qx qy qz qw: its norm is 2"));
   EXPECT_THAT(InputErrorMessage([] { ParsePoseTxyzQxyzw("1 2 3", "--body-from-cam"); }),
               HasSubstr("--body-from-cam: expected 7 numbers"));
   EXPECT_THAT(InputErrorMessage([] { ParsePoseTxyzQxyzw("1 2 3 0 0 a 1", "--x"); }),

@@ -98,6 +98,12 @@ std::vector<double> YamlMap::GetDoubles(const std::string& key, int expected_siz
   return values;
 }
 
+YamlMap YamlMap::GetMap(const std::string& key) const {
+  const YAML::Node value = Get(key);
+  if (!value.IsMap()) Fail(key, "expected a map of key: value entries");
+  return YamlMap(path_, value);
+}
+
 Eigen::Matrix4d YamlMap::GetMatrix4(const std::string& key) const {
   const YAML::Node value = Get(key);
   std::vector<double> data;

@@ -38,6 +38,8 @@ class YamlMap {
   // data: [16 numbers, row-major]}, a flat list of 16 numbers, or a list of 4
   // rows of 4 numbers.
   Eigen::Matrix4d GetMatrix4(const std::string& key) const;
+  // A nested map (e.g. Kalibr's "cam0:"); throws if absent or not a map.
+  YamlMap GetMap(const std::string& key) const;
 
   // Throws InputError at the line of `key` (or of the map if absent).
   [[noreturn]] void Fail(const std::string& key, const std::string& what) const;

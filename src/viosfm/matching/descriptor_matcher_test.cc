@@ -10,7 +10,6 @@
 
 #include "viosfm/geometry/epipolar.h"
 #include "viosfm/util/random.h"
-#include "viosfm/util/timer.h"
 
 namespace viosfm {
 namespace {
@@ -233,11 +232,18 @@ TEST(MatchImagePairs, EqualsMatchingEachPair) {
   const std::vector<FeatureMatches> matches = MatchImagePairs(
       pairs, [&](image_t id) { return images.at(id); }, options);
   ASSERT_EQ(matches.size(), pairs.size());
+  // The truth: the 150 shared descriptors are identical in every image, the
+  // other 150 of each are independent (about 0.7 apart, never within the
+  // ratio test of their nearest neighbour), so each pair's matches are
+  // exactly (i, i) for i < 150, whatever the pair and its order in the list.
+  std::vector<std::pair<point2D_t, point2D_t>> shared;
+  for (point2D_t i = 0; i < 150; ++i) shared.emplace_back(i, i);
   for (size_t k = 0; k < pairs.size(); ++k) {
+    EXPECT_EQ(AsPairs(matches[k]), shared) << "pair " << k;
+    // And the parallel driver gives what matching the pair alone gives.
     const FeatureMatches expected =
         MatchDescriptors(*images[pairs[k].image_id1], *images[pairs[k].image_id2], options);
     EXPECT_EQ(AsPairs(matches[k]), AsPairs(expected));
-    EXPECT_GE(matches[k].size(), 140u);  // the 150 shared descriptors
   }
 }
 
@@ -383,43 +389,6 @@ TEST(MatchDescriptorsGuided, RejectsRepeatedTextureOffTheEpipolarLine) {
   EXPECT_LT(unguided.recall, 0.8);  // the 200 repeated descriptors are lost
   EXPECT_GT(guided.recall, 0.97);
   EXPECT_GT(guided.precision, 0.98);  // a few copies fall inside the 4 px band by chance
-}
-
-// Time per pair at 2000 x 2000 descriptors (printed, not asserted).
-TEST(MatchDescriptors, TimingAt2000x2000) {
-  const GuidedScene scene = MakeGuidedScene(1500, 100, 400, 9);
-  const FloatDescriptors d1 =
-      (FloatDescriptors(2000, kDim) << scene.d1, scene.d2.topRows(500)).finished();
-  std::vector<Eigen::Vector2d> points1 = scene.points1;
-  points1.insert(points1.end(), scene.points2.begin(), scene.points2.begin() + 500);
-  auto best_of_3 = [](auto&& run) {
-    double best = 1e9;
-    for (int rep = 0; rep < 3; ++rep) {
-      Timer timer;
-      run();
-      best = std::min(best, timer.ElapsedSeconds());
-    }
-    return best;
-  };
-  DescriptorMatchingOptions options;
-  options.num_threads = 1;
-  const double one_thread = best_of_3([&] { MatchDescriptors(d1, scene.d2, options); });
-  options.num_threads = -1;
-  const double all_threads = best_of_3([&] { MatchDescriptors(d1, scene.d2, options); });
-  GuidedMatchingOptions guided;
-  guided.matching.num_threads = 1;
-  const double guided_20 = best_of_3(
-      [&] { MatchDescriptorsGuided(d1, scene.d2, points1, scene.points2, scene.F, guided); });
-  guided.max_epipolar_distance_px = 4.0;
-  const double guided_4 = best_of_3(
-      [&] { MatchDescriptorsGuided(d1, scene.d2, points1, scene.points2, scene.F, guided); });
-  FeatureDescriptors raw(2000, kDim);
-  raw.setConstant(17);
-  const double normalize = best_of_3([&] { NormalizeDescriptors(raw); });
-  std::cout << "2000x2000 descriptors, seconds per pair: brute force 1 thread " << one_thread
-            << ", all threads " << all_threads << "; guided (752x480, 1 thread) 20 px " << guided_20
-            << ", 4 px " << guided_4 << "; normalising one image " << normalize << "\n";
-  EXPECT_GT(one_thread, 0.0);
 }
 
 TEST(DescriptorMatchingOptions, ValidateNamesTheField) {

@@ -271,6 +271,9 @@ std::string PipelineOptions::Validate() const {
     return "imu_scale." + error;
   }
   if (num_threads < 1) return "num_threads must be >= 1";
+  if (const std::string error = calibration.Validate(); !error.empty()) {
+    return "calibration." + error;
+  }
   if (const std::string error = frame_selection.Validate(); !error.empty()) {
     return "frame_selection." + error;
   }
@@ -328,6 +331,8 @@ std::vector<std::pair<std::string, std::string>> PipelineOptions::ToKeyValues() 
       {"dataset", dataset.string()},
       {"image_folder.timestamps_file", image_folder.timestamps_file.string()},
       {"image_folder.camera_yaml", image_folder.camera_yaml.string()},
+      {"calibration.camchain", calibration.camchain.string()},
+      {"calibration.imu", calibration.imu.string()},
       {"output_folder", output_folder.string()},
       {"vio.source", vio_source ? "function" : "file"},
       {"vio.trajectory", vio_trajectory.string()},
@@ -545,7 +550,8 @@ std::string PipelineSummaryToJson(const PipelineSummary& s) {
   return json.dump(2);
 }
 
-Sequence ReadPipelineDataset(const fs::path& dataset, const ImageFolderOptions& image_folder) {
+Sequence ReadPipelineDataset(const fs::path& dataset, const ImageFolderOptions& image_folder,
+                             const CalibrationFiles& calibration) {
   if (!fs::is_directory(dataset)) {
     throw InputError(dataset.string(), 0, "dataset folder not found");
   }
@@ -565,6 +571,7 @@ Sequence ReadPipelineDataset(const fs::path& dataset, const ImageFolderOptions& 
   if (sequence.images.empty()) {
     throw InputError(dataset.string(), 0, "the dataset has no images");
   }
+  ApplyCalibrationFiles(calibration, &sequence);
   return sequence;
 }
 
@@ -585,10 +592,13 @@ PipelineSummary RunPipeline(const PipelineOptions& options) {
 
   // 1. Dataset.
   clock.Begin("read_dataset");
-  const Sequence sequence =
-      HasRosbagExtension(options.dataset)
-          ? ReadRosbagDataset(options.dataset, options.EffectiveRosbagOptions())
-          : ReadPipelineDataset(options.dataset, options.image_folder);
+  Sequence sequence;
+  if (HasRosbagExtension(options.dataset)) {
+    sequence = ReadRosbagDataset(options.dataset, options.EffectiveRosbagOptions());
+    ApplyCalibrationFiles(options.calibration, &sequence);
+  } else {
+    sequence = ReadPipelineDataset(options.dataset, options.image_folder, options.calibration);
+  }
   summary.num_frames_in = sequence.images.size();
   VIOSFM_LOG(INFO) << "run: " << sequence.images.size() << " images"
                    << (sequence.has_imu() ? ", IMU" : "")

@@ -59,6 +59,7 @@
 #include "viosfm/eval/metric_accuracy.h"
 #include "viosfm/io/image_folder.h"
 #include "viosfm/io/rosbag_dataset.h"
+#include "viosfm/io/kalibr.h"
 #include "viosfm/io/sequence.h"
 #include "viosfm/io/trajectory_io.h"
 #include "viosfm/matching/frame_selection.h"
@@ -95,6 +96,9 @@ struct PipelineOptions {
   // Its images are extracted to rosbag.extract_folder, default OUT/bag (a
   // EuRoC folder of what was read, see io/rosbag_dataset.h).
   RosbagDatasetOptions rosbag;
+  // Kalibr camchain.yaml (+ imu.yaml) replacing the dataset's calibration
+  // (io/kalibr.h, ApplyCalibration). Default none.
+  CalibrationFiles calibration;
   // The output folder (created if missing). Required.
   std::filesystem::path output_folder;
 
@@ -221,9 +225,11 @@ std::string PipelineSummaryToJson(const PipelineSummary& summary);
 Trajectory LoadVioTrajectory(const Sequence& sequence, const PipelineOptions& options);
 
 // Reads a dataset folder: EuRoC if it holds mav0/ (or is mav0), else an
-// image folder read with `image_folder`. Throws InputError naming the folder.
+// image folder read with `image_folder`; then applies `calibration` (if any).
+// Throws InputError naming the folder.
 Sequence ReadPipelineDataset(const std::filesystem::path& dataset,
-                             const ImageFolderOptions& image_folder);
+                             const ImageFolderOptions& image_folder,
+                             const CalibrationFiles& calibration = {});
 
 // Runs the pipeline (see the top of this file). Throws InputError for invalid
 // options, unreadable or empty input, a VIO trajectory that does not overlap

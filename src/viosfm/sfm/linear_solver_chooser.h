@@ -1,88 +1,79 @@
 #pragma once
 
-// The linear solver of the batched mapper's bundle adjustments, chosen by
-// measurement.
+// The linear solver of the batched mapper's bundle adjustments: a
+// deterministic function of the problem, so that the same input gives the
+// same solver (and the same model) run after run, whatever the machine's
+// load. (It used to be chosen from wall-clock timings of earlier
+// adjustments, and a loaded machine changed the choice.)
 
 #include <cstddef>
 #include <optional>
 
 #include "viosfm/ba/bundle_adjustment.h"
+#include "viosfm/sfm/ba_problem_structure.h"
 
 namespace viosfm {
 
-// For each bundle adjustment with more than max_images_for_sparse_schur free
-// images, when the options leave the solver to kAuto: neither SPARSE_SCHUR
-// nor ITERATIVE_SCHUR is faster on every scene (bundle_adjustment.h), so the
-// mapper measures. The first such adjustment runs SPARSE_SCHUR, the second
-// ITERATIVE_SCHUR; after that each uses the one predicted to be cheaper, and
-// every kProbePeriod-th tries the other again if it was predicted less than
-// kProbeMaxRatio times slower, since the balance shifts as the
-// reconstruction grows.
+// Neither SPARSE_SCHUR nor ITERATIVE_SCHUR is faster on every scene
+// (bundle_adjustment.h). Measured once on the suite's room and corridor,
+// 610 images each, mapping from the same stored matches, one thread
+// (docs/benchmarks.md, "Bundle adjustment: choosing the linear solver"):
+// the room's mapping took 225 CPU-s with SPARSE_SCHUR throughout and 126
+// with ITERATIVE_SCHUR above 100 images; the corridor's 95 and 251. The
+// scenes' reduced camera matrices are about as full (each camera shares
+// points with a third to a half of the others; the corridor more at small
+// sizes), so the fill does not tell them apart; the mean track length L
+// (observations per point) does: 9.4 to 13.7 on the room from 150 images
+// on (points stay in view of many cameras), 7.9 to 8.7 on the corridor
+// (weak texture: short tracks), where the conjugate gradients with the
+// Schur-Jacobi preconditioner needed about three times as long in the
+// mapper's adjustments. And where the reduced camera matrix's Cholesky
+// factor is large (X = E^2 / (n obs) of BaProblemStructure; SPARSE_SCHUR's
+// cost per iteration and observation grew as 1.9 + 0.2 X us on the room),
+// the factorisation dominates whatever the tracks. The rule:
 //
-// Measurements are taken at different sizes, so each solver's time per
-// iteration and observation is modelled as c * n^e in the number n of free
-// images, with e measured from that solver's last two measurements at sizes
-// at least kMinSizeRatio apart (clamped to [0, kMaxExponent]). Until
-// measured, e is kPriorSparseExponent for SPARSE_SCHUR and 0 for
-// ITERATIVE_SCHUR: a windowed run (--ba-window) measures at one size only,
-// and its final BA over every image must not extrapolate SPARSE_SCHUR's
-// cost as flat (a 2400-image room, measured at 200 free images, spent more
-// than 20 minutes in its final SPARSE_SCHUR adjustment before it was
-// stopped). Guessing wrong the
-// other way costs at most ITERATIVE_SCHUR's factor of about 2 on a sparse
-// scene. For the same reason an exponent measured between small sizes
-// (150 and 200 free images) is not trusted more than kMaxExtrapolation
-// times beyond the largest measured size: there SPARSE_SCHUR's exponent is
-// at least the prior. How it grows depends on the scene: on the suite's room, whose
-// cameras all see each other, SPARSE_SCHUR's cost per observation went from
-// 4.0 to 9.1 us between 300 and 610 images (e = 1.2: the reduced camera
-// matrix fills in) while ITERATIVE_SCHUR's stayed at 2.6-2.7 us; along the
-// corridor the reduced camera matrix stays banded. Without the exponent, a
-// SPARSE_SCHUR measurement on the room from a smaller reconstruction looks
-// cheaper than SPARSE_SCHUR would be now.
+//   n <= max_images_for_sparse_schur       SPARSE_SCHUR
+//   L >= kMinTrackLengthForIterative       ITERATIVE_SCHUR
+//   X > kMaxFillPerObservation             ITERATIVE_SCHUR   (with the structure)
+//   otherwise                              SPARSE_SCHUR
+//
+// A forced solver (options.linear_solver != kAuto) is always taken. Two scenes
+// fixed the thresholds; a scene between them may get the slower solver, never
+// a different result beyond the solvers' tolerance (both converge to the same
+// cost: the trajectories of the table above agree to 0.1 mm).
 class LinearSolverChooser {
  public:
-  static constexpr int kProbePeriod = 4;
-  static constexpr double kProbeMaxRatio = 2.0;
-  static constexpr double kMinSizeRatio = 1.25;
-  static constexpr double kMaxExponent = 2.0;
-  static constexpr double kPriorSparseExponent = 1.0;
-  static constexpr double kMaxExtrapolation = 2.0;
+  // Mean track length from which ITERATIVE_SCHUR is taken (observations per point).
+  static constexpr double kMinTrackLengthForIterative = 9.0;
+  // The largest X = E^2 / (n obs) at which SPARSE_SCHUR is taken.
+  static constexpr double kMaxFillPerObservation = 20.0;
 
   explicit LinearSolverChooser(const BundleAdjustmentOptions& options);
 
-  // The solver for an adjustment of `num_free_images` free images; `final`:
-  // the last adjustment of the run (never a probe).
+  // The solver for an adjustment of the problem `structure`: the rule above
+  // with the problem's own L and X. `final`: the last adjustment of the run
+  // (the rule is the same).
+  BaLinearSolver Next(const BaProblemStructure& structure, bool final) const;
+
+  // The solver when only the number of free images is known: the rule above
+  // with L of the last adjustment given to Record (its observations per
+  // point), and without the fill test; SPARSE_SCHUR before any was recorded.
   BaLinearSolver Next(size_t num_free_images, bool final);
 
-  // Records the time of an adjustment chosen by Next; `num_free_images` as
-  // given to Next (held images are not in Ceres' reduced camera system).
+  // Keeps the track length of an adjustment (observations per point of its
+  // summary; both are counts, so the choice stays deterministic) for the
+  // size-only Next. Its time is not used.
   void Record(const BundleAdjustmentSummary& summary, size_t num_free_images);
 
-  // Predicted seconds per iteration and observation at `num_free_images`,
-  // once `solver` has been measured.
-  std::optional<double> PredictedCost(BaLinearSolver solver, size_t num_free_images) const;
-
-  // The growth exponent e of `solver` (measured, or the prior above).
-  double GrowthExponent(BaLinearSolver solver) const;
+  // L as the size-only Next sees it (none before a Record with points).
+  std::optional<double> RecordedTrackLength() const { return recorded_track_length_; }
 
  private:
-  struct Measurement {
-    double num_free_images = 0.0;
-    double cost = 0.0;  // seconds per iteration and observation
-  };
-  struct SolverModel {
-    std::optional<Measurement> last;
-    std::optional<Measurement> reference;  // an earlier one, for the exponent
-    double exponent = 0.0;
-    double largest_num_free_images = 0.0;  // of any measurement
-  };
-  const SolverModel& Model(BaLinearSolver solver) const;
+  BaLinearSolver Choose(size_t num_free_images, double mean_track_length,
+                        std::optional<double> fill_per_observation) const;
 
   BundleAdjustmentOptions options_;
-  SolverModel sparse_{std::nullopt, std::nullopt, kPriorSparseExponent, 0.0};
-  SolverModel iterative_;
-  int num_choices_ = 0;
+  std::optional<double> recorded_track_length_;
 };
 
 }  // namespace viosfm

@@ -37,6 +37,20 @@ class InternalError : public std::logic_error {
   using std::logic_error::logic_error;
 };
 
+// What the viosfm command does with an exception that reaches main: the
+// line to print and the exit code. Bad input (InputError) and a
+// std::filesystem error (a path that cannot be read, created or renamed: a
+// missing permission, a file where a folder is expected, a full disk) exit
+// with 2 and name the path(s); anything else is an internal error, exit 3.
+struct TopLevelError {
+  int exit_code = 3;
+  std::string message;  // "error: ..." or "internal error: ..."
+};
+TopLevelError DescribeTopLevelError(const std::exception& error);
+
+inline constexpr int kExitInputError = 2;
+inline constexpr int kExitInternalError = 3;
+
 namespace internal {
 
 // Collects a message with operator<< and throws InternalError when destroyed.

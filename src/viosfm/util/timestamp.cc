@@ -33,11 +33,14 @@ std::optional<timestamp_ns_t> ParseSecondsToNs(std::string_view text) {
   const std::string_view frac_part =
       dot == std::string_view::npos ? std::string_view() : text.substr(dot + 1);
   if (int_part.empty() && frac_part.empty()) return std::nullopt;
+  // Every step is checked: a stamp beyond +-(2^63 - 1) ns (about 292 years)
+  // does not fit an int64 and is rejected, never wrapped.
   int64_t seconds = 0;
+  bool overflow = false;
   for (char c : int_part) {
     if (c < '0' || c > '9') return std::nullopt;
-    if (seconds > (INT64_MAX / kNanosecondsPerSecond) / 10) return std::nullopt;
-    seconds = seconds * 10 + (c - '0');
+    overflow = overflow || __builtin_mul_overflow(seconds, int64_t{10}, &seconds) ||
+               __builtin_add_overflow(seconds, int64_t{c - '0'}, &seconds);
   }
   int64_t frac_ns = 0;
   int digits = 0;
@@ -52,7 +55,10 @@ std::optional<timestamp_ns_t> ParseSecondsToNs(std::string_view text) {
     ++digits;
   }
   for (int d = digits; d < 9; ++d) frac_ns *= 10;
-  int64_t ns = seconds * kNanosecondsPerSecond + frac_ns + (round_up ? 1 : 0);
+  int64_t ns = 0;
+  overflow = overflow || __builtin_mul_overflow(seconds, kNanosecondsPerSecond, &ns) ||
+             __builtin_add_overflow(ns, frac_ns + (round_up ? 1 : 0), &ns);
+  if (overflow) return std::nullopt;
   return negative ? -ns : ns;
 }
 

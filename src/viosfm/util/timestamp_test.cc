@@ -19,6 +19,22 @@ TEST(Timestamp, ParsesDecimalSecondsExactly) {
   EXPECT_FALSE(ParseSecondsToNs("1e9"));
 }
 
+// The largest stamps an int64 holds parse exactly; one nanosecond more (or a
+// rounding digit that carries past it) is rejected, never wrapped around.
+TEST(Timestamp, SecondsBeyondInt64AreRejectedNotWrapped) {
+  EXPECT_EQ(ParseSecondsToNs("9223372036.854775807"), INT64_MAX);
+  EXPECT_EQ(ParseSecondsToNs("-9223372036.854775807"), -INT64_MAX);
+  EXPECT_EQ(ParseSecondsToNs("9223372036.8547758074"), INT64_MAX);  // rounds down
+  EXPECT_FALSE(ParseSecondsToNs("9223372036.854775808"));
+  EXPECT_FALSE(ParseSecondsToNs("9223372036.8547758075"));  // rounds up past the limit
+  EXPECT_FALSE(ParseSecondsToNs("9223372037"));
+  EXPECT_FALSE(ParseSecondsToNs("9999999999.999999999"));  // passed the old digit-count guard
+  EXPECT_FALSE(ParseSecondsToNs("100000000000000000000000"));
+  EXPECT_FALSE(ParseSecondsToNs("-100000000000000000000000.5"));
+  EXPECT_FALSE(ParseNs("9223372036854775808"));
+  EXPECT_EQ(ParseNs("-9223372036854775808"), INT64_MIN);
+}
+
 TEST(Timestamp, FormatsRoundTrip) {
   EXPECT_EQ(FormatNsAsSeconds(1403715273262142976), "1403715273.262142976");
   EXPECT_EQ(FormatNsAsSeconds(1403715273262142976, 6), "1403715273.262143");

@@ -1,0 +1,53 @@
+# ctest cli/exit_codes: the viosfm command's exit codes and error lines
+# (docs/design.md, Failures): bad input and filesystem errors exit with 2
+# and print "error: <path>...", never "internal error" (3).
+#   cmake -DVIOSFM=<viosfm binary> -DWORK=<scratch folder> -P exit_codes_test.cmake
+file(REMOVE_RECURSE "${WORK}")
+file(MAKE_DIRECTORY "${WORK}")
+file(WRITE "${WORK}/a_file" "not a folder\n")
+
+function(expect_exit code pattern)
+  execute_process(COMMAND "${VIOSFM}" --log-level error ${ARGN}
+                  RESULT_VARIABLE result ERROR_VARIABLE stderr OUTPUT_QUIET)
+  if(NOT result EQUAL code)
+    message(FATAL_ERROR "viosfm ${ARGN}: exit code ${result}, expected ${code}; stderr: ${stderr}")
+  endif()
+  if(NOT stderr MATCHES "${pattern}")
+    message(FATAL_ERROR "viosfm ${ARGN}: stderr '${stderr}' does not match '${pattern}'")
+  endif()
+endfunction()
+
+# A missing dataset: an input error naming the folder.
+expect_exit(2 "^error: ${WORK}/absent: dataset folder not found" vio "${WORK}/absent" --out "${WORK}/out")
+# An output folder below a regular file: a std::filesystem error, reported
+# as bad input naming the path (it used to exit with 3, "internal error").
+expect_exit(2 "^error: ${WORK}/a_file/sub[^ ]*: cannot create directories: Not a directory"
+            simulate --duration 3 --no-images --out "${WORK}/a_file/sub")
+# A minimal EuRoC dataset, then calibrations that do not exist or are bad:
+# --calibration is read by the subcommands that read a dataset.
+set(mav0 "${WORK}/dataset/mav0")
+file(WRITE "${mav0}/cam0/data.csv" "#timestamp [ns],filename\n1000,a.png\n2000,b.png\n")
+file(WRITE "${mav0}/cam0/data/a.png" "x")
+file(WRITE "${mav0}/cam0/data/b.png" "x")
+file(WRITE "${mav0}/cam0/sensor.yaml"
+     "T_BS: [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]\nresolution: [640, 480]\n"
+     "intrinsics: [500, 500, 320, 240]\n")
+file(WRITE "${mav0}/imu0/sensor.yaml"
+     "gyroscope_noise_density: 1e-4\ngyroscope_random_walk: 1e-5\n"
+     "accelerometer_noise_density: 1e-3\naccelerometer_random_walk: 1e-3\n")
+file(WRITE "${mav0}/imu0/data.csv" "500,0,0,0,0,0,9.81\n2500,0,0,0,0,0,9.81\n")
+expect_exit(2 "^error: ${WORK}/absent.yaml: file does not exist" vio "${WORK}/dataset"
+            --out "${WORK}/out" --calibration "${WORK}/absent.yaml")
+file(WRITE "${WORK}/mirrored.yaml"
+     "cam0:\n  T_cam_imu: [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, -1, 0], [0, 0, 0, 1]]\n")
+foreach(command vio run features)
+  set(extra)
+  if(command STREQUAL "features")
+    set(extra --database "${WORK}/out_${command}/database.db")
+  else()
+    set(extra --out "${WORK}/out_${command}")
+  endif()
+  expect_exit(2 "^error: ${WORK}/mirrored.yaml:2: 'T_cam_imu': .*determinant is -1"
+              ${command} "${WORK}/dataset" ${extra} --calibration "${WORK}/mirrored.yaml")
+endforeach()
+file(REMOVE_RECURSE "${WORK}")
