@@ -22,6 +22,7 @@
 
 #include <array>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -29,8 +30,10 @@
 #include "viosfm/io/sequence.h"
 #include "viosfm/scene/trajectory.h"
 #include "viosfm/vio/feature_tracker.h"
+#include "viosfm/vio/imu_noise_check.h"
 #include "viosfm/vio/sliding_window.h"
 #include "viosfm/vio/static_init.h"
+#include "viosfm/vio/time_offset.h"
 #include "viosfm/vio/vi_initializer.h"
 
 namespace viosfm {
@@ -40,6 +43,10 @@ struct VioOptions {
   SlidingWindowOptions window;
   StaticInitOptions static_init;
   ViInitOptions vi_init;
+  // Camera-IMU time offset estimated from the first frames (time_offset.h).
+  TimeOffsetOptions time_offset;
+  // What is done with implausible IMU noise figures (imu_noise_check.h).
+  ImuNoiseCheckOptions imu_noise;
   // Try the static start first (default true).
   bool use_static_init = true;
   // Prior of the first state after a static start (InitialStateSigmas defaults).
@@ -70,6 +77,10 @@ struct VioFrameResult {
   bool is_keyframe = false;
   int num_features = 0;   // tracked corners
   int num_landmarks = 0;  // triangulated landmarks seen, used by the window
+  // The window's marginal covariance of world_from_body (SlidingWindowOptions
+  // compute_covariance; [rotation rad, position m]); zero when the window
+  // did not estimate this frame.
+  Eigen::Matrix<double, 6, 6> pose_covariance = Eigen::Matrix<double, 6, 6>::Zero();
 };
 
 struct VioSummary {
@@ -77,6 +88,8 @@ struct VioSummary {
   // Frames per status, indexed by static_cast<int>(VioStatus).
   std::array<size_t, 4> status_counts{};
   StaticInitResult static_init;  // status kNotStatic/kNotEnoughData when not a static start
+  ImuNoiseCheck imu_noise;       // the calibration's IMU noise and what was used
+  TimeOffsetEstimate time_offset;  // the camera-IMU time offset used (time_offset.h)
   bool visual_initialized = false;
   // Camera stamp of the first kTracking frame (-1: never).
   timestamp_ns_t first_tracking_ns = -1;
@@ -128,7 +141,7 @@ class VisualInertialOdometry {
   SensorRig rig_;
   const std::vector<ImuSample>& imu_;
   VioOptions options_;
-  SlidingWindowEstimator window_;
+  std::unique_ptr<SlidingWindowEstimator> window_;
   VioSummary summary_;
   ImuState static_state_;
   bool static_start_ = false;
@@ -137,6 +150,13 @@ class VisualInertialOdometry {
   ImuState last_state_;
   std::vector<FrameFeatures> init_keyframes_;  // for the visual-inertial initialisation
 };
+
+// cam_now_from_cam_prev: the gyro's rotation between two camera stamps
+// (converted with rig.CamToImuTime) with `gyro_bias` removed; identity
+// without IMU coverage.
+Eigen::Quaterniond GyroRotationPrior(const SensorRig& rig, const std::vector<ImuSample>& imu,
+                                     const Eigen::Vector3d& gyro_bias, timestamp_ns_t from_ns,
+                                     timestamp_ns_t to_ns);
 
 // Runs the VIO over a sequence: every image is read once (ReadGreyImage),
 // tracked, and processed. Throws InputError if the sequence has no IMU or

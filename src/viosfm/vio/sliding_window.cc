@@ -1,5 +1,6 @@
 #include "viosfm/vio/sliding_window.h"
 
+#include <ceres/covariance.h>
 #include <ceres/loss_function.h>
 #include <ceres/ordered_groups.h>
 #include <ceres/problem.h>
@@ -34,6 +35,11 @@ std::string SlidingWindowOptions::Validate() const {
   if (!(pixel_sigma_px > 0)) return "pixel_sigma_px must be > 0";
   if (!(cauchy_loss_scale > 0)) return "cauchy_loss_scale must be > 0";
   if (!(min_triangulation_angle_deg >= 0)) return "min_triangulation_angle_deg must be >= 0";
+  if (!(fallback_triangulation_angle_deg >= 0) ||
+      fallback_triangulation_angle_deg > min_triangulation_angle_deg) {
+    return "fallback_triangulation_angle_deg must be in [0, min_triangulation_angle_deg]";
+  }
+  if (fallback_target_landmarks < 0) return "fallback_target_landmarks must be >= 0";
   if (!(min_depth_m > 0) || !(max_depth_m > min_depth_m)) {
     return "min_depth_m/max_depth_m must satisfy 0 < min < max";
   }
@@ -144,6 +150,53 @@ void SlidingWindowEstimator::Initialize(const ImuState& state, const InitialStat
   frames_.push_back(std::move(frame));
 }
 
+void SlidingWindowEstimator::InitializeWithKeyframes(
+    const std::vector<FrameFeatures>& keyframes, const std::vector<ImuState>& states,
+    const std::unordered_map<uint64_t, Eigen::Vector3d>& points_in_world,
+    const std::vector<ImuSample>& imu, const InitialStateSigmas& sigmas) {
+  VIOSFM_CHECK(!keyframes.empty() && keyframes.size() == states.size());
+  Initialize(states.front(), sigmas, keyframes.front());
+  for (size_t k = 1; k < keyframes.size(); ++k) {
+    const ImuState previous_state = NewestState();
+    auto frame = std::make_unique<Frame>();
+    frame->id = next_frame_id_++;
+    frame->timestamp_ns = states[k].timestamp_ns;
+    frame->preintegration = std::make_unique<ImuPreintegration>(
+        previous_state.gyro_bias, previous_state.accel_bias, noise_, options_.preintegration);
+    if (!frame->preintegration->IntegrateRange(imu, previous_state.timestamp_ns,
+                                               frame->timestamp_ns)) {
+      // No IMU between two keyframes: keep what is there.
+      break;
+    }
+    frame->parameters = ImuStateParameters::FromState(states[k]);
+    frame->is_keyframe = true;
+    for (const FeatureObservation& observation : keyframes[k].observations) {
+      frame->observations[observation.track_id] = observation.normalized;
+    }
+    Frame* frame_pointer = frame.get();
+    frames_.push_back(std::move(frame));
+    for (const auto& [track_id, normalized] : frame_pointer->observations) {
+      Landmark& landmark = landmarks_[track_id];
+      if (landmark.anchor == nullptr) {
+        landmark.track_id = track_id;
+        landmark.anchor = frame_pointer;
+      }
+      ++landmark.num_observations;
+    }
+  }
+  for (auto& [track_id, landmark] : landmarks_) {
+    const auto it = points_in_world.find(track_id);
+    if (it == points_in_world.end()) continue;
+    const double inverse_depth = InverseDepthOfPoint(
+        StateOf(landmark.anchor->parameters, landmark.anchor->timestamp_ns).world_from_body,
+        body_from_cam_, it->second);
+    if (inverse_depth > 1.0 / options_.max_depth_m && inverse_depth < 1.0 / options_.min_depth_m) {
+      landmark.inverse_depth = inverse_depth;
+      landmark.triangulated = true;
+    }
+  }
+}
+
 bool SlidingWindowEstimator::IsKeyframe(const Frame& frame, const FrameFeatures& features) const {
   const Frame* last_keyframe = nullptr;
   for (auto it = frames_.rbegin(); it != frames_.rend(); ++it) {
@@ -164,7 +217,7 @@ bool SlidingWindowEstimator::IsKeyframe(const Frame& frame, const FrameFeatures&
     const auto it = last_keyframe->observations.find(track_id);
     if (it == last_keyframe->observations.end()) continue;
     ++shared;
-    parallax_sum += (normalized - it->second).norm() * focal_length_px_;
+    parallax_sum += (normalized - it->second).norm() * kReferenceFocalLengthPx;
   }
   if (shared < options_.keyframe_min_shared_tracks) return true;
   return parallax_sum / shared >= options_.keyframe_parallax_px;
@@ -213,6 +266,7 @@ void SlidingWindowEstimator::RemoveFrame(size_t index) {
 
 void SlidingWindowEstimator::TriangulateLandmarks() {
   const double min_angle = options_.min_triangulation_angle_deg * M_PI / 180.0;
+  const double fallback_angle = options_.fallback_triangulation_angle_deg * M_PI / 180.0;
   std::vector<Matrix3x4d> cams_from_world;
   std::vector<Eigen::Vector3d> centers;
   cams_from_world.reserve(frames_.size());
@@ -221,6 +275,19 @@ void SlidingWindowEstimator::TriangulateLandmarks() {
     cams_from_world.push_back(world_from_cam.Inverse().ToMatrix());
     centers.push_back(world_from_cam.translation);
   }
+  const Frame* newest = frames_.back().get();
+  int newest_seen = 0;  // triangulated landmarks the newest frame observes
+  for (const auto& [track_id, landmark] : landmarks_) {
+    if (landmark.triangulated && newest->observations.count(track_id) > 0) ++newest_seen;
+  }
+  // Landmarks with less parallax than min_angle but at least fallback_angle,
+  // with their angle, inverse depth, and whether the newest frame sees them.
+  struct Candidate {
+    Landmark* landmark;
+    double angle;
+    double inverse_depth;
+  };
+  std::vector<Candidate> weak;
   std::vector<Matrix3x4d> poses;
   std::vector<Eigen::Vector2d> points;
   std::vector<size_t> frame_indices;
@@ -245,14 +312,11 @@ void SlidingWindowEstimator::TriangulateLandmarks() {
       best_angle = std::max(best_angle, TriangulationAngle(centers[frame_indices.front()],
                                                            centers[frame_indices[k]], *point));
     }
-    if (best_angle < min_angle) continue;
+    if (best_angle < std::min(min_angle, fallback_angle)) continue;
     bool good = true;
     for (size_t k = 0; k < poses.size() && good; ++k) {
       const Eigen::Vector3d in_cam = poses[k] * point->homogeneous();
-      if (in_cam.z() < options_.min_depth_m || in_cam.z() > options_.max_depth_m) {
-        good = false;
-        break;
-      }
+      if (in_cam.z() < options_.min_depth_m || in_cam.z() > options_.max_depth_m) good = false;
       const double error_px = (in_cam.hnormalized() - points[k]).norm() * focal_length_px_;
       if (error_px > options_.max_reprojection_error_px) good = false;
     }
@@ -262,8 +326,31 @@ void SlidingWindowEstimator::TriangulateLandmarks() {
     const double inverse_depth = InverseDepthOfPoint(
         StateOf(anchor.parameters, anchor.timestamp_ns).world_from_body, body_from_cam_, *point);
     if (inverse_depth <= 0.0) continue;
-    landmark.inverse_depth = inverse_depth;
-    landmark.triangulated = true;
+    if (best_angle >= min_angle) {
+      landmark.inverse_depth = inverse_depth;
+      landmark.triangulated = true;
+      if (newest->observations.count(track_id) > 0) ++newest_seen;
+    } else {
+      weak.push_back({&landmark, best_angle, inverse_depth});
+    }
+  }
+  // Weak texture: while the newest frame sees fewer than
+  // fallback_target_landmarks triangulated landmarks, its lower-parallax
+  // tracks are triangulated too, widest angle first.
+  if (!has_tracked_ || newest_seen >= options_.fallback_target_landmarks) return;
+  std::stable_sort(weak.begin(), weak.end(), [&](const Candidate& a, const Candidate& b) {
+    const bool a_newest = newest->observations.count(a.landmark->track_id) > 0;
+    const bool b_newest = newest->observations.count(b.landmark->track_id) > 0;
+    if (a_newest != b_newest) return a_newest;
+    if (a.angle != b.angle) return a.angle > b.angle;
+    return a.landmark->track_id < b.landmark->track_id;
+  });
+  for (const Candidate& candidate : weak) {
+    if (newest_seen >= options_.fallback_target_landmarks) break;
+    if (newest->observations.count(candidate.landmark->track_id) == 0) break;
+    candidate.landmark->inverse_depth = candidate.inverse_depth;
+    candidate.landmark->triangulated = true;
+    ++newest_seen;
   }
 }
 
@@ -287,7 +374,8 @@ std::vector<SlidingWindowEstimator::Landmark*> SlidingWindowEstimator::SelectLan
   return selected;
 }
 
-void SlidingWindowEstimator::Optimize(const std::vector<Landmark*>& landmarks) {
+Eigen::Matrix<double, 6, 6> SlidingWindowEstimator::Optimize(
+    const std::vector<Landmark*>& landmarks) {
   ceres::Problem::Options problem_options;
   problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   ceres::Problem problem(problem_options);
@@ -347,6 +435,22 @@ void SlidingWindowEstimator::Optimize(const std::vector<Landmark*>& landmarks) {
   if (!summary.IsSolutionUsable()) {
     VIOSFM_LOG(DEBUG) << "sliding window: solver failed: " << summary.message;
   }
+  Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();
+  if (!options_.compute_covariance || !summary.IsSolutionUsable()) return covariance;
+  ceres::Covariance::Options covariance_options;
+  covariance_options.algorithm_type = ceres::SPARSE_QR;
+  covariance_options.num_threads = options_.num_threads;
+  ceres::Covariance estimator(covariance_options);
+  const double* pose = frames_.back()->parameters.pose.data();
+  const std::vector<std::pair<const double*, const double*>> blocks = {{pose, pose}};
+  if (!estimator.Compute(blocks, &problem)) return covariance;
+  Eigen::Matrix<double, 6, 6, Eigen::RowMajor> tangent;
+  if (!estimator.GetCovarianceBlockInTangentSpace(pose, pose, tangent.data())) return covariance;
+  // The quaternion part of the tangent is half the rotation vector.
+  Eigen::Matrix<double, 6, 6> scale = Eigen::Matrix<double, 6, 6>::Identity();
+  scale.topLeftCorner<3, 3>() *= 2.0;
+  covariance = scale * tangent * scale;
+  return covariance;
 }
 
 void SlidingWindowEstimator::RemoveOutliers(const std::vector<Landmark*>& landmarks) {
@@ -500,7 +604,7 @@ WindowFrameEstimate SlidingWindowEstimator::AddFrame(const FrameFeatures& featur
 
   TriangulateLandmarks();
   std::vector<Landmark*> selected = SelectLandmarks();
-  Optimize(selected);
+  estimate.pose_covariance = Optimize(selected);
   const std::string failure = CheckPlausible(predicted);
   if (!failure.empty()) {
     estimate.state = predicted;
@@ -518,6 +622,11 @@ WindowFrameEstimate SlidingWindowEstimator::AddFrame(const FrameFeatures& featur
   for (const Landmark* landmark : selected) {
     if (frame_pointer->observations.count(landmark->track_id) > 0) ++estimate.num_landmarks;
   }
+  VIOSFM_LOG(DEBUG) << "window: frame " << FormatNsAsSeconds(frame_pointer->timestamp_ns, 3)
+                    << " s, " << frames_.size() << " frames, keyframe " << frame_pointer->is_keyframe
+                    << ", " << frame_pointer->observations.size() << " observations, "
+                    << estimate.num_window_landmarks << " landmarks used, "
+                    << estimate.num_landmarks << " seen by the frame";
   if (estimate.num_landmarks >= options_.min_tracked_landmarks) {
     has_tracked_ = true;
     imu_only_since_ns_ = -1;
