@@ -352,6 +352,51 @@ void VisualInertialOdometry::Record(const VioFrameResult& result) {
   }
 }
 
+bool VisualInertialOdometry::TryVisualInertialInitialization(const FrameFeatures& frame,
+                                                             const ImuState* carried) {
+  if (!(frame.is_keyframe || init_keyframes_.empty() ||
+        IsNewKeyframe(init_keyframes_.back(), frame, options_.window))) {
+    return false;
+  }
+  init_keyframes_.push_back(frame);
+  if (static_cast<int>(init_keyframes_.size()) > options_.vi_init.window_size) {
+    init_keyframes_.erase(init_keyframes_.begin());
+  }
+  if (static_cast<int>(init_keyframes_.size()) < options_.vi_init.min_num_frames) return false;
+  const ViInitResult init = InitializeVisualInertial(init_keyframes_, imu_, rig_.body_from_cam,
+                                                     rig_.imu_noise, options_.vi_init);
+  if (!init.success || init.states.empty()) return false;
+  VIOSFM_LOG(INFO) << "vio: visual-inertial initialisation at "
+                   << FormatNsAsSeconds(frame.timestamp_ns - rig_.cam_time_offset_ns, 3)
+                   << " s: " << init.message;
+  const size_t used = init.states.size();
+  std::vector<FrameFeatures> used_keyframes(init_keyframes_.end() - used, init_keyframes_.end());
+  std::vector<ImuState> states = init.states;
+  std::unordered_map<uint64_t, Eigen::Vector3d> points = init.points_in_world;
+  for (size_t k = 0; k < used; ++k) states[k].timestamp_ns = used_keyframes[k].timestamp_ns;
+  if (carried != nullptr && have_good_state_) {
+    // A restart: the initialisation's world (gravity-aligned, origin and yaw
+    // at its first keyframe) is placed in the VIO's world so that its first
+    // keyframe lands where the IMU carries the last good state.
+    const ImuState at_first = Propagate(last_good_state_, states.front().timestamp_ns);
+    const Eigen::Matrix3d delta = at_first.world_from_body.rotation.toRotationMatrix() *
+                                  states.front().world_from_body.rotation.toRotationMatrix().transpose();
+    const double yaw = std::atan2(delta(1, 0) - delta(0, 1), delta(0, 0) + delta(1, 1));
+    const Eigen::Quaterniond rotation(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()));
+    const Eigen::Vector3d translation =
+        at_first.world_from_body.translation - rotation * states.front().world_from_body.translation;
+    for (ImuState& state : states) {
+      state.world_from_body.rotation = (rotation * state.world_from_body.rotation).normalized();
+      state.world_from_body.translation = rotation * state.world_from_body.translation + translation;
+      state.velocity_in_world = rotation * state.velocity_in_world;
+    }
+    for (auto& [track_id, point] : points) point = rotation * point + translation;
+  }
+  window_->InitializeWithKeyframes(used_keyframes, states, points, imu_, options_.restart_sigmas);
+  init_keyframes_.clear();
+  return true;
+}
+
 VioFrameResult VisualInertialOdometry::ProcessFrame(const FrameFeatures& features) {
   VioFrameResult result;
   result.timestamp_ns = features.timestamp_ns;
@@ -366,9 +411,28 @@ VioFrameResult VisualInertialOdometry::ProcessFrame(const FrameFeatures& feature
     result.is_keyframe = estimate.is_keyframe;
     result.num_landmarks = estimate.num_landmarks;
     result.pose_covariance = estimate.pose_covariance;
+    result.num_map_points = estimate.num_map_points;
     if (estimate.status == VioStatus::kLost) {
       VIOSFM_LOG(WARNING) << "vio: lost at " << FormatNsAsSeconds(features.timestamp_ns, 3)
                           << " s: " << estimate.message;
+      VioReset reset;
+      reset.timestamp_ns = features.timestamp_ns;
+      reset.message = estimate.message;
+      summary_.resets.push_back(reset);
+      relocalization_pending_ = false;
+      init_keyframes_.clear();
+    } else if (relocalization_pending_ &&
+               NsToSeconds(frame.timestamp_ns - restart_ns_) >=
+                   options_.window.relocalization_window_s) {
+      relocalization_pending_ = false;
+      VioReset& reset = summary_.resets.back();
+      reset.relocalized = window_->relocalized();
+      reset.num_map_points = window_->num_relocalization_observations();
+      VIOSFM_LOG(INFO) << "vio: the restart after the reset at "
+                       << FormatNsAsSeconds(reset.timestamp_ns, 3) << " s "
+                       << (reset.relocalized ? "re-localised against the previous map"
+                                             : "did not re-localise (joined by the IMU alone)")
+                       << " (" << reset.num_map_points << " map point observations)";
     }
     Record(result);
     return result;
@@ -379,10 +443,9 @@ VioFrameResult VisualInertialOdometry::ProcessFrame(const FrameFeatures& feature
     // Standing still: hold the static state.
     result.state = static_state_;
     result.state.timestamp_ns = frame.timestamp_ns;
-  } else if (have_good_state_) {
-    // The static start ended, or a restart after kLost: the window starts
-    // from the last good state carried forward by the IMU.
-    const bool from_static = static_start_ && summary_.num_resets == 0;
+  } else if (have_good_state_ && static_start_ && summary_.num_resets == 0) {
+    // The static start ended: the window starts from the static state
+    // carried forward by the IMU.
     ImuState start = Propagate(last_good_state_, frame.timestamp_ns);
     if (!start.velocity_in_world.allFinite() ||
         start.velocity_in_world.norm() > options_.window.max_speed_mps) {
@@ -390,41 +453,41 @@ VioFrameResult VisualInertialOdometry::ProcessFrame(const FrameFeatures& feature
       start.timestamp_ns = frame.timestamp_ns;
       start.velocity_in_world.setZero();
     }
-    InitialStateSigmas sigmas = from_static ? options_.static_start_sigmas : options_.restart_sigmas;
-    if (from_static) {
-      // Carried by the IMU alone from the end of the static interval: the
-      // velocity is known less well the longer that took.
-      const double carried_s = NsToSeconds(frame.timestamp_ns - last_good_state_.timestamp_ns);
-      sigmas.velocity_mps = std::hypot(sigmas.velocity_mps, kCarriedVelocitySigmaPerSecond * carried_s);
-    }
+    // Carried by the IMU alone from the end of the static interval: the
+    // velocity is known less well the longer that took.
+    InitialStateSigmas sigmas = options_.static_start_sigmas;
+    const double carried_s = NsToSeconds(frame.timestamp_ns - last_good_state_.timestamp_ns);
+    sigmas.velocity_mps = std::hypot(sigmas.velocity_mps, kCarriedVelocitySigmaPerSecond * carried_s);
     StartWindow(start, sigmas, frame);
     result.state = start;
   } else {
-    // Moving start: collect keyframes for the visual-inertial initialisation.
+    // A moving start, or a restart after kLost: keyframes are collected until
+    // the visual-inertial initialisation succeeds on them (a restart thus
+    // takes its velocity and gravity from the images and the IMU together,
+    // not from an IMU propagation across the failure, which may be what
+    // failed). Meanwhile a restart's frames are carried by the IMU from the
+    // last good state (status kImuOnly); a moving start's have no pose.
     result.state.timestamp_ns = frame.timestamp_ns;
-    if (frame.is_keyframe || init_keyframes_.empty() ||
-        IsNewKeyframe(init_keyframes_.back(), frame, options_.window)) {
-      init_keyframes_.push_back(frame);
-      if (static_cast<int>(init_keyframes_.size()) > options_.vi_init.window_size) {
-        init_keyframes_.erase(init_keyframes_.begin());
+    result.has_pose = false;
+    std::optional<ImuState> carried;
+    if (have_good_state_) {
+      carried = Propagate(last_good_state_, frame.timestamp_ns);
+      if (carried->velocity_in_world.allFinite() &&
+          carried->velocity_in_world.norm() <= options_.window.max_speed_mps) {
+        result.state = *carried;
+        result.status = VioStatus::kImuOnly;
+        result.has_pose = true;
+      } else {
+        carried.reset();
       }
-      if (static_cast<int>(init_keyframes_.size()) >= options_.vi_init.min_num_frames) {
-        const ViInitResult init = InitializeVisualInertial(
-            init_keyframes_, imu_, rig_.body_from_cam, rig_.imu_noise, options_.vi_init);
-        if (init.success && !init.states.empty()) {
-          VIOSFM_LOG(INFO) << "vio: visual-inertial initialisation at "
-                           << FormatNsAsSeconds(features.timestamp_ns, 3) << " s: " << init.message;
-          const size_t used = init.states.size();
-          std::vector<FrameFeatures> used_keyframes(init_keyframes_.end() - used,
-                                                    init_keyframes_.end());
-          std::vector<ImuState> states = init.states;
-          for (size_t k = 0; k < used; ++k) states[k].timestamp_ns = used_keyframes[k].timestamp_ns;
-          window_->InitializeWithKeyframes(used_keyframes, states, init.points_in_world, imu_,
-                                          options_.restart_sigmas);
-          const ImuState start = states.back();
-          result.state = start;
-          init_keyframes_.clear();
-        }
+    }
+    if (TryVisualInertialInitialization(frame, carried ? &*carried : nullptr)) {
+      result.state = window_->NewestState();
+      result.status = VioStatus::kInitializing;
+      result.has_pose = true;
+      if (!summary_.resets.empty()) {
+        relocalization_pending_ = true;
+        restart_ns_ = frame.timestamp_ns;
       }
     }
   }
@@ -521,6 +584,17 @@ VioResult RunVio(const Sequence& sequence, const VioOptions& options) {
   result.summary = vio.summary();
   VioSummary& summary = result.summary;
   summary.time_offset = time_offset;
+  // Segments: a reset that did not re-localise starts a new one at its lost frame.
+  int segment = 0;
+  size_t next_reset = 0;
+  for (VioFrameResult& frame : result.frames) {
+    if (frame.status == VioStatus::kLost && next_reset < summary.resets.size()) {
+      if (!summary.resets[next_reset].relocalized) ++segment;
+      ++next_reset;
+    }
+    frame.segment = segment;
+  }
+  summary.num_segments = segment + 1;
   summary.cpu_seconds = ProcessCpuSeconds() - cpu_start;
   summary.wall_seconds = timer.ElapsedSeconds();
 
@@ -585,6 +659,12 @@ std::string FormatVioSummary(const VioSummary& summary) {
   out << "visual_initialized: " << (summary.visual_initialized ? "true" : "false") << "\n";
   out << "first_tracking_ns: " << summary.first_tracking_ns << "\n";
   out << "num_resets: " << summary.num_resets << "\n";
+  out << "num_segments: " << summary.num_segments << "\n";
+  for (const VioReset& reset : summary.resets) {
+    out << "reset: {timestamp_ns: " << reset.timestamp_ns << ", relocalized: "
+        << (reset.relocalized ? "true" : "false") << ", map_point_observations: "
+        << reset.num_map_points << ", message: \"" << reset.message << "\"}\n";
+  }
   out << "cpu_seconds: " << summary.cpu_seconds << "\n";
   out << "wall_seconds: " << summary.wall_seconds << "\n";
   out << "message: \"" << summary.message << "\"\n";
@@ -599,7 +679,7 @@ void WriteVioResult(const std::filesystem::path& folder, const VioResult& result
   WriteTumTrajectory(folder / "trajectory_cam.tum", result.CameraTrajectory());
   WriteFileAtomically(folder / "states.csv", [&](std::ostream& out) {
     out << "#timestamp [ns],status,px,py,pz,qw,qx,qy,qz,vx,vy,vz,bgx,bgy,bgz,bax,bay,baz,"
-           "sigma_roll,sigma_pitch,sigma_yaw,sigma_px,sigma_py,sigma_pz\n";
+           "sigma_roll,sigma_pitch,sigma_yaw,sigma_px,sigma_py,sigma_pz,segment,has_pose\n";
     out << std::setprecision(17);
     for (const VioFrameResult& frame : result.frames) {
       const ImuState& s = frame.state;
@@ -611,6 +691,7 @@ void WriteVioResult(const std::filesystem::path& folder, const VioResult& result
         out << "," << v->x() << "," << v->y() << "," << v->z();
       }
       for (int i = 0; i < 6; ++i) out << "," << std::sqrt(std::max(0.0, frame.pose_covariance(i, i)));
+      out << "," << frame.segment << "," << (frame.has_pose ? 1 : 0);
       out << "\n";
     }
   });

@@ -81,6 +81,29 @@ struct VioFrameResult {
   // compute_covariance; [rotation rad, position m]); zero when the window
   // did not estimate this frame.
   Eigen::Matrix<double, 6, 6> pose_covariance = Eigen::Matrix<double, 6, 6>::Zero();
+  // Whether `state` is an estimate: false only before a moving start is
+  // initialised (the state is then a placeholder at the origin).
+  bool has_pose = true;
+  // Trajectory segment: frames of one segment are in one consistent frame.
+  // A reset starts a new segment (from its lost frame on) unless the
+  // restarted window re-localised against the map of the previous one; a
+  // segment joined only by the IMU's propagation across the gap is a new
+  // one (its pose relative to the previous segment is as good as the IMU
+  // alone over the gap).
+  int segment = 0;
+  // Map points of the previous segment seen while re-localising.
+  int num_map_points = 0;
+};
+
+// One failure of the estimate (status kLost) and how the VIO went on.
+struct VioReset {
+  timestamp_ns_t timestamp_ns = 0;  // camera stamp of the lost frame
+  std::string message;              // why
+  // Whether the restarted window re-localised against the previous map
+  // (SlidingWindowOptions::min_relocalization_points distinct map points
+  // within relocalization_window_s); false: joined by the IMU alone.
+  bool relocalized = false;
+  int num_map_points = 0;  // distinct map points seen while re-localising
 };
 
 struct VioSummary {
@@ -94,6 +117,8 @@ struct VioSummary {
   // Camera stamp of the first kTracking frame (-1: never).
   timestamp_ns_t first_tracking_ns = -1;
   int num_resets = 0;  // kLost events
+  std::vector<VioReset> resets;  // one per kLost event, in order
+  int num_segments = 0;          // distinct VioFrameResult::segment values
   int num_keyframes = 0;
   double cpu_seconds = 0.0;  // process CPU time of RunVio
   double wall_seconds = 0.0;
@@ -135,6 +160,11 @@ class VisualInertialOdometry {
  private:
   void StartWindow(const ImuState& state, const InitialStateSigmas& sigmas,
                    const FrameFeatures& features);
+  // Adds `frame` (IMU clock) to the initialisation keyframes when it is one
+  // and tries the visual-inertial initialisation; on success the window is
+  // started from its keyframes. `carried` (after a reset): the last good
+  // state's IMU propagation, which places the new world in the old one.
+  bool TryVisualInertialInitialization(const FrameFeatures& frame, const ImuState* carried);
   ImuState Propagate(const ImuState& state, timestamp_ns_t to_ns) const;
   void Record(const VioFrameResult& result);
 
@@ -149,6 +179,9 @@ class VisualInertialOdometry {
   ImuState last_good_state_;
   ImuState last_state_;
   std::vector<FrameFeatures> init_keyframes_;  // for the visual-inertial initialisation
+  // The restart after the last reset, while its re-localisation is pending.
+  bool relocalization_pending_ = false;
+  timestamp_ns_t restart_ns_ = 0;
 };
 
 // cam_now_from_cam_prev: the gyro's rotation between two camera stamps

@@ -53,6 +53,12 @@ std::string SlidingWindowOptions::Validate() const {
   if (!(max_gyro_bias > 0)) return "max_gyro_bias must be > 0";
   if (!(max_accel_bias > 0)) return "max_accel_bias must be > 0";
   if (!(max_position_correction_m > 0)) return "max_position_correction_m must be > 0";
+  if (!(imu_only_accel_uncertainty >= 0)) return "imu_only_accel_uncertainty must be >= 0";
+  if (!(relocalization_position_sigma_m > 0) || !(relocalization_yaw_sigma_rad > 0)) {
+    return "relocalization_position_sigma_m and relocalization_yaw_sigma_rad must be > 0";
+  }
+  if (!(relocalization_window_s > 0)) return "relocalization_window_s must be > 0";
+  if (min_relocalization_points < 1) return "min_relocalization_points must be >= 1";
   if (const std::string error = preintegration.Validate(); !error.empty()) {
     return "preintegration." + error;
   }
@@ -102,12 +108,23 @@ SlidingWindowEstimator::SlidingWindowEstimator(const Rigid3d& body_from_cam, con
 
 SlidingWindowEstimator::~SlidingWindowEstimator() = default;
 
-void SlidingWindowEstimator::Reset() {
+void SlidingWindowEstimator::ClearWindow() {
   frames_.clear();
   landmarks_.clear();
   prior_.reset();
   has_tracked_ = false;
   imu_only_since_ns_ = -1;
+}
+
+void SlidingWindowEstimator::Reset() {
+  if (!map_points_.empty()) relocalization_points_ = std::move(map_points_);
+  map_points_.clear();
+  ClearWindow();
+}
+
+ceres::LossFunction* SlidingWindowEstimator::ImuLoss() const {
+  if (!(options_.imu_loss_scale > 0)) return nullptr;
+  return new ceres::HuberLoss(options_.imu_loss_scale);
 }
 
 Rigid3d SlidingWindowEstimator::WorldFromCam(const Frame& frame) const {
@@ -119,10 +136,20 @@ ImuState SlidingWindowEstimator::NewestState() const {
   return StateOf(frames_.back()->parameters, frames_.back()->timestamp_ns);
 }
 
-void SlidingWindowEstimator::Initialize(const ImuState& state, const InitialStateSigmas& sigmas,
+void SlidingWindowEstimator::Initialize(const ImuState& state, const InitialStateSigmas& sigmas_in,
                                         const FrameFeatures& features) {
-  Reset();
+  ClearWindow();
   rejected_tracks_.clear();
+  InitialStateSigmas sigmas = sigmas_in;
+  restart_ns_ = state.timestamp_ns;
+  relocalization_observations_ = 0;
+  relocalization_seen_.clear();
+  relocalized_ = false;
+  if (!relocalization_points_.empty()) {
+    // The map of the previous window, not this prior, places the restart.
+    sigmas.position_m = std::max(sigmas.position_m, options_.relocalization_position_sigma_m);
+    sigmas.yaw_rad = std::max(sigmas.yaw_rad, options_.relocalization_yaw_sigma_rad);
+  }
   auto frame = std::make_unique<Frame>();
   frame->id = next_frame_id_++;
   frame->timestamp_ns = state.timestamp_ns;
@@ -357,7 +384,10 @@ void SlidingWindowEstimator::TriangulateLandmarks() {
 std::vector<SlidingWindowEstimator::Landmark*> SlidingWindowEstimator::SelectLandmarks() {
   std::vector<Landmark*> selected;
   for (auto& [track_id, landmark] : landmarks_) {
-    if (landmark.triangulated && landmark.num_observations >= 2) selected.push_back(&landmark);
+    if (landmark.triangulated && landmark.num_observations >= 2 &&
+        relocalization_points_.count(landmark.track_id) == 0) {
+      selected.push_back(&landmark);
+    }
   }
   if (static_cast<int>(selected.size()) > options_.max_landmarks) {
     std::stable_sort(selected.begin(), selected.end(), [](const Landmark* a, const Landmark* b) {
@@ -395,7 +425,7 @@ Eigen::Matrix<double, 6, 6> SlidingWindowEstimator::Optimize(
     Frame& frame = *frames_[k];
     const ImuState previous_state = StateOf(previous.parameters, previous.timestamp_ns);
     frame.preintegration->RepropagateIfNeeded(previous_state.gyro_bias, previous_state.accel_bias);
-    problem.AddResidualBlock(ImuFactor::Create(*frame.preintegration), nullptr,
+    problem.AddResidualBlock(ImuFactor::Create(*frame.preintegration), ImuLoss(),
                              previous.parameters.pose.data(), previous.parameters.speed_bias.data(),
                              frame.parameters.pose.data(), frame.parameters.speed_bias.data());
   }
@@ -414,6 +444,17 @@ Eigen::Matrix<double, 6, 6> SlidingWindowEstimator::Optimize(
                                new ceres::CauchyLoss(options_.cauchy_loss_scale),
                                landmark->anchor->parameters.pose.data(),
                                frame->parameters.pose.data(), &landmark->inverse_depth);
+    }
+  }
+  // Re-localisation: the frames' observations of the map kept at the reset.
+  for (auto& frame : frames_) {
+    for (const auto& [track_id, normalized] : frame->observations) {
+      const auto it = relocalization_points_.find(track_id);
+      if (it == relocalization_points_.end()) continue;
+      problem.AddResidualBlock(
+          MapPointReprojectionFactor::Create(it->second, normalized, body_from_cam_,
+                                             sqrt_information),
+          new ceres::CauchyLoss(options_.cauchy_loss_scale), frame->parameters.pose.data());
     }
   }
   ceres::Solver::Options solver_options;
@@ -507,7 +548,7 @@ void SlidingWindowEstimator::MarginalizeOldest(const std::vector<Landmark*>& lan
   const ImuState oldest_state = StateOf(oldest->parameters, oldest->timestamp_ns);
   second->preintegration->RepropagateIfNeeded(oldest_state.gyro_bias, oldest_state.accel_bias);
   marginalizer.AddResidualBlock(
-      ImuFactor::Create(*second->preintegration), nullptr,
+      ImuFactor::Create(*second->preintegration), ImuLoss(),
       {oldest->parameters.pose.data(), oldest->parameters.speed_bias.data(),
        second->parameters.pose.data(), second->parameters.speed_bias.data()});
   const double sqrt_information = focal_length_px_ / options_.pixel_sigma_px;
@@ -544,6 +585,13 @@ std::string SlidingWindowEstimator::CheckPlausible(const ImuState& predicted) co
     }
   }
   const ImuState newest = NewestState();
+  // After T seconds carried by the IMU alone, its prediction may be off by
+  // the accel uncertainty times T^2 / 2.
+  double allowed_correction_m = options_.max_position_correction_m;
+  if (imu_only_since_ns_ >= 0) {
+    const double t = NsToSeconds(newest.timestamp_ns - imu_only_since_ns_);
+    allowed_correction_m += 0.5 * options_.imu_only_accel_uncertainty * t * t;
+  }
   std::ostringstream message;
   if (newest.velocity_in_world.norm() > options_.max_speed_mps) {
     message << "implausible speed " << newest.velocity_in_world.norm() << " m/s";
@@ -552,12 +600,40 @@ std::string SlidingWindowEstimator::CheckPlausible(const ImuState& predicted) co
   } else if (newest.accel_bias.norm() > options_.max_accel_bias) {
     message << "implausible accel bias " << newest.accel_bias.norm() << " m/s^2";
   } else if ((newest.world_from_body.translation - predicted.world_from_body.translation).norm() >
-             options_.max_position_correction_m) {
+             allowed_correction_m) {
     message << "position jumped "
             << (newest.world_from_body.translation - predicted.world_from_body.translation).norm()
-            << " m from the IMU prediction";
+            << " m from the IMU prediction (" << allowed_correction_m << " m allowed)";
   }
   return message.str();
+}
+
+int SlidingWindowEstimator::UpdateRelocalization(const Frame& newest) {
+  if (relocalization_points_.empty()) return 0;
+  // Map points the newest frame sees within the reprojection threshold;
+  // those farther off are dropped (a track that jumped, or a wrong point).
+  const Rigid3d cam_from_world = WorldFromCam(newest).Inverse();
+  int seen = 0;
+  for (const auto& [track_id, normalized] : newest.observations) {
+    const auto it = relocalization_points_.find(track_id);
+    if (it == relocalization_points_.end()) continue;
+    const Eigen::Vector3d in_cam = cam_from_world * it->second;
+    if (in_cam.z() > 0.0 && (in_cam.hnormalized() - normalized).norm() * focal_length_px_ <=
+                                options_.max_reprojection_error_px) {
+      ++seen;
+      relocalization_seen_.insert(track_id);
+    } else {
+      relocalization_points_.erase(it);
+    }
+  }
+  relocalization_observations_ += seen;
+  if (NsToSeconds(newest.timestamp_ns - restart_ns_) >= options_.relocalization_window_s) {
+    relocalized_ =
+        static_cast<int>(relocalization_seen_.size()) >= options_.min_relocalization_points;
+    relocalization_points_.clear();
+    relocalization_seen_.clear();
+  }
+  return seen;
 }
 
 WindowFrameEstimate SlidingWindowEstimator::AddFrame(const FrameFeatures& features,
@@ -615,6 +691,7 @@ WindowFrameEstimate SlidingWindowEstimator::AddFrame(const FrameFeatures& featur
   }
   RemoveOutliers(selected);
   selected = SelectLandmarks();
+  estimate.num_map_points = UpdateRelocalization(*frame_pointer);
 
   estimate.state = NewestState();
   estimate.is_keyframe = frame_pointer->is_keyframe;
@@ -631,6 +708,15 @@ WindowFrameEstimate SlidingWindowEstimator::AddFrame(const FrameFeatures& featur
     has_tracked_ = true;
     imu_only_since_ns_ = -1;
     estimate.status = VioStatus::kTracking;
+    // The map a later restart would re-localise against.
+    map_points_.clear();
+    for (const Landmark* landmark : selected) {
+      map_points_.emplace(landmark->track_id,
+                          InverseDepthPointInWorld(
+                              StateOf(landmark->anchor->parameters, 0).world_from_body,
+                              body_from_cam_, landmark->anchor->observations.at(landmark->track_id),
+                              landmark->inverse_depth));
+    }
   } else if (!has_tracked_) {
     estimate.status = VioStatus::kInitializing;
   } else {
