@@ -1,4 +1,5 @@
 #include "viosfm/vio/feature_tracker.h"
+#include "viosfm/util/logging.h"
 
 #include <algorithm>
 #include <cmath>
@@ -119,7 +120,8 @@ struct FeatureTracker::State {
   FeatureTrackerOptions options;
   int width = 0;
   int height = 0;
-  double virtual_focal = 1.0;  // px, mean focal length of the camera
+  // The camera's mean focal length over kReferenceFocalLengthPx.
+  double pixel_scale = 1.0;
   cv::Ptr<cv::CLAHE> clahe;
 
   // The previous image: its pyramid (with derivatives), the raw image (to
@@ -138,7 +140,10 @@ struct FeatureTracker::State {
   bool has_keyframe = false;
   std::unordered_map<uint64_t, Eigen::Vector2d> keyframe_pixels;
 
-  cv::Size WindowSize() const { return {options.klt_window_size, options.klt_window_size}; }
+  cv::Size WindowSize() const {
+    const int side = 2 * static_cast<int>(std::lround(0.5 * (options.klt_window_size * pixel_scale - 1.0))) + 1;
+    return {std::max(3, side), std::max(3, side)};
+  }
 
   bool InsideBorder(const cv::Point2f& p) const {
     const float m = static_cast<float>(options.border_margin_px);
@@ -239,15 +244,15 @@ struct FeatureTracker::State {
     std::vector<cv::Point2f> a(corners.size());
     std::vector<cv::Point2f> b(corners.size());
     for (size_t i = 0; i < corners.size(); ++i) {
-      a[i] = cv::Point2f(static_cast<float>(virtual_focal * previous_normalized[i].x() + cx),
-                         static_cast<float>(virtual_focal * previous_normalized[i].y() + cy));
-      b[i] = cv::Point2f(static_cast<float>(virtual_focal * corners[i].normalized.x() + cx),
-                         static_cast<float>(virtual_focal * corners[i].normalized.y() + cy));
+      a[i] = cv::Point2f(static_cast<float>(kReferenceFocalLengthPx * previous_normalized[i].x() + cx),
+                         static_cast<float>(kReferenceFocalLengthPx * previous_normalized[i].y() + cy));
+      b[i] = cv::Point2f(static_cast<float>(kReferenceFocalLengthPx * corners[i].normalized.x() + cx),
+                         static_cast<float>(kReferenceFocalLengthPx * corners[i].normalized.y() + cy));
     }
     std::vector<uint8_t> inliers;
     const cv::Mat model =
         options.ransac_essential
-            ? cv::findEssentialMat(a, b, virtual_focal, cv::Point2d(cx, cy), cv::RANSAC,
+            ? cv::findEssentialMat(a, b, kReferenceFocalLengthPx, cv::Point2d(cx, cy), cv::RANSAC,
                                    options.ransac_confidence, options.ransac_threshold_px, inliers)
             : cv::findFundamentalMat(a, b, cv::FM_RANSAC, options.ransac_threshold_px,
                                      options.ransac_confidence, inliers);
@@ -329,7 +334,7 @@ struct FeatureTracker::State {
     } else if (!has_keyframe) {
       frame->is_keyframe = true;
     } else {
-      frame->is_keyframe = frame->parallax_px >= options.keyframe_parallax_px ||
+      frame->is_keyframe = frame->parallax_px >= options.keyframe_parallax_px * pixel_scale ||
                            shared < options.keyframe_min_tracked_ratio * options.max_num_features;
     }
     if (frame->is_keyframe) {
@@ -353,7 +358,7 @@ FeatureTracker::FeatureTracker(const Camera& camera, const FeatureTrackerOptions
   state_->options = options;
   state_->width = static_cast<int>(camera.width);
   state_->height = static_cast<int>(camera.height);
-  state_->virtual_focal = MeanFocalLength(camera);
+  state_->pixel_scale = MeanFocalLength(camera) / kReferenceFocalLengthPx;
   state_->clahe = cv::createCLAHE(options.clahe_clip_limit, cv::Size(options.clahe_tile_grid_size,
                                                                      options.clahe_tile_grid_size));
 }
@@ -415,12 +420,16 @@ FrameFeatures FeatureTracker::Track(timestamp_ns_t timestamp_ns, const GreyImage
     for (const TrackedCorner& corner : s.corners) {
       previous_normalized_by_id.emplace(corner.track_id, corner.normalized);
     }
+    const size_t num_before = s.corners.size();
     s.TrackCorners(pyramid, rotation_prior);
+    const size_t num_tracked = s.corners.size();
     std::vector<Eigen::Vector2d> previous_normalized(s.corners.size());
     for (size_t i = 0; i < s.corners.size(); ++i) {
       previous_normalized[i] = previous_normalized_by_id.at(s.corners[i].track_id);
     }
     s.RejectOutliers(previous_normalized);
+    VIOSFM_LOG(DEBUG) << "tracker: " << num_before << " corners, " << num_tracked
+                      << " tracked, " << s.corners.size() << " after RANSAC";
   } else {
     s.corners.clear();
   }

@@ -64,7 +64,9 @@ struct FeatureTrackerOptions {
   // come closer are dropped (default 5).
   int border_margin_px = 5;
 
-  // px, side of the KLT window (odd, default 21).
+  // px at kReferenceFocalLengthPx (frame_features.h), side of the KLT window
+  // (odd, default 21; scaled with the focal length and rounded to odd: 41
+  // px at 906 px, where blur and motion span twice the pixels).
   int klt_window_size = 21;
   // Pyramid levels above the full-resolution image (default 3, as VINS-Mono).
   int klt_max_level = 3;
@@ -78,7 +80,7 @@ struct FeatureTrackerOptions {
   double klt_epsilon_px = 0.01;
   // px, forward-backward check: a track is dropped if tracking it back into
   // the previous image lands farther than this from where it started
-  // (default 0.5 px).
+  // (default 0.5 px, as VINS-Mono).
   double max_forward_backward_error_px = 0.5;
 
   // RANSAC between consecutive images (default on), on the essential matrix
@@ -86,9 +88,9 @@ struct FeatureTrackerOptions {
   // as VINS-Mono) of the undistorted points.
   bool ransac = true;
   bool ransac_essential = true;
-  // px, RANSAC inlier threshold (distance to the epipolar line) in the
-  // virtual pinhole image of the undistorted points (default 1 px, as
-  // VINS-Mono).
+  // px at kReferenceFocalLengthPx, RANSAC inlier threshold (distance to the
+  // epipolar line) between the undistorted positions (default 1 px, as
+  // VINS-Mono, whose virtual camera this is).
   double ransac_threshold_px = 1.0;
   double ransac_confidence = 0.99;  // default 0.99
   // RANSAC runs only with at least this many tracks (default 15; fewer are
@@ -101,8 +103,9 @@ struct FeatureTrackerOptions {
   double clahe_clip_limit = 3.0;      // default 3
   int clahe_tile_grid_size = 8;       // tiles per image side, default 8
 
-  // Keyframe when the mean parallax (px) of the tracks shared with the last
-  // keyframe reaches this (default 10 px, as VINS-Mono) ...
+  // Keyframe when the mean parallax (px at kReferenceFocalLengthPx) of the
+  // tracks shared with the last keyframe reaches this (default 10 px, as
+  // VINS-Mono) ...
   double keyframe_parallax_px = 10.0;
   // ... or fewer than this fraction of max_num_features are shared with it
   // (default 0.5).

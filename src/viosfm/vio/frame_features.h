@@ -11,6 +11,14 @@
 
 namespace viosfm {
 
+// Pixel thresholds of the VIO that stand for angles (parallax, epipolar
+// distances, the KLT window's reach) are stated for a camera of this focal
+// length (VINS-Mono's virtual camera, about EuRoC's 458 px) and scaled by
+// the camera's focal length over it, so that a 1280x720 camera at 906 px
+// behaves as a 752x480 one at 458 px. Measurement noise (pixel sigmas,
+// reprojection thresholds, the forward-backward check) stays in pixels.
+constexpr double kReferenceFocalLengthPx = 460.0;
+
 struct FeatureObservation {
   // Unique over the whole sequence; the same id in two frames is the same
   // scene point (as far as the tracker knows).

@@ -14,10 +14,17 @@
 #include "viosfm/util/logging.h"
 #include "viosfm/util/progress.h"
 #include "viosfm/util/timer.h"
+#include "viosfm/vio/imu_noise_check.h"
+#include "viosfm/vio/time_offset.h"
 
 namespace viosfm {
 
 namespace {
+
+// m/s per second of IMU-only propagation added to the velocity prior of a
+// window started after a static interval: an accel bias or gravity error of
+// 0.3 m/s^2, the size a consumer IMU's bias reaches (BMI055: 70 mg offset).
+constexpr double kCarriedVelocitySigmaPerSecond = 0.3;
 
 // Builds the key-value list of VioOptions::ToKeyValues.
 class KeyValueList {
@@ -107,6 +114,9 @@ std::vector<std::pair<std::string, std::string>> VioOptions::ToKeyValues() const
   list.Add("window.max_gyro_bias", w.max_gyro_bias);
   list.Add("window.max_accel_bias", w.max_accel_bias);
   list.Add("window.max_position_correction_m", w.max_position_correction_m);
+  list.Add("window.fallback_triangulation_angle_deg", w.fallback_triangulation_angle_deg);
+  list.Add("window.fallback_target_landmarks", w.fallback_target_landmarks);
+  list.Add("window.compute_covariance", w.compute_covariance);
   list.Add("window.preintegration.gyro_bias_repropagation_threshold",
            w.preintegration.gyro_bias_repropagation_threshold);
   list.Add("window.preintegration.accel_bias_repropagation_threshold",
@@ -121,6 +131,9 @@ std::vector<std::pair<std::string, std::string>> VioOptions::ToKeyValues() const
   list.Add("static_init.max_gravity_norm_error", s.max_gravity_norm_error);
   list.Add("static_init.gravity_magnitude", s.gravity_magnitude);
   list.Add("static_init.motion_margin_s", s.motion_margin_s);
+  list.Add("static_init.min_static_s", s.min_static_s);
+  list.Add("static_init.lookback_s", s.lookback_s);
+  list.Add("static_init.max_propagation_s", s.max_propagation_s);
   list.Add("static_init.estimate_accel_bias_along_gravity", s.estimate_accel_bias_along_gravity);
   const ViInitOptions& v = vi_init;
   list.Add("vi_init.window_size", v.window_size);
@@ -141,6 +154,19 @@ std::vector<std::pair<std::string, std::string>> VioOptions::ToKeyValues() const
   list.Add("vi_init.min_baseline_m", v.min_baseline_m);
   list.Add("vi_init.max_baseline_m", v.max_baseline_m);
   list.Add("vi_init.seed", static_cast<uint64_t>(v.seed));
+  const TimeOffsetOptions& o = time_offset;
+  list.Add("time_offset.estimate", o.estimate);
+  list.Add("time_offset.max_offset_s", o.max_offset_s);
+  list.Add("time_offset.coarse_step_s", o.coarse_step_s);
+  list.Add("time_offset.fine_step_s", o.fine_step_s);
+  list.Add("time_offset.min_tracks_per_pair", o.min_tracks_per_pair);
+  list.Add("time_offset.min_total_rotation_deg", o.min_total_rotation_deg);
+  list.Add("time_offset.max_wait_s", o.max_wait_s);
+  list.Add("time_offset.min_cost_reduction", o.min_cost_reduction);
+  list.Add("imu_noise.enabled", imu_noise.enabled);
+  list.Add("imu_noise.min_ratio", imu_noise.min_ratio);
+  list.Add("imu_noise.max_ratio", imu_noise.max_ratio);
+  list.Add("imu_noise.min_static_s", imu_noise.min_static_s);
   list.Add("use_static_init", use_static_init);
   AddSigmas("static_start_sigmas", static_start_sigmas, &list);
   AddSigmas("restart_sigmas", restart_sigmas, &list);
@@ -157,6 +183,10 @@ std::string VioOptions::Validate() const {
     return "static_init." + error;
   }
   if (const std::string error = vi_init.Validate(); !error.empty()) return "vi_init." + error;
+  if (const std::string error = time_offset.Validate(); !error.empty()) {
+    return "time_offset." + error;
+  }
+  if (const std::string error = imu_noise.Validate(); !error.empty()) return "imu_noise." + error;
   for (const InitialStateSigmas* sigmas : {&static_start_sigmas, &restart_sigmas}) {
     if (!(sigmas->position_m > 0) || !(sigmas->yaw_rad > 0) || !(sigmas->roll_pitch_rad > 0) ||
         !(sigmas->velocity_mps > 0) || !(sigmas->gyro_bias > 0) || !(sigmas->accel_bias > 0)) {
@@ -185,7 +215,7 @@ namespace {
 
 // Keyframe test for the initialisation buffer: the window's parallax and
 // shared-track criteria against the last buffered keyframe.
-bool IsNewKeyframe(const FrameFeatures& last, const FrameFeatures& frame, double focal_length_px,
+bool IsNewKeyframe(const FrameFeatures& last, const FrameFeatures& frame,
                    const SlidingWindowOptions& options) {
   std::unordered_map<uint64_t, Eigen::Vector2d> previous;
   for (const FeatureObservation& observation : last.observations) {
@@ -197,7 +227,7 @@ bool IsNewKeyframe(const FrameFeatures& last, const FrameFeatures& frame, double
     const auto it = previous.find(observation.track_id);
     if (it == previous.end()) continue;
     ++shared;
-    parallax_sum += (observation.normalized - it->second).norm() * focal_length_px;
+    parallax_sum += (observation.normalized - it->second).norm() * kReferenceFocalLengthPx;
   }
   if (shared < options.keyframe_min_shared_tracks) return true;
   return parallax_sum / shared >= options.keyframe_parallax_px;
@@ -212,26 +242,55 @@ VisualInertialOdometry::VisualInertialOdometry(const SensorRig& rig,
                                                const VioOptions& options)
     : rig_(rig),
       imu_(imu),
-      options_(options),
-      window_(rig.body_from_cam, rig.imu_noise, MeanFocalLength(rig.camera), options.window) {
+      options_(options) {
   if (const std::string error = options.Validate(); !error.empty()) {
     throw InputError("invalid VIO options: " + error);
   }
   summary_.static_init.status = StaticInitStatus::kNotEnoughData;
   if (options_.use_static_init) {
-    summary_.static_init =
-        DetectStaticStart(imu_, rig_.CamToImuTime(first_frame_ns), rig_.CamToImuTime(last_frame_ns),
-                          options_.static_init);
-    static_start_ = summary_.static_init.is_static();
+    const timestamp_ns_t first_image = rig_.CamToImuTime(first_frame_ns);
+    timestamp_ns_t from = first_image;
+    if (!imu_.empty()) {
+      from = std::max(imu_.front().timestamp_ns,
+                      first_image - SecondsToNs(options_.static_init.lookback_s));
+    }
+    summary_.static_init = DetectStaticStart(imu_, std::min(from, first_image),
+                                             rig_.CamToImuTime(last_frame_ns), options_.static_init);
+    StaticInitResult& init = summary_.static_init;
+    if (init.is_static() &&
+        first_image - init.end_ns > SecondsToNs(options_.static_init.max_propagation_s)) {
+      init.status = StaticInitStatus::kNotStatic;
+      init.message = "the static interval ends " + FormatNsAsSeconds(first_image - init.end_ns, 2) +
+                     " s before the first image (more than static_init.max_propagation_s)";
+    }
+    static_start_ = init.is_static();
   }
+  // The IMU noise the window uses (imu_noise_check.h): measured on the
+  // static interval, which may lie before the first image.
+  summary_.imu_noise = CheckImuNoise(rig_.imu_noise, imu_,
+                                     summary_.static_init.is_static() ? &summary_.static_init
+                                                                       : nullptr,
+                                     options_.imu_noise);
+  rig_.imu_noise = summary_.imu_noise.used;
+  if (summary_.imu_noise.changes.empty()) {
+    VIOSFM_LOG(INFO) << "vio: " << summary_.imu_noise.message;
+  } else {
+    VIOSFM_LOG(WARNING) << "vio: " << summary_.imu_noise.message;
+  }
+  window_ = std::make_unique<SlidingWindowEstimator>(rig_.body_from_cam, rig_.imu_noise,
+                                                     MeanFocalLength(rig_.camera), options_.window);
   if (static_start_) {
     const StaticInitResult& init = summary_.static_init;
     static_state_.world_from_body = init.world_from_body;
     static_state_.world_from_body.translation.setZero();
     static_state_.gyro_bias = init.gyro_bias;
     static_state_.accel_bias = init.accel_bias;
+    static_state_.timestamp_ns = init.end_ns;
+    last_good_state_ = static_state_;
+    have_good_state_ = true;
     VIOSFM_LOG(INFO) << "vio: static start over " << NsToSeconds(init.end_ns - init.start_ns)
-                     << " s: roll " << init.roll_rad * 180.0 / M_PI << " deg, pitch "
+                     << " s (ending " << FormatNsAsSeconds(init.end_ns - rig_.CamToImuTime(first_frame_ns), 2)
+                     << " s from the first image): roll " << init.roll_rad * 180.0 / M_PI << " deg, pitch "
                      << init.pitch_rad * 180.0 / M_PI << " deg, gyro bias "
                      << init.gyro_bias.transpose();
   } else {
@@ -253,21 +312,27 @@ ImuState VisualInertialOdometry::Propagate(const ImuState& state, timestamp_ns_t
   return predicted;
 }
 
-Eigen::Quaterniond VisualInertialOdometry::GyroRotationPrior(timestamp_ns_t from_ns,
-                                                             timestamp_ns_t to_ns) const {
-  const timestamp_ns_t from = rig_.CamToImuTime(from_ns);
-  const timestamp_ns_t to = rig_.CamToImuTime(to_ns);
-  ImuPreintegration preintegration(last_state_.gyro_bias, last_state_.accel_bias, rig_.imu_noise);
-  if (!preintegration.IntegrateRange(imu_, from, to)) return Eigen::Quaterniond::Identity();
+Eigen::Quaterniond GyroRotationPrior(const SensorRig& rig, const std::vector<ImuSample>& imu,
+                                     const Eigen::Vector3d& gyro_bias, timestamp_ns_t from_ns,
+                                     timestamp_ns_t to_ns) {
+  ImuPreintegration preintegration(gyro_bias, Eigen::Vector3d::Zero(), rig.imu_noise);
+  if (!preintegration.IntegrateRange(imu, rig.CamToImuTime(from_ns), rig.CamToImuTime(to_ns))) {
+    return Eigen::Quaterniond::Identity();
+  }
   // x_cam_now = R_bc^T * R_body_now_from_body_prev * R_bc * x_cam_prev.
-  const Eigen::Quaterniond& body_from_cam = rig_.body_from_cam.rotation;
+  const Eigen::Quaterniond& body_from_cam = rig.body_from_cam.rotation;
   return (body_from_cam.conjugate() * preintegration.delta_R().conjugate() * body_from_cam)
       .normalized();
 }
 
+Eigen::Quaterniond VisualInertialOdometry::GyroRotationPrior(timestamp_ns_t from_ns,
+                                                             timestamp_ns_t to_ns) const {
+  return viosfm::GyroRotationPrior(rig_, imu_, last_state_.gyro_bias, from_ns, to_ns);
+}
+
 void VisualInertialOdometry::StartWindow(const ImuState& state, const InitialStateSigmas& sigmas,
                                          const FrameFeatures& features) {
-  window_.Initialize(state, sigmas, features);
+  window_->Initialize(state, sigmas, features);
 }
 
 void VisualInertialOdometry::Record(const VioFrameResult& result) {
@@ -287,6 +352,51 @@ void VisualInertialOdometry::Record(const VioFrameResult& result) {
   }
 }
 
+bool VisualInertialOdometry::TryVisualInertialInitialization(const FrameFeatures& frame,
+                                                             const ImuState* carried) {
+  if (!(frame.is_keyframe || init_keyframes_.empty() ||
+        IsNewKeyframe(init_keyframes_.back(), frame, options_.window))) {
+    return false;
+  }
+  init_keyframes_.push_back(frame);
+  if (static_cast<int>(init_keyframes_.size()) > options_.vi_init.window_size) {
+    init_keyframes_.erase(init_keyframes_.begin());
+  }
+  if (static_cast<int>(init_keyframes_.size()) < options_.vi_init.min_num_frames) return false;
+  const ViInitResult init = InitializeVisualInertial(init_keyframes_, imu_, rig_.body_from_cam,
+                                                     rig_.imu_noise, options_.vi_init);
+  if (!init.success || init.states.empty()) return false;
+  VIOSFM_LOG(INFO) << "vio: visual-inertial initialisation at "
+                   << FormatNsAsSeconds(frame.timestamp_ns - rig_.cam_time_offset_ns, 3)
+                   << " s: " << init.message;
+  const size_t used = init.states.size();
+  std::vector<FrameFeatures> used_keyframes(init_keyframes_.end() - used, init_keyframes_.end());
+  std::vector<ImuState> states = init.states;
+  std::unordered_map<uint64_t, Eigen::Vector3d> points = init.points_in_world;
+  for (size_t k = 0; k < used; ++k) states[k].timestamp_ns = used_keyframes[k].timestamp_ns;
+  if (carried != nullptr && have_good_state_) {
+    // A restart: the initialisation's world (gravity-aligned, origin and yaw
+    // at its first keyframe) is placed in the VIO's world so that its first
+    // keyframe lands where the IMU carries the last good state.
+    const ImuState at_first = Propagate(last_good_state_, states.front().timestamp_ns);
+    const Eigen::Matrix3d delta = at_first.world_from_body.rotation.toRotationMatrix() *
+                                  states.front().world_from_body.rotation.toRotationMatrix().transpose();
+    const double yaw = std::atan2(delta(1, 0) - delta(0, 1), delta(0, 0) + delta(1, 1));
+    const Eigen::Quaterniond rotation(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()));
+    const Eigen::Vector3d translation =
+        at_first.world_from_body.translation - rotation * states.front().world_from_body.translation;
+    for (ImuState& state : states) {
+      state.world_from_body.rotation = (rotation * state.world_from_body.rotation).normalized();
+      state.world_from_body.translation = rotation * state.world_from_body.translation + translation;
+      state.velocity_in_world = rotation * state.velocity_in_world;
+    }
+    for (auto& [track_id, point] : points) point = rotation * point + translation;
+  }
+  window_->InitializeWithKeyframes(used_keyframes, states, points, imu_, options_.restart_sigmas);
+  init_keyframes_.clear();
+  return true;
+}
+
 VioFrameResult VisualInertialOdometry::ProcessFrame(const FrameFeatures& features) {
   VioFrameResult result;
   result.timestamp_ns = features.timestamp_ns;
@@ -294,15 +404,35 @@ VioFrameResult VisualInertialOdometry::ProcessFrame(const FrameFeatures& feature
   FrameFeatures frame = features;
   frame.timestamp_ns = rig_.CamToImuTime(features.timestamp_ns);
 
-  if (window_.initialized()) {
-    const WindowFrameEstimate estimate = window_.AddFrame(frame, imu_);
+  if (window_->initialized()) {
+    const WindowFrameEstimate estimate = window_->AddFrame(frame, imu_);
     result.state = estimate.state;
     result.status = estimate.status;
     result.is_keyframe = estimate.is_keyframe;
     result.num_landmarks = estimate.num_landmarks;
+    result.pose_covariance = estimate.pose_covariance;
+    result.num_map_points = estimate.num_map_points;
     if (estimate.status == VioStatus::kLost) {
       VIOSFM_LOG(WARNING) << "vio: lost at " << FormatNsAsSeconds(features.timestamp_ns, 3)
                           << " s: " << estimate.message;
+      VioReset reset;
+      reset.timestamp_ns = features.timestamp_ns;
+      reset.message = estimate.message;
+      summary_.resets.push_back(reset);
+      relocalization_pending_ = false;
+      init_keyframes_.clear();
+    } else if (relocalization_pending_ &&
+               NsToSeconds(frame.timestamp_ns - restart_ns_) >=
+                   options_.window.relocalization_window_s) {
+      relocalization_pending_ = false;
+      VioReset& reset = summary_.resets.back();
+      reset.relocalized = window_->relocalized();
+      reset.num_map_points = window_->num_relocalization_observations();
+      VIOSFM_LOG(INFO) << "vio: the restart after the reset at "
+                       << FormatNsAsSeconds(reset.timestamp_ns, 3) << " s "
+                       << (reset.relocalized ? "re-localised against the previous map"
+                                             : "did not re-localise (joined by the IMU alone)")
+                       << " (" << reset.num_map_points << " map point observations)";
     }
     Record(result);
     return result;
@@ -313,10 +443,9 @@ VioFrameResult VisualInertialOdometry::ProcessFrame(const FrameFeatures& feature
     // Standing still: hold the static state.
     result.state = static_state_;
     result.state.timestamp_ns = frame.timestamp_ns;
-  } else if (have_good_state_) {
-    // The static start ended, or a restart after kLost: the window starts
-    // from the last good state carried forward by the IMU.
-    const bool from_static = static_start_ && summary_.num_resets == 0;
+  } else if (have_good_state_ && static_start_ && summary_.num_resets == 0) {
+    // The static start ended: the window starts from the static state
+    // carried forward by the IMU.
     ImuState start = Propagate(last_good_state_, frame.timestamp_ns);
     if (!start.velocity_in_world.allFinite() ||
         start.velocity_in_world.norm() > options_.window.max_speed_mps) {
@@ -324,30 +453,41 @@ VioFrameResult VisualInertialOdometry::ProcessFrame(const FrameFeatures& feature
       start.timestamp_ns = frame.timestamp_ns;
       start.velocity_in_world.setZero();
     }
-    StartWindow(start, from_static ? options_.static_start_sigmas : options_.restart_sigmas, frame);
+    // Carried by the IMU alone from the end of the static interval: the
+    // velocity is known less well the longer that took.
+    InitialStateSigmas sigmas = options_.static_start_sigmas;
+    const double carried_s = NsToSeconds(frame.timestamp_ns - last_good_state_.timestamp_ns);
+    sigmas.velocity_mps = std::hypot(sigmas.velocity_mps, kCarriedVelocitySigmaPerSecond * carried_s);
+    StartWindow(start, sigmas, frame);
     result.state = start;
   } else {
-    // Moving start: collect keyframes for the visual-inertial initialisation.
+    // A moving start, or a restart after kLost: keyframes are collected until
+    // the visual-inertial initialisation succeeds on them (a restart thus
+    // takes its velocity and gravity from the images and the IMU together,
+    // not from an IMU propagation across the failure, which may be what
+    // failed). Meanwhile a restart's frames are carried by the IMU from the
+    // last good state (status kImuOnly); a moving start's have no pose.
     result.state.timestamp_ns = frame.timestamp_ns;
-    if (frame.is_keyframe || init_keyframes_.empty() ||
-        IsNewKeyframe(init_keyframes_.back(), frame, MeanFocalLength(rig_.camera),
-                      options_.window)) {
-      init_keyframes_.push_back(frame);
-      if (static_cast<int>(init_keyframes_.size()) > options_.vi_init.window_size) {
-        init_keyframes_.erase(init_keyframes_.begin());
+    result.has_pose = false;
+    std::optional<ImuState> carried;
+    if (have_good_state_) {
+      carried = Propagate(last_good_state_, frame.timestamp_ns);
+      if (carried->velocity_in_world.allFinite() &&
+          carried->velocity_in_world.norm() <= options_.window.max_speed_mps) {
+        result.state = *carried;
+        result.status = VioStatus::kImuOnly;
+        result.has_pose = true;
+      } else {
+        carried.reset();
       }
-      if (static_cast<int>(init_keyframes_.size()) >= options_.vi_init.min_num_frames) {
-        const ViInitResult init = InitializeVisualInertial(
-            init_keyframes_, imu_, rig_.body_from_cam, rig_.imu_noise, options_.vi_init);
-        if (init.success && !init.states.empty()) {
-          VIOSFM_LOG(INFO) << "vio: visual-inertial initialisation at "
-                           << FormatNsAsSeconds(features.timestamp_ns, 3) << " s: " << init.message;
-          ImuState start = init.states.back();
-          start.timestamp_ns = frame.timestamp_ns;
-          StartWindow(start, options_.restart_sigmas, frame);
-          result.state = start;
-          init_keyframes_.clear();
-        }
+    }
+    if (TryVisualInertialInitialization(frame, carried ? &*carried : nullptr)) {
+      result.state = window_->NewestState();
+      result.status = VioStatus::kInitializing;
+      result.has_pose = true;
+      if (!summary_.resets.empty()) {
+        relocalization_pending_ = true;
+        restart_ns_ = frame.timestamp_ns;
       }
     }
   }
@@ -380,28 +520,81 @@ VioResult RunVio(const Sequence& sequence, const VioOptions& options) {
 
   VioResult result;
   result.body_from_cam = sequence.rig.body_from_cam;
-  VisualInertialOdometry vio(sequence.rig, sequence.imu, sequence.images.front().timestamp_ns,
-                             sequence.images[num_frames - 1].timestamp_ns, options);
+  SensorRig rig = sequence.rig;
   FeatureTracker tracker(sequence.rig.camera, options.tracker);
   ProgressBar progress(
       "vio", static_cast<int64_t>(num_frames),
       options.show_progress ? ProgressBar::Mode::kAuto : ProgressBar::Mode::kNever);
   result.frames.reserve(num_frames);
-  for (size_t k = 0; k < num_frames; ++k) {
+  const auto read_and_track = [&](size_t k, const std::optional<Eigen::Quaterniond>& prior) {
     const SequenceImage& image = sequence.images[k];
-    const GreyImage grey = ReadGreyImage(image.path);
-    std::optional<Eigen::Quaterniond> rotation_prior;
-    if (options.gyro_rotation_prior && k > 0) {
-      rotation_prior =
-          vio.GyroRotationPrior(sequence.images[k - 1].timestamp_ns, image.timestamp_ns);
-    }
-    const FrameFeatures features = tracker.Track(image.timestamp_ns, grey, rotation_prior);
-    result.frames.push_back(vio.ProcessFrame(features));
+    const FrameFeatures features = tracker.Track(image.timestamp_ns, ReadGreyImage(image.path), prior);
     progress.Update();
+    return features;
+  };
+
+  // The camera-IMU time offset, from the first frames that rotate enough
+  // (they are tracked with the calibration's offset for the gyro prior and
+  // kept until the estimate is made).
+  std::vector<FrameFeatures> startup;
+  TimeOffsetEstimate time_offset;
+  time_offset.offset_ns = time_offset.calibration_offset_ns = rig.cam_time_offset_ns;
+  time_offset.message = "the calibration's camera-IMU time offset (not estimated)";
+  size_t k = 0;
+  if (options.time_offset.estimate) {
+    double rotation_deg = 0.0;
+    for (; k < num_frames; ++k) {
+      std::optional<Eigen::Quaterniond> prior;
+      if (options.gyro_rotation_prior && k > 0) {
+        prior = GyroRotationPrior(rig, sequence.imu, Eigen::Vector3d::Zero(),
+                                  sequence.images[k - 1].timestamp_ns,
+                                  sequence.images[k].timestamp_ns);
+      }
+      startup.push_back(read_and_track(k, prior));
+      if (startup.size() >= 2) {
+        rotation_deg += GyroRotationSumDeg({startup[startup.size() - 2], startup.back()},
+                                           sequence.imu, rig.cam_time_offset_ns);
+      }
+      if (rotation_deg >= options.time_offset.min_total_rotation_deg ||
+          NsToSeconds(startup.back().timestamp_ns - startup.front().timestamp_ns) >=
+              options.time_offset.max_wait_s) {
+        ++k;
+        break;
+      }
+    }
+    time_offset =
+        EstimateTimeOffset(startup, sequence.imu, rig.body_from_cam,
+                           rig.cam_time_offset_ns, MeanFocalLength(rig.camera),
+                           options.time_offset);
+    VIOSFM_LOG(INFO) << "vio: " << time_offset.message;
+    rig.cam_time_offset_ns = time_offset.offset_ns;
+  }
+  VisualInertialOdometry vio(rig, sequence.imu, sequence.images.front().timestamp_ns,
+                             sequence.images[num_frames - 1].timestamp_ns, options);
+  for (const FrameFeatures& features : startup) result.frames.push_back(vio.ProcessFrame(features));
+  for (; k < num_frames; ++k) {
+    std::optional<Eigen::Quaterniond> prior;
+    if (options.gyro_rotation_prior && k > 0) {
+      prior = vio.GyroRotationPrior(sequence.images[k - 1].timestamp_ns,
+                                    sequence.images[k].timestamp_ns);
+    }
+    result.frames.push_back(vio.ProcessFrame(read_and_track(k, prior)));
   }
   progress.Finish();
   result.summary = vio.summary();
   VioSummary& summary = result.summary;
+  summary.time_offset = time_offset;
+  // Segments: a reset that did not re-localise starts a new one at its lost frame.
+  int segment = 0;
+  size_t next_reset = 0;
+  for (VioFrameResult& frame : result.frames) {
+    if (frame.status == VioStatus::kLost && next_reset < summary.resets.size()) {
+      if (!summary.resets[next_reset].relocalized) ++segment;
+      ++next_reset;
+    }
+    frame.segment = segment;
+  }
+  summary.num_segments = segment + 1;
   summary.cpu_seconds = ProcessCpuSeconds() - cpu_start;
   summary.wall_seconds = timer.ElapsedSeconds();
 
@@ -455,9 +648,23 @@ std::string FormatVioSummary(const VioSummary& summary) {
     out << "accel_bias: [" << init.accel_bias.x() << ", " << init.accel_bias.y() << ", "
         << init.accel_bias.z() << "]\n";
   }
+  out << "time_offset_ns: " << summary.time_offset.offset_ns << "\n";
+  out << "time_offset_estimated: " << (summary.time_offset.estimated ? "true" : "false") << "\n";
+  out << "time_offset_message: \"" << summary.time_offset.message << "\"\n";
+  const ImuNoise& used = summary.imu_noise.used;
+  out << "imu_noise_used: [" << used.gyro_noise_density << ", " << used.gyro_random_walk << ", "
+      << used.accel_noise_density << ", " << used.accel_random_walk
+      << "]  # gyro density, gyro walk, accel density, accel walk\n";
+  out << "imu_noise_message: \"" << summary.imu_noise.message << "\"\n";
   out << "visual_initialized: " << (summary.visual_initialized ? "true" : "false") << "\n";
   out << "first_tracking_ns: " << summary.first_tracking_ns << "\n";
   out << "num_resets: " << summary.num_resets << "\n";
+  out << "num_segments: " << summary.num_segments << "\n";
+  for (const VioReset& reset : summary.resets) {
+    out << "reset: {timestamp_ns: " << reset.timestamp_ns << ", relocalized: "
+        << (reset.relocalized ? "true" : "false") << ", map_point_observations: "
+        << reset.num_map_points << ", message: \"" << reset.message << "\"}\n";
+  }
   out << "cpu_seconds: " << summary.cpu_seconds << "\n";
   out << "wall_seconds: " << summary.wall_seconds << "\n";
   out << "message: \"" << summary.message << "\"\n";
@@ -471,7 +678,8 @@ void WriteVioResult(const std::filesystem::path& folder, const VioResult& result
   WriteTumTrajectory(folder / "trajectory_body.tum", result.BodyTrajectory());
   WriteTumTrajectory(folder / "trajectory_cam.tum", result.CameraTrajectory());
   WriteFileAtomically(folder / "states.csv", [&](std::ostream& out) {
-    out << "#timestamp [ns],status,px,py,pz,qw,qx,qy,qz,vx,vy,vz,bgx,bgy,bgz,bax,bay,baz\n";
+    out << "#timestamp [ns],status,px,py,pz,qw,qx,qy,qz,vx,vy,vz,bgx,bgy,bgz,bax,bay,baz,"
+           "sigma_roll,sigma_pitch,sigma_yaw,sigma_px,sigma_py,sigma_pz,segment,has_pose\n";
     out << std::setprecision(17);
     for (const VioFrameResult& frame : result.frames) {
       const ImuState& s = frame.state;
@@ -482,6 +690,8 @@ void WriteVioResult(const std::filesystem::path& folder, const VioResult& result
       for (const Eigen::Vector3d* v : {&s.velocity_in_world, &s.gyro_bias, &s.accel_bias}) {
         out << "," << v->x() << "," << v->y() << "," << v->z();
       }
+      for (int i = 0; i < 6; ++i) out << "," << std::sqrt(std::max(0.0, frame.pose_covariance(i, i)));
+      out << "," << frame.segment << "," << (frame.has_pose ? 1 : 0);
       out << "\n";
     }
   });

@@ -22,6 +22,7 @@
 
 #include <array>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -29,8 +30,10 @@
 #include "viosfm/io/sequence.h"
 #include "viosfm/scene/trajectory.h"
 #include "viosfm/vio/feature_tracker.h"
+#include "viosfm/vio/imu_noise_check.h"
 #include "viosfm/vio/sliding_window.h"
 #include "viosfm/vio/static_init.h"
+#include "viosfm/vio/time_offset.h"
 #include "viosfm/vio/vi_initializer.h"
 
 namespace viosfm {
@@ -40,6 +43,10 @@ struct VioOptions {
   SlidingWindowOptions window;
   StaticInitOptions static_init;
   ViInitOptions vi_init;
+  // Camera-IMU time offset estimated from the first frames (time_offset.h).
+  TimeOffsetOptions time_offset;
+  // What is done with implausible IMU noise figures (imu_noise_check.h).
+  ImuNoiseCheckOptions imu_noise;
   // Try the static start first (default true).
   bool use_static_init = true;
   // Prior of the first state after a static start (InitialStateSigmas defaults).
@@ -70,6 +77,33 @@ struct VioFrameResult {
   bool is_keyframe = false;
   int num_features = 0;   // tracked corners
   int num_landmarks = 0;  // triangulated landmarks seen, used by the window
+  // The window's marginal covariance of world_from_body (SlidingWindowOptions
+  // compute_covariance; [rotation rad, position m]); zero when the window
+  // did not estimate this frame.
+  Eigen::Matrix<double, 6, 6> pose_covariance = Eigen::Matrix<double, 6, 6>::Zero();
+  // Whether `state` is an estimate: false only before a moving start is
+  // initialised (the state is then a placeholder at the origin).
+  bool has_pose = true;
+  // Trajectory segment: frames of one segment are in one consistent frame.
+  // A reset starts a new segment (from its lost frame on) unless the
+  // restarted window re-localised against the map of the previous one; a
+  // segment joined only by the IMU's propagation across the gap is a new
+  // one (its pose relative to the previous segment is as good as the IMU
+  // alone over the gap).
+  int segment = 0;
+  // Map points of the previous segment seen while re-localising.
+  int num_map_points = 0;
+};
+
+// One failure of the estimate (status kLost) and how the VIO went on.
+struct VioReset {
+  timestamp_ns_t timestamp_ns = 0;  // camera stamp of the lost frame
+  std::string message;              // why
+  // Whether the restarted window re-localised against the previous map
+  // (SlidingWindowOptions::min_relocalization_points distinct map points
+  // within relocalization_window_s); false: joined by the IMU alone.
+  bool relocalized = false;
+  int num_map_points = 0;  // distinct map points seen while re-localising
 };
 
 struct VioSummary {
@@ -77,10 +111,14 @@ struct VioSummary {
   // Frames per status, indexed by static_cast<int>(VioStatus).
   std::array<size_t, 4> status_counts{};
   StaticInitResult static_init;  // status kNotStatic/kNotEnoughData when not a static start
+  ImuNoiseCheck imu_noise;       // the calibration's IMU noise and what was used
+  TimeOffsetEstimate time_offset;  // the camera-IMU time offset used (time_offset.h)
   bool visual_initialized = false;
   // Camera stamp of the first kTracking frame (-1: never).
   timestamp_ns_t first_tracking_ns = -1;
   int num_resets = 0;  // kLost events
+  std::vector<VioReset> resets;  // one per kLost event, in order
+  int num_segments = 0;          // distinct VioFrameResult::segment values
   int num_keyframes = 0;
   double cpu_seconds = 0.0;  // process CPU time of RunVio
   double wall_seconds = 0.0;
@@ -122,13 +160,18 @@ class VisualInertialOdometry {
  private:
   void StartWindow(const ImuState& state, const InitialStateSigmas& sigmas,
                    const FrameFeatures& features);
+  // Adds `frame` (IMU clock) to the initialisation keyframes when it is one
+  // and tries the visual-inertial initialisation; on success the window is
+  // started from its keyframes. `carried` (after a reset): the last good
+  // state's IMU propagation, which places the new world in the old one.
+  bool TryVisualInertialInitialization(const FrameFeatures& frame, const ImuState* carried);
   ImuState Propagate(const ImuState& state, timestamp_ns_t to_ns) const;
   void Record(const VioFrameResult& result);
 
   SensorRig rig_;
   const std::vector<ImuSample>& imu_;
   VioOptions options_;
-  SlidingWindowEstimator window_;
+  std::unique_ptr<SlidingWindowEstimator> window_;
   VioSummary summary_;
   ImuState static_state_;
   bool static_start_ = false;
@@ -136,7 +179,17 @@ class VisualInertialOdometry {
   ImuState last_good_state_;
   ImuState last_state_;
   std::vector<FrameFeatures> init_keyframes_;  // for the visual-inertial initialisation
+  // The restart after the last reset, while its re-localisation is pending.
+  bool relocalization_pending_ = false;
+  timestamp_ns_t restart_ns_ = 0;
 };
+
+// cam_now_from_cam_prev: the gyro's rotation between two camera stamps
+// (converted with rig.CamToImuTime) with `gyro_bias` removed; identity
+// without IMU coverage.
+Eigen::Quaterniond GyroRotationPrior(const SensorRig& rig, const std::vector<ImuSample>& imu,
+                                     const Eigen::Vector3d& gyro_bias, timestamp_ns_t from_ns,
+                                     timestamp_ns_t to_ns);
 
 // Runs the VIO over a sequence: every image is read once (ReadGreyImage),
 // tracked, and processed. Throws InputError if the sequence has no IMU or

@@ -101,6 +101,51 @@ class InverseDepthReprojectionCost : public ceres::SizedCostFunction<2, 7, 7, 1>
   double sqrt_information_;
 };
 
+// The reprojection error of a fixed world point (a landmark of the map the
+// window kept before a reset) in a frame: the re-localisation of a
+// restarted window against the previous segment. Block: pose[7]
+// (world_from_body). residual = sqrt_information * (x_cam.xy / x_cam.z - u).
+class MapPointReprojectionFactor {
+ public:
+  MapPointReprojectionFactor(const Eigen::Vector3d& point_in_world,
+                             const Eigen::Vector2d& observed_normalized,
+                             const Rigid3d& body_from_cam, double sqrt_information)
+      : point_(point_in_world),
+        observed_(observed_normalized),
+        body_from_cam_rotation_(body_from_cam.rotation.normalized()),
+        body_from_cam_translation_(body_from_cam.translation),
+        sqrt_information_(sqrt_information) {}
+
+  static ceres::CostFunction* Create(const Eigen::Vector3d& point_in_world,
+                                     const Eigen::Vector2d& observed_normalized,
+                                     const Rigid3d& body_from_cam, double sqrt_information) {
+    return new ceres::AutoDiffCostFunction<MapPointReprojectionFactor, 2, 7>(
+        new MapPointReprojectionFactor(point_in_world, observed_normalized, body_from_cam,
+                                       sqrt_information));
+  }
+
+  template <typename T>
+  bool operator()(const T* pose, T* residuals) const {
+    using Vector3T = Eigen::Matrix<T, 3, 1>;
+    const Eigen::Map<const Eigen::Quaternion<T>> q(pose);
+    const Eigen::Map<const Vector3T> p(pose + 4);
+    const Vector3T x_body = q.conjugate() * Vector3T(point_.cast<T>() - p);
+    const Vector3T x_cam = body_from_cam_rotation_.cast<T>().conjugate() *
+                           Vector3T(x_body - body_from_cam_translation_.cast<T>());
+    const T sqrt_information = T(sqrt_information_);
+    residuals[0] = sqrt_information * (x_cam.x() / x_cam.z() - T(observed_.x()));
+    residuals[1] = sqrt_information * (x_cam.y() / x_cam.z() - T(observed_.y()));
+    return true;
+  }
+
+ private:
+  Eigen::Vector3d point_;
+  Eigen::Vector2d observed_;
+  Eigen::Quaterniond body_from_cam_rotation_;
+  Eigen::Vector3d body_from_cam_translation_;
+  double sqrt_information_;
+};
+
 // The landmark in the world frame from its anchor pose, anchor observation
 // and inverse depth (rho > 0).
 Eigen::Vector3d InverseDepthPointInWorld(const Rigid3d& world_from_body_anchor,

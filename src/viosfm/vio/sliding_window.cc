@@ -1,5 +1,6 @@
 #include "viosfm/vio/sliding_window.h"
 
+#include <ceres/covariance.h>
 #include <ceres/loss_function.h>
 #include <ceres/ordered_groups.h>
 #include <ceres/problem.h>
@@ -34,6 +35,11 @@ std::string SlidingWindowOptions::Validate() const {
   if (!(pixel_sigma_px > 0)) return "pixel_sigma_px must be > 0";
   if (!(cauchy_loss_scale > 0)) return "cauchy_loss_scale must be > 0";
   if (!(min_triangulation_angle_deg >= 0)) return "min_triangulation_angle_deg must be >= 0";
+  if (!(fallback_triangulation_angle_deg >= 0) ||
+      fallback_triangulation_angle_deg > min_triangulation_angle_deg) {
+    return "fallback_triangulation_angle_deg must be in [0, min_triangulation_angle_deg]";
+  }
+  if (fallback_target_landmarks < 0) return "fallback_target_landmarks must be >= 0";
   if (!(min_depth_m > 0) || !(max_depth_m > min_depth_m)) {
     return "min_depth_m/max_depth_m must satisfy 0 < min < max";
   }
@@ -47,6 +53,12 @@ std::string SlidingWindowOptions::Validate() const {
   if (!(max_gyro_bias > 0)) return "max_gyro_bias must be > 0";
   if (!(max_accel_bias > 0)) return "max_accel_bias must be > 0";
   if (!(max_position_correction_m > 0)) return "max_position_correction_m must be > 0";
+  if (!(imu_only_accel_uncertainty >= 0)) return "imu_only_accel_uncertainty must be >= 0";
+  if (!(relocalization_position_sigma_m > 0) || !(relocalization_yaw_sigma_rad > 0)) {
+    return "relocalization_position_sigma_m and relocalization_yaw_sigma_rad must be > 0";
+  }
+  if (!(relocalization_window_s > 0)) return "relocalization_window_s must be > 0";
+  if (min_relocalization_points < 1) return "min_relocalization_points must be >= 1";
   if (const std::string error = preintegration.Validate(); !error.empty()) {
     return "preintegration." + error;
   }
@@ -96,12 +108,23 @@ SlidingWindowEstimator::SlidingWindowEstimator(const Rigid3d& body_from_cam, con
 
 SlidingWindowEstimator::~SlidingWindowEstimator() = default;
 
-void SlidingWindowEstimator::Reset() {
+void SlidingWindowEstimator::ClearWindow() {
   frames_.clear();
   landmarks_.clear();
   prior_.reset();
   has_tracked_ = false;
   imu_only_since_ns_ = -1;
+}
+
+void SlidingWindowEstimator::Reset() {
+  if (!map_points_.empty()) relocalization_points_ = std::move(map_points_);
+  map_points_.clear();
+  ClearWindow();
+}
+
+ceres::LossFunction* SlidingWindowEstimator::ImuLoss() const {
+  if (!(options_.imu_loss_scale > 0)) return nullptr;
+  return new ceres::HuberLoss(options_.imu_loss_scale);
 }
 
 Rigid3d SlidingWindowEstimator::WorldFromCam(const Frame& frame) const {
@@ -113,10 +136,20 @@ ImuState SlidingWindowEstimator::NewestState() const {
   return StateOf(frames_.back()->parameters, frames_.back()->timestamp_ns);
 }
 
-void SlidingWindowEstimator::Initialize(const ImuState& state, const InitialStateSigmas& sigmas,
+void SlidingWindowEstimator::Initialize(const ImuState& state, const InitialStateSigmas& sigmas_in,
                                         const FrameFeatures& features) {
-  Reset();
+  ClearWindow();
   rejected_tracks_.clear();
+  InitialStateSigmas sigmas = sigmas_in;
+  restart_ns_ = state.timestamp_ns;
+  relocalization_observations_ = 0;
+  relocalization_seen_.clear();
+  relocalized_ = false;
+  if (!relocalization_points_.empty()) {
+    // The map of the previous window, not this prior, places the restart.
+    sigmas.position_m = std::max(sigmas.position_m, options_.relocalization_position_sigma_m);
+    sigmas.yaw_rad = std::max(sigmas.yaw_rad, options_.relocalization_yaw_sigma_rad);
+  }
   auto frame = std::make_unique<Frame>();
   frame->id = next_frame_id_++;
   frame->timestamp_ns = state.timestamp_ns;
@@ -144,6 +177,53 @@ void SlidingWindowEstimator::Initialize(const ImuState& state, const InitialStat
   frames_.push_back(std::move(frame));
 }
 
+void SlidingWindowEstimator::InitializeWithKeyframes(
+    const std::vector<FrameFeatures>& keyframes, const std::vector<ImuState>& states,
+    const std::unordered_map<uint64_t, Eigen::Vector3d>& points_in_world,
+    const std::vector<ImuSample>& imu, const InitialStateSigmas& sigmas) {
+  VIOSFM_CHECK(!keyframes.empty() && keyframes.size() == states.size());
+  Initialize(states.front(), sigmas, keyframes.front());
+  for (size_t k = 1; k < keyframes.size(); ++k) {
+    const ImuState previous_state = NewestState();
+    auto frame = std::make_unique<Frame>();
+    frame->id = next_frame_id_++;
+    frame->timestamp_ns = states[k].timestamp_ns;
+    frame->preintegration = std::make_unique<ImuPreintegration>(
+        previous_state.gyro_bias, previous_state.accel_bias, noise_, options_.preintegration);
+    if (!frame->preintegration->IntegrateRange(imu, previous_state.timestamp_ns,
+                                               frame->timestamp_ns)) {
+      // No IMU between two keyframes: keep what is there.
+      break;
+    }
+    frame->parameters = ImuStateParameters::FromState(states[k]);
+    frame->is_keyframe = true;
+    for (const FeatureObservation& observation : keyframes[k].observations) {
+      frame->observations[observation.track_id] = observation.normalized;
+    }
+    Frame* frame_pointer = frame.get();
+    frames_.push_back(std::move(frame));
+    for (const auto& [track_id, normalized] : frame_pointer->observations) {
+      Landmark& landmark = landmarks_[track_id];
+      if (landmark.anchor == nullptr) {
+        landmark.track_id = track_id;
+        landmark.anchor = frame_pointer;
+      }
+      ++landmark.num_observations;
+    }
+  }
+  for (auto& [track_id, landmark] : landmarks_) {
+    const auto it = points_in_world.find(track_id);
+    if (it == points_in_world.end()) continue;
+    const double inverse_depth = InverseDepthOfPoint(
+        StateOf(landmark.anchor->parameters, landmark.anchor->timestamp_ns).world_from_body,
+        body_from_cam_, it->second);
+    if (inverse_depth > 1.0 / options_.max_depth_m && inverse_depth < 1.0 / options_.min_depth_m) {
+      landmark.inverse_depth = inverse_depth;
+      landmark.triangulated = true;
+    }
+  }
+}
+
 bool SlidingWindowEstimator::IsKeyframe(const Frame& frame, const FrameFeatures& features) const {
   const Frame* last_keyframe = nullptr;
   for (auto it = frames_.rbegin(); it != frames_.rend(); ++it) {
@@ -164,7 +244,7 @@ bool SlidingWindowEstimator::IsKeyframe(const Frame& frame, const FrameFeatures&
     const auto it = last_keyframe->observations.find(track_id);
     if (it == last_keyframe->observations.end()) continue;
     ++shared;
-    parallax_sum += (normalized - it->second).norm() * focal_length_px_;
+    parallax_sum += (normalized - it->second).norm() * kReferenceFocalLengthPx;
   }
   if (shared < options_.keyframe_min_shared_tracks) return true;
   return parallax_sum / shared >= options_.keyframe_parallax_px;
@@ -213,6 +293,7 @@ void SlidingWindowEstimator::RemoveFrame(size_t index) {
 
 void SlidingWindowEstimator::TriangulateLandmarks() {
   const double min_angle = options_.min_triangulation_angle_deg * M_PI / 180.0;
+  const double fallback_angle = options_.fallback_triangulation_angle_deg * M_PI / 180.0;
   std::vector<Matrix3x4d> cams_from_world;
   std::vector<Eigen::Vector3d> centers;
   cams_from_world.reserve(frames_.size());
@@ -221,6 +302,19 @@ void SlidingWindowEstimator::TriangulateLandmarks() {
     cams_from_world.push_back(world_from_cam.Inverse().ToMatrix());
     centers.push_back(world_from_cam.translation);
   }
+  const Frame* newest = frames_.back().get();
+  int newest_seen = 0;  // triangulated landmarks the newest frame observes
+  for (const auto& [track_id, landmark] : landmarks_) {
+    if (landmark.triangulated && newest->observations.count(track_id) > 0) ++newest_seen;
+  }
+  // Landmarks with less parallax than min_angle but at least fallback_angle,
+  // with their angle, inverse depth, and whether the newest frame sees them.
+  struct Candidate {
+    Landmark* landmark;
+    double angle;
+    double inverse_depth;
+  };
+  std::vector<Candidate> weak;
   std::vector<Matrix3x4d> poses;
   std::vector<Eigen::Vector2d> points;
   std::vector<size_t> frame_indices;
@@ -245,14 +339,11 @@ void SlidingWindowEstimator::TriangulateLandmarks() {
       best_angle = std::max(best_angle, TriangulationAngle(centers[frame_indices.front()],
                                                            centers[frame_indices[k]], *point));
     }
-    if (best_angle < min_angle) continue;
+    if (best_angle < std::min(min_angle, fallback_angle)) continue;
     bool good = true;
     for (size_t k = 0; k < poses.size() && good; ++k) {
       const Eigen::Vector3d in_cam = poses[k] * point->homogeneous();
-      if (in_cam.z() < options_.min_depth_m || in_cam.z() > options_.max_depth_m) {
-        good = false;
-        break;
-      }
+      if (in_cam.z() < options_.min_depth_m || in_cam.z() > options_.max_depth_m) good = false;
       const double error_px = (in_cam.hnormalized() - points[k]).norm() * focal_length_px_;
       if (error_px > options_.max_reprojection_error_px) good = false;
     }
@@ -262,15 +353,41 @@ void SlidingWindowEstimator::TriangulateLandmarks() {
     const double inverse_depth = InverseDepthOfPoint(
         StateOf(anchor.parameters, anchor.timestamp_ns).world_from_body, body_from_cam_, *point);
     if (inverse_depth <= 0.0) continue;
-    landmark.inverse_depth = inverse_depth;
-    landmark.triangulated = true;
+    if (best_angle >= min_angle) {
+      landmark.inverse_depth = inverse_depth;
+      landmark.triangulated = true;
+      if (newest->observations.count(track_id) > 0) ++newest_seen;
+    } else {
+      weak.push_back({&landmark, best_angle, inverse_depth});
+    }
+  }
+  // Weak texture: while the newest frame sees fewer than
+  // fallback_target_landmarks triangulated landmarks, its lower-parallax
+  // tracks are triangulated too, widest angle first.
+  if (!has_tracked_ || newest_seen >= options_.fallback_target_landmarks) return;
+  std::stable_sort(weak.begin(), weak.end(), [&](const Candidate& a, const Candidate& b) {
+    const bool a_newest = newest->observations.count(a.landmark->track_id) > 0;
+    const bool b_newest = newest->observations.count(b.landmark->track_id) > 0;
+    if (a_newest != b_newest) return a_newest;
+    if (a.angle != b.angle) return a.angle > b.angle;
+    return a.landmark->track_id < b.landmark->track_id;
+  });
+  for (const Candidate& candidate : weak) {
+    if (newest_seen >= options_.fallback_target_landmarks) break;
+    if (newest->observations.count(candidate.landmark->track_id) == 0) break;
+    candidate.landmark->inverse_depth = candidate.inverse_depth;
+    candidate.landmark->triangulated = true;
+    ++newest_seen;
   }
 }
 
 std::vector<SlidingWindowEstimator::Landmark*> SlidingWindowEstimator::SelectLandmarks() {
   std::vector<Landmark*> selected;
   for (auto& [track_id, landmark] : landmarks_) {
-    if (landmark.triangulated && landmark.num_observations >= 2) selected.push_back(&landmark);
+    if (landmark.triangulated && landmark.num_observations >= 2 &&
+        relocalization_points_.count(landmark.track_id) == 0) {
+      selected.push_back(&landmark);
+    }
   }
   if (static_cast<int>(selected.size()) > options_.max_landmarks) {
     std::stable_sort(selected.begin(), selected.end(), [](const Landmark* a, const Landmark* b) {
@@ -287,7 +404,8 @@ std::vector<SlidingWindowEstimator::Landmark*> SlidingWindowEstimator::SelectLan
   return selected;
 }
 
-void SlidingWindowEstimator::Optimize(const std::vector<Landmark*>& landmarks) {
+Eigen::Matrix<double, 6, 6> SlidingWindowEstimator::Optimize(
+    const std::vector<Landmark*>& landmarks) {
   ceres::Problem::Options problem_options;
   problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   ceres::Problem problem(problem_options);
@@ -307,7 +425,7 @@ void SlidingWindowEstimator::Optimize(const std::vector<Landmark*>& landmarks) {
     Frame& frame = *frames_[k];
     const ImuState previous_state = StateOf(previous.parameters, previous.timestamp_ns);
     frame.preintegration->RepropagateIfNeeded(previous_state.gyro_bias, previous_state.accel_bias);
-    problem.AddResidualBlock(ImuFactor::Create(*frame.preintegration), nullptr,
+    problem.AddResidualBlock(ImuFactor::Create(*frame.preintegration), ImuLoss(),
                              previous.parameters.pose.data(), previous.parameters.speed_bias.data(),
                              frame.parameters.pose.data(), frame.parameters.speed_bias.data());
   }
@@ -326,6 +444,17 @@ void SlidingWindowEstimator::Optimize(const std::vector<Landmark*>& landmarks) {
                                new ceres::CauchyLoss(options_.cauchy_loss_scale),
                                landmark->anchor->parameters.pose.data(),
                                frame->parameters.pose.data(), &landmark->inverse_depth);
+    }
+  }
+  // Re-localisation: the frames' observations of the map kept at the reset.
+  for (auto& frame : frames_) {
+    for (const auto& [track_id, normalized] : frame->observations) {
+      const auto it = relocalization_points_.find(track_id);
+      if (it == relocalization_points_.end()) continue;
+      problem.AddResidualBlock(
+          MapPointReprojectionFactor::Create(it->second, normalized, body_from_cam_,
+                                             sqrt_information),
+          new ceres::CauchyLoss(options_.cauchy_loss_scale), frame->parameters.pose.data());
     }
   }
   ceres::Solver::Options solver_options;
@@ -347,6 +476,22 @@ void SlidingWindowEstimator::Optimize(const std::vector<Landmark*>& landmarks) {
   if (!summary.IsSolutionUsable()) {
     VIOSFM_LOG(DEBUG) << "sliding window: solver failed: " << summary.message;
   }
+  Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();
+  if (!options_.compute_covariance || !summary.IsSolutionUsable()) return covariance;
+  ceres::Covariance::Options covariance_options;
+  covariance_options.algorithm_type = ceres::SPARSE_QR;
+  covariance_options.num_threads = options_.num_threads;
+  ceres::Covariance estimator(covariance_options);
+  const double* pose = frames_.back()->parameters.pose.data();
+  const std::vector<std::pair<const double*, const double*>> blocks = {{pose, pose}};
+  if (!estimator.Compute(blocks, &problem)) return covariance;
+  Eigen::Matrix<double, 6, 6, Eigen::RowMajor> tangent;
+  if (!estimator.GetCovarianceBlockInTangentSpace(pose, pose, tangent.data())) return covariance;
+  // The quaternion part of the tangent is half the rotation vector.
+  Eigen::Matrix<double, 6, 6> scale = Eigen::Matrix<double, 6, 6>::Identity();
+  scale.topLeftCorner<3, 3>() *= 2.0;
+  covariance = scale * tangent * scale;
+  return covariance;
 }
 
 void SlidingWindowEstimator::RemoveOutliers(const std::vector<Landmark*>& landmarks) {
@@ -403,7 +548,7 @@ void SlidingWindowEstimator::MarginalizeOldest(const std::vector<Landmark*>& lan
   const ImuState oldest_state = StateOf(oldest->parameters, oldest->timestamp_ns);
   second->preintegration->RepropagateIfNeeded(oldest_state.gyro_bias, oldest_state.accel_bias);
   marginalizer.AddResidualBlock(
-      ImuFactor::Create(*second->preintegration), nullptr,
+      ImuFactor::Create(*second->preintegration), ImuLoss(),
       {oldest->parameters.pose.data(), oldest->parameters.speed_bias.data(),
        second->parameters.pose.data(), second->parameters.speed_bias.data()});
   const double sqrt_information = focal_length_px_ / options_.pixel_sigma_px;
@@ -440,6 +585,13 @@ std::string SlidingWindowEstimator::CheckPlausible(const ImuState& predicted) co
     }
   }
   const ImuState newest = NewestState();
+  // After T seconds carried by the IMU alone, its prediction may be off by
+  // the accel uncertainty times T^2 / 2.
+  double allowed_correction_m = options_.max_position_correction_m;
+  if (imu_only_since_ns_ >= 0) {
+    const double t = NsToSeconds(newest.timestamp_ns - imu_only_since_ns_);
+    allowed_correction_m += 0.5 * options_.imu_only_accel_uncertainty * t * t;
+  }
   std::ostringstream message;
   if (newest.velocity_in_world.norm() > options_.max_speed_mps) {
     message << "implausible speed " << newest.velocity_in_world.norm() << " m/s";
@@ -448,12 +600,40 @@ std::string SlidingWindowEstimator::CheckPlausible(const ImuState& predicted) co
   } else if (newest.accel_bias.norm() > options_.max_accel_bias) {
     message << "implausible accel bias " << newest.accel_bias.norm() << " m/s^2";
   } else if ((newest.world_from_body.translation - predicted.world_from_body.translation).norm() >
-             options_.max_position_correction_m) {
+             allowed_correction_m) {
     message << "position jumped "
             << (newest.world_from_body.translation - predicted.world_from_body.translation).norm()
-            << " m from the IMU prediction";
+            << " m from the IMU prediction (" << allowed_correction_m << " m allowed)";
   }
   return message.str();
+}
+
+int SlidingWindowEstimator::UpdateRelocalization(const Frame& newest) {
+  if (relocalization_points_.empty()) return 0;
+  // Map points the newest frame sees within the reprojection threshold;
+  // those farther off are dropped (a track that jumped, or a wrong point).
+  const Rigid3d cam_from_world = WorldFromCam(newest).Inverse();
+  int seen = 0;
+  for (const auto& [track_id, normalized] : newest.observations) {
+    const auto it = relocalization_points_.find(track_id);
+    if (it == relocalization_points_.end()) continue;
+    const Eigen::Vector3d in_cam = cam_from_world * it->second;
+    if (in_cam.z() > 0.0 && (in_cam.hnormalized() - normalized).norm() * focal_length_px_ <=
+                                options_.max_reprojection_error_px) {
+      ++seen;
+      relocalization_seen_.insert(track_id);
+    } else {
+      relocalization_points_.erase(it);
+    }
+  }
+  relocalization_observations_ += seen;
+  if (NsToSeconds(newest.timestamp_ns - restart_ns_) >= options_.relocalization_window_s) {
+    relocalized_ =
+        static_cast<int>(relocalization_seen_.size()) >= options_.min_relocalization_points;
+    relocalization_points_.clear();
+    relocalization_seen_.clear();
+  }
+  return seen;
 }
 
 WindowFrameEstimate SlidingWindowEstimator::AddFrame(const FrameFeatures& features,
@@ -500,7 +680,7 @@ WindowFrameEstimate SlidingWindowEstimator::AddFrame(const FrameFeatures& featur
 
   TriangulateLandmarks();
   std::vector<Landmark*> selected = SelectLandmarks();
-  Optimize(selected);
+  estimate.pose_covariance = Optimize(selected);
   const std::string failure = CheckPlausible(predicted);
   if (!failure.empty()) {
     estimate.state = predicted;
@@ -511,6 +691,7 @@ WindowFrameEstimate SlidingWindowEstimator::AddFrame(const FrameFeatures& featur
   }
   RemoveOutliers(selected);
   selected = SelectLandmarks();
+  estimate.num_map_points = UpdateRelocalization(*frame_pointer);
 
   estimate.state = NewestState();
   estimate.is_keyframe = frame_pointer->is_keyframe;
@@ -518,10 +699,24 @@ WindowFrameEstimate SlidingWindowEstimator::AddFrame(const FrameFeatures& featur
   for (const Landmark* landmark : selected) {
     if (frame_pointer->observations.count(landmark->track_id) > 0) ++estimate.num_landmarks;
   }
+  VIOSFM_LOG(DEBUG) << "window: frame " << FormatNsAsSeconds(frame_pointer->timestamp_ns, 3)
+                    << " s, " << frames_.size() << " frames, keyframe " << frame_pointer->is_keyframe
+                    << ", " << frame_pointer->observations.size() << " observations, "
+                    << estimate.num_window_landmarks << " landmarks used, "
+                    << estimate.num_landmarks << " seen by the frame";
   if (estimate.num_landmarks >= options_.min_tracked_landmarks) {
     has_tracked_ = true;
     imu_only_since_ns_ = -1;
     estimate.status = VioStatus::kTracking;
+    // The map a later restart would re-localise against.
+    map_points_.clear();
+    for (const Landmark* landmark : selected) {
+      map_points_.emplace(landmark->track_id,
+                          InverseDepthPointInWorld(
+                              StateOf(landmark->anchor->parameters, 0).world_from_body,
+                              body_from_cam_, landmark->anchor->observations.at(landmark->track_id),
+                              landmark->inverse_depth));
+    }
   } else if (!has_tracked_) {
     estimate.status = VioStatus::kInitializing;
   } else {

@@ -96,6 +96,9 @@ std::string StaticInitOptions::Validate() const {
   if (!(max_gyro_stddev > 0)) return "max_gyro_stddev must be > 0";
   if (!(max_gyro_norm > 0)) return "max_gyro_norm must be > 0";
   if (!(motion_margin_s >= 0)) return "motion_margin_s must be >= 0";
+  if (!(min_static_s > 0)) return "min_static_s must be > 0";
+  if (!(lookback_s >= 0)) return "lookback_s must be >= 0";
+  if (!(max_propagation_s >= 0)) return "max_propagation_s must be >= 0";
   if (!(max_gravity_norm_error > 0)) return "max_gravity_norm_error must be > 0";
   if (!(gravity_magnitude > 0)) return "gravity_magnitude must be > 0";
   return "";
@@ -166,9 +169,9 @@ StaticInitResult DetectStaticStart(const std::vector<ImuSample>& samples, timest
 
   if (ended_by_motion) {
     static_end -= SecondsToNs(options.motion_margin_s);
-    if (static_end - t_first < window_ns) {
+    if (static_end - t_first < SecondsToNs(options.min_static_s)) {
       result.status = StaticInitStatus::kNotStatic;
-      result.message = "static for less than window_s + motion_margin_s";
+      result.message = "static for less than min_static_s + motion_margin_s";
       return result;
     }
   }

@@ -62,6 +62,17 @@ struct StaticInitOptions {
   // s, dropped from the end of a static interval that motion ends (see
   // above). Default 0.5.
   double motion_margin_s = 0.5;
+  // s, shortest static interval accepted once motion_margin_s is dropped.
+  // Default 0.5 (0.5 s at 200 Hz gives the gyro bias to a few 1e-4 rad/s).
+  double min_static_s = 0.5;
+  // s, IMU readings this long before the first image are searched for the
+  // static interval too (recorders often start the IMU first; a static
+  // interval that ends before the first image is carried to it by the IMU).
+  // Default 10.
+  double lookback_s = 10.0;
+  // s, a static interval that ends longer than this before the first image
+  // is not used (the IMU alone would carry the state too far). Default 2.
+  double max_propagation_s = 2.0;
   // Estimate the accel bias along gravity (true) or leave it zero. Default true.
   bool estimate_accel_bias_along_gravity = true;
 

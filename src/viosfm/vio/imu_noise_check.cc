@@ -1,0 +1,138 @@
+#include "viosfm/vio/imu_noise_check.h"
+
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <sstream>
+
+namespace viosfm {
+namespace {
+
+// Data-sheet ranges of MEMS IMUs, widened by ten for inflated configurations.
+constexpr double kMinGyroDensity = 5e-5;   // rad/s/sqrt(Hz)
+constexpr double kMaxGyroDensity = 1e-2;   // rad/s/sqrt(Hz)
+constexpr double kMinAccelDensity = 5e-4;  // m/s^2/sqrt(Hz)
+constexpr double kMaxAccelDensity = 5e-2;  // m/s^2/sqrt(Hz)
+constexpr double kMinGyroWalk = 1e-7;      // rad/s^2/sqrt(Hz)
+constexpr double kMaxGyroWalk = 1e-2;
+constexpr double kMinAccelWalk = 1e-6;  // m/s^3/sqrt(Hz)
+constexpr double kMaxAccelWalk = 1e-1;
+
+std::string Number(double value) {
+  std::ostringstream out;
+  out << std::setprecision(3) << value;
+  return out.str();
+}
+
+// Clamps *value into [low, high]; records a line when it changes.
+void Bound(const std::string& name, const std::string& why, double low, double high, double* value,
+           std::vector<std::string>* changes) {
+  const double bounded = std::clamp(*value, low, high);
+  if (bounded == *value) return;
+  changes->push_back(name + " " + Number(*value) + " -> " + Number(bounded) + " (" + why + ")");
+  *value = bounded;
+}
+
+}  // namespace
+
+std::string ImuNoiseCheckOptions::Validate() const {
+  if (!(min_ratio > 0.0) || !(min_ratio <= 1.0)) return "min_ratio must be in (0, 1]";
+  if (!(max_ratio >= 1.0)) return "max_ratio must be >= 1";
+  if (!(min_static_s > 0)) return "min_static_s must be > 0";
+  return "";
+}
+
+std::pair<double, double> MeasureWhiteNoiseDensities(const std::vector<ImuSample>& imu,
+                                                     timestamp_ns_t start_ns,
+                                                     timestamp_ns_t end_ns) {
+  const auto begin = std::lower_bound(
+      imu.begin(), imu.end(), start_ns,
+      [](const ImuSample& sample, timestamp_ns_t t) { return sample.timestamp_ns < t; });
+  const auto end = std::upper_bound(
+      imu.begin(), imu.end(), end_ns,
+      [](timestamp_ns_t t, const ImuSample& sample) { return t < sample.timestamp_ns; });
+  const long count = end - begin;
+  if (count < 10) return {0.0, 0.0};
+  Eigen::Vector3d gyro_mean = Eigen::Vector3d::Zero();
+  Eigen::Vector3d accel_mean = Eigen::Vector3d::Zero();
+  for (auto it = begin; it != end; ++it) {
+    gyro_mean += it->gyro;
+    accel_mean += it->accel;
+  }
+  gyro_mean /= static_cast<double>(count);
+  accel_mean /= static_cast<double>(count);
+  Eigen::Vector3d gyro_var = Eigen::Vector3d::Zero();
+  Eigen::Vector3d accel_var = Eigen::Vector3d::Zero();
+  for (auto it = begin; it != end; ++it) {
+    gyro_var += (it->gyro - gyro_mean).cwiseAbs2();
+    accel_var += (it->accel - accel_mean).cwiseAbs2();
+  }
+  gyro_var /= static_cast<double>(count - 1);
+  accel_var /= static_cast<double>(count - 1);
+  const double dt = NsToSeconds((end - 1)->timestamp_ns - begin->timestamp_ns) /
+                    static_cast<double>(count - 1);
+  const double root_dt = std::sqrt(dt);
+  return {gyro_var.cwiseSqrt().mean() * root_dt, accel_var.cwiseSqrt().mean() * root_dt};
+}
+
+ImuNoiseCheck CheckImuNoise(const ImuNoise& given, const std::vector<ImuSample>& imu,
+                            const StaticInitResult* static_interval,
+                            const ImuNoiseCheckOptions& options) {
+  ImuNoiseCheck check;
+  check.given = given;
+  check.used = given;
+  if (!options.enabled) {
+    check.message = "IMU noise: the calibration's figures, unchecked";
+    return check;
+  }
+  ImuNoise& used = check.used;
+  if (static_interval != nullptr && static_interval->is_static() &&
+      NsToSeconds(static_interval->end_ns - static_interval->start_ns) >= options.min_static_s) {
+    const auto [gyro, accel] =
+        MeasureWhiteNoiseDensities(imu, static_interval->start_ns, static_interval->end_ns);
+    if (gyro > 0.0 && accel > 0.0) {
+      check.measured = true;
+      check.measured_gyro_density = gyro;
+      check.measured_accel_density = accel;
+      const std::string why = "the calibration may state " + Number(options.min_ratio) + " to " +
+                              Number(options.max_ratio) + " times the density measured at rest";
+      Bound("gyroscope_noise_density", why, options.min_ratio * gyro, options.max_ratio * gyro,
+            &used.gyro_noise_density, &check.changes);
+      Bound("accelerometer_noise_density", why, options.min_ratio * accel,
+            options.max_ratio * accel, &used.accel_noise_density, &check.changes);
+    }
+  }
+  if (!check.measured) {
+    const std::string why = "outside the range of MEMS IMUs";
+    Bound("gyroscope_noise_density", why, kMinGyroDensity, kMaxGyroDensity,
+          &used.gyro_noise_density, &check.changes);
+    Bound("accelerometer_noise_density", why, kMinAccelDensity, kMaxAccelDensity,
+          &used.accel_noise_density, &check.changes);
+  }
+  const std::string why = "outside the range of MEMS IMUs";
+  Bound("gyroscope_random_walk", why, kMinGyroWalk, kMaxGyroWalk, &used.gyro_random_walk,
+        &check.changes);
+  Bound("accelerometer_random_walk", why, kMinAccelWalk, kMaxAccelWalk, &used.accel_random_walk,
+        &check.changes);
+
+  std::ostringstream message;
+  message << "IMU noise: ";
+  if (check.measured) {
+    message << "white noise measured at rest over "
+            << Number(NsToSeconds(static_interval->end_ns - static_interval->start_ns))
+            << " s: gyro " << Number(check.measured_gyro_density) << " rad/s/sqrt(Hz), accel "
+            << Number(check.measured_accel_density) << " m/s^2/sqrt(Hz); ";
+  }
+  if (check.changes.empty()) {
+    message << "the calibration's figures are used";
+  } else {
+    message << "changed ";
+    for (size_t i = 0; i < check.changes.size(); ++i) {
+      message << (i > 0 ? "; " : "") << check.changes[i];
+    }
+  }
+  check.message = message.str();
+  return check;
+}
+
+}  // namespace viosfm

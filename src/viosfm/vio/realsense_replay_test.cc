@@ -1,0 +1,147 @@
+// The VIO on the first 200 frames (11 s) of the real handheld RealSense
+// recording in ../shared/data/realsense_room_30s (see its README): weak
+// texture, auto exposure, motion blur, images about 47 ms late against the
+// IMU with no offset in the calibration, and an IMU noise file that is far
+// off. What the run must get right without ground truth: the time offset,
+// a prompt start, and no failure.
+#include <gtest/gtest.h>
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <iostream>
+
+#include "viosfm/io/euroc.h"
+#include "viosfm/util/testing.h"
+#include "viosfm/vio/odometry.h"
+
+namespace viosfm {
+namespace {
+
+// The recording's camera-IMU time offset (t_imu = t_cam + offset), from a
+// separate program that shares no code with viosfm (OpenCV LK tracks,
+// frame-to-frame rotation by RANSAC on the bearing vectors with a
+// rotation-only model, gyro integrated over the shifted frame intervals
+// with the static bias removed, body_from_cam from cam0/sensor.yaml):
+//  - the offset that best aligns the gyro's and the images' rotations:
+//    -45 ms over the first 190 frames, -47.5 ms over all 545 (-43.5 and
+//    -46.5 ms with a 1.5 px instead of 3 px inlier threshold);
+//  - the lag that best correlates the gyro's and the images' angular rate
+//    vectors: -43 ms over the first 190 frames, -45.5 ms over all 545.
+// So -42 to -47.5 ms; the test accepts [-50, -41] ms. The calibration's 0 ms
+// (or a wrong sign) explains the images far worse: the rotation residual
+// there is 3 to 4 times that at -45 ms.
+constexpr double kOffsetMinMs = -50.0;
+constexpr double kOffsetMaxMs = -41.0;
+
+// The estimate waits for 90 degrees of gyro rotation (TimeOffsetOptions
+// default), which this recording reaches at its 183rd frame (10 s): fewer
+// frames leave the calibration's offset, and the VIO then starts late and
+// loses landmarks for seconds.
+constexpr int kNumFrames = 200;
+
+TEST(RealSenseReplay, FirstElevenSeconds) {
+  VIOSFM_REQUIRE_DATASET(root, "realsense_room_30s");
+  EurocReadOptions read_options;
+  read_options.require_imu = true;
+  const Sequence sequence = ReadEurocDataset(root, read_options);
+  ASSERT_GE(sequence.images.size(), static_cast<size_t>(kNumFrames));
+  ASSERT_EQ(sequence.rig.cam_time_offset_ns, 0);  // the calibration states none
+
+  VioOptions options;  // the defaults of `viosfm vio`
+  options.show_progress = false;
+  options.max_frames = kNumFrames;
+  const VioResult result = RunVio(sequence, options);
+  const VioSummary& summary = result.summary;
+  std::cout << "RealSense room, first " << kNumFrames << " frames: " << summary.message << "\n  "
+            << summary.time_offset.message << "\n  " << summary.imu_noise.message << "\n  tracking "
+            << summary.status_counts[static_cast<int>(VioStatus::kTracking)] << ", initializing "
+            << summary.status_counts[static_cast<int>(VioStatus::kInitializing)] << ", imu_only "
+            << summary.status_counts[static_cast<int>(VioStatus::kImuOnly)] << ", lost "
+            << summary.status_counts[static_cast<int>(VioStatus::kLost)] << "; CPU "
+            << summary.cpu_seconds << " s\n";
+
+  // The time offset.
+  EXPECT_TRUE(summary.time_offset.estimated) << summary.time_offset.message;
+  const double offset_ms = NsToSeconds(summary.time_offset.offset_ns) * 1e3;
+  EXPECT_GE(offset_ms, kOffsetMinMs) << summary.time_offset.message;
+  EXPECT_LE(offset_ms, kOffsetMaxMs) << summary.time_offset.message;
+
+  // The IMU starts 1.25 s before the first image; its rate stays below
+  // 0.01 rad/s for the first 0.68 s and below 0.05 rad/s until 0.1 s before
+  // the first image, then the hand turns (0.2 rad/s 0.2 s after it): a
+  // static start that begins with the IMU and ends before the first image.
+  const timestamp_ns_t first_image_ns = sequence.images.front().timestamp_ns;
+  ASSERT_TRUE(summary.static_init.is_static()) << summary.static_init.message;
+  EXPECT_EQ(summary.static_init.start_ns, sequence.imu.front().timestamp_ns);
+  EXPECT_LT(summary.static_init.end_ns, first_image_ns + summary.time_offset.offset_ns);
+  EXPECT_GT(NsToSeconds(summary.static_init.end_ns - summary.static_init.start_ns), 0.5);
+  // The file's accelerometer density (0.18 m/s^2/sqrt(Hz), ten times a
+  // consumer MEMS data sheet) is replaced by a far smaller one measured at
+  // rest; the gyro figure (3.7e-5, below any MEMS gyro) is raised.
+  EXPECT_TRUE(summary.imu_noise.measured) << summary.imu_noise.message;
+  EXPECT_LT(summary.imu_noise.used.accel_noise_density,
+            0.2 * summary.imu_noise.given.accel_noise_density);
+  EXPECT_GT(summary.imu_noise.used.gyro_noise_density, summary.imu_noise.given.gyro_noise_density);
+
+  // Visual-inertial tracking within 2 s of the first image, no failure, one
+  // segment, a pose for every frame.
+  ASSERT_TRUE(summary.visual_initialized) << summary.message;
+  EXPECT_LT(NsToSeconds(summary.first_tracking_ns - first_image_ns), 2.0) << summary.message;
+  EXPECT_EQ(summary.num_resets, 0);
+  EXPECT_TRUE(summary.resets.empty());
+  EXPECT_EQ(summary.status_counts[static_cast<int>(VioStatus::kLost)], 0u);
+  EXPECT_EQ(summary.num_segments, 1);
+  ASSERT_EQ(result.frames.size(), static_cast<size_t>(kNumFrames));
+  size_t tracking_after_start = 0;
+  size_t frames_after_start = 0;
+  for (size_t k = 0; k < result.frames.size(); ++k) {
+    const VioFrameResult& frame = result.frames[k];
+    EXPECT_EQ(frame.timestamp_ns, sequence.images[k].timestamp_ns);
+    EXPECT_TRUE(frame.has_pose) << "frame " << k;
+    EXPECT_EQ(frame.segment, 0) << "frame " << k;
+    EXPECT_TRUE(frame.state.world_from_body.translation.allFinite()) << "frame " << k;
+    EXPECT_TRUE(frame.state.velocity_in_world.allFinite()) << "frame " << k;
+    if (frame.timestamp_ns >= summary.first_tracking_ns) {
+      ++frames_after_start;
+      if (frame.status == VioStatus::kTracking) ++tracking_after_start;
+    }
+  }
+  // The newest pose's marginal covariance ([rotation in the world frame,
+  // position]) on the tracking frames: symmetric positive definite; roll and
+  // pitch, observable through gravity, within a degree; yaw and position,
+  // unobservable, never better known than the static start's prior fixed
+  // them (the images and the IMU carry no information about them).
+  const InitialStateSigmas& gauge = options.static_start_sigmas;
+  double min_yaw_sigma = 1e9;
+  double min_position_sigma = 1e9;
+  for (const VioFrameResult& frame : result.frames) {
+    if (frame.status != VioStatus::kTracking) continue;
+    const Eigen::Matrix<double, 6, 6>& covariance = frame.pose_covariance;
+    ASSERT_TRUE(covariance.allFinite());
+    EXPECT_LT((covariance - covariance.transpose()).cwiseAbs().maxCoeff(),
+              1e-9 * covariance.diagonal().maxCoeff());
+    using Matrix6d = Eigen::Matrix<double, 6, 6>;
+    const double smallest = Eigen::SelfAdjointEigenSolver<Matrix6d>(covariance).eigenvalues()(0);
+    EXPECT_GT(smallest, 0.0);
+    EXPECT_LT(std::sqrt(covariance(0, 0)), M_PI / 180.0);
+    EXPECT_LT(std::sqrt(covariance(1, 1)), M_PI / 180.0);
+    min_yaw_sigma = std::min(min_yaw_sigma, std::sqrt(covariance(2, 2)));
+    for (int i = 3; i < 6; ++i) {
+      min_position_sigma = std::min(min_position_sigma, std::sqrt(covariance(i, i)));
+    }
+  }
+  std::cout << "  smallest sigma of a tracking frame: yaw " << min_yaw_sigma << " rad (prior "
+            << gauge.yaw_rad << "), position " << min_position_sigma << " m (prior "
+            << gauge.position_m << ")\n";
+  EXPECT_GE(min_yaw_sigma, gauge.yaw_rad);
+  EXPECT_GE(min_position_sigma, gauge.position_m);
+
+  // Once started, the images carry the estimate: at most a tenth of the
+  // frames on the IMU alone.
+  EXPECT_GE(tracking_after_start * 10, frames_after_start * 9)
+      << tracking_after_start << " of " << frames_after_start << " frames tracking";
+}
+
+}  // namespace
+}  // namespace viosfm
