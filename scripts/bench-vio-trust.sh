@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# How far viosfm trusts the VIO (issue 15): the default run against its
+# How far viosfm trusts the VIO: the default run against its
 # ablations on sequences with the realistic emulated VIO (drift in time,
 # distance and rotation, a 2 % scale error, correlated noise).
 #

@@ -11,7 +11,7 @@
 #     matches every pair), then on copies of its database with --reverify
 #     (stored matches verified again): the paper's VIO-aided check
 #     (--no-depth-check --fixed-band), the VIO-aided check with the depth
-#     check and the fixed band (--fixed-band, the default until issue 15) and
+#     check and the fixed band (--fixed-band) and
 #     the default (the depth check and the band that follows the VIO's drift);
 #  3. viosfm check-pairs against the simulator's ground truth;
 #  4. drift sweep: the emulated VIO regenerated (--no-images, same seed, so

@@ -26,23 +26,39 @@ VioPoses RunOwnVio(const Sequence& sequence, const PipelineOptions& options) {
   vio_options.show_progress = vio_options.show_progress && options.show_progress;
   const VioResult result = RunVio(sequence, vio_options);
   WriteVioResult(options.output_folder / "vio", result);
+  // Every frame the VIO gives a pose (tracking, IMU-only, or held at a
+  // static start), in the VIO's own segments: a reset it re-localised stays
+  // in its segment, one it did not starts a new one.
   VioPoses poses;
-  int segment = -1;
-  bool previous_posed = false;
+  std::vector<int> segment_ids;
   for (const VioFrameResult& frame : result.frames) {
-    const bool posed = frame.status == VioStatus::kTracking || frame.status == VioStatus::kImuOnly;
-    if (posed) {
-      if (!previous_posed) ++segment;
-      poses.world_from_body.poses.push_back({frame.timestamp_ns, frame.state.world_from_body});
-      poses.segments.push_back(segment);
-    }
-    previous_posed = posed;
+    if (!frame.has_pose) continue;
+    poses.world_from_body.poses.push_back({frame.timestamp_ns, frame.state.world_from_body});
+    segment_ids.push_back(frame.segment);
+  }
+  // Renumbered 0, 1, ... in order (a segment whose frames all lack a pose
+  // leaves no gap).
+  int segment = -1;
+  int previous_id = -1;
+  for (const int id : segment_ids) {
+    if (segment < 0 || id != previous_id) ++segment;
+    previous_id = id;
+    poses.segments.push_back(segment);
+  }
+  const size_t num_unposed = result.frames.size() - poses.world_from_body.size();
+  if (num_unposed > 0 || result.summary.num_frames_beyond_imu > 0) {
+    VIOSFM_LOG(WARNING) << "run: own VIO: " << num_unposed
+                        << " frame(s) without a pose (before its initialisation or while "
+                           "re-initialising), "
+                        << result.summary.num_frames_beyond_imu
+                        << " after the IMU's last sample; the images place them if they can";
   }
   if (poses.world_from_body.empty()) {
     throw InputError(sequence.root.string(), 0,
                      "viosfm's own VIO never initialised: " + result.summary.message);
   }
-  poses.segment_rule = "the own VIO's statuses (a new segment after every re-initialisation)";
+  poses.segment_rule =
+      "the own VIO's segments (a new one after every reset it did not re-localise)";
   VIOSFM_LOG(INFO) << "run: own VIO: " << poses.world_from_body.size() << " of "
                    << result.frames.size() << " frames posed in " << segment + 1
                    << " segment(s) (" << result.summary.num_resets << " reset(s)), "

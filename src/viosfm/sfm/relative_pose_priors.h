@@ -32,7 +32,7 @@ struct RelativePosePriorOptions {
   // kCovariance: every prior carries the square-root information of the
   // model's covariance and the bridging priors are full 6-DoF ones;
   // kPaper: no covariance, bridging priors rotation-only (the weighting of
-  // the paper plus the rotation-only bridging of before issue 15).
+  // the paper plus rotation-only bridging).
   PriorWeighting weighting = PriorWeighting::kCovariance;
   VioUncertaintyModel vio_uncertainty;
 };

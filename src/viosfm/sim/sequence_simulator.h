@@ -21,8 +21,8 @@ namespace viosfm {
 
 // Keyframe-like frame selection: instead of every frame of the camera-rate
 // grid, frames with irregular gaps, as a keyframe-based VIO or a user's
-// selection leaves them (the maintainers' real-data test of issue 15: 100
-// keyframes of EuRoC V1_01's 144 s, gaps 0.05-7 s). The gaps are drawn
+// selection leaves them (as 100 keyframes of EuRoC V1_01's 144 s with gaps
+// of 0.05-7 s). The gaps are drawn
 // log-uniformly in [min_gap_s, max_gap_s] (mean (max - min) / ln(max / min),
 // 1.4 s for the defaults, as 100 keyframes in 144 s) and rounded to the
 // grid; ground truth and the emulated VIO stay on the dense grid (a VIO
@@ -61,7 +61,7 @@ struct SimulationOptions {
   WalkOptions walk;         // random walk of `room`; duration/static start/seed are set from above
   ImuSynthesisOptions imu;  // IMU noise; seed set from above
   // The emulated VIO: "gentle" (EmulateVioDrift with vio_drift, the
-  // default and the only one before issue 15: distance random walks, no
+  // default: distance random walks, no
   // scale error, white jitter) or "realistic" (EmulateRealisticVio with
   // realistic_vio: the VIO uncertainty model's defaults, a 2 % scale error,
   // optional re-initialisations; sim/vio_emulator.h).

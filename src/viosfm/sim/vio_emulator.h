@@ -52,7 +52,7 @@ struct RealisticVioOptions {
   // used: the scale error is scale_error.
   VioUncertaintyModel model;
   // The VIO's displacements are (1 + scale_error) times the true ones.
-  // Default 0.02 (the 2 % of issue 15's emulation of a real VIO).
+  // Default 0.02 (a real monocular VIO's order of scale error).
   double scale_error = 0.02;
   // Seconds after the first pose at which the VIO loses track and
   // re-initialises; default none.

@@ -571,8 +571,22 @@ VioResult RunVio(const Sequence& sequence, const VioOptions& options) {
   }
   VisualInertialOdometry vio(rig, sequence.imu, sequence.images.front().timestamp_ns,
                              sequence.images[num_frames - 1].timestamp_ns, options);
-  for (const FrameFeatures& features : startup) result.frames.push_back(vio.ProcessFrame(features));
+  // Frames the IMU does not reach (after the time offset) cannot be
+  // propagated to; they end the run, counted and reported.
+  const timestamp_ns_t last_imu_ns = sequence.imu.back().timestamp_ns;
+  size_t num_beyond_imu = 0;
+  for (const FrameFeatures& features : startup) {
+    if (rig.CamToImuTime(features.timestamp_ns) > last_imu_ns) {
+      ++num_beyond_imu;
+      continue;
+    }
+    result.frames.push_back(vio.ProcessFrame(features));
+  }
   for (; k < num_frames; ++k) {
+    if (rig.CamToImuTime(sequence.images[k].timestamp_ns) > last_imu_ns) {
+      num_beyond_imu += num_frames - k;
+      break;
+    }
     std::optional<Eigen::Quaterniond> prior;
     if (options.gyro_rotation_prior && k > 0) {
       prior = vio.GyroRotationPrior(sequence.images[k - 1].timestamp_ns,
@@ -584,6 +598,15 @@ VioResult RunVio(const Sequence& sequence, const VioOptions& options) {
   result.summary = vio.summary();
   VioSummary& summary = result.summary;
   summary.time_offset = time_offset;
+  summary.num_frames_beyond_imu = num_beyond_imu;
+  if (num_beyond_imu > 0) {
+    VIOSFM_LOG(WARNING) << "vio: the last " << num_beyond_imu
+                        << " frame(s) lie after the last IMU sample ("
+                        << FormatNsAsSeconds(last_imu_ns, 3)
+                        << " s on the IMU clock, camera-IMU offset "
+                        << NsToSeconds(rig.cam_time_offset_ns) * 1e3
+                        << " ms): no pose for them";
+  }
   // Segments: a reset that did not re-localise starts a new one at its lost frame.
   int segment = 0;
   size_t next_reset = 0;
@@ -636,6 +659,7 @@ std::string FormatVioSummary(const VioSummary& summary) {
         << "\n";
   }
   out << "num_keyframes: " << summary.num_keyframes << "\n";
+  out << "num_frames_beyond_imu: " << summary.num_frames_beyond_imu << "\n";
   out << "static_start: " << (summary.static_init.is_static() ? "true" : "false") << "\n";
   out << "static_init_status: " << StaticInitStatusName(summary.static_init.status) << "\n";
   if (summary.static_init.is_static()) {

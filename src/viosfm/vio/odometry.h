@@ -120,6 +120,9 @@ struct VioSummary {
   std::vector<VioReset> resets;  // one per kLost event, in order
   int num_segments = 0;          // distinct VioFrameResult::segment values
   int num_keyframes = 0;
+  // Frames at the end that lie after the last IMU sample (on the IMU clock):
+  // not processed, no pose, not in VioResult::frames.
+  size_t num_frames_beyond_imu = 0;
   double cpu_seconds = 0.0;  // process CPU time of RunVio
   double wall_seconds = 0.0;
   std::string message;  // one-paragraph outcome (static start, initialisation, failures)

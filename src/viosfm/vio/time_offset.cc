@@ -237,7 +237,7 @@ TimeOffsetEstimate EstimateTimeOffset(const std::vector<FrameFeatures>& frames,
             << options.max_offset_s * 1e3 << " ms search range";
   } else if (reduction < options.min_cost_reduction) {
     estimate.offset_ns = calibration_offset_ns;
-    estimate.estimated = true;
+    estimate.estimated = false;
     message << "; the calibration's offset is as good (kept)";
     estimate.message = message.str();
     return estimate;
