@@ -211,6 +211,9 @@ void SlidingWindowEstimator::InitializeWithKeyframes(
       ++landmark.num_observations;
     }
   }
+  // The restart is the newest keyframe, not the first: the re-localisation
+  // lasts relocalization_window_s from now, however long the keyframes span.
+  restart_ns_ = frames_.back()->timestamp_ns;
   for (auto& [track_id, landmark] : landmarks_) {
     const auto it = points_in_world.find(track_id);
     if (it == points_in_world.end()) continue;
