@@ -2,6 +2,7 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <vector>
 
 #include "viosfm/cli/commands.h"
 #include "viosfm/sim/sequence_simulator.h"
@@ -20,6 +21,7 @@ struct SimulateArgs {
   bool no_imu_noise = false;
   bool no_images = false;
   bool row_parallel = false;
+  std::vector<double> imu_noise_file_scale;  // gyro, accel factors
 };
 
 void RunSimulate(const SimulateArgs& args) {
@@ -33,6 +35,10 @@ void RunSimulate(const SimulateArgs& args) {
   options.imu.add_noise = !args.no_imu_noise;
   options.render_images = !args.no_images;
   options.threads_over_frames = !args.row_parallel;
+  if (!args.imu_noise_file_scale.empty()) {
+    options.imu_noise_file_scale_gyro = args.imu_noise_file_scale[0];
+    options.imu_noise_file_scale_accel = args.imu_noise_file_scale[1];
+  }
   Timer timer;
   const SimulatedSequence simulated = SimulateSequence(options);
   const double setup_seconds = timer.ElapsedSeconds();
@@ -152,6 +158,35 @@ void RegisterSimulate(CLI::App& app) {
   command->add_flag("--row-parallel", args->row_parallel,
                     "Render one frame at a time with its rows split over the threads (default: "
                     "frames in parallel)");
+  // Robustness cases (sim/robustness.h, docs/simulator.md).
+  command
+      ->add_option("--auto-exposure", args->options.auto_exposure.strength_stops,
+                   "Auto-exposure changes: per-frame gain 2^(STOPS * (drift + steps)), a smooth "
+                   "drift of about +-0.5 STOPS and sudden steps of 0.5-1 STOPS every 5 s on "
+                   "average that recover in about 1 s (0: off)")
+      ->capture_default_str();
+  command
+      ->add_option("--rolling-shutter-readout", args->options.rolling_shutter_readout_s,
+                   "Rolling shutter: rows exposed top to bottom over this many seconds, the "
+                   "middle row at the stamp (0: global shutter)")
+      ->capture_default_str();
+  command
+      ->add_option("--camera-time-offset", args->options.camera_time_offset_s,
+                   "Image stamps minus true exposure times in s (0.047: images stamped 47 ms "
+                   "late); the calibration does not state it")
+      ->capture_default_str();
+  command
+      ->add_option("--imu-noise-file-scale", args->imu_noise_file_scale,
+                   "GYRO,ACCEL: factors on the IMU noise figures written to imu0/sensor.yaml "
+                   "against the simulated noise (a wrong calibration; default 1,1)")
+      ->delimiter(',')
+      ->expected(2);
+  command->add_flag("--white-walls", args->options.white_walls.enabled,
+                    "Repaint the outer walls and ceiling nearly uniform white");
+  command
+      ->add_option("--white-wall-contrast", args->options.white_walls.contrast,
+                   "Peak-to-peak texture contrast of the white walls (1 = 255 grey levels)")
+      ->capture_default_str();
   command->callback([args] { RunSimulate(*args); });
 }
 

@@ -59,22 +59,57 @@ void ForEachRow(int height, int num_threads, const std::function<void(int)>& bod
   }
 }
 
-// Adds the radiance (grey levels, before noise) seen from cam_from_world,
-// times `weight`, to `radiance`.
-void AccumulateRadiance(const Scene& scene, const RayTable& rays, const Rigid3d& cam_from_world,
+GreyImage Quantize(const std::vector<float>& radiance, int width, int height,
+                   const RenderOptions& options) {
+  GreyImage image(width, height);
+  ForEachRow(height, options.num_threads, [&](int y) {
+    for (int x = 0; x < width; ++x) {
+      const size_t index = static_cast<size_t>(y) * width + x;
+      double value = radiance[index];
+      if (options.noise_sigma > 0.0)
+        value += options.noise_sigma * PixelNormal(options.seed, index);
+      image.pixels[index] = static_cast<uint8_t>(std::clamp(std::lround(value), 0L, 255L));
+    }
+  });
+  return image;
+}
+
+// What a ray cast needs of one camera pose.
+struct View {
+  Eigen::Matrix3d world_from_cam_rotation;
+  Eigen::Vector3d center;
+  std::vector<int> candidates;  // quads that may be visible
+};
+
+View MakeView(const Scene& scene, const RayTable& rays, const Rigid3d& cam_from_world) {
+  return {cam_from_world.rotation.inverse().toRotationMatrix(), ProjectionCenter(cam_from_world),
+          rays.VisibleQuads(scene, cam_from_world)};
+}
+
+// Adds the radiance (grey levels, before noise) times `weight` to
+// `radiance`: every row seen from cam_from_world_of_row[0] if it holds one
+// pose, else row y from cam_from_world_of_row[y] (one pose a row).
+void AccumulateRadiance(const Scene& scene, const RayTable& rays,
+                        const std::vector<Rigid3d>& cam_from_world_of_row,
                         const RenderOptions& options, float weight, std::vector<float>* radiance) {
-  const Eigen::Matrix3d world_from_cam_rotation =
-      cam_from_world.rotation.inverse().toRotationMatrix();
-  const Eigen::Vector3d center = ProjectionCenter(cam_from_world);
+  const bool per_row = cam_from_world_of_row.size() > 1;
+  VIOSFM_CHECK(cam_from_world_of_row.size() == 1 ||
+               cam_from_world_of_row.size() == static_cast<size_t>(rays.height()))
+      << cam_from_world_of_row.size() << " poses for " << rays.height() << " rows";
   const int width = rays.width();
   const double footprint_scale = std::exp2(options.mip_bias);
-  const std::vector<int> candidates = rays.VisibleQuads(scene, cam_from_world);
+  View shared;
+  if (!per_row) shared = MakeView(scene, rays, cam_from_world_of_row.front());
   ForEachRow(rays.height(), options.num_threads, [&](int y) {
+    View own;
+    if (per_row) own = MakeView(scene, rays, cam_from_world_of_row[y]);
+    const View& view = per_row ? own : shared;
     float* row = radiance->data() + static_cast<size_t>(y) * width;
     for (int x = 0; x < width; ++x) {
       const Eigen::Vector3d direction =
-          world_from_cam_rotation * rays.Direction(x, y).cast<double>();
-      const std::optional<RayHit> hit = scene.Intersect(center, direction, 1e-6, candidates);
+          view.world_from_cam_rotation * rays.Direction(x, y).cast<double>();
+      const std::optional<RayHit> hit =
+          scene.Intersect(view.center, direction, 1e-6, view.candidates);
       double value = options.background;
       if (hit) {
         const TexturedQuad& quad = scene.quads()[hit->quad_id];
@@ -96,19 +131,35 @@ void AccumulateRadiance(const Scene& scene, const RayTable& rays, const Rigid3d&
   });
 }
 
-GreyImage Quantize(const std::vector<float>& radiance, int width, int height,
-                   const RenderOptions& options) {
-  GreyImage image(width, height);
-  ForEachRow(height, options.num_threads, [&](int y) {
-    for (int x = 0; x < width; ++x) {
-      const size_t index = static_cast<size_t>(y) * width + x;
-      double value = radiance[index];
-      if (options.noise_sigma > 0.0)
-        value += options.noise_sigma * PixelNormal(options.seed, index);
-      image.pixels[index] = static_cast<uint8_t>(std::clamp(std::lround(value), 0L, 255L));
+// The pose a fraction s in [0, 1] of the way from `open` to `close`: slerp
+// of the rotation, linear in the camera centre.
+Rigid3d InterpolateCamFromWorld(const Rigid3d& open, const Rigid3d& close, double s) {
+  const Eigen::Quaterniond rotation = open.rotation.slerp(s, close.rotation).normalized();
+  const Eigen::Vector3d center = (1.0 - s) * ProjectionCenter(open) + s * ProjectionCenter(close);
+  return Rigid3d(rotation, -(rotation * center));
+}
+
+// The average of options.motion_blur_samples sub-frames between the poses
+// of `open` and `close` (one pose, or one a row), or the single view `open`
+// if `close` is empty; noise and quantisation once.
+GreyImage RenderBlurred(const Scene& scene, const RayTable& rays, const std::vector<Rigid3d>& open,
+                        const std::vector<Rigid3d>& close, const RenderOptions& options) {
+  VIOSFM_CHECK(options.Check()) << options.Validate();
+  std::vector<float> radiance(static_cast<size_t>(rays.width()) * rays.height(), 0.0f);
+  if (close.empty()) {
+    AccumulateRadiance(scene, rays, open, options, 1.0f, &radiance);
+  } else {
+    VIOSFM_CHECK_EQ(open.size(), close.size());
+    const int n = options.motion_blur_samples;
+    std::vector<Rigid3d> poses(open.size());
+    for (int k = 0; k < n; ++k) {
+      const double s = (k + 0.5) / n;
+      for (size_t r = 0; r < open.size(); ++r)
+        poses[r] = InterpolateCamFromWorld(open[r], close[r], s);
+      AccumulateRadiance(scene, rays, poses, options, 1.0f / static_cast<float>(n), &radiance);
     }
-  });
-  return image;
+  }
+  return Quantize(radiance, rays.width(), rays.height(), options);
 }
 
 }  // namespace
@@ -219,10 +270,7 @@ std::string RenderOptions::Validate() const {
 
 GreyImage Render(const Scene& scene, const RayTable& rays, const Rigid3d& cam_from_world,
                  const RenderOptions& options) {
-  VIOSFM_CHECK(options.Check()) << options.Validate();
-  std::vector<float> radiance(static_cast<size_t>(rays.width()) * rays.height(), 0.0f);
-  AccumulateRadiance(scene, rays, cam_from_world, options, 1.0f, &radiance);
-  return Quantize(radiance, rays.width(), rays.height(), options);
+  return RenderBlurred(scene, rays, {cam_from_world}, {}, options);
 }
 
 GreyImage Render(const Scene& scene, const Camera& camera, const Rigid3d& cam_from_world,
@@ -233,20 +281,18 @@ GreyImage Render(const Scene& scene, const Camera& camera, const Rigid3d& cam_fr
 GreyImage RenderWithMotionBlur(const Scene& scene, const RayTable& rays,
                                const Rigid3d& cam_from_world_open,
                                const Rigid3d& cam_from_world_close, const RenderOptions& options) {
-  VIOSFM_CHECK(options.Check()) << options.Validate();
-  std::vector<float> radiance(static_cast<size_t>(rays.width()) * rays.height(), 0.0f);
-  const Eigen::Vector3d center_open = ProjectionCenter(cam_from_world_open);
-  const Eigen::Vector3d center_close = ProjectionCenter(cam_from_world_close);
-  const int n = options.motion_blur_samples;
-  for (int k = 0; k < n; ++k) {
-    const double s = (k + 0.5) / n;
-    const Eigen::Quaterniond rotation =
-        cam_from_world_open.rotation.slerp(s, cam_from_world_close.rotation).normalized();
-    const Eigen::Vector3d center = (1.0 - s) * center_open + s * center_close;
-    AccumulateRadiance(scene, rays, Rigid3d(rotation, -(rotation * center)), options,
-                       1.0f / static_cast<float>(n), &radiance);
-  }
-  return Quantize(radiance, rays.width(), rays.height(), options);
+  return RenderBlurred(scene, rays, {cam_from_world_open}, {cam_from_world_close}, options);
+}
+
+GreyImage RenderRowByRow(const Scene& scene, const RayTable& rays,
+                         const std::vector<Rigid3d>& cam_from_world_open_of_row,
+                         const std::vector<Rigid3d>& cam_from_world_close_of_row,
+                         const RenderOptions& options) {
+  VIOSFM_CHECK_EQ(cam_from_world_open_of_row.size(), static_cast<size_t>(rays.height()));
+  VIOSFM_CHECK(cam_from_world_close_of_row.empty() ||
+               cam_from_world_close_of_row.size() == cam_from_world_open_of_row.size());
+  return RenderBlurred(scene, rays, cam_from_world_open_of_row, cam_from_world_close_of_row,
+                       options);
 }
 
 }  // namespace viosfm

@@ -98,4 +98,15 @@ GreyImage RenderWithMotionBlur(const Scene& scene, const RayTable& rays,
                                const Rigid3d& cam_from_world_open,
                                const Rigid3d& cam_from_world_close, const RenderOptions& options);
 
+// Rolling shutter: row y is seen from cam_from_world_open_of_row[y] (one pose
+// a row, rays.height() of them), the view frustum culled per row. With
+// cam_from_world_close_of_row non-empty (as many poses), row y is motion
+// blurred as RenderWithMotionBlur blurs the whole image, between its own
+// open and close poses; empty: sharp. The same pose for every row gives the
+// image Render (or RenderWithMotionBlur) gives, byte for byte.
+GreyImage RenderRowByRow(const Scene& scene, const RayTable& rays,
+                         const std::vector<Rigid3d>& cam_from_world_open_of_row,
+                         const std::vector<Rigid3d>& cam_from_world_close_of_row,
+                         const RenderOptions& options);
+
 }  // namespace viosfm

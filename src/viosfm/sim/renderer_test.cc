@@ -260,6 +260,69 @@ TEST(Renderer, MotionBlurAveragesSubFrames) {
   EXPECT_LT(gradient_energy(blurred), 0.7 * gradient_energy(sharp));
 }
 
+// Column (sub-pixel) in `row` where the intensity first rises through
+// `level`, by linear interpolation between the bracketing pixels; -1 if it
+// never does.
+double RisingEdgeColumn(const GreyImage& image, int row, double level) {
+  for (int x = 1; x < image.width; ++x) {
+    const double a = image.pixels[static_cast<size_t>(row) * image.width + x - 1];
+    const double b = image.pixels[static_cast<size_t>(row) * image.width + x];
+    if (a < level && b >= level) return x - 1 + (level - a) / (b - a);
+  }
+  return -1.0;
+}
+
+TEST(Renderer, RollingShutterRowsSeeTheSceneFromTheirOwnPoses) {
+  // A wall 2 m ahead, dark for x < 0 and bright for x > 0 (a vertical step
+  // edge at x = 0), seen by a pinhole camera that yaws (rotates about its y
+  // axis) while the rows are read out: row y from the angle
+  // theta_y = 0.002 (y - 59.5) rad. The edge point (0, s, 2) is at camera
+  // (2 sin(theta), s, 2 cos(theta)), so the edge is drawn in row y at
+  // column fx tan(theta_y) + cx, a slanted line; a global shutter (every
+  // row at theta 0) draws it straight at cx.
+  Camera camera;
+  camera.model_id = CameraModelId::kPinhole;
+  camera.width = 160;
+  camera.height = 120;
+  camera.params = {100.0, 100.0, 79.5, 59.5};
+  const RayTable rays(camera);
+  std::vector<float> texels(64 * 64);
+  for (int j = 0; j < 64; ++j) {
+    for (int i = 0; i < 64; ++i) texels[j * 64 + i] = i < 32 ? 0.1f : 0.9f;
+  }
+  Scene scene;
+  TexturedQuad wall;
+  wall.origin = Eigen::Vector3d(-2, -2, 2);
+  wall.axis_u = Eigen::Vector3d(4, 0, 0);
+  wall.axis_v = Eigen::Vector3d(0, 4, 0);
+  wall.texture_id = scene.AddTexture(Texture(64, 64, std::move(texels)));
+  wall.texels_per_metre = 16.0;  // texel column 32 (the edge) at x = 0
+  scene.AddQuad(wall);
+  const double rate = 0.002;  // rad a row
+  std::vector<Rigid3d> cam_from_world_of_row(camera.height);
+  for (int y = 0; y < static_cast<int>(camera.height); ++y) {
+    cam_from_world_of_row[y] =
+        Rigid3d(Eigen::Quaterniond(Eigen::AngleAxisd(rate * (y - 59.5), Eigen::Vector3d::UnitY())),
+                Eigen::Vector3d::Zero());
+  }
+  const RenderOptions options = CleanOptions();
+  const GreyImage rolling = RenderRowByRow(scene, rays, cam_from_world_of_row, {}, options);
+  const GreyImage global = Render(scene, rays, Rigid3d(), options);
+  const double level = 0.5 * 255.0;
+  double max_error = 0.0;
+  for (int y = 0; y < static_cast<int>(camera.height); ++y) {
+    const double expected = 100.0 * std::tan(rate * (y - 59.5)) + 79.5;
+    max_error = std::max(max_error, std::abs(RisingEdgeColumn(rolling, y, level) - expected));
+    EXPECT_NEAR(RisingEdgeColumn(global, y, level), 79.5, 0.05) << "row " << y;
+  }
+  // The edge moves by 2 * 100 * tan(0.119) = 24 pixels from top to bottom.
+  EXPECT_LT(max_error, 0.05);
+  // One pose for every row gives Render's image byte for byte.
+  const std::vector<Rigid3d> same(camera.height, cam_from_world_of_row[0]);
+  EXPECT_EQ(RenderRowByRow(scene, rays, same, {}, options).pixels,
+            Render(scene, rays, cam_from_world_of_row[0], options).pixels);
+}
+
 TEST(Renderer, OptionsValidation) {
   RenderOptions options;
   EXPECT_TRUE(options.Check());

@@ -1,8 +1,8 @@
 #include "viosfm/sim/sequence_simulator.h"
 
 #include <algorithm>
-#include <cmath>
 #include <atomic>
+#include <cmath>
 #include <exception>
 #include <iomanip>
 #include <sstream>
@@ -76,7 +76,22 @@ std::string SimulationOptions::Validate() const {
   if (keyframes.enabled) {
     if (const std::string error = keyframes.Validate(); !error.empty()) return error;
   }
+  if (const std::string error = auto_exposure.Validate(); !error.empty())
+    return "auto_exposure: " + error;
+  if (!(rolling_shutter_readout_s >= 0.0 && rolling_shutter_readout_s < 1.0))
+    return "rolling_shutter_readout_s must be in [0, 1)";
+  if (!(std::abs(camera_time_offset_s) < 1.0)) return "camera_time_offset_s must be in (-1, 1)";
+  if (!(imu_noise_file_scale_gyro > 0.0)) return "imu_noise_file_scale_gyro must be > 0";
+  if (!(imu_noise_file_scale_accel > 0.0)) return "imu_noise_file_scale_accel must be > 0";
+  if (const std::string error = white_walls.Validate(); !error.empty())
+    return "white_walls: " + error;
   return "";
+}
+
+bool SimulationOptions::HasImperfections() const {
+  return auto_exposure.enabled() || rolling_shutter_readout_s > 0.0 ||
+         camera_time_offset_s != 0.0 || imu_noise_file_scale_gyro != 1.0 ||
+         imu_noise_file_scale_accel != 1.0 || white_walls.enabled;
 }
 
 SimulatedSequence SimulateSequence(const SimulationOptions& options) {
@@ -111,6 +126,9 @@ SimulatedSequence SimulateSequence(const SimulationOptions& options) {
     scenario->walk_box_min = options.walk.box_min;
     scenario->walk_box_max = options.walk.box_max;
   }
+  if (options.white_walls.enabled) {
+    PaintWallsWhite(scenario.get(), options.white_walls, MixSeed(options.seed, 0x5768697465ULL));
+  }
   out.motion = GenerateScenarioMotion(*scenario, motion);
   out.scenario = scenario;
   const timestamp_ns_t start = out.motion.start_ns();
@@ -120,7 +138,10 @@ SimulatedSequence SimulateSequence(const SimulationOptions& options) {
   sequence.rig.camera = options.camera;
   sequence.rig.body_from_cam = options.body_from_cam;
   sequence.rig.camera_rate_hz = options.camera_rate_hz;
-  sequence.rig.imu_noise = imu_options.noise;
+  out.true_imu_noise = imu_options.noise;
+  sequence.rig.imu_noise = ScaledImuNoise(imu_options.noise, options.imu_noise_file_scale_gyro,
+                                          options.imu_noise_file_scale_accel);
+  out.camera_time_offset_ns = SecondsToNs(options.camera_time_offset_s);
   const SynthesizedImu imu = SynthesizeImu(out.motion, start, end, imu_options);
   sequence.imu = imu.samples;
 
@@ -156,11 +177,16 @@ SimulatedSequence SimulateSequence(const SimulationOptions& options) {
     state.has_velocity_and_biases = true;
     sequence.ground_truth.push_back(state);
   }
+  // The images, stamped camera_time_offset_ns after their true (IMU-clock)
+  // exposure times.
+  std::vector<timestamp_ns_t> image_true_times;
   for (const size_t k : frames) {
     const timestamp_ns_t t = grid[k];
+    image_true_times.push_back(t);
+    const timestamp_ns_t stamp = t + out.camera_time_offset_ns;
     std::ostringstream name;
-    name << t << ".png";
-    sequence.images.push_back({t, fs::path(name.str())});
+    name << stamp << ".png";
+    sequence.images.push_back({stamp, fs::path(name.str())});
     out.frame_regions.push_back(
         out.scenario->RegionIndex(ProjectionCenter(SimulatedCamFromWorld(out, t))));
   }
@@ -175,6 +201,8 @@ SimulatedSequence SimulateSequence(const SimulationOptions& options) {
     out.vio_body = EmulateVioDrift(truth, drift);
     out.vio_segments.assign(out.vio_body.size(), 0);
   }
+  out.exposure_gains =
+      AutoExposureGains(image_true_times, options.auto_exposure, MixSeed(options.seed, 0x4145ULL));
   return out;
 }
 
@@ -190,12 +218,35 @@ GreyImage RenderSimulatedFrame(const SimulatedSequence& simulated, const RayTabl
   RenderOptions render = simulated.scenario->render;
   render.seed = MixSeed(options.seed, frame_index);
   render.num_threads = num_threads;
+  if (!simulated.exposure_gains.empty())
+    render.exposure_gain *= simulated.exposure_gains[frame_index];
   const double exposure_s = options.exposure_time_s >= 0.0 ? options.exposure_time_s
                                                            : simulated.scenario->exposure_time_s;
-  const timestamp_ns_t t = simulated.sequence.images[frame_index].timestamp_ns;
+  const timestamp_ns_t t = simulated.FrameTime(frame_index);
+  const timestamp_ns_t half = SecondsToNs(0.5 * exposure_s);
+  const auto pose_at = [&](timestamp_ns_t time) {
+    return SimulatedCamFromWorld(
+        simulated, std::clamp(time, simulated.motion.start_ns(), simulated.motion.end_ns()));
+  };
+  if (options.rolling_shutter_readout_s > 0.0) {
+    const int height = rays.height();
+    std::vector<Rigid3d> open(height);
+    std::vector<Rigid3d> close;
+    if (exposure_s > 0.0) close.resize(height);
+    for (int y = 0; y < height; ++y) {
+      const timestamp_ns_t row_t =
+          RollingShutterRowTime(t, y, height, options.rolling_shutter_readout_s);
+      if (exposure_s > 0.0) {
+        open[y] = pose_at(row_t - half);
+        close[y] = pose_at(row_t + half);
+      } else {
+        open[y] = pose_at(row_t);
+      }
+    }
+    return RenderRowByRow(simulated.scenario->scene, rays, open, close, render);
+  }
   if (exposure_s <= 0.0)
     return Render(simulated.scenario->scene, rays, SimulatedCamFromWorld(simulated, t), render);
-  const timestamp_ns_t half = SecondsToNs(0.5 * exposure_s);
   const timestamp_ns_t open = std::max(simulated.motion.start_ns(), t - half);
   const timestamp_ns_t close = std::min(simulated.motion.end_ns(), t + half);
   return RenderWithMotionBlur(simulated.scenario->scene, rays,
@@ -264,7 +315,8 @@ void WriteSimulatedSequence(const fs::path& out, const SimulatedSequence& simula
     for (size_t k = 0; k < simulated.sequence.images.size(); ++k) {
       const timestamp_ns_t t = simulated.sequence.images[k].timestamp_ns;
       const int region = simulated.frame_regions[k];
-      const Eigen::Vector3d center = ProjectionCenter(SimulatedCamFromWorld(simulated, t));
+      const Eigen::Vector3d center =
+          ProjectionCenter(SimulatedCamFromWorld(simulated, simulated.FrameTime(k)));
       stream << t << ',' << (region >= 0 ? regions[region].name : "none") << ','
              << (region >= 0 ? regions[region].floor : -1) << ',' << center.x() << ',' << center.y()
              << ',' << center.z() << '\n';
@@ -323,7 +375,39 @@ void WriteSimulatedSequence(const fs::path& out, const SimulatedSequence& simula
            << "  enabled: " << (options.keyframes.enabled ? "true" : "false") << "\n"
            << "  min_gap_s: " << options.keyframes.min_gap_s << "\n"
            << "  max_gap_s: " << options.keyframes.max_gap_s << "\n";
+    if (!options.HasImperfections()) return;
+    const AutoExposureOptions& ae = options.auto_exposure;
+    const ImuNoise& truth = simulated.true_imu_noise;
+    stream << "robustness:\n"
+           << "  auto_exposure:\n"
+           << "    strength_stops: " << ae.strength_stops << "\n"
+           << "    drift_stddev: " << ae.drift_stddev << "\n"
+           << "    drift_time_constant_s: " << ae.drift_time_constant_s << "\n"
+           << "    step_rate_hz: " << ae.step_rate_hz << "\n"
+           << "    step_size: " << ae.step_size << "\n"
+           << "    recovery_time_constant_s: " << ae.recovery_time_constant_s << "\n"
+           << "  rolling_shutter_readout_s: " << options.rolling_shutter_readout_s << "\n"
+           << "  camera_time_offset_s: " << options.camera_time_offset_s << "\n"
+           << "  imu_noise_file_scale_gyro: " << options.imu_noise_file_scale_gyro << "\n"
+           << "  imu_noise_file_scale_accel: " << options.imu_noise_file_scale_accel << "\n"
+           << "  true_imu_noise: [" << truth.gyro_noise_density << ", " << truth.gyro_random_walk
+           << ", " << truth.accel_noise_density << ", " << truth.accel_random_walk
+           << "]  # gyro density, gyro walk, accel density, accel walk\n"
+           << "  white_walls:\n"
+           << "    enabled: " << (options.white_walls.enabled ? "true" : "false") << "\n"
+           << "    mean: " << options.white_walls.mean << "\n"
+           << "    contrast: " << options.white_walls.contrast << "\n"
+           << "    texels_per_metre: " << options.white_walls.texels_per_metre << "\n";
   });
+  if (options.auto_exposure.enabled()) {
+    WriteFileAtomically(out / "exposure.csv", [&](std::ostream& stream) {
+      stream << "#timestamp [ns],gain\n" << std::setprecision(17);
+      for (size_t k = 0; k < simulated.sequence.images.size(); ++k) {
+        stream << simulated.sequence.images[k].timestamp_ns << ',' << simulated.exposure_gains[k]
+               << '\n';
+      }
+    });
+  }
 }
 
 }  // namespace viosfm

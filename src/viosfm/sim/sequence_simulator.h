@@ -13,6 +13,7 @@
 #include "viosfm/io/sequence.h"
 #include "viosfm/sim/imu_synthesis.h"
 #include "viosfm/sim/renderer.h"
+#include "viosfm/sim/robustness.h"
 #include "viosfm/sim/scenarios.h"
 #include "viosfm/sim/trajectory.h"
 #include "viosfm/sim/vio_emulator.h"
@@ -72,6 +73,30 @@ struct SimulationOptions {
   Camera camera = DefaultCamera();
   Rigid3d body_from_cam = DefaultBodyFromCam();
 
+  // Imperfections for robustness tests (sim/robustness.h); every default
+  // leaves the sequence as it is without them.
+  // Per-frame exposure gain (auto exposure); default off.
+  AutoExposureOptions auto_exposure;
+  // s, rolling-shutter readout time: row y of a frame stamped t is exposed
+  // at RollingShutterRowTime(t, y, height, readout) (rows top to bottom, the
+  // middle row at t). 0 (default): global shutter.
+  double rolling_shutter_readout_s = 0.0;
+  // s, camera clock against the IMU clock: the image exposed at true (IMU)
+  // time t is stamped t + camera_time_offset_s in cam0/data.csv and its file
+  // name; the IMU, the ground truth (at t) and the calibration (which states
+  // no offset) are unchanged. 0 (default): one clock. E.g. 0.047: images
+  // stamped 47 ms late.
+  double camera_time_offset_s = 0.0;
+  // Factors on the noise figures written to imu0/sensor.yaml (densities and
+  // random walks of the gyro, resp. the accelerometer) against the noise
+  // actually simulated (`imu`): a wrong calibration. Default 1 (true figures).
+  double imu_noise_file_scale_gyro = 1.0;
+  double imu_noise_file_scale_accel = 1.0;
+  WhiteWallOptions white_walls;  // nearly textureless outer walls and ceiling; default off
+
+  // Whether any of the imperfections above is set.
+  bool HasImperfections() const;
+
   // EuRoC cam0-like: OPENCV 752x480, fx 458.654, fy 457.296, cx 367.215, cy 248.375.
   static Camera DefaultCamera();
   // Camera looking along the body's x axis (forward), 5 cm ahead of the IMU.
@@ -95,6 +120,18 @@ struct SimulatedSequence {
   Trajectory vio_body;
   std::vector<int> vio_segments;
   std::vector<int> frame_regions;  // per image: index into scenario->regions (-1: none)
+  // ns, image stamp minus true exposure time (options.camera_time_offset_s).
+  timestamp_ns_t camera_time_offset_ns = 0;
+  // Per image: the auto-exposure gain (all 1 without auto exposure).
+  std::vector<double> exposure_gains;
+  // The IMU noise simulated; sequence.rig.imu_noise is what the written
+  // calibration states (different with imu_noise_file_scale_*).
+  ImuNoise true_imu_noise;
+
+  // True (IMU-clock) time of image k's exposure (of its middle row).
+  timestamp_ns_t FrameTime(size_t k) const {
+    return sequence.images[k].timestamp_ns - camera_time_offset_ns;
+  }
 };
 
 SimulatedSequence SimulateSequence(const SimulationOptions& options);
@@ -102,10 +139,13 @@ SimulatedSequence SimulateSequence(const SimulationOptions& options);
 // Camera pose at stamp t: (world_from_body(t) * body_from_cam)^-1.
 Rigid3d SimulatedCamFromWorld(const SimulatedSequence& simulated, timestamp_ns_t t);
 
-// Renders image `frame_index` with the scenario's exposure, noise seed
-// MixSeed(options.seed, frame_index), and motion blur over the shutter time
-// centred on the stamp when the exposure time is > 0. `rays` is the
-// sequence camera's RayTable; num_threads splits the rows.
+// Renders image `frame_index` with the scenario's exposure times the
+// frame's auto-exposure gain, noise seed MixSeed(options.seed, frame_index),
+// at the frame's true time FrameTime(frame_index), with motion blur over the
+// shutter time centred on it when the exposure time is > 0, and with every
+// row at its own time (RollingShutterRowTime; each row blurred over its own
+// shutter interval) when options.rolling_shutter_readout_s > 0. `rays` is
+// the sequence camera's RayTable; num_threads splits the rows.
 GreyImage RenderSimulatedFrame(const SimulatedSequence& simulated, const RayTable& rays,
                                size_t frame_index, const SimulationOptions& options,
                                int num_threads = 1);
@@ -120,7 +160,8 @@ void RenderSimulatedImages(const std::filesystem::path& folder, const SimulatedS
 // floor, camera centre), <out>/vio_emulated.tum (world_from_body at the
 // stamps of the camera-rate grid, none while it re-initialises), <out>/scene.csv (every textured quad with its region,
 // floor, texture id and world geometry: io/scene_structure_io.h),
-// <out>/camera_stamps.txt and <out>/simulation.yaml (the options used). Without
+// <out>/camera_stamps.txt and <out>/simulation.yaml (the options used); with
+// auto exposure also <out>/exposure.csv (per frame: stamp, gain). Without
 // options.render_images, cam0 has sensor.yaml only.
 void WriteSimulatedSequence(const std::filesystem::path& out, const SimulatedSequence& simulated,
                             const SimulationOptions& options);
