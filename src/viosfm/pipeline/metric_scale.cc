@@ -8,8 +8,8 @@
 
 namespace viosfm {
 
-MetricScaleSummary ApplyImuMetricScale(const Sequence& sequence, double vio_scale_sigma,
-                                       const ImuScaleOptions& options,
+MetricScaleSummary ApplyImuMetricScale(const Sequence& sequence, const SensorRig& rig,
+                                       double vio_scale_sigma, const ImuScaleOptions& options,
                                        Reconstruction* reconstruction) {
   VIOSFM_CHECK(reconstruction != nullptr);
   MetricScaleSummary summary;
@@ -17,17 +17,19 @@ MetricScaleSummary ApplyImuMetricScale(const Sequence& sequence, double vio_scal
     summary.message = "no IMU in the dataset: the scale is the VIO's";
     return summary;
   }
-  const Rigid3d cam_from_body = sequence.rig.body_from_cam.Inverse();
+  const Rigid3d cam_from_body = rig.body_from_cam.Inverse();
   Trajectory body;
   for (const image_t image_id : reconstruction->RegImageIds()) {
     const Image& image = reconstruction->GetImage(image_id);
     if (!image.timestamp_ns) continue;
-    body.poses.push_back({*image.timestamp_ns, image.cam_from_world.Inverse() * cam_from_body});
+    // On the IMU's clock.
+    body.poses.push_back(
+        {rig.CamToImuTime(*image.timestamp_ns), image.cam_from_world.Inverse() * cam_from_body});
   }
   std::sort(body.poses.begin(), body.poses.end(),
             [](const StampedPose& a, const StampedPose& b) { return a.timestamp_ns < b.timestamp_ns; });
   summary.estimated = true;
-  summary.imu = EstimateImuScale(body, sequence.imu, sequence.rig.imu_noise, options);
+  summary.imu = EstimateImuScale(body, sequence.imu, rig.imu_noise, options);
   std::ostringstream message;
   message << summary.imu.message;
   if (summary.imu.usable) {

@@ -26,11 +26,13 @@ struct MetricScaleSummary {
 };
 
 // Estimates and, when usable, applies the IMU's metric scale to the
-// registered images of `reconstruction` (cam_from_world; body_from_cam of
-// the sequence's rig). vio_scale_sigma: the VIO's relative scale
+// registered images of `reconstruction` (cam_from_world) from the
+// sequence's IMU. `rig` gives body_from_cam, the camera-IMU time offset and
+// the IMU noise figures (the sequence's own, or as viosfm's own VIO
+// estimated and checked them). vio_scale_sigma: the VIO's relative scale
 // uncertainty.
-MetricScaleSummary ApplyImuMetricScale(const Sequence& sequence, double vio_scale_sigma,
-                                       const ImuScaleOptions& options,
+MetricScaleSummary ApplyImuMetricScale(const Sequence& sequence, const SensorRig& rig,
+                                       double vio_scale_sigma, const ImuScaleOptions& options,
                                        Reconstruction* reconstruction);
 
 }  // namespace viosfm

@@ -744,7 +744,8 @@ PipelineSummary RunPipeline(const PipelineOptions& options) {
   VIOSFM_LOG(INFO) << "run: mapper " << summary.mapper.ToString();
   if (options.use_imu_scale) {
     summary.metric_scale = ApplyImuMetricScale(
-        sequence, options.vio_uncertainty.scale_sigma, options.imu_scale, &reconstruction);
+        sequence, vio_poses.own_vio_rig.value_or(sequence.rig),
+        options.vio_uncertainty.scale_sigma, options.imu_scale, &reconstruction);
     VIOSFM_LOG(INFO) << "run: metric scale: " << summary.metric_scale.message;
   }
   summary.num_frames_registered = static_cast<size_t>(summary.mapper.num_supported);

@@ -57,6 +57,10 @@ VioPoses RunOwnVio(const Sequence& sequence, const PipelineOptions& options) {
     throw InputError(sequence.root.string(), 0,
                      "viosfm's own VIO never initialised: " + result.summary.message);
   }
+  SensorRig rig = sequence.rig;
+  rig.cam_time_offset_ns = result.summary.time_offset.offset_ns;
+  rig.imu_noise = result.summary.imu_noise.used;
+  poses.own_vio_rig = rig;
   poses.segment_rule =
       "the own VIO's segments (a new one after every reset it did not re-localise)";
   VIOSFM_LOG(INFO) << "run: own VIO: " << poses.world_from_body.size() << " of "

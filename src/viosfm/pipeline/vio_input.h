@@ -30,6 +30,10 @@ struct VioPoses {
   std::vector<VioOdometer> odometers;  // per pose (ComputeVioOdometers)
   // How the segments were found, for the log.
   std::string segment_rule;
+  // The sensor rig as viosfm's own VIO found it (its camera-IMU time offset
+  // estimate and the IMU noise figures it used), for what else reads the
+  // IMU (the metric scale); empty for an external VIO.
+  std::optional<SensorRig> own_vio_rig;
   int num_segments() const { return segments.empty() ? 0 : segments.back() + 1; }
 };
 
