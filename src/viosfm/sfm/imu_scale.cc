@@ -235,14 +235,19 @@ ImuScaleResult EstimateImuScale(const Trajectory& world_from_body,
       unit[col_scale] = 1.0;
       const Eigen::VectorXd column = solver.solve(unit);
       result.scale_sigma = std::sqrt(std::max(0.0, column[col_scale])) / std::abs(scale);
-      // The whitened residual at the optimum, |W b|^2 - x^T A^T W^T W b:
-      // when the equations disagree more than their covariance says (the
-      // trajectory's shape or rotations are worse than assumed), the
-      // scale's uncertainty grows with them.
+      // The whitened residual at the optimum, |W b|^2 - x^T A^T W^T W b,
+      // gives the a-posteriori variance factor (sse / dof): the covariance
+      // assumed for the equations (the preintegration's, plus the images'
+      // position_sigma_m and rotation_sigma_rad, chosen on the safe side)
+      // is rescaled to what the equations show. When they disagree more
+      // than assumed (the trajectory's shape or rotations are worse), the
+      // scale's uncertainty grows; when they agree better, it shrinks.
+      // Hundreds of equations make the factor itself reliable; a shape
+      // whose errors are systematic is caught by max_residual_ratio.
       const double sse = std::max(0.0, whitened_b2 - solution.dot(rhs));
       const int dof = std::max(1, num_rows - num_unknowns);
       result.residual_ratio = std::sqrt(sse / dof);
-      result.scale_sigma *= std::max(1.0, result.residual_ratio);
+      result.scale_sigma *= result.residual_ratio;
     }
   }
   result.scale = scale;

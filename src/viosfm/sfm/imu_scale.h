@@ -20,8 +20,9 @@
 // reconstruction's against the preintegrated ones). The result carries the
 // scale's standard deviation from the least squares, inflated by the
 // residual where the equations disagree more than their covariance allows
-// (a reconstruction bent or tilted in places pulls the scale); the caller
-// applies it only when that is small.
+// (a reconstruction bent or tilted in places pulls the scale) and
+// narrowed where they agree better than assumed (the a-posteriori variance
+// factor); the caller applies it only when that is small.
 #pragma once
 
 #include <string>
@@ -74,7 +75,7 @@ struct ImuScaleResult {
   int num_pairs = 0;
   // sqrt(whitened residual / degrees of freedom) of the least squares: 1
   // when the equations agree as well as their covariance says; scale_sigma
-  // is multiplied by it when larger.
+  // is multiplied by it (the a-posteriori variance factor).
   double residual_ratio = 0.0;
 };
 
