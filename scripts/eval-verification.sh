@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Ground-truth evaluation of the pair verification (issue 4) on simulated
+# Ground-truth evaluation of the pair verification on simulated
 # sequences with repeated structure, and its sensitivity to VIO drift.
 #
 # Per scenario (default two_floors and corridor, 60 s at 2 Hz = 121 frames,
