@@ -200,16 +200,7 @@ void SlidingWindowEstimator::InitializeWithKeyframes(
     for (const FeatureObservation& observation : keyframes[k].observations) {
       frame->observations[observation.track_id] = observation.normalized;
     }
-    Frame* frame_pointer = frame.get();
-    frames_.push_back(std::move(frame));
-    for (const auto& [track_id, normalized] : frame_pointer->observations) {
-      Landmark& landmark = landmarks_[track_id];
-      if (landmark.anchor == nullptr) {
-        landmark.track_id = track_id;
-        landmark.anchor = frame_pointer;
-      }
-      ++landmark.num_observations;
-    }
+    AppendFrame(std::move(frame));
   }
   // The restart is the newest keyframe, not the first: the re-localisation
   // lasts relocalization_window_s from now, however long the keyframes span.
@@ -251,6 +242,19 @@ bool SlidingWindowEstimator::IsKeyframe(const Frame& frame, const FrameFeatures&
   }
   if (shared < options_.keyframe_min_shared_tracks) return true;
   return parallax_sum / shared >= options_.keyframe_parallax_px;
+}
+
+void SlidingWindowEstimator::AppendFrame(std::unique_ptr<Frame> frame) {
+  Frame* frame_pointer = frame.get();
+  frames_.push_back(std::move(frame));
+  for (const auto& [track_id, normalized] : frame_pointer->observations) {
+    Landmark& landmark = landmarks_[track_id];
+    if (landmark.anchor == nullptr) {
+      landmark.track_id = track_id;
+      landmark.anchor = frame_pointer;
+    }
+    ++landmark.num_observations;
+  }
 }
 
 void SlidingWindowEstimator::RemoveFrame(size_t index) {
@@ -671,15 +675,7 @@ WindowFrameEstimate SlidingWindowEstimator::AddFrame(const FrameFeatures& featur
   }
   frame->is_keyframe = IsKeyframe(*frame, features);
   Frame* frame_pointer = frame.get();
-  frames_.push_back(std::move(frame));
-  for (const auto& [track_id, normalized] : frame_pointer->observations) {
-    Landmark& landmark = landmarks_[track_id];
-    if (landmark.anchor == nullptr) {
-      landmark.track_id = track_id;
-      landmark.anchor = frame_pointer;
-    }
-    ++landmark.num_observations;
-  }
+  AppendFrame(std::move(frame));
 
   TriangulateLandmarks();
   std::vector<Landmark*> selected = SelectLandmarks();

@@ -232,6 +232,9 @@ class SlidingWindowEstimator {
   // those it contradicts, and ends the re-localisation after
   // relocalization_window_s. Returns the count.
   int UpdateRelocalization(const Frame& newest);
+  // Appends a frame to the window and counts its observations in the
+  // landmarks (a new landmark is anchored in it).
+  void AppendFrame(std::unique_ptr<Frame> frame);
   void RemoveFrame(size_t index);
   void TriangulateLandmarks();
   // Landmarks used in the optimisation: triangulated, seen twice or more.
