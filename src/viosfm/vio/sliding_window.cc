@@ -413,13 +413,23 @@ Eigen::Matrix<double, 6, 6> SlidingWindowEstimator::Optimize(
   problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   ceres::Problem problem(problem_options);
   ceres::Manifold* pose_manifold = const_cast<ceres::Manifold*>(pose_manifold_.get());
+  // Ceres orders the parameter blocks of one ordering group by their
+  // addresses, which depend on the allocation history of the whole process:
+  // the same window could be solved in another order, and so give other
+  // last bits, depending on what ran before. So every state block gets a
+  // group of its own, in window order, and the landmarks' inverse depths
+  // (the eliminated group) are solved in one array in track order, copied
+  // back after the solve.
   auto* ordering = new ceres::ParameterBlockOrdering;
+  int group = 1;
   for (auto& frame : frames_) {
     problem.AddParameterBlock(frame->parameters.pose.data(), 7, pose_manifold);
     problem.AddParameterBlock(frame->parameters.speed_bias.data(), 9);
-    ordering->AddElementToGroup(frame->parameters.pose.data(), 1);
-    ordering->AddElementToGroup(frame->parameters.speed_bias.data(), 1);
+    ordering->AddElementToGroup(frame->parameters.pose.data(), group++);
+    ordering->AddElementToGroup(frame->parameters.speed_bias.data(), group++);
   }
+  std::vector<double> inverse_depths(landmarks.size());
+  for (size_t i = 0; i < landmarks.size(); ++i) inverse_depths[i] = landmarks[i]->inverse_depth;
   if (prior_ != nullptr) {
     problem.AddResidualBlock(new LinearPriorFactor(prior_), nullptr, prior_->ParameterBlocks());
   }
@@ -433,11 +443,13 @@ Eigen::Matrix<double, 6, 6> SlidingWindowEstimator::Optimize(
                              frame.parameters.pose.data(), frame.parameters.speed_bias.data());
   }
   const double sqrt_information = focal_length_px_ / options_.pixel_sigma_px;
-  for (Landmark* landmark : landmarks) {
+  for (size_t i = 0; i < landmarks.size(); ++i) {
+    Landmark* landmark = landmarks[i];
+    double* inverse_depth = &inverse_depths[i];
     const Eigen::Vector2d& anchor_observation =
         landmark->anchor->observations.at(landmark->track_id);
-    problem.AddParameterBlock(&landmark->inverse_depth, 1);
-    ordering->AddElementToGroup(&landmark->inverse_depth, 0);
+    problem.AddParameterBlock(inverse_depth, 1);
+    ordering->AddElementToGroup(inverse_depth, 0);
     for (auto& frame : frames_) {
       if (frame.get() == landmark->anchor) continue;
       const auto it = frame->observations.find(landmark->track_id);
@@ -446,7 +458,7 @@ Eigen::Matrix<double, 6, 6> SlidingWindowEstimator::Optimize(
                                                                 body_from_cam_, sqrt_information),
                                new ceres::CauchyLoss(options_.cauchy_loss_scale),
                                landmark->anchor->parameters.pose.data(),
-                               frame->parameters.pose.data(), &landmark->inverse_depth);
+                               frame->parameters.pose.data(), inverse_depth);
     }
   }
   // Re-localisation: the frames' observations of the map kept at the reset.
@@ -476,6 +488,7 @@ Eigen::Matrix<double, 6, 6> SlidingWindowEstimator::Optimize(
   solver_options.logging_type = ceres::SILENT;
   ceres::Solver::Summary summary;
   ceres::Solve(solver_options, &problem, &summary);
+  for (size_t i = 0; i < landmarks.size(); ++i) landmarks[i]->inverse_depth = inverse_depths[i];
   if (!summary.IsSolutionUsable()) {
     VIOSFM_LOG(DEBUG) << "sliding window: solver failed: " << summary.message;
   }
