@@ -9,6 +9,8 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <unordered_map>
+#include <vector>
 
 #include "viosfm/geometry/triangulation.h"
 #include "viosfm/util/errors.h"
@@ -413,34 +415,57 @@ Eigen::Matrix<double, 6, 6> SlidingWindowEstimator::Optimize(
   problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   ceres::Problem problem(problem_options);
   ceres::Manifold* pose_manifold = const_cast<ceres::Manifold*>(pose_manifold_.get());
-  // Ceres orders the parameter blocks of one ordering group by their
-  // addresses, which depend on the allocation history of the whole process:
-  // the same window could be solved in another order, and so give other
-  // last bits, depending on what ran before. So every state block gets a
-  // group of its own, in window order, and the landmarks' inverse depths
-  // (the eliminated group) are solved in one array in track order, copied
-  // back after the solve.
+  // Ceres orders the parameter blocks of an ordering group, and
+  // ceres::Covariance all of them, by their addresses, which depend on the
+  // allocation history of the whole process: the same window could be
+  // solved in another order, and so give other last bits, depending on what
+  // ran before. So the solve works on copies of the window's states and the
+  // landmarks' inverse depths in one array, in window and track order (the
+  // order of their addresses), each state block in an ordering group of its
+  // own after the eliminated inverse depths; the values are copied back after.
+  constexpr size_t kStateSize = 16;  // pose 7, speed and biases 9
+  std::vector<double> values(frames_.size() * kStateSize + landmarks.size());
+  std::unordered_map<const double*, double*> copy_of;  // a frame's block -> its copy
   auto* ordering = new ceres::ParameterBlockOrdering;
   int group = 1;
-  for (auto& frame : frames_) {
-    problem.AddParameterBlock(frame->parameters.pose.data(), 7, pose_manifold);
-    problem.AddParameterBlock(frame->parameters.speed_bias.data(), 9);
-    ordering->AddElementToGroup(frame->parameters.pose.data(), group++);
-    ordering->AddElementToGroup(frame->parameters.speed_bias.data(), group++);
+  for (size_t k = 0; k < frames_.size(); ++k) {
+    ImuStateParameters& parameters = frames_[k]->parameters;
+    double* pose = values.data() + k * kStateSize;
+    double* speed_bias = pose + parameters.pose.size();
+    std::copy(parameters.pose.begin(), parameters.pose.end(), pose);
+    std::copy(parameters.speed_bias.begin(), parameters.speed_bias.end(), speed_bias);
+    copy_of[parameters.pose.data()] = pose;
+    copy_of[parameters.speed_bias.data()] = speed_bias;
+    problem.AddParameterBlock(pose, 7, pose_manifold);
+    problem.AddParameterBlock(speed_bias, 9);
+    ordering->AddElementToGroup(pose, group++);
+    ordering->AddElementToGroup(speed_bias, group++);
   }
-  std::vector<double> inverse_depths(landmarks.size());
+  const auto pose_of = [&copy_of](const Frame& frame) {
+    return copy_of.at(frame.parameters.pose.data());
+  };
+  const auto speed_bias_of = [&copy_of](const Frame& frame) {
+    return copy_of.at(frame.parameters.speed_bias.data());
+  };
+  double* inverse_depths = values.data() + frames_.size() * kStateSize;
   for (size_t i = 0; i < landmarks.size(); ++i) inverse_depths[i] = landmarks[i]->inverse_depth;
   if (prior_ != nullptr) {
-    problem.AddResidualBlock(new LinearPriorFactor(prior_), nullptr, prior_->ParameterBlocks());
+    std::vector<double*> blocks = prior_->ParameterBlocks();
+    for (double*& block : blocks) {
+      const auto it = copy_of.find(block);
+      VIOSFM_CHECK(it != copy_of.end())
+          << "the marginalisation prior acts on a block outside the window";
+      block = it->second;
+    }
+    problem.AddResidualBlock(new LinearPriorFactor(prior_), nullptr, blocks);
   }
   for (size_t k = 1; k < frames_.size(); ++k) {
     Frame& previous = *frames_[k - 1];
     Frame& frame = *frames_[k];
     const ImuState previous_state = StateOf(previous.parameters, previous.timestamp_ns);
     frame.preintegration->RepropagateIfNeeded(previous_state.gyro_bias, previous_state.accel_bias);
-    problem.AddResidualBlock(ImuFactor::Create(*frame.preintegration), ImuLoss(),
-                             previous.parameters.pose.data(), previous.parameters.speed_bias.data(),
-                             frame.parameters.pose.data(), frame.parameters.speed_bias.data());
+    problem.AddResidualBlock(ImuFactor::Create(*frame.preintegration), ImuLoss(), pose_of(previous),
+                             speed_bias_of(previous), pose_of(frame), speed_bias_of(frame));
   }
   const double sqrt_information = focal_length_px_ / options_.pixel_sigma_px;
   for (size_t i = 0; i < landmarks.size(); ++i) {
@@ -457,8 +482,7 @@ Eigen::Matrix<double, 6, 6> SlidingWindowEstimator::Optimize(
       problem.AddResidualBlock(new InverseDepthReprojectionCost(anchor_observation, it->second,
                                                                 body_from_cam_, sqrt_information),
                                new ceres::CauchyLoss(options_.cauchy_loss_scale),
-                               landmark->anchor->parameters.pose.data(),
-                               frame->parameters.pose.data(), inverse_depth);
+                               pose_of(*landmark->anchor), pose_of(*frame), inverse_depth);
     }
   }
   // Re-localisation: the frames' observations of the map kept at the reset.
@@ -466,10 +490,9 @@ Eigen::Matrix<double, 6, 6> SlidingWindowEstimator::Optimize(
     for (const auto& [track_id, normalized] : frame->observations) {
       const auto it = relocalization_points_.find(track_id);
       if (it == relocalization_points_.end()) continue;
-      problem.AddResidualBlock(
-          MapPointReprojectionFactor::Create(it->second, normalized, body_from_cam_,
-                                             sqrt_information),
-          new ceres::CauchyLoss(options_.cauchy_loss_scale), frame->parameters.pose.data());
+      problem.AddResidualBlock(MapPointReprojectionFactor::Create(it->second, normalized,
+                                                                  body_from_cam_, sqrt_information),
+                               new ceres::CauchyLoss(options_.cauchy_loss_scale), pose_of(*frame));
     }
   }
   ceres::Solver::Options solver_options;
@@ -488,6 +511,11 @@ Eigen::Matrix<double, 6, 6> SlidingWindowEstimator::Optimize(
   solver_options.logging_type = ceres::SILENT;
   ceres::Solver::Summary summary;
   ceres::Solve(solver_options, &problem, &summary);
+  for (auto& frame : frames_) {
+    ImuStateParameters& parameters = frame->parameters;
+    std::copy_n(pose_of(*frame), parameters.pose.size(), parameters.pose.begin());
+    std::copy_n(speed_bias_of(*frame), parameters.speed_bias.size(), parameters.speed_bias.begin());
+  }
   for (size_t i = 0; i < landmarks.size(); ++i) landmarks[i]->inverse_depth = inverse_depths[i];
   if (!summary.IsSolutionUsable()) {
     VIOSFM_LOG(DEBUG) << "sliding window: solver failed: " << summary.message;
@@ -498,7 +526,7 @@ Eigen::Matrix<double, 6, 6> SlidingWindowEstimator::Optimize(
   covariance_options.algorithm_type = ceres::SPARSE_QR;
   covariance_options.num_threads = options_.num_threads;
   ceres::Covariance estimator(covariance_options);
-  const double* pose = frames_.back()->parameters.pose.data();
+  const double* pose = pose_of(*frames_.back());
   const std::vector<std::pair<const double*, const double*>> blocks = {{pose, pose}};
   if (!estimator.Compute(blocks, &problem)) return covariance;
   Eigen::Matrix<double, 6, 6, Eigen::RowMajor> tangent;
