@@ -1,10 +1,11 @@
 #include "viosfm/vio/sliding_window.h"
 
-#include <ceres/covariance.h>
 #include <ceres/loss_function.h>
 #include <ceres/ordered_groups.h>
 #include <ceres/problem.h>
 #include <ceres/solver.h>
+
+#include <Eigen/Cholesky>
 
 #include <algorithm>
 #include <cmath>
@@ -415,11 +416,10 @@ Eigen::Matrix<double, 6, 6> SlidingWindowEstimator::Optimize(
   problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   ceres::Problem problem(problem_options);
   ceres::Manifold* pose_manifold = const_cast<ceres::Manifold*>(pose_manifold_.get());
-  // Ceres orders the parameter blocks of an ordering group, and
-  // ceres::Covariance all of them, by their addresses, which depend on the
-  // allocation history of the whole process: the same window could be
-  // solved in another order, and so give other last bits, depending on what
-  // ran before. So the solve works on copies of the window's states and the
+  // Ceres orders the parameter blocks of an ordering group by their
+  // addresses, which depend on the allocation history of the whole process:
+  // the same window could be solved in another order, and so give other last
+  // bits, depending on what ran before. So the solve works on copies of the window's states and the
   // landmarks' inverse depths in one array, in window and track order (the
   // order of their addresses), each state block in an ordering group of its
   // own after the eliminated inverse depths; the values are copied back after.
@@ -522,19 +522,68 @@ Eigen::Matrix<double, 6, 6> SlidingWindowEstimator::Optimize(
   }
   Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();
   if (!options_.compute_covariance || !summary.IsSolutionUsable()) return covariance;
-  ceres::Covariance::Options covariance_options;
-  covariance_options.algorithm_type = ceres::SPARSE_QR;
-  covariance_options.num_threads = options_.num_threads;
-  ceres::Covariance estimator(covariance_options);
-  const double* pose = pose_of(*frames_.back());
-  const std::vector<std::pair<const double*, const double*>> blocks = {{pose, pose}};
-  if (!estimator.Compute(blocks, &problem)) return covariance;
-  Eigen::Matrix<double, 6, 6, Eigen::RowMajor> tangent;
-  if (!estimator.GetCovarianceBlockInTangentSpace(pose, pose, tangent.data())) return covariance;
+  // The newest pose's marginal covariance: (J^T J)^-1 at the solution, with
+  // the loss applied as in the solve, in the tangent spaces. The inverse
+  // depths are eliminated in closed form (each residual sees at most one,
+  // so their block of J^T J is diagonal) and the states' Schur complement is
+  // inverted densely, in a fixed order: the same bits every run
+  // (ceres::Covariance's sparse QR through SuiteSparse gave other last bits
+  // from run to run on the same window).
+  ceres::Problem::EvaluateOptions evaluate;
+  for (auto& frame : frames_) {
+    evaluate.parameter_blocks.push_back(pose_of(*frame));
+    evaluate.parameter_blocks.push_back(speed_bias_of(*frame));
+  }
+  for (size_t i = 0; i < landmarks.size(); ++i) {
+    evaluate.parameter_blocks.push_back(&inverse_depths[i]);
+  }
+  evaluate.num_threads = 1;
+  ceres::CRSMatrix jacobian;
+  if (!problem.Evaluate(evaluate, nullptr, nullptr, nullptr, &jacobian)) return covariance;
+  const int num_states = static_cast<int>(frames_.size()) * 15;  // tangent: pose 6, speed_bias 9
+  const int num_depths = static_cast<int>(landmarks.size());
+  VIOSFM_CHECK_EQ(jacobian.num_cols, num_states + num_depths);
+  Eigen::MatrixXd states = Eigen::MatrixXd::Zero(num_states, num_states);
+  Eigen::MatrixXd states_depths = Eigen::MatrixXd::Zero(num_states, num_depths);
+  Eigen::VectorXd depths = Eigen::VectorXd::Zero(num_depths);
+  for (int row = 0; row < jacobian.num_rows; ++row) {
+    for (int a = jacobian.rows[row]; a < jacobian.rows[row + 1]; ++a) {
+      const int column_a = jacobian.cols[a];
+      for (int b = jacobian.rows[row]; b < jacobian.rows[row + 1]; ++b) {
+        const int column_b = jacobian.cols[b];
+        const double product = jacobian.values[a] * jacobian.values[b];
+        if (column_a < num_states && column_b < num_states) {
+          states(column_a, column_b) += product;
+        } else if (column_a < num_states) {
+          states_depths(column_a, column_b - num_states) += product;
+        } else if (column_b >= num_states) {
+          VIOSFM_CHECK_EQ(column_a, column_b) << "a residual sees two inverse depths";
+          depths(column_a - num_states) += product;
+        }
+      }
+    }
+  }
+  for (int l = 0; l < num_depths; ++l) {
+    // A depth no residual sees (a zero column) constrains nothing.
+    if (!(depths(l) > 0.0)) continue;
+    states.noalias() -= states_depths.col(l) * states_depths.col(l).transpose() / depths(l);
+  }
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(states);
+  const Eigen::VectorXd pivots = ldlt.vectorD().cwiseAbs();
+  // Rank deficient (no covariance), as ceres::Covariance's default
+  // reciprocal condition number 1e-14 judges.
+  if (ldlt.info() != Eigen::Success || !ldlt.isPositive() || num_states == 0 ||
+      !(pivots.minCoeff() > 1e-14 * pivots.maxCoeff())) {
+    return covariance;
+  }
+  Eigen::MatrixXd unit = Eigen::MatrixXd::Zero(num_states, 6);
+  const int newest = num_states - 15;
+  unit.block<6, 6>(newest, 0).setIdentity();
+  const Eigen::Matrix<double, 6, 6> tangent = ldlt.solve(unit).block<6, 6>(newest, 0);
   // The quaternion part of the tangent is half the rotation vector.
   Eigen::Matrix<double, 6, 6> scale = Eigen::Matrix<double, 6, 6>::Identity();
   scale.topLeftCorner<3, 3>() *= 2.0;
-  covariance = scale * tangent * scale;
+  covariance = scale * (0.5 * (tangent + tangent.transpose())) * scale;
   return covariance;
 }
 
