@@ -3,7 +3,7 @@ BUILD_DIR ?= build
 JOBS ?= $(shell nproc)
 CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Release
 
-.PHONY: deps configure build test demo bench fuzz test-sanitize clean
+.PHONY: deps configure build test demo bench fuzz test-sanitize check-integrity clean
 
 deps:
 	./scripts/install-deps.sh
@@ -37,6 +37,14 @@ fuzz: deps
 # Not part of `make test`.
 test-sanitize: deps
 	JOBS=$(JOBS) ./scripts/test-sanitize.sh build-sanitize
+
+# Runs of `viosfm run` on a small simulated sequence: identical re-runs, a
+# second dataset into the same folder, SIGKILL and re-run, thread counts,
+# hostile inputs (build/integrity/); see docs/robustness.md. Not part of
+# `make test`.
+check-integrity: configure
+	cmake --build $(BUILD_DIR) -j $(JOBS) --target viosfm
+	./scripts/check-integrity.sh $(BUILD_DIR)
 
 clean:
 	rm -rf $(BUILD_DIR)

@@ -90,8 +90,9 @@ void RegisterRun(CLI::App& app) {
       "run",
       "Reconstruct a dataset end to end: frame selection, features, VIO-aided verification, "
       "batched mapping with relative-pose constraints, evaluation against ground truth; writes "
-      "model/, model_txt/, points.ply, trajectories, eval.json and summary.json to --out; a "
-      "re-run on the same folder reuses the stored features and matches");
+      "model/, model_txt/, points.ply, trajectories, eval.json and summary.json (last) to --out; a "
+      "re-run on the same folder reuses the stored features and matches when fingerprint.json "
+      "says they were made from the same inputs and options");
   command
       ->add_option("dataset", args->dataset,
                    "EuRoC dataset (folder containing mav0/), a folder of images or a ROS 1 bag")
@@ -199,6 +200,10 @@ void RegisterRun(CLI::App& app) {
       ->capture_default_str();
   command->add_option("--seed", args->options.seed, "Seed of every random choice")
       ->capture_default_str();
+  command->add_flag("--overwrite", args->options.overwrite,
+                    "Remove the stored database and outputs of an earlier run in --out and start "
+                    "afresh (without it a re-run reuses them, and refuses a folder whose "
+                    "fingerprint.json says they were made from other inputs or options)");
   command->add_flag("--no-progress", args->no_progress, "No progress bars");
   command->callback([args] { RunRun(*args); });
 }

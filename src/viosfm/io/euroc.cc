@@ -249,6 +249,26 @@ std::string EurocReadOptions::Validate() const {
   return "";
 }
 
+std::vector<fs::path> EurocDatasetFiles(const fs::path& root, const EurocReadOptions& options) {
+  fs::path mav0;
+  if (fs::is_directory(root / "mav0")) {
+    mav0 = "mav0";
+  } else if (!fs::is_directory(root / options.cam_name)) {
+    return {};
+  }
+  std::vector<fs::path> candidates = {
+      mav0 / options.cam_name / "sensor.yaml", mav0 / options.cam_name / "data.csv",
+      mav0 / options.imu_name / "sensor.yaml", mav0 / options.imu_name / "data.csv"};
+  if (options.read_ground_truth) {
+    candidates.push_back(mav0 / "state_groundtruth_estimate0" / "data.csv");
+  }
+  std::vector<fs::path> files;
+  for (const fs::path& candidate : candidates) {
+    if (fs::is_regular_file(root / candidate)) files.push_back(candidate);
+  }
+  return files;
+}
+
 Sequence ReadEurocDataset(const fs::path& root, const EurocReadOptions& options) {
   if (const std::string problem = options.Validate(); !problem.empty()) {
     throw InputError("EuRoC read options: " + problem);

@@ -131,4 +131,12 @@ struct EurocReadOptions {
 // `root` is the folder that contains mav0/, or the mav0 folder itself.
 Sequence ReadEurocDataset(const std::filesystem::path& root, const EurocReadOptions& options = {});
 
+// The files besides the images that ReadEurocDataset(root, options) reads,
+// those present, in a fixed order: <cam>/sensor.yaml, <cam>/data.csv,
+// <imu>/sensor.yaml, <imu>/data.csv, state_groundtruth_estimate0/data.csv
+// (with read_ground_truth), each relative to `root` (e.g.
+// "mav0/imu0/data.csv"). Empty if `root` is not a EuRoC folder.
+std::vector<std::filesystem::path> EurocDatasetFiles(const std::filesystem::path& root,
+                                                     const EurocReadOptions& options = {});
+
 }  // namespace viosfm

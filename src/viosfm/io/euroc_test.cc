@@ -210,6 +210,26 @@ TEST(ReadEurocDataset, MicroSequence) {
             1e-15);
 }
 
+TEST(EurocDatasetFiles, ListsTheFilesTheReaderReads) {
+  const fs::path root = testing::MakeScratchFolder("euroc_files");
+  EXPECT_TRUE(EurocDatasetFiles(root).empty());  // not a EuRoC folder
+  for (const char* file : {"mav0/cam0/sensor.yaml", "mav0/cam0/data.csv", "mav0/imu0/data.csv",
+                           "mav0/state_groundtruth_estimate0/data.csv", "mav0/leica0/data.csv"}) {
+    fs::create_directories((root / file).parent_path());
+    WriteTextFile(root / file, "x\n");
+  }
+  // imu0/sensor.yaml is absent, leica0 is not read.
+  EXPECT_THAT(EurocDatasetFiles(root),
+              ::testing::ElementsAre(fs::path("mav0/cam0/sensor.yaml"),
+                                     fs::path("mav0/cam0/data.csv"), fs::path("mav0/imu0/data.csv"),
+                                     fs::path("mav0/state_groundtruth_estimate0/data.csv")));
+  EurocReadOptions options;
+  options.read_ground_truth = false;
+  EXPECT_EQ(EurocDatasetFiles(root, options).size(), 3u);
+  // Given mav0/ itself, the paths are relative to it.
+  EXPECT_EQ(EurocDatasetFiles(root / "mav0").front(), fs::path("cam0/sensor.yaml"));
+}
+
 TEST(ReadEurocDataset, AcceptsTheMav0FolderItself) {
   VIOSFM_REQUIRE_DATASET(root, kMicro);
   EurocReadOptions options;

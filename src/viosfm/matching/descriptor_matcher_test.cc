@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <numeric>
 
@@ -90,6 +91,66 @@ std::vector<std::pair<point2D_t, point2D_t>> AsPairs(const FeatureMatches& match
   return pairs;
 }
 
+// Independent reference: every (i, j) that `allowed` admits, compared one
+// by one, with the matcher's rules (distance, ratio test, mutual check).
+template <typename Allowed>
+FeatureMatches BruteForceMatches(const FloatDescriptors& d1, const FloatDescriptors& d2,
+                                 const DescriptorMatchingOptions& options, Allowed allowed) {
+  const Eigen::Index n1 = d1.rows();
+  const Eigen::Index n2 = d2.rows();
+  const float kNone = -std::numeric_limits<float>::infinity();
+  Eigen::MatrixXf dots = Eigen::MatrixXf::Constant(n1, n2, kNone);
+  for (Eigen::Index i = 0; i < n1; ++i) {
+    for (Eigen::Index j = 0; j < n2; ++j) {
+      if (allowed(i, j)) dots(i, j) = d1.row(i).dot(d2.row(j));
+    }
+  }
+  // Best index (or -1) passing the distance and ratio tests along a row of m.
+  auto best = [&](const Eigen::VectorXf& m) -> Eigen::Index {
+    Eigen::Index arg = -1;
+    float top = kNone;
+    float second = 0.0f;
+    for (Eigen::Index k = 0; k < m.size(); ++k) {
+      if (m[k] > top) {
+        second = std::max(second, top);
+        top = m[k];
+        arg = k;
+      } else if (m[k] > second) {
+        second = m[k];
+      }
+    }
+    if (arg < 0) return -1;
+    const double d_best = std::sqrt(std::max(0.0, 2.0 - 2.0 * top));
+    const double d_second = std::sqrt(std::max(0.0, 2.0 - 2.0 * second));
+    if (d_best > options.max_distance) return -1;
+    if (!(d_best * d_best < options.max_ratio * options.max_ratio * d_second * d_second)) return -1;
+    return arg;
+  };
+  FeatureMatches matches;
+  for (Eigen::Index i = 0; i < n1; ++i) {
+    const Eigen::Index j = best(dots.row(i).transpose());
+    if (j < 0) continue;
+    if (options.cross_check && best(dots.col(j)) != i) continue;
+    matches.push_back({static_cast<point2D_t>(i), static_cast<point2D_t>(j)});
+  }
+  return matches;
+}
+
+FeatureMatches BruteForce(const FloatDescriptors& d1, const FloatDescriptors& d2,
+                          const DescriptorMatchingOptions& options) {
+  return BruteForceMatches(d1, d2, options, [](Eigen::Index, Eigen::Index) { return true; });
+}
+
+// The same restricted to the epipolar band of F.
+FeatureMatches BruteForceInBand(const FloatDescriptors& d1, const FloatDescriptors& d2,
+                                const std::vector<Eigen::Vector2d>& points1,
+                                const std::vector<Eigen::Vector2d>& points2,
+                                const Eigen::Matrix3d& F, const GuidedMatchingOptions& options) {
+  return BruteForceMatches(d1, d2, options.matching, [&](Eigen::Index i, Eigen::Index j) {
+    return EpipolarLineDistance(F, points1[i], points2[j]) <= options.max_epipolar_distance_px;
+  });
+}
+
 TEST(NormalizeDescriptors, RowsHaveUnitNorm) {
   FeatureDescriptors descriptors(3, kDim);
   descriptors.setZero();
@@ -131,7 +192,11 @@ TEST(MatchDescriptors, RecallAndPrecisionOnSyntheticDescriptors) {
   loose.cross_check = false;
   loose.max_distance = 2.0;
   const FeatureMatches all = MatchDescriptors(hard.descriptors1, hard.descriptors2, loose);
-  EXPECT_EQ(all.size(), 1000u);  // every descriptor of image 1 has a nearest neighbour
+  // Each descriptor of image 1 with its nearest neighbour, as comparing
+  // every pair finds them.
+  EXPECT_EQ(AsPairs(all), AsPairs(BruteForce(NormalizeDescriptors(hard.descriptors1),
+                                             NormalizeDescriptors(hard.descriptors2), loose)));
+  EXPECT_GT(all.size(), 990u);
   EXPECT_LT(Evaluate(all, hard.truth).precision, 0.75);
 }
 
@@ -199,11 +264,10 @@ TEST(MatchDescriptors, SameResultForAnyBlockSizeAndThreadCount) {
   const FloatDescriptors d1 = NormalizeDescriptors(pair.descriptors1);
   const FloatDescriptors d2 = NormalizeDescriptors(pair.descriptors2);
   DescriptorMatchingOptions options;
-  options.num_threads = 1;
-  options.block_size = 1024;
-  const auto reference = AsPairs(MatchDescriptors(d1, d2, options));
+  // The reference compares every pair of descriptors one by one.
+  const auto reference = AsPairs(BruteForce(d1, d2, options));
   ASSERT_GT(reference.size(), 200u);
-  for (const int block_size : {1, 37, 256}) {
+  for (const int block_size : {1, 37, 256, 1024}) {
     for (const int threads : {1, 2, 3}) {
       options.block_size = block_size;
       options.num_threads = threads;
@@ -240,60 +304,7 @@ TEST(MatchImagePairs, EqualsMatchingEachPair) {
   for (point2D_t i = 0; i < 150; ++i) shared.emplace_back(i, i);
   for (size_t k = 0; k < pairs.size(); ++k) {
     EXPECT_EQ(AsPairs(matches[k]), shared) << "pair " << k;
-    // And the parallel driver gives what matching the pair alone gives.
-    const FeatureMatches expected =
-        MatchDescriptors(*images[pairs[k].image_id1], *images[pairs[k].image_id2], options);
-    EXPECT_EQ(AsPairs(matches[k]), AsPairs(expected));
   }
-}
-
-// Independent reference: every (i, j) in the band, the same rules.
-FeatureMatches BruteForceInBand(const FloatDescriptors& d1, const FloatDescriptors& d2,
-                                const std::vector<Eigen::Vector2d>& points1,
-                                const std::vector<Eigen::Vector2d>& points2,
-                                const Eigen::Matrix3d& F, const GuidedMatchingOptions& options) {
-  const Eigen::Index n1 = d1.rows();
-  const Eigen::Index n2 = d2.rows();
-  const float kNone = -std::numeric_limits<float>::infinity();
-  Eigen::MatrixXf dots = Eigen::MatrixXf::Constant(n1, n2, kNone);
-  for (Eigen::Index i = 0; i < n1; ++i) {
-    for (Eigen::Index j = 0; j < n2; ++j) {
-      if (EpipolarLineDistance(F, points1[i], points2[j]) <= options.max_epipolar_distance_px) {
-        dots(i, j) = d1.row(i).dot(d2.row(j));
-      }
-    }
-  }
-  // Best index (or -1) passing the distance and ratio tests along a row of m.
-  auto best = [&](const Eigen::VectorXf& m) -> Eigen::Index {
-    Eigen::Index arg = -1;
-    float top = kNone;
-    float second = 0.0f;
-    for (Eigen::Index k = 0; k < m.size(); ++k) {
-      if (m[k] > top) {
-        second = std::max(second, top);
-        top = m[k];
-        arg = k;
-      } else if (m[k] > second) {
-        second = m[k];
-      }
-    }
-    if (arg < 0) return -1;
-    const double d_best = std::sqrt(std::max(0.0, 2.0 - 2.0 * top));
-    const double d_second = std::sqrt(std::max(0.0, 2.0 - 2.0 * second));
-    if (d_best > options.matching.max_distance) return -1;
-    if (!(d_best * d_best <
-          options.matching.max_ratio * options.matching.max_ratio * d_second * d_second))
-      return -1;
-    return arg;
-  };
-  FeatureMatches matches;
-  for (Eigen::Index i = 0; i < n1; ++i) {
-    const Eigen::Index j = best(dots.row(i).transpose());
-    if (j < 0) continue;
-    if (options.matching.cross_check && best(dots.col(j)) != i) continue;
-    matches.push_back({static_cast<point2D_t>(i), static_cast<point2D_t>(j)});
-  }
-  return matches;
 }
 
 // Two views of random 3D points: each point seen in both images, plus

@@ -380,6 +380,7 @@ VerificationResult RunVerification(const Sequence& sequence, const Trajectory& v
               database->ReadTwoViewGeometry(info1.image_id, info2.image_id).inlier_matches.size());
           decision.accepted = decision.num_inliers > 0;
         }
+        if (!decision.accepted) decision.num_inliers = 0;
       }
     }
     summary.seconds_loading += step_timer.ElapsedSeconds();
@@ -441,15 +442,15 @@ VerificationResult RunVerification(const Sequence& sequence, const Trajectory& v
         depth_inconsistent = check.depth_inconsistent;
         vio_seconds[thread] += timer.ElapsedSeconds();
       }
-      if (decision.resumed) {
-        // The stored geometry is the decision; the reason is reconstructed.
-        decision.vio_rejected = decision.vio_rejected && !decision.accepted;
-        decision.reason = decision.accepted       ? kPairAccepted
-                          : matches.empty()       ? kPairNoMatches
-                          : decision.vio_rejected ? kPairVioOutlierRatio
-                                                  : kPairTooFewInliers;
+      if (decision.resumed && decision.accepted) {
+        // The stored geometry is the decision.
+        decision.vio_rejected = false;
+        decision.reason = kPairAccepted;
         return;
       }
+      // A stored pair without a geometry was rejected: decided again below
+      // from its stored matches (the same steps with the same seed, so the
+      // same decision, inlier count and reason as when it was stored).
       if (matches.empty()) {
         decision.reason = kPairNoMatches;
         return;
@@ -489,9 +490,12 @@ VerificationResult RunVerification(const Sequence& sequence, const Trajectory& v
     step_timer.Start();
     for (PairWork& pair_work : work) {
       const PairDecision& decision = pair_work.decision;
-      if (!decision.resumed) {
+      // A resumed pair is written again only if it is now accepted without
+      // a stored geometry (it cannot be with the options it was stored with,
+      // which the caller keeps; the database then holds what the decision says).
+      if (!decision.resumed || pair_work.geometry) {
         ColmapDatabase::Transaction transaction(*database);
-        if (!pair_work.reverified) {
+        if (!pair_work.reverified && !decision.resumed) {
           database->WriteMatches(decision.image_id1, decision.image_id2, pair_work.matches);
         }
         if (pair_work.geometry) {

@@ -30,10 +30,14 @@
 // only, the verified geometry (two_view_geometries, COLMAP's config
 // CALIBRATED), so `colmap mapper` can use the database; both written in one
 // transaction per pair, batch by batch, so an interrupted run keeps every
-// finished pair. A re-run skips the pairs whose matches are stored (resume):
-// their record says resumed, accepted iff a geometry is stored, and the VIO
-// check is recomputed from the stored matches for the report. With
-// reverify_stored_matches the stored matches are verified again instead.
+// finished pair. A re-run skips the matching of the pairs whose matches are
+// stored (resume): their record says resumed; a pair with a stored geometry
+// is accepted (the VIO check is recomputed from the stored matches for the
+// report), one without is decided again from its stored matches (VIO check
+// and RANSAC, seeded by the pair), so a resumed run records the same
+// decisions, inlier counts and reasons as an uninterrupted one. With
+// reverify_stored_matches the stored matches are verified again and the
+// geometries replaced.
 #pragma once
 
 #include <string>

@@ -71,6 +71,10 @@ fs::path CopyFeatures(const Fixture& f, const std::string& name) {
   return path;
 }
 
+// RANSAC's inlier threshold of the resume test: between the inlier counts
+// of this walk's consecutive pairs (483 to 626).
+constexpr int kStrictMinInliers = 550;
+
 VerificationOptions SmallOptions() {
   VerificationOptions options;
   options.pairs.num_temporal_neighbors = 2;
@@ -368,6 +372,73 @@ TEST(VerificationDriver, ReverifyStoredMatchesWithAndWithoutDepthCheck) {
   }
   EXPECT_LT(results[0].summary.num_accepted, baseline.summary.num_accepted);
   EXPECT_EQ(AcceptedPairIds(results[0]), AcceptedPairIds(results[1]));
+}
+
+// A run interrupted after part of its pairs (here: the consecutive pairs,
+// among them pairs the VIO step rejects, by the epipolar band and by the
+// depth check, and pairs RANSAC rejects) and run
+// again decides every pair as an uninterrupted run does: the stored pairs
+// resumed, a rejected one decided again from its stored matches (the same
+// VIO check, inlier count and reason), the others verified anew.
+TEST(VerificationDriver, ResumingAHalfVerifiedPairSetDecidesAsAnUninterruptedRun) {
+  const Fixture& f = SharedFixture();
+  const Trajectory corrupted = CorruptPose(f.vio_body, 6);
+  VerificationOptions options = SmallOptions();
+  // Strict enough that RANSAC rejects some pairs.
+  options.geometry.min_num_inliers = kStrictMinInliers;
+  // A scene taken to end 1.5 m away: the depth check rejects the pairs
+  // whose baseline shows the walls' parallax to be too small.
+  options.prior.max_scene_depth_m = 1.5;
+  options.prior.min_depth_parallax_px = 5.0;
+  options.prior.depth_tolerance_px = 2.0;
+  VerificationResult uninterrupted;
+  {
+    ColmapDatabase database = ColmapDatabase::Open(CopyFeatures(f, "uninterrupted.db"));
+    uninterrupted = RunVerification(f.sequence, corrupted, &database, options);
+  }
+  // What an interrupted run stored: the consecutive pairs only.
+  const fs::path path = CopyFeatures(f, "interrupted.db");
+  VerificationOptions first_part = options;
+  first_part.pairs.num_temporal_neighbors = 1;
+  first_part.pairs.num_retrieval_neighbors = 0;
+  size_t num_stored = 0;
+  {
+    ColmapDatabase database = ColmapDatabase::Open(path);
+    const VerificationResult part = RunVerification(f.sequence, corrupted, &database, first_part);
+    num_stored = part.decisions.size();
+    // It holds each kind of decision.
+    EXPECT_GT(part.summary.num_accepted, 0u);
+    EXPECT_GT(part.summary.num_vio_rejected, 0u);
+    EXPECT_GT(part.summary.num_ransac_rejected, 0u);
+    EXPECT_GT(part.summary.num_vio_depth_rejected, 0u);
+  }
+  ColmapDatabase database = ColmapDatabase::Open(path);
+  const VerificationResult resumed = RunVerification(f.sequence, corrupted, &database, options);
+  EXPECT_EQ(resumed.summary.num_resumed, num_stored);
+  ASSERT_EQ(resumed.decisions.size(), uninterrupted.decisions.size());
+  for (size_t i = 0; i < resumed.decisions.size(); ++i) {
+    const PairDecision& a = resumed.decisions[i];
+    const PairDecision& b = uninterrupted.decisions[i];
+    const std::string pair = a.name1 + " " + a.name2;
+    EXPECT_EQ(a.image_id1, b.image_id1) << pair;
+    EXPECT_EQ(a.image_id2, b.image_id2) << pair;
+    EXPECT_EQ(a.source, b.source) << pair;
+    EXPECT_EQ(a.accepted, b.accepted) << pair;
+    EXPECT_EQ(a.num_matches, b.num_matches) << pair;
+    EXPECT_EQ(a.num_inliers, b.num_inliers) << pair;
+    EXPECT_EQ(a.vio_rejected, b.vio_rejected) << pair;
+    EXPECT_EQ(a.vio_depth_rejected, b.vio_depth_rejected) << pair;
+    EXPECT_EQ(a.reason, b.reason) << pair;
+    EXPECT_EQ(std::isnan(a.vio_outlier_ratio), std::isnan(b.vio_outlier_ratio)) << pair;
+    if (!std::isnan(b.vio_outlier_ratio)) {
+      EXPECT_EQ(a.vio_outlier_ratio, b.vio_outlier_ratio) << pair;
+    }
+  }
+  EXPECT_EQ(resumed.summary.num_accepted, uninterrupted.summary.num_accepted);
+  EXPECT_EQ(resumed.summary.num_ransac_rejected, uninterrupted.summary.num_ransac_rejected);
+  EXPECT_GT(resumed.summary.num_ransac_rejected, 0u);
+  EXPECT_EQ(StoredGeometryPairIds(database), AcceptedPairIds(uninterrupted));
+  EXPECT_EQ(database.NumMatchedImagePairs(), uninterrupted.decisions.size());
 }
 
 }  // namespace

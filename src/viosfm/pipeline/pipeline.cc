@@ -20,6 +20,7 @@
 #include "viosfm/io/image_io.h"
 #include "viosfm/io/ply.h"
 #include "viosfm/io/verification_report.h"
+#include "viosfm/pipeline/run_fingerprint.h"
 #include "viosfm/pipeline/vio_input.h"
 #include "viosfm/scene/reprojection.h"
 #include "viosfm/util/errors.h"
@@ -91,11 +92,6 @@ double PeakMemoryMb() {
   return static_cast<double>(usage.ru_maxrss) / 1024.0;  // Linux: kilobytes
 }
 
-bool IsEurocDataset(const fs::path& root) {
-  return fs::is_directory(root / "mav0") ||
-         (root.filename() == "mav0" && fs::is_directory(root / "cam0"));
-}
-
 // The pose at `t`, interpolated (linear position, slerp rotation) between
 // the two poses around it when they are at most max_gap apart.
 std::optional<Rigid3d> InterpolatePose(const Trajectory& trajectory, timestamp_ns_t t,
@@ -147,39 +143,6 @@ class StageClock {
   int index_ = 0;
   Timer timer_;
 };
-
-// The option keys whose values decide what the database holds: a resumed
-// run must agree with the stored options on them.
-bool AffectsDatabase(const std::string& key) {
-  if (key == "sift.num_threads" || key == "verification.num_threads") return false;
-  return key.rfind("sift.", 0) == 0 || key.rfind("verification.", 0) == 0;
-}
-
-// Throws InputError if OUT/database.db was made with other feature or
-// verification options than `options` (as OUT/options.json records them).
-void CheckResumable(const fs::path& output_folder,
-                    const std::vector<std::pair<std::string, std::string>>& options) {
-  const fs::path database = output_folder / "database.db";
-  const fs::path options_file = output_folder / "options.json";
-  if (!fs::exists(database) || !fs::exists(options_file)) return;
-  ordered_json stored;
-  try {
-    stored = ordered_json::parse(ReadTextFile(options_file));
-  } catch (const nlohmann::json::exception& error) {
-    throw InputError(options_file.string(), 0,
-                     std::string("expected the JSON options of a previous run: ") + error.what());
-  }
-  for (const auto& [key, value] : options) {
-    if (!AffectsDatabase(key) || !stored.contains(key) || !stored[key].is_string()) continue;
-    const std::string previous = stored[key].get<std::string>();
-    if (previous != value) {
-      throw InputError(options_file.string(), 0,
-                       "the database " + database.string() + " was made with " + key + " = " +
-                           previous + " but this run asks for " + value +
-                           "; use another output folder or delete the database to start afresh");
-    }
-  }
-}
 
 void WriteJsonFile(const fs::path& path, const std::string& text) {
   WriteFileAtomically(path, [&text](std::ostream& stream) { stream << text << "\n"; });
@@ -243,6 +206,11 @@ void ColorPoints(const std::unordered_map<image_t, fs::path>& image_paths, bool 
 }
 
 }  // namespace
+
+bool IsEurocDatasetFolder(const fs::path& root) {
+  return fs::is_directory(root / "mav0") ||
+         (root.filename() == "mav0" && fs::is_directory(root / "cam0"));
+}
 
 std::string ViosfmVersion() {
   return VIOSFM_VERSION;
@@ -547,6 +515,7 @@ std::string PipelineSummaryToJson(const PipelineSummary& s) {
   json["peak_memory_mb"] = s.peak_memory_mb;
   if (s.evaluation) json["eval"] = StatsJson(*s.evaluation);
   json["options_file"] = "options.json";
+  json["fingerprint"] = s.fingerprint;
   return json.dump(2);
 }
 
@@ -556,7 +525,7 @@ Sequence ReadPipelineDataset(const fs::path& dataset, const ImageFolderOptions& 
     throw InputError(dataset.string(), 0, "dataset folder not found");
   }
   Sequence sequence;
-  if (IsEurocDataset(dataset)) {
+  if (IsEurocDatasetFolder(dataset)) {
     EurocReadOptions options;
     options.require_imu = false;  // the IMU only helps frame selection
     sequence = ReadEurocDataset(dataset, options);
@@ -590,15 +559,36 @@ PipelineSummary RunPipeline(const PipelineOptions& options) {
                                    ? std::string("the VIO")
                                    : options.vio_trajectory.string();
 
+  // The folder: locked while this run writes into it; an earlier run's
+  // outputs removed (--overwrite) or its stored data checked against this
+  // run's inputs before anything changes.
+  fs::create_directories(out);
+  const FolderLock lock(out, "another viosfm run");
+  if (options.overwrite) {
+    RemoveRunOutputs(options);
+  } else {
+    RemoveAtomicWriteLeftovers(options);
+  }
+
   // 1. Dataset.
   clock.Begin("read_dataset");
+  RunFingerprint fingerprint = FingerprintOfInputs(options);
+  CheckStoredRunData(out, fingerprint, /*complete=*/false);
+  // Before the first write into the folder (a bag's images, the own VIO's
+  // output): the folder is incomplete until summary.json is written again,
+  // last. A refused run leaves an earlier run's complete folder as it was.
+  const auto mark_incomplete = [&out] { fs::remove(out / "summary.json"); };
   Sequence sequence;
   if (HasRosbagExtension(options.dataset)) {
+    mark_incomplete();
     sequence = ReadRosbagDataset(options.dataset, options.EffectiveRosbagOptions());
     ApplyCalibrationFiles(options.calibration, &sequence);
   } else {
     sequence = ReadPipelineDataset(options.dataset, options.image_folder, options.calibration);
   }
+  AddSequenceToFingerprint(sequence, &fingerprint);
+  CheckStoredRunData(out, fingerprint, /*complete=*/false);
+  mark_incomplete();
   summary.num_frames_in = sequence.images.size();
   VIOSFM_LOG(INFO) << "run: " << sequence.images.size() << " images"
                    << (sequence.has_imu() ? ", IMU" : "")
@@ -610,6 +600,9 @@ PipelineSummary RunPipeline(const PipelineOptions& options) {
   clock.Begin("vio");
   const VioPoses vio_poses = LoadVioPoses(sequence, options);
   const Trajectory& vio = vio_poses.world_from_body;
+  AddVioPosesToFingerprint(vio, vio_poses.segments, &fingerprint);
+  CheckStoredRunData(out, fingerprint, /*complete=*/true);
+  summary.fingerprint = fingerprint.Hash();
   summary.num_vio_segments = vio_poses.num_segments();
   summary.vio_segment_rule = vio_poses.segment_rule;
   VIOSFM_LOG(INFO) << "run: " << vio.size() << " VIO poses over "
@@ -667,11 +660,9 @@ PipelineSummary RunPipeline(const PipelineOptions& options) {
 
   // 4. Features into OUT/database.db (resumable).
   clock.Begin("features");
-  fs::create_directories(out);
   const std::vector<std::pair<std::string, std::string>> key_values = options.ToKeyValues();
-  CheckResumable(out, key_values);
-  // A summary.json from an earlier run would mark this unfinished folder complete.
-  fs::remove(out / "summary.json");
+  // What the database's content is made from, before the database changes.
+  WriteJsonFile(out / "fingerprint.json", RunFingerprintToJson(fingerprint));
   {
     ordered_json json = ordered_json::object();
     for (const auto& [key, value] : key_values) json[key] = value;

@@ -41,10 +41,28 @@
 //   OUT/eval.json, OUT/eval_vio.json eval/report.h JSON (if ground truth)
 //   OUT/summary.json                 see PipelineSummaryToJson
 //
+//   OUT/fingerprint.json             what the stored features and matches were
+//                                    made from (run_fingerprint.h)
+//
 // Resume: a re-run on the same folder reuses the stored features and pair
-// verifications. options.json records the options of the run that filled
-// the database; a re-run whose feature or verification options differ is an
-// InputError (the stored results would not match the options).
+// verifications when its fingerprint (run_fingerprint.h: the dataset's
+// files, images and calibration, the VIO's input and poses, every option
+// that shapes the stored data) equals the stored one; otherwise it is an
+// InputError naming each changed key with its old and new value, before
+// anything in the folder changes. `overwrite` removes the run's stored
+// outputs first (RemoveRunOutputs) and starts afresh. Mapper options do not
+// count: a re-run with other ones reuses the features and matches.
+//
+// Crash safety: a run killed at any point (SIGKILL included) and run again
+// with the same options ends as an uninterrupted run would, byte for byte
+// (with the same thread count): the database keeps every committed image's
+// features and every verified pair (SQLite, WAL; one transaction per image
+// and per pair), a pair stored as rejected is decided again from its stored
+// matches, and every other output is recomputed. summary.json is removed
+// when the folder starts to change and written last, atomically: a folder
+// without it is incomplete (`viosfm report` and `viosfm export` refuse it).
+// Leftovers of interrupted atomic writes are removed at the start, and the
+// folder is locked (util/file_util.h FolderLock) while a run writes into it.
 #pragma once
 
 #include <filesystem>
@@ -146,6 +164,10 @@ struct PipelineOptions {
   int num_threads = 2;
   // Seed of every random choice (RANSAC, vocabulary training). Default 0.
   uint64_t seed = 0;
+  // Remove the output folder's stored database and outputs of an earlier
+  // run (RunOutputNames, run_fingerprint.h) before starting, instead of
+  // reusing them or refusing a folder made from other inputs. Default false.
+  bool overwrite = false;
   // Progress bars. Default true.
   bool show_progress = true;
 
@@ -185,6 +207,9 @@ struct PipelineEvaluation {
 
 struct PipelineSummary {
   std::string dataset;
+  // The hash of the run's fingerprint (run_fingerprint.h, RunFingerprint::Hash):
+  // runs with equal ones were made from the same inputs and data-shaping options.
+  std::string fingerprint;
   std::filesystem::path output_folder;
   std::string started_utc;  // "2026-11-21T07:38:16Z"
   size_t num_frames_in = 0;
@@ -224,6 +249,9 @@ std::string PipelineSummaryToJson(const PipelineSummary& summary);
 // cannot be read, has no stamps or no poses.
 Trajectory LoadVioTrajectory(const Sequence& sequence, const PipelineOptions& options);
 
+// Whether `folder` is a EuRoC dataset: it holds mav0/, or is mav0/ with cam0/.
+bool IsEurocDatasetFolder(const std::filesystem::path& folder);
+
 // Reads a dataset folder: EuRoC if it holds mav0/ (or is mav0), else an
 // image folder read with `image_folder`; then applies `calibration` (if any).
 // Throws InputError naming the folder.
@@ -233,8 +261,9 @@ Sequence ReadPipelineDataset(const std::filesystem::path& dataset,
 
 // Runs the pipeline (see the top of this file). Throws InputError for invalid
 // options, unreadable or empty input, a VIO trajectory that does not overlap
-// the images in time, a sequence without moving frames, or options that
-// differ from those of the database being resumed.
+// the images in time, a sequence without moving frames, a stored database
+// made from other inputs or options (see Resume above), or an output folder
+// another run is writing into.
 PipelineSummary RunPipeline(const PipelineOptions& options);
 
 }  // namespace viosfm

@@ -67,6 +67,10 @@ RunExportSummary ExportRun(const RunExportOptions& options) {
   }
   const fs::path run = options.run_folder;
   RequireFolder(run, "run folder");
+  // summary.json is written last: without it the run was interrupted (or is
+  // still running) and its other files may be stale or missing.
+  RequireFile(run / "summary.json",
+              "summary.json of a finished run (an interrupted run has none: run it again)");
   RequireFile(run / "database.db", "COLMAP database of the run");
   RequireFolder(run / "model", "COLMAP model of the run");
   const Reconstruction model = ReadColmapModel(run / "model");

@@ -1,7 +1,11 @@
 #include "viosfm/util/file_util.h"
 
+#include <fcntl.h>
+#include <sys/file.h>
 #include <unistd.h>
 
+#include <cerrno>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 
@@ -62,6 +66,46 @@ void WriteFolderAtomically(const fs::path& path,
     fs::remove_all(tmp, ignored);
     throw;
   }
+}
+
+bool IsAtomicWriteLeftover(const std::string& file_name, const std::string& target_name) {
+  for (const char* suffix : {".tmp-", ".old-"}) {
+    const std::string prefix = target_name + suffix;
+    if (file_name.size() <= prefix.size() || file_name.compare(0, prefix.size(), prefix) != 0) {
+      continue;
+    }
+    bool digits = true;
+    for (size_t i = prefix.size(); i < file_name.size(); ++i) {
+      digits = digits && file_name[i] >= '0' && file_name[i] <= '9';
+    }
+    if (digits) return true;
+  }
+  return false;
+}
+
+FolderLock::FolderLock(const fs::path& folder, const std::string& what) {
+  fd_ = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd_ < 0) {
+    throw InputError(folder.string(), 0,
+                     std::string("cannot open the folder to lock it: ") + std::strerror(errno));
+  }
+  if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+    const int error = errno;
+    ::close(fd_);
+    fd_ = -1;
+    if (error == EWOULDBLOCK) {
+      throw InputError(folder.string(), 0,
+                       what +
+                           " is writing into this folder; wait for it to end or choose "
+                           "another folder");
+    }
+    throw InputError(folder.string(), 0,
+                     std::string("cannot lock the folder: ") + std::strerror(error));
+  }
+}
+
+FolderLock::~FolderLock() {
+  if (fd_ >= 0) ::close(fd_);  // closing the last descriptor releases the lock
 }
 
 void RequireFile(const fs::path& path, const std::string& what) {

@@ -21,6 +21,29 @@ void WriteFileAtomically(const std::filesystem::path& path,
 void WriteFolderAtomically(const std::filesystem::path& path,
                            const std::function<void(const std::filesystem::path&)>& write);
 
+// Whether `file_name` is what an interrupted WriteFileAtomically or
+// WriteFolderAtomically of `target_name` leaves behind: "<target>.tmp-<pid>"
+// or "<target>.old-<pid>" (a process killed between its two renames leaves
+// the old folder so). Such leftovers are never taken for the target.
+bool IsAtomicWriteLeftover(const std::string& file_name, const std::string& target_name);
+
+// An exclusive advisory lock (flock) on a folder, held while the object
+// lives, so that two processes never write into the same folder at once. The
+// kernel releases it however the process ends, so a killed process leaves
+// no stale lock behind.
+class FolderLock {
+ public:
+  // Throws InputError naming the folder if another process holds its lock
+  // (`what` says who, e.g. "another `viosfm run`"), or if it cannot be opened.
+  FolderLock(const std::filesystem::path& folder, const std::string& what);
+  ~FolderLock();
+  FolderLock(const FolderLock&) = delete;
+  FolderLock& operator=(const FolderLock&) = delete;
+
+ private:
+  int fd_ = -1;
+};
+
 // Throws InputError naming `path` if it is not an existing regular file / folder.
 void RequireFile(const std::filesystem::path& path, const std::string& what = "file");
 void RequireFolder(const std::filesystem::path& path, const std::string& what = "folder");

@@ -56,5 +56,42 @@ TEST(FileUtil, RequireNamesThePath) {
   EXPECT_THROW(RequireFolder("/nonexistent"), InputError);
 }
 
+TEST(FileUtil, AtomicWriteLeftoversAreRecognised) {
+  EXPECT_TRUE(IsAtomicWriteLeftover("summary.json.tmp-1234", "summary.json"));
+  EXPECT_TRUE(IsAtomicWriteLeftover("model.old-7", "model"));
+  EXPECT_FALSE(IsAtomicWriteLeftover("summary.json", "summary.json"));
+  EXPECT_FALSE(IsAtomicWriteLeftover("summary.json.tmp-", "summary.json"));
+  EXPECT_FALSE(IsAtomicWriteLeftover("summary.json.tmp-12a", "summary.json"));
+  EXPECT_FALSE(IsAtomicWriteLeftover("model_txt.tmp-12", "model"));
+  EXPECT_FALSE(IsAtomicWriteLeftover("my.model.tmp-12", "model"));
+
+  // What WriteFolderAtomically leaves when its write throws: nothing; the
+  // names it would leave when killed are the ones recognised above.
+  const fs::path dir = testing::MakeScratchFolder("leftovers");
+  EXPECT_THROW(
+      WriteFolderAtomically(dir / "model",
+                            [](const fs::path& tmp) {
+                              EXPECT_TRUE(IsAtomicWriteLeftover(tmp.filename().string(), "model"));
+                              throw std::runtime_error("crash mid-write");
+                            }),
+      std::runtime_error);
+  EXPECT_TRUE(fs::is_empty(dir));
+}
+
+TEST(FileUtil, FolderLockIsExclusiveAndReleased) {
+  const fs::path dir = testing::MakeScratchFolder("lock");
+  {
+    const FolderLock lock(dir, "another test");
+    // flock locks belong to the open file description: a second open in the
+    // same process conflicts as a second process would.
+    const std::string message =
+        testing::InputErrorMessage([&] { FolderLock second(dir, "another test"); });
+    EXPECT_NE(message.find("another test is writing into this folder"), std::string::npos)
+        << message;
+  }
+  EXPECT_NO_THROW(FolderLock again(dir, "another test"));
+  EXPECT_THROW(FolderLock absent(dir / "absent", "x"), InputError);
+}
+
 }  // namespace
 }  // namespace viosfm

@@ -1,14 +1,17 @@
 #include "viosfm/vio/sliding_window.h"
 
-#include <ceres/covariance.h>
 #include <ceres/loss_function.h>
 #include <ceres/ordered_groups.h>
 #include <ceres/problem.h>
 #include <ceres/solver.h>
 
+#include <Eigen/Cholesky>
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <unordered_map>
+#include <vector>
 
 #include "viosfm/geometry/triangulation.h"
 #include "viosfm/util/errors.h"
@@ -417,31 +420,65 @@ Eigen::Matrix<double, 6, 6> SlidingWindowEstimator::Optimize(
   problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   ceres::Problem problem(problem_options);
   ceres::Manifold* pose_manifold = const_cast<ceres::Manifold*>(pose_manifold_.get());
+  // Ceres orders the parameter blocks of an ordering group by their
+  // addresses, which depend on the allocation history of the whole process:
+  // the same window could be solved in another order, and so give other last
+  // bits, depending on what ran before. So the solve works on copies of the window's states and the
+  // landmarks' inverse depths in one array, in window and track order (the
+  // order of their addresses), each state block in an ordering group of its
+  // own after the eliminated inverse depths; the values are copied back after.
+  constexpr size_t kStateSize = 16;  // pose 7, speed and biases 9
+  std::vector<double> values(frames_.size() * kStateSize + landmarks.size());
+  std::unordered_map<const double*, double*> copy_of;  // a frame's block -> its copy
   auto* ordering = new ceres::ParameterBlockOrdering;
-  for (auto& frame : frames_) {
-    problem.AddParameterBlock(frame->parameters.pose.data(), 7, pose_manifold);
-    problem.AddParameterBlock(frame->parameters.speed_bias.data(), 9);
-    ordering->AddElementToGroup(frame->parameters.pose.data(), 1);
-    ordering->AddElementToGroup(frame->parameters.speed_bias.data(), 1);
+  int group = 1;
+  for (size_t k = 0; k < frames_.size(); ++k) {
+    ImuStateParameters& parameters = frames_[k]->parameters;
+    double* pose = values.data() + k * kStateSize;
+    double* speed_bias = pose + parameters.pose.size();
+    std::copy(parameters.pose.begin(), parameters.pose.end(), pose);
+    std::copy(parameters.speed_bias.begin(), parameters.speed_bias.end(), speed_bias);
+    copy_of[parameters.pose.data()] = pose;
+    copy_of[parameters.speed_bias.data()] = speed_bias;
+    problem.AddParameterBlock(pose, 7, pose_manifold);
+    problem.AddParameterBlock(speed_bias, 9);
+    ordering->AddElementToGroup(pose, group++);
+    ordering->AddElementToGroup(speed_bias, group++);
   }
+  const auto pose_of = [&copy_of](const Frame& frame) {
+    return copy_of.at(frame.parameters.pose.data());
+  };
+  const auto speed_bias_of = [&copy_of](const Frame& frame) {
+    return copy_of.at(frame.parameters.speed_bias.data());
+  };
+  double* inverse_depths = values.data() + frames_.size() * kStateSize;
+  for (size_t i = 0; i < landmarks.size(); ++i) inverse_depths[i] = landmarks[i]->inverse_depth;
   if (prior_ != nullptr) {
-    problem.AddResidualBlock(new LinearPriorFactor(prior_), nullptr, prior_->ParameterBlocks());
+    std::vector<double*> blocks = prior_->ParameterBlocks();
+    for (double*& block : blocks) {
+      const auto it = copy_of.find(block);
+      VIOSFM_CHECK(it != copy_of.end())
+          << "the marginalisation prior acts on a block outside the window";
+      block = it->second;
+    }
+    problem.AddResidualBlock(new LinearPriorFactor(prior_), nullptr, blocks);
   }
   for (size_t k = 1; k < frames_.size(); ++k) {
     Frame& previous = *frames_[k - 1];
     Frame& frame = *frames_[k];
     const ImuState previous_state = StateOf(previous.parameters, previous.timestamp_ns);
     frame.preintegration->RepropagateIfNeeded(previous_state.gyro_bias, previous_state.accel_bias);
-    problem.AddResidualBlock(ImuFactor::Create(*frame.preintegration), ImuLoss(),
-                             previous.parameters.pose.data(), previous.parameters.speed_bias.data(),
-                             frame.parameters.pose.data(), frame.parameters.speed_bias.data());
+    problem.AddResidualBlock(ImuFactor::Create(*frame.preintegration), ImuLoss(), pose_of(previous),
+                             speed_bias_of(previous), pose_of(frame), speed_bias_of(frame));
   }
   const double sqrt_information = focal_length_px_ / options_.pixel_sigma_px;
-  for (Landmark* landmark : landmarks) {
+  for (size_t i = 0; i < landmarks.size(); ++i) {
+    Landmark* landmark = landmarks[i];
+    double* inverse_depth = &inverse_depths[i];
     const Eigen::Vector2d& anchor_observation =
         landmark->anchor->observations.at(landmark->track_id);
-    problem.AddParameterBlock(&landmark->inverse_depth, 1);
-    ordering->AddElementToGroup(&landmark->inverse_depth, 0);
+    problem.AddParameterBlock(inverse_depth, 1);
+    ordering->AddElementToGroup(inverse_depth, 0);
     for (auto& frame : frames_) {
       if (frame.get() == landmark->anchor) continue;
       const auto it = frame->observations.find(landmark->track_id);
@@ -449,8 +486,7 @@ Eigen::Matrix<double, 6, 6> SlidingWindowEstimator::Optimize(
       problem.AddResidualBlock(new InverseDepthReprojectionCost(anchor_observation, it->second,
                                                                 body_from_cam_, sqrt_information),
                                new ceres::CauchyLoss(options_.cauchy_loss_scale),
-                               landmark->anchor->parameters.pose.data(),
-                               frame->parameters.pose.data(), &landmark->inverse_depth);
+                               pose_of(*landmark->anchor), pose_of(*frame), inverse_depth);
     }
   }
   // Re-localisation: the frames' observations of the map kept at the reset.
@@ -458,10 +494,9 @@ Eigen::Matrix<double, 6, 6> SlidingWindowEstimator::Optimize(
     for (const auto& [track_id, normalized] : frame->observations) {
       const auto it = relocalization_points_.find(track_id);
       if (it == relocalization_points_.end()) continue;
-      problem.AddResidualBlock(
-          MapPointReprojectionFactor::Create(it->second, normalized, body_from_cam_,
-                                             sqrt_information),
-          new ceres::CauchyLoss(options_.cauchy_loss_scale), frame->parameters.pose.data());
+      problem.AddResidualBlock(MapPointReprojectionFactor::Create(it->second, normalized,
+                                                                  body_from_cam_, sqrt_information),
+                               new ceres::CauchyLoss(options_.cauchy_loss_scale), pose_of(*frame));
     }
   }
   ceres::Solver::Options solver_options;
@@ -480,24 +515,79 @@ Eigen::Matrix<double, 6, 6> SlidingWindowEstimator::Optimize(
   solver_options.logging_type = ceres::SILENT;
   ceres::Solver::Summary summary;
   ceres::Solve(solver_options, &problem, &summary);
+  for (auto& frame : frames_) {
+    ImuStateParameters& parameters = frame->parameters;
+    std::copy_n(pose_of(*frame), parameters.pose.size(), parameters.pose.begin());
+    std::copy_n(speed_bias_of(*frame), parameters.speed_bias.size(), parameters.speed_bias.begin());
+  }
+  for (size_t i = 0; i < landmarks.size(); ++i) landmarks[i]->inverse_depth = inverse_depths[i];
   if (!summary.IsSolutionUsable()) {
     VIOSFM_LOG(DEBUG) << "sliding window: solver failed: " << summary.message;
   }
   Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();
   if (!options_.compute_covariance || !summary.IsSolutionUsable()) return covariance;
-  ceres::Covariance::Options covariance_options;
-  covariance_options.algorithm_type = ceres::SPARSE_QR;
-  covariance_options.num_threads = options_.num_threads;
-  ceres::Covariance estimator(covariance_options);
-  const double* pose = frames_.back()->parameters.pose.data();
-  const std::vector<std::pair<const double*, const double*>> blocks = {{pose, pose}};
-  if (!estimator.Compute(blocks, &problem)) return covariance;
-  Eigen::Matrix<double, 6, 6, Eigen::RowMajor> tangent;
-  if (!estimator.GetCovarianceBlockInTangentSpace(pose, pose, tangent.data())) return covariance;
+  // The newest pose's marginal covariance: (J^T J)^-1 at the solution, with
+  // the loss applied as in the solve, in the tangent spaces. The inverse
+  // depths are eliminated in closed form (each residual sees at most one,
+  // so their block of J^T J is diagonal) and the states' Schur complement is
+  // inverted densely, in a fixed order: the same bits every run
+  // (ceres::Covariance's sparse QR through SuiteSparse gave other last bits
+  // from run to run on the same window).
+  ceres::Problem::EvaluateOptions evaluate;
+  for (auto& frame : frames_) {
+    evaluate.parameter_blocks.push_back(pose_of(*frame));
+    evaluate.parameter_blocks.push_back(speed_bias_of(*frame));
+  }
+  for (size_t i = 0; i < landmarks.size(); ++i) {
+    evaluate.parameter_blocks.push_back(&inverse_depths[i]);
+  }
+  evaluate.num_threads = 1;
+  ceres::CRSMatrix jacobian;
+  if (!problem.Evaluate(evaluate, nullptr, nullptr, nullptr, &jacobian)) return covariance;
+  const int num_states = static_cast<int>(frames_.size()) * 15;  // tangent: pose 6, speed_bias 9
+  const int num_depths = static_cast<int>(landmarks.size());
+  VIOSFM_CHECK_EQ(jacobian.num_cols, num_states + num_depths);
+  Eigen::MatrixXd states = Eigen::MatrixXd::Zero(num_states, num_states);
+  Eigen::MatrixXd states_depths = Eigen::MatrixXd::Zero(num_states, num_depths);
+  Eigen::VectorXd depths = Eigen::VectorXd::Zero(num_depths);
+  for (int row = 0; row < jacobian.num_rows; ++row) {
+    for (int a = jacobian.rows[row]; a < jacobian.rows[row + 1]; ++a) {
+      const int column_a = jacobian.cols[a];
+      for (int b = jacobian.rows[row]; b < jacobian.rows[row + 1]; ++b) {
+        const int column_b = jacobian.cols[b];
+        const double product = jacobian.values[a] * jacobian.values[b];
+        if (column_a < num_states && column_b < num_states) {
+          states(column_a, column_b) += product;
+        } else if (column_a < num_states) {
+          states_depths(column_a, column_b - num_states) += product;
+        } else if (column_b >= num_states) {
+          VIOSFM_CHECK_EQ(column_a, column_b) << "a residual sees two inverse depths";
+          depths(column_a - num_states) += product;
+        }
+      }
+    }
+  }
+  for (int l = 0; l < num_depths; ++l) {
+    // A depth no residual sees (a zero column) constrains nothing.
+    if (!(depths(l) > 0.0)) continue;
+    states.noalias() -= states_depths.col(l) * states_depths.col(l).transpose() / depths(l);
+  }
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(states);
+  const Eigen::VectorXd pivots = ldlt.vectorD().cwiseAbs();
+  // Rank deficient (no covariance), as ceres::Covariance's default
+  // reciprocal condition number 1e-14 judges.
+  if (ldlt.info() != Eigen::Success || !ldlt.isPositive() || num_states == 0 ||
+      !(pivots.minCoeff() > 1e-14 * pivots.maxCoeff())) {
+    return covariance;
+  }
+  Eigen::MatrixXd unit = Eigen::MatrixXd::Zero(num_states, 6);
+  const int newest = num_states - 15;
+  unit.block<6, 6>(newest, 0).setIdentity();
+  const Eigen::Matrix<double, 6, 6> tangent = ldlt.solve(unit).block<6, 6>(newest, 0);
   // The quaternion part of the tangent is half the rotation vector.
   Eigen::Matrix<double, 6, 6> scale = Eigen::Matrix<double, 6, 6>::Identity();
   scale.topLeftCorner<3, 3>() *= 2.0;
-  covariance = scale * tangent * scale;
+  covariance = scale * (0.5 * (tangent + tangent.transpose())) * scale;
   return covariance;
 }
 

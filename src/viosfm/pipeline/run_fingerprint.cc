@@ -1,0 +1,376 @@
+#include "viosfm/pipeline/run_fingerprint.h"
+
+#include <algorithm>
+#include <array>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+
+#include "viosfm/features/feature_extraction.h"
+#include "viosfm/io/euroc.h"
+#include "viosfm/io/rosbag_dataset.h"
+#include "viosfm/util/errors.h"
+#include "viosfm/util/file_util.h"
+#include "viosfm/util/hash.h"
+#include "viosfm/util/logging.h"
+#include "viosfm/util/timestamp.h"
+
+namespace viosfm {
+namespace {
+
+namespace fs = std::filesystem;
+using ordered_json = nlohmann::ordered_json;
+
+constexpr const char* kAbsent = "(absent)";
+// At most this many differences are spelled out in the error message.
+constexpr size_t kMaxDifferencesNamed = 8;
+
+bool StartsWith(const std::string& text, const std::string& prefix) {
+  return text.compare(0, prefix.size(), prefix) == 0;
+}
+bool EndsWith(const std::string& text, const std::string& suffix) {
+  return text.size() >= suffix.size() &&
+         text.compare(text.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+// "1234 bytes, fnv1a64 ..." of an input file, or "missing" (its reader
+// then says what is wrong with it).
+std::string FileValue(const fs::path& path) {
+  if (!fs::is_regular_file(path)) return "missing";
+  return HashFile(path).ToString();
+}
+
+// Whether `name` is a leftover of an interrupted atomic write of any file:
+// "<x>.tmp-<pid>", "<x>.old-<pid>", or the PNG writer's "<x>.tmp-<pid>.png".
+bool IsAnyAtomicWriteLeftover(const std::string& name) {
+  if (EndsWith(name, ".png") && IsAnyAtomicWriteLeftover(name.substr(0, name.size() - 4))) {
+    return true;
+  }
+  for (const char* marker : {".tmp-", ".old-"}) {
+    const size_t position = name.rfind(marker);
+    if (position != std::string::npos && position > 0 &&
+        IsAtomicWriteLeftover(name, name.substr(0, position))) {
+      return true;
+    }
+  }
+  return false;
+}
+
+// The run's folders whose every file is the run's (leftovers are looked for inside).
+constexpr std::array<const char*, 3> kOwnedFolders = {"verification", "vio", "bag"};
+
+}  // namespace
+
+void RunFingerprint::Set(const std::string& key, const std::string& value) {
+  for (auto& [existing_key, existing_value] : entries) {
+    if (existing_key == key) {
+      existing_value = value;
+      return;
+    }
+  }
+  entries.emplace_back(key, value);
+}
+
+const std::string* RunFingerprint::Find(const std::string& key) const {
+  for (const auto& [existing_key, value] : entries) {
+    if (existing_key == key) return &value;
+  }
+  return nullptr;
+}
+
+std::string RunFingerprint::Hash() const {
+  Fnv1a64 hash;
+  for (const auto& [key, value] : entries) {
+    hash.UpdateField(key);
+    hash.UpdateField(value);
+  }
+  return hash.HexDigest();
+}
+
+bool ShapesStoredData(const std::string& key, const PipelineOptions& options) {
+  static const std::set<std::string> kNotShaping = {
+      // Paths: their content is hashed instead, or they are where outputs go.
+      "dataset", "output_folder", "vio.trajectory", "image_folder.timestamps_file",
+      "image_folder.camera_yaml", "calibration.camchain", "calibration.imu", "rosbag.camera_yaml",
+      "rosbag.imu_yaml", "rosbag.extract_folder", "verification.retrieval.vocabulary_path",
+      // Said by vio.input and dataset.rig.
+      "vio.source", "rosbag.rig",
+      // After the verification.
+      "use_imu_scale",
+      // The verification's seed is verification.seed.
+      "seed",
+      // How, not what.
+      "num_threads", "show_progress"};
+  if (kNotShaping.count(key) > 0) return false;
+  if (StartsWith(key, "mapper.") || StartsWith(key, "imu_scale.")) return false;
+  if (EndsWith(key, ".num_threads") || EndsWith(key, ".show_progress")) return false;
+  if (StartsWith(key, "vio_uncertainty.")) {
+    // The model widens the verification's epipolar band (and weighs the
+    // mapper's priors, which stores nothing).
+    return options.verification.use_vio_prior && options.verification.band_follows_drift;
+  }
+  return true;
+}
+
+RunFingerprint FingerprintOfInputs(const PipelineOptions& options) {
+  RunFingerprint fingerprint;
+  fingerprint.Set("fingerprint.version", kRunFingerprintVersion);
+  const fs::path& dataset = options.dataset;
+  if (HasRosbagExtension(dataset)) {
+    fingerprint.Set("dataset.kind", "rosbag");
+    fingerprint.Set("dataset.bag", FileValue(dataset));
+    const RosbagDatasetOptions rosbag = options.EffectiveRosbagOptions();
+    if (!rosbag.camera_yaml.empty()) {
+      fingerprint.Set("dataset.camera_yaml", FileValue(rosbag.camera_yaml));
+    }
+    if (!rosbag.imu_yaml.empty()) fingerprint.Set("dataset.imu_yaml", FileValue(rosbag.imu_yaml));
+  } else if (!fs::is_directory(dataset)) {
+    fingerprint.Set("dataset.kind", "missing");
+  } else if (IsEurocDatasetFolder(dataset)) {
+    fingerprint.Set("dataset.kind", "euroc");
+    EurocReadOptions read;  // as ReadPipelineDataset reads
+    read.require_imu = false;
+    for (const fs::path& file : EurocDatasetFiles(dataset, read)) {
+      fingerprint.Set("dataset.file." + file.generic_string(), FileValue(dataset / file));
+    }
+  } else {
+    fingerprint.Set("dataset.kind", "image_folder");
+    if (!options.image_folder.timestamps_file.empty()) {
+      fingerprint.Set("dataset.timestamps_file", FileValue(options.image_folder.timestamps_file));
+    }
+    if (!options.image_folder.camera_yaml.empty()) {
+      fingerprint.Set("dataset.camera_yaml", FileValue(options.image_folder.camera_yaml));
+    }
+  }
+  if (!options.calibration.camchain.empty()) {
+    fingerprint.Set("calibration.camchain", FileValue(options.calibration.camchain));
+  }
+  if (!options.calibration.imu.empty()) {
+    fingerprint.Set("calibration.imu", FileValue(options.calibration.imu));
+  }
+  if (options.vio_source) {
+    fingerprint.Set("vio.input", "a VioSource given in code");
+  } else if (options.vio_trajectory.empty()) {
+    fingerprint.Set("vio.input", "viosfm's own VIO");
+  } else {
+    fingerprint.Set("vio.input", "file, " + FileValue(options.vio_trajectory));
+  }
+  if (!options.verification.retrieval.vocabulary_path.empty()) {
+    fingerprint.Set("vocabulary.file", FileValue(options.verification.retrieval.vocabulary_path));
+  }
+  for (const auto& [key, value] : options.ToKeyValues()) {
+    if (ShapesStoredData(key, options)) fingerprint.Set(key, value);
+  }
+  return fingerprint;
+}
+
+void AddSequenceToFingerprint(const Sequence& sequence, RunFingerprint* fingerprint) {
+  Fnv1a64 images;
+  uintmax_t total_bytes = 0;
+  for (const SequenceImage& image : sequence.images) {
+    std::error_code error;
+    const uintmax_t size = fs::file_size(image.path, error);
+    if (error) throw InputError(image.path.string(), 0, "cannot read its size: " + error.message());
+    images.UpdateField(DatabaseImageName(image));
+    images.UpdateValue(image.timestamp_ns);
+    images.UpdateValue(size);
+    total_bytes += size;
+  }
+  std::ostringstream text;
+  text << sequence.images.size() << " images";
+  if (!sequence.images.empty()) {
+    text << " [" << FormatNsAsSeconds(sequence.images.front().timestamp_ns, 3) << ", "
+         << FormatNsAsSeconds(sequence.images.back().timestamp_ns, 3) << "] s";
+  }
+  text << ", " << total_bytes << " bytes, fnv1a64 " << images.HexDigest();
+  fingerprint->Set("dataset.images", text.str());
+
+  const SensorRig& rig = sequence.rig;
+  Fnv1a64 hash;
+  hash.UpdateValue(static_cast<int>(rig.camera.model_id));
+  hash.UpdateValue(rig.camera.width);
+  hash.UpdateValue(rig.camera.height);
+  for (const double param : rig.camera.params) hash.UpdateValue(param);
+  for (const double value : rig.body_from_cam.rotation.coeffs()) hash.UpdateValue(value);
+  for (const double value : rig.body_from_cam.translation) hash.UpdateValue(value);
+  for (const double value : {rig.imu_noise.gyro_noise_density, rig.imu_noise.gyro_random_walk,
+                             rig.imu_noise.accel_noise_density, rig.imu_noise.accel_random_walk,
+                             rig.imu_noise.rate_hz, rig.camera_rate_hz}) {
+    hash.UpdateValue(value);
+  }
+  hash.UpdateValue(rig.cam_time_offset_ns);
+  fingerprint->Set("dataset.rig", rig.camera.ModelName() + " " + std::to_string(rig.camera.width) +
+                                      "x" + std::to_string(rig.camera.height) + ", fnv1a64 " +
+                                      hash.HexDigest());
+}
+
+void AddVioPosesToFingerprint(const Trajectory& world_from_body, const std::vector<int>& segments,
+                              RunFingerprint* fingerprint) {
+  Fnv1a64 hash;
+  for (const StampedPose& pose : world_from_body.poses) {
+    hash.UpdateValue(pose.timestamp_ns);
+    for (const double value : pose.world_from_frame.rotation.coeffs()) hash.UpdateValue(value);
+    for (const double value : pose.world_from_frame.translation) hash.UpdateValue(value);
+  }
+  for (const int segment : segments) hash.UpdateValue(segment);
+  const int num_segments = segments.empty() ? 0 : segments.back() + 1;
+  fingerprint->Set("vio.poses", std::to_string(world_from_body.size()) + " poses in " +
+                                    std::to_string(num_segments) + " segment(s), fnv1a64 " +
+                                    hash.HexDigest());
+}
+
+std::string RunFingerprintToJson(const RunFingerprint& fingerprint) {
+  ordered_json json;
+  json["about"] =
+      "what the features and matches in database.db were made from; a run into this folder "
+      "reuses them only with the same entries (--overwrite starts afresh)";
+  ordered_json entries = ordered_json::object();
+  for (const auto& [key, value] : fingerprint.entries) entries[key] = value;
+  json["entries"] = entries;
+  return json.dump(2);
+}
+
+RunFingerprint ReadRunFingerprint(const fs::path& path) {
+  const auto fail = [&path](const std::string& what) {
+    throw InputError(path.string(), 0,
+                     "expected the fingerprint of a viosfm run (" + what +
+                         "); re-run with --overwrite to start afresh");
+  };
+  ordered_json json;
+  try {
+    json = ordered_json::parse(ReadTextFile(path));
+  } catch (const nlohmann::json::exception& error) {
+    fail(std::string("not JSON: ") + error.what());
+  }
+  if (!json.is_object() || !json.contains("entries") || !json["entries"].is_object()) {
+    fail("no \"entries\" object");
+  }
+  RunFingerprint fingerprint;
+  for (const auto& [key, value] : json["entries"].items()) {
+    if (!value.is_string()) fail("the entry \"" + key + "\" is not a string");
+    fingerprint.entries.emplace_back(key, value.get<std::string>());
+  }
+  return fingerprint;
+}
+
+std::vector<FingerprintDifference> CompareFingerprints(const RunFingerprint& stored,
+                                                       const RunFingerprint& current,
+                                                       bool complete) {
+  std::vector<FingerprintDifference> differences;
+  for (const auto& [key, value] : current.entries) {
+    const std::string* previous = stored.Find(key);
+    if (previous == nullptr || *previous != value) {
+      differences.push_back({key, previous ? *previous : kAbsent, value});
+    }
+  }
+  if (complete) {
+    for (const auto& [key, value] : stored.entries) {
+      if (current.Find(key) == nullptr) differences.push_back({key, value, kAbsent});
+    }
+  }
+  return differences;
+}
+
+void CheckStoredRunData(const fs::path& output_folder, const RunFingerprint& current,
+                        bool complete) {
+  const fs::path database = output_folder / "database.db";
+  if (!fs::exists(database)) return;
+  const fs::path file = output_folder / "fingerprint.json";
+  if (!fs::exists(file)) {
+    throw InputError(database.string(), 0,
+                     "stored features and matches without the fingerprint.json that says what "
+                     "they were made from (a folder of an older viosfm, or a database copied "
+                     "here alone); re-run with --overwrite to remove the stored outputs and start "
+                     "afresh, or choose another --out");
+  }
+  const std::vector<FingerprintDifference> differences =
+      CompareFingerprints(ReadRunFingerprint(file), current, complete);
+  if (differences.empty()) return;
+  std::string message = "the features and matches stored in " + database.string() +
+                        " were made from other inputs or options than this run's: ";
+  for (size_t i = 0; i < differences.size() && i < kMaxDifferencesNamed; ++i) {
+    const FingerprintDifference& d = differences[i];
+    message += (i > 0 ? "; " : "") + d.key + " was '" + d.stored + "', is now '" + d.current + "'";
+  }
+  if (differences.size() > kMaxDifferencesNamed) {
+    message += " (and " + std::to_string(differences.size() - kMaxDifferencesNamed) + " more)";
+  }
+  message +=
+      ". Re-run with --overwrite to remove that run's database and outputs and start afresh, or "
+      "choose another --out";
+  throw InputError(file.string(), 0, message);
+}
+
+std::vector<std::string> RunOutputNames(const PipelineOptions& options) {
+  std::vector<std::string> names = {"database.db",
+                                    "database.db-wal",
+                                    "database.db-shm",
+                                    "database.db-journal",
+                                    "fingerprint.json",
+                                    "options.json",
+                                    "summary.json",
+                                    "model",
+                                    "model_txt",
+                                    "verification",
+                                    "vio",
+                                    "points.ply",
+                                    "trajectory_cam.tum",
+                                    "trajectory_body.tum",
+                                    "vio_body.tum",
+                                    "groundtruth_body.tum",
+                                    "eval.json",
+                                    "eval_vio.json"};
+  // A bag's images go to OUT/bag unless the options send them elsewhere.
+  if (options.rosbag.extract_folder.empty()) names.push_back("bag");
+  return names;
+}
+
+size_t RemoveAtomicWriteLeftovers(const PipelineOptions& options) {
+  const fs::path& out = options.output_folder;
+  if (!fs::is_directory(out)) return 0;
+  const std::vector<std::string> names = RunOutputNames(options);
+  std::vector<fs::path> leftovers;
+  for (const fs::directory_entry& entry : fs::directory_iterator(out)) {
+    const std::string name = entry.path().filename().string();
+    for (const std::string& output : names) {
+      if (IsAtomicWriteLeftover(name, output)) leftovers.push_back(entry.path());
+    }
+  }
+  for (const char* folder : kOwnedFolders) {
+    if (std::find(names.begin(), names.end(), folder) == names.end()) continue;
+    if (!fs::is_directory(out / folder) || fs::is_symlink(out / folder)) continue;
+    for (const fs::directory_entry& entry : fs::recursive_directory_iterator(out / folder)) {
+      if (IsAnyAtomicWriteLeftover(entry.path().filename().string())) {
+        leftovers.push_back(entry.path());
+      }
+    }
+  }
+  size_t removed = 0;
+  for (const fs::path& path : leftovers) {
+    std::error_code error;
+    if (fs::remove_all(path, error) > 0) ++removed;
+  }
+  if (removed > 0) {
+    VIOSFM_LOG(INFO) << "run: removed " << removed << " leftover(s) of an interrupted run in "
+                     << out.string();
+  }
+  return removed;
+}
+
+size_t RemoveRunOutputs(const PipelineOptions& options) {
+  const fs::path& out = options.output_folder;
+  size_t removed = RemoveAtomicWriteLeftovers(options);
+  for (const std::string& name : RunOutputNames(options)) {
+    const fs::path path = out / name;
+    if (fs::symlink_status(path).type() == fs::file_type::not_found) continue;
+    fs::remove_all(path);
+    ++removed;
+  }
+  if (removed > 0) {
+    VIOSFM_LOG(INFO) << "run: --overwrite: removed " << removed << " stored output(s) of "
+                     << out.string();
+  }
+  return removed;
+}
+
+}  // namespace viosfm

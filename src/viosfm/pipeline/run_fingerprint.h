@@ -1,0 +1,130 @@
+// The fingerprint of a `viosfm run`: what the features and verified matches
+// stored in OUT/database.db were made from, so that a re-run into the same
+// folder reuses them only when it would make the same ones.
+//
+// A fingerprint is a list of (key, value) texts, written to
+// OUT/fingerprint.json (atomically, before the database is opened):
+//   fingerprint.version           the layout of this list ("1")
+//   dataset.kind                  euroc, image_folder, rosbag (or missing)
+//   dataset.file.<path>           each file of a EuRoC folder the reader reads
+//                                 (io/euroc.h EurocDatasetFiles: the cam0 and
+//                                 imu0 data.csv and sensor.yaml, the ground
+//                                 truth csv): size and FNV-1a hash
+//                                 (util/hash.h) of the whole content
+//   dataset.bag                   a ROS 1 bag: size and hash of the whole
+//                                 file (the bag is read whole anyway)
+//   dataset.timestamps_file, dataset.camera_yaml, dataset.imu_yaml,
+//   calibration.camchain, calibration.imu, vocabulary.file
+//                                 the other input files, when given: size and
+//                                 hash (never their paths, so a moved dataset
+//                                 is the same dataset)
+//   dataset.images                the images as read: count, time span, total
+//                                 size, and a hash of every (name, stamp,
+//                                 file size)
+//   dataset.rig                   the sensor rig as read and calibrated
+//                                 (camera, body_from_cam, IMU noise, rates,
+//                                 time offset; whatever file it came from)
+//   vio.input                     viosfm's own VIO, a trajectory file (size
+//                                 and hash) or a VioSource given in code
+//   vio.poses                     the VIO's poses and segments as the run uses
+//                                 them: count, segments, hash (bit for bit)
+//   <option>                      every option of options.json that shapes
+//                                 the stored data (ShapesStoredData): frame
+//                                 selection, sift.*, verification.* (pairs
+//                                 N1/N2, vocabulary, matching, VIO check,
+//                                 RANSAC, seed), the VIO file's format,
+//                                 frame, time tolerance and segment gap,
+//                                 own_vio.* when the own VIO runs, and
+//                                 vio_uncertainty.* when the verification band
+//                                 follows the VIO's drift
+// Options that only shape the mapper and what follows it (mapper.*,
+// imu_scale.*, --no-imu-scale) and thread counts are not part of it: a
+// re-run with other ones reuses the stored features and matches.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "viosfm/io/sequence.h"
+#include "viosfm/pipeline/pipeline.h"
+#include "viosfm/scene/trajectory.h"
+
+namespace viosfm {
+
+struct RunFingerprint {
+  // (key, value) in the order they were set; keys are unique.
+  std::vector<std::pair<std::string, std::string>> entries;
+
+  // Replaces the value of `key`, or appends it.
+  void Set(const std::string& key, const std::string& value);
+  // The value of `key`, or nullptr.
+  const std::string* Find(const std::string& key) const;
+  // FNV-1a over every key and value: one text for summary.json.
+  std::string Hash() const;
+};
+
+// The layout version written as fingerprint.version.
+inline constexpr const char* kRunFingerprintVersion = "1";
+
+// Whether the option `key` of PipelineOptions::ToKeyValues shapes the
+// features or matches a run stores. Conservative: every key is taken to
+// shape them except the mapper's and what follows it (mapper.*, imu_scale.*,
+// use_imu_scale), thread counts, progress bars, paths whose content is
+// hashed instead (dataset, calibration, VIO and vocabulary files) and the
+// output folder; vio_uncertainty.* shapes them only when the verification
+// uses the VIO prior with a band that follows the drift.
+bool ShapesStoredData(const std::string& key, const PipelineOptions& options);
+
+// What is known before the dataset is read: the input files and the
+// options. A file that does not exist is "missing" (its reader reports it).
+// Throws InputError naming a file that exists but cannot be read.
+RunFingerprint FingerprintOfInputs(const PipelineOptions& options);
+// Adds dataset.images and dataset.rig of the sequence as read.
+void AddSequenceToFingerprint(const Sequence& sequence, RunFingerprint* fingerprint);
+// Adds vio.poses: the poses (world_from_body, stamped) and their segments.
+void AddVioPosesToFingerprint(const Trajectory& world_from_body, const std::vector<int>& segments,
+                              RunFingerprint* fingerprint);
+
+// fingerprint.json's text, and reading it back (InputError naming the file
+// if it is not such a file).
+std::string RunFingerprintToJson(const RunFingerprint& fingerprint);
+RunFingerprint ReadRunFingerprint(const std::filesystem::path& path);
+
+struct FingerprintDifference {
+  std::string key;
+  std::string stored;   // "(absent)" if the stored fingerprint lacks the key
+  std::string current;  // "(absent)" if the current one lacks it
+};
+// The keys whose values differ. With `complete` false, `current` is a
+// fingerprint still being built: keys only the stored one has are skipped.
+std::vector<FingerprintDifference> CompareFingerprints(const RunFingerprint& stored,
+                                                       const RunFingerprint& current,
+                                                       bool complete);
+
+// Throws InputError if `output_folder` holds stored features and matches
+// (database.db) made from other inputs than `current` says: naming
+// fingerprint.json, every changed key with its stored and its current value,
+// and --overwrite; or if the database has no fingerprint.json beside it.
+// Nothing stored: no check.
+void CheckStoredRunData(const std::filesystem::path& output_folder, const RunFingerprint& current,
+                        bool complete);
+
+// The files and folders a run writes into its output folder (top level):
+// database.db with its SQLite -wal, -shm and -journal files, fingerprint.json,
+// options.json, summary.json, model/, model_txt/, verification/, vio/,
+// points.ply, the .tum trajectories, eval.json, eval_vio.json, and bag/ when
+// a bag is extracted to its default place.
+std::vector<std::string> RunOutputNames(const PipelineOptions& options);
+
+// --overwrite: removes every output of RunOutputNames and the leftovers of
+// interrupted atomic writes, nothing else. Returns how many entries it removed.
+size_t RemoveRunOutputs(const PipelineOptions& options);
+
+// Removes what interrupted atomic writes of the run's outputs left behind
+// ("<output>.tmp-<pid>", "<output>.old-<pid>", util/file_util.h), at the top
+// level and inside the run's own folders. Returns how many it removed.
+size_t RemoveAtomicWriteLeftovers(const PipelineOptions& options);
+
+}  // namespace viosfm

@@ -1,0 +1,242 @@
+#include "viosfm/pipeline/run_fingerprint.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <set>
+#include <string>
+
+#include "viosfm/util/errors.h"
+#include "viosfm/util/file_util.h"
+#include "viosfm/util/hash.h"
+#include "viosfm/util/testing.h"
+
+namespace viosfm {
+namespace {
+
+namespace fs = std::filesystem;
+
+PipelineOptions Options(const fs::path& dataset, const fs::path& out) {
+  PipelineOptions options;
+  options.dataset = dataset;
+  options.output_folder = out;
+  options.vio_trajectory = dataset / "vio.tum";
+  return options;
+}
+
+// A EuRoC folder of text files only (FingerprintOfInputs reads no image).
+fs::path MakeEurocTextFiles(const fs::path& root) {
+  for (const char* file : {"mav0/cam0/sensor.yaml", "mav0/cam0/data.csv", "mav0/imu0/sensor.yaml",
+                           "mav0/imu0/data.csv"}) {
+    fs::create_directories((root / file).parent_path());
+    testing::WriteTextFile(root / file, std::string(file) + "\n");
+  }
+  testing::WriteTextFile(root / "vio.tum", "1 0 0 0 0 0 0 1\n");
+  return root;
+}
+
+std::set<std::string> Keys(const RunFingerprint& fingerprint) {
+  std::set<std::string> keys;
+  for (const auto& [key, value] : fingerprint.entries) keys.insert(key);
+  return keys;
+}
+
+// Every option of options.json either shapes the stored data or is named
+// here as one that does not; a new option shapes it until said otherwise.
+TEST(RunFingerprint, WhichOptionsShapeTheStoredData) {
+  PipelineOptions options = Options("d", "o");
+  for (const char* key :
+       {"sift.max_num_features", "sift.root_sift", "frame_selection.target_rate_hz",
+        "frame_selection.trim_static", "verification.pairs.num_temporal_neighbors",
+        "verification.pairs.num_retrieval_neighbors", "verification.retrieval.vocabulary.depth",
+        "verification.prior.max_epipolar_error_px", "verification.geometry.min_num_inliers",
+        "verification.seed", "vio.max_time_difference_ns", "vio.max_gap_ns", "vio.frame",
+        "own_vio.window.window_size", "vio_uncertainty.position_per_sqrt_m", "some.new_option"}) {
+    EXPECT_TRUE(ShapesStoredData(key, options)) << key;
+  }
+  for (const char* key :
+       {"mapper.batch_size", "mapper.ba.use_relative_pose_priors", "mapper.ba.prior_weighting",
+        "mapper.bridge_spans", "use_imu_scale", "imu_scale.max_scale_sigma", "num_threads",
+        "sift.num_threads", "verification.num_threads", "own_vio.window.num_threads",
+        "show_progress", "own_vio.show_progress", "seed", "dataset", "output_folder",
+        "vio.trajectory", "calibration.camchain", "verification.retrieval.vocabulary_path"}) {
+    EXPECT_FALSE(ShapesStoredData(key, options)) << key;
+  }
+  // The uncertainty model shapes the verification only through the band
+  // that follows the drift.
+  options.verification.band_follows_drift = false;
+  EXPECT_FALSE(ShapesStoredData("vio_uncertainty.position_per_sqrt_m", options));
+  options.verification.band_follows_drift = true;
+  options.verification.use_vio_prior = false;
+  EXPECT_FALSE(ShapesStoredData("vio_uncertainty.position_per_sqrt_m", options));
+}
+
+TEST(RunFingerprint, InputsFilesAndOptions) {
+  const fs::path root = MakeEurocTextFiles(testing::MakeScratchFolder("fingerprint_inputs"));
+  const RunFingerprint fingerprint = FingerprintOfInputs(Options(root, root / "out"));
+  EXPECT_EQ(*fingerprint.Find("fingerprint.version"), kRunFingerprintVersion);
+  EXPECT_EQ(*fingerprint.Find("dataset.kind"), "euroc");
+  // "mav0/imu0/data.csv\n" is 19 bytes.
+  EXPECT_EQ(*fingerprint.Find("dataset.file.mav0/imu0/data.csv"),
+            HashFile(root / "mav0/imu0/data.csv").ToString());
+  EXPECT_EQ(HashFile(root / "mav0/imu0/data.csv").size, 19u);
+  EXPECT_EQ(fingerprint.Find("dataset.file.mav0/state_groundtruth_estimate0/data.csv"), nullptr);
+  EXPECT_EQ(*fingerprint.Find("vio.input"), "file, " + HashFile(root / "vio.tum").ToString());
+  EXPECT_EQ(*fingerprint.Find("sift.max_num_features"), "8192");
+  const std::set<std::string> keys = Keys(fingerprint);
+  EXPECT_EQ(keys.count("mapper.batch_size"), 0u);
+  EXPECT_EQ(keys.count("output_folder"), 0u);
+  EXPECT_EQ(keys.count("own_vio.window.window_size"), 0u);  // a VIO file: no own VIO
+
+  // The own VIO and its options; a missing VIO file is "missing" (its reader
+  // says what is wrong later).
+  PipelineOptions own = Options(root, root / "out");
+  own.vio_trajectory.clear();
+  const RunFingerprint own_fingerprint = FingerprintOfInputs(own);
+  EXPECT_EQ(*own_fingerprint.Find("vio.input"), "viosfm's own VIO");
+  EXPECT_NE(own_fingerprint.Find("own_vio.window.window_size"), nullptr);
+  own.vio_trajectory = root / "absent.tum";
+  EXPECT_EQ(*FingerprintOfInputs(own).Find("vio.input"), "file, missing");
+  own.dataset = root / "absent";
+  EXPECT_EQ(*FingerprintOfInputs(own).Find("dataset.kind"), "missing");
+}
+
+TEST(RunFingerprint, SequenceAndVioPoses) {
+  const fs::path root = testing::MakeScratchFolder("fingerprint_sequence");
+  Sequence sequence;
+  for (int k = 0; k < 3; ++k) {
+    const fs::path image = root / (std::to_string(k) + ".png");
+    testing::WriteTextFile(image, std::string(static_cast<size_t>(10 + k), 'x'));
+    sequence.images.push_back({int64_t{1'000'000'000} * (k + 1), image});
+  }
+  RunFingerprint a;
+  AddSequenceToFingerprint(sequence, &a);
+  EXPECT_EQ(a.Find("dataset.images")->substr(0, 39), "3 images [1.000, 3.000] s, 33 bytes, fn");
+  // One image one byte longer: other images.
+  testing::WriteTextFile(sequence.images[1].path, std::string(12, 'x'));
+  RunFingerprint b;
+  AddSequenceToFingerprint(sequence, &b);
+  EXPECT_NE(*a.Find("dataset.images"), *b.Find("dataset.images"));
+  EXPECT_EQ(*a.Find("dataset.rig"), *b.Find("dataset.rig"));
+  // Another calibration: another rig.
+  sequence.rig.body_from_cam.translation.x() += 1e-12;
+  RunFingerprint c;
+  AddSequenceToFingerprint(sequence, &c);
+  EXPECT_NE(*b.Find("dataset.rig"), *c.Find("dataset.rig"));
+
+  Trajectory poses;
+  poses.poses.push_back({1, Rigid3d()});
+  poses.poses.push_back({2, Rigid3d()});
+  RunFingerprint one_segment, two_segments, moved;
+  AddVioPosesToFingerprint(poses, {0, 0}, &one_segment);
+  AddVioPosesToFingerprint(poses, {0, 1}, &two_segments);
+  EXPECT_NE(*one_segment.Find("vio.poses"), *two_segments.Find("vio.poses"));
+  EXPECT_EQ(one_segment.Find("vio.poses")->substr(0, 27), "2 poses in 1 segment(s), fn");
+  poses.poses[1].world_from_frame.translation.z() = 1e-300;  // bit for bit
+  AddVioPosesToFingerprint(poses, {0, 0}, &moved);
+  EXPECT_NE(*one_segment.Find("vio.poses"), *moved.Find("vio.poses"));
+}
+
+TEST(RunFingerprint, JsonRoundTripAndComparison) {
+  const fs::path folder = testing::MakeScratchFolder("fingerprint_json");
+  RunFingerprint stored;
+  stored.Set("a", "1");
+  stored.Set("b", "two words");
+  stored.Set("a", "3");  // replaced, keeps its place
+  ASSERT_EQ(stored.entries.size(), 2u);
+  EXPECT_EQ(stored.entries[0].second, "3");
+  WriteFileAtomically(folder / "fingerprint.json",
+                      [&](std::ostream& out) { out << RunFingerprintToJson(stored); });
+  const RunFingerprint read = ReadRunFingerprint(folder / "fingerprint.json");
+  EXPECT_EQ(read.entries, stored.entries);
+  EXPECT_EQ(read.Hash(), stored.Hash());
+
+  RunFingerprint current;
+  current.Set("a", "3");
+  current.Set("c", "new");
+  // Partial: only the keys computed so far count.
+  std::vector<FingerprintDifference> differences = CompareFingerprints(stored, current, false);
+  ASSERT_EQ(differences.size(), 1u);
+  EXPECT_EQ(differences[0].key, "c");
+  EXPECT_EQ(differences[0].stored, "(absent)");
+  differences = CompareFingerprints(stored, current, true);
+  ASSERT_EQ(differences.size(), 2u);
+  EXPECT_EQ(differences[1].key, "b");
+  EXPECT_EQ(differences[1].current, "(absent)");
+  EXPECT_NE(stored.Hash(), current.Hash());
+
+  testing::WriteTextFile(folder / "bad.json", "{\"entries\": {\"a\": 1}}");
+  EXPECT_NE(testing::InputErrorMessage([&] { ReadRunFingerprint(folder / "bad.json"); })
+                .find("\"a\" is not a string"),
+            std::string::npos);
+  testing::WriteTextFile(folder / "bad.json", "not json");
+  EXPECT_NE(testing::InputErrorMessage([&] { ReadRunFingerprint(folder / "bad.json"); })
+                .find("--overwrite"),
+            std::string::npos);
+}
+
+TEST(RunFingerprint, CheckStoredRunDataNamesWhatChanged) {
+  const fs::path out = testing::MakeScratchFolder("fingerprint_check");
+  RunFingerprint stored;
+  stored.Set("dataset.file.mav0/imu0/data.csv", "10 bytes, fnv1a64 0000000000000001");
+  stored.Set("sift.max_num_features", "600");
+  RunFingerprint current = stored;
+  // Nothing stored: nothing to check.
+  current.Set("sift.max_num_features", "300");
+  EXPECT_NO_THROW(CheckStoredRunData(out, current, true));
+  // A database without its fingerprint.
+  testing::WriteTextFile(out / "database.db", "");
+  EXPECT_NE(testing::InputErrorMessage([&] { CheckStoredRunData(out, current, true); })
+                .find("without the fingerprint.json"),
+            std::string::npos);
+  WriteFileAtomically(out / "fingerprint.json",
+                      [&](std::ostream& stream) { stream << RunFingerprintToJson(stored); });
+  EXPECT_NO_THROW(CheckStoredRunData(out, stored, true));
+  const InputError error = testing::ExpectInputError([&] { CheckStoredRunData(out, current, true); });
+  EXPECT_EQ(error.path(), (out / "fingerprint.json").string());
+  const std::string message = error.what();
+  EXPECT_NE(message.find("sift.max_num_features was '600', is now '300'"), std::string::npos)
+      << message;
+  EXPECT_EQ(message.find("imu0"), std::string::npos) << message;  // unchanged
+  EXPECT_NE(message.find("--overwrite"), std::string::npos) << message;
+}
+
+TEST(RunFingerprint, OverwriteRemovesTheRunsOutputsOnly) {
+  const fs::path out = testing::MakeScratchFolder("fingerprint_overwrite");
+  const PipelineOptions options = Options("dataset", out);
+  for (const char* file : {"database.db", "database.db-wal", "fingerprint.json", "summary.json",
+                           "points.ply", "trajectory_body.tum", "verification/pairs.csv",
+                           "model/images.bin", "vio/states.csv", "bag/mav0/cam0/data/1.png",
+                           "notes.txt", "model_mine/x.txt", "report.html"}) {
+    fs::create_directories((out / file).parent_path());
+    testing::WriteTextFile(out / file, "x");
+  }
+  // Leftovers of killed atomic writes, at the top and inside the run's folders.
+  for (const char* file : {"summary.json.tmp-123", "model.old-77", "verification/pairs.csv.tmp-5",
+                           "bag/mav0/cam0/data/2.png.tmp-9.png", "notes.txt.tmp-1"}) {
+    testing::WriteTextFile(out / file, "x");
+  }
+  EXPECT_EQ(RemoveAtomicWriteLeftovers(options), 4u);
+  EXPECT_FALSE(fs::exists(out / "summary.json.tmp-123"));
+  EXPECT_FALSE(fs::exists(out / "verification/pairs.csv.tmp-5"));
+  EXPECT_FALSE(fs::exists(out / "bag/mav0/cam0/data/2.png.tmp-9.png"));
+  EXPECT_TRUE(fs::exists(out / "notes.txt.tmp-1"));  // not a file of the run
+  EXPECT_TRUE(fs::exists(out / "summary.json"));
+
+  RemoveRunOutputs(options);
+  std::set<std::string> left;
+  for (const fs::directory_entry& entry : fs::recursive_directory_iterator(out)) {
+    left.insert(fs::relative(entry.path(), out).generic_string());
+  }
+  EXPECT_EQ(left, (std::set<std::string>{"notes.txt", "notes.txt.tmp-1", "model_mine",
+                                         "model_mine/x.txt", "report.html"}));
+  // A bag extracted elsewhere: OUT/bag is not the run's.
+  PipelineOptions elsewhere = options;
+  elsewhere.rosbag.extract_folder = out / "extracted";
+  fs::create_directories(out / "bag");
+  RemoveRunOutputs(elsewhere);
+  EXPECT_TRUE(fs::exists(out / "bag"));
+}
+
+}  // namespace
+}  // namespace viosfm
