@@ -37,7 +37,9 @@ SECONDS=0
 
 # Small settings: 80 moving frames, a few minutes for everything.
 SIM_ARGS=(--scenario room --duration 10 --rate 10 --threads 1)
-RUN_ARGS=(--no-progress --max-features 1000 --n1 6 --n2 3 --batch-size 20)
+# Pairs stored every 40 (instead of 2000), so that a kill in the verification
+# leaves a half-verified pair set behind.
+RUN_ARGS=(--no-progress --max-features 1000 --n1 6 --n2 3 --batch-size 20 --verification-batch 40)
 
 say() { echo "$*"; }
 # (also from background jobs: the marker file carries the failure out)
@@ -196,6 +198,13 @@ kill_point() {
     echo "$line; re-run FAILED" >"$WORK/kill_$name.result"
     return
   fi
+  # What the re-run found stored.
+  local stored_features stored_pairs
+  stored_features=$(grep -o "features [0-9]* images ([0-9]* extracted, [0-9]* already stored)" \
+    "$LOGS/kill_${name}_rerun.log" | head -1 | sed 's/features \([0-9]*\) images ([0-9]* extracted, \([0-9]*\) .*/\2 of \1/')
+  stored_pairs=$(grep -o "verification: [0-9]* pairs .*; [0-9]* already stored" \
+    "$LOGS/kill_${name}_rerun.log" | head -1 | sed 's/verification: \([0-9]*\) pairs .*; \([0-9]*\) already stored/\2 of \1/')
+  line="$line; the re-run found ${stored_features:-no} images' features and ${stored_pairs:-no} pairs stored"
   local result
   if result=$(compare "$WORK/ref" "$out"); then
     echo "$line; re-run: $result" >"$WORK/kill_$name.result"

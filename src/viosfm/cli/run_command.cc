@@ -189,6 +189,11 @@ void RegisterRun(CLI::App& app) {
                    "at time gaps longer than this, s (0: never)")
       ->capture_default_str();
   AddVioUncertaintyOptions(command, &args->vio_uncertainty);
+  command
+      ->add_option("--verification-batch", args->options.verification.batch_size,
+                   "Pairs matched and verified between two writes to the database (an "
+                   "interrupted run keeps every finished batch; the results do not depend on it)")
+      ->capture_default_str();
   command->add_flag("--guided-matching", args->options.verification.guided_matching,
                     "Match inside the VIO epipolar band instead of by brute force");
   command->add_option("--camera-yaml", args->bag.camera_yaml,
