@@ -218,7 +218,8 @@ viosfm_run() {
     rm -rf "$dir/run" "$dir/reused.txt"
     if [ -n "${REUSE:-}" ] && [ -f "$REUSE/run/database.db" ]; then
       mkdir -p "$dir/run"
-      cp "$REUSE/run/database.db" "$REUSE/run/options.json" "$dir/run/"
+      cp "$REUSE/run/database.db" "$REUSE/run/options.json" "$REUSE/run/fingerprint.json" \
+        "$dir/run/"
       echo "features and verified matches of $(basename "$REUSE")" > "$dir/reused.txt"
     fi
     local source=(--vio-trajectory "$vio")

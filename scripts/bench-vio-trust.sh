@@ -62,7 +62,8 @@ for case in "${cases[@]}"; do
     esac
     rm -rf "$runs/$variant"
     mkdir -p "$runs/$variant"
-    cp "$runs/default/database.db" "$runs/default/options.json" "$runs/$variant/"
+    cp "$runs/default/database.db" "$runs/default/options.json" "$runs/default/fingerprint.json" \
+      "$runs/$variant/"
     "$VIOSFM" run "$seq" --out "$runs/$variant" --vio-trajectory "$seq/vio_emulated.tum" \
       "${rate_flags[@]}" "${run_flags[@]}" "${flags[@]}" > "$runs/$variant.log" 2>&1
   done

@@ -6,8 +6,8 @@
 // cryptographic: inputs made to collide on purpose are not detected. Two
 // different inputs of a run share a hash with probability about 2^-64.
 //
-// Speed: one multiply per byte, about 1 GB/s on one core; a file is read in
-// 1 MiB blocks.
+// Speed: one multiply per byte; a file is read in 1 MiB blocks: 0.7 GB/s
+// from the page cache on the 2-core test machine (500 MB in 0.72 s).
 #pragma once
 
 #include <cstddef>
