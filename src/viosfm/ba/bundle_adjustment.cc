@@ -3,7 +3,6 @@
 #include <ceres/ceres.h>
 
 #include <Eigen/Cholesky>
-
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
@@ -153,19 +152,18 @@ BundleAdjustmentSummary BundleAdjust(Reconstruction* reconstruction,
       ceres::LossFunction* prior_loss = nullptr;
       if (options.prior_weighting == PriorWeighting::kCovariance && prior.sqrt_information) {
         // The connectivity factor exp(-beta c) scales the information.
-        const double factor = std::sqrt(
-            prior.weight_scale *
-            RelativePoseWeight(prior.num_verified_matches, 1.0, options.prior_beta));
+        const double factor =
+            std::sqrt(prior.weight_scale *
+                      RelativePoseWeight(prior.num_verified_matches, 1.0, options.prior_beta));
         sqrt_information = factor * *prior.sqrt_information;
         if (prior.rotation_only) {
           // The rotation's marginal information: whiten the rotation block alone.
           sqrt_information.setZero();
           const Eigen::Matrix<double, 6, 6> information =
               prior.sqrt_information->transpose() * *prior.sqrt_information;
-          const Eigen::Matrix3d rotation_covariance =
-              information.inverse().topLeftCorner<3, 3>();
-          const Eigen::Matrix3d rotation_sqrt = rotation_covariance.llt().matrixL().solve(
-              Eigen::Matrix3d::Identity());
+          const Eigen::Matrix3d rotation_covariance = information.inverse().topLeftCorner<3, 3>();
+          const Eigen::Matrix3d rotation_sqrt =
+              rotation_covariance.llt().matrixL().solve(Eigen::Matrix3d::Identity());
           sqrt_information.topLeftCorner<3, 3>() = factor * rotation_sqrt;
         }
         if (options.prior_loss_scale > 0.0) {

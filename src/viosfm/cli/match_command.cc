@@ -135,8 +135,9 @@ void RegisterMatch(CLI::App& app) {
                          "check (step 1), then RANSAC (step 2); writes matches and "
                          "verified geometries to the "
                          "database; a re-run skips the pairs already stored");
-  command->add_option("dataset", args->dataset,
-                      "EuRoC dataset (folder containing mav0/) or a ROS 1 bag")
+  command
+      ->add_option("dataset", args->dataset,
+                   "EuRoC dataset (folder containing mav0/) or a ROS 1 bag")
       ->required();
   command->add_option("--database", args->database, "COLMAP database with features")->required();
   AddBagOptions(command, &args->bag, /*add_camera_yaml=*/true);

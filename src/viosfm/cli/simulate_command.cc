@@ -95,10 +95,9 @@ void RegisterSimulate(CLI::App& app) {
       ->add_option("--vio-drift", args->drift_factor,
                    "Multiplier of the emulated VIO's drift and noise (0: perfect VIO)")
       ->capture_default_str();
-  command
-      ->add_option("--vio-scale-error", args->scale_error,
-                   "Metric scale error of the emulated VIO (0.02: its displacements 2 % too "
-                   "long); default: the profile's (gentle 0, realistic 0.02)");
+  command->add_option("--vio-scale-error", args->scale_error,
+                      "Metric scale error of the emulated VIO (0.02: its displacements 2 % too "
+                      "long); default: the profile's (gentle 0, realistic 0.02)");
   command
       ->add_option("--vio-profile", args->options.vio_profile,
                    "Emulated VIO: gentle (distance random walks and white jitter) or realistic "

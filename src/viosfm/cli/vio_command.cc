@@ -66,8 +66,9 @@ void RegisterVio(CLI::App& app) {
       "vio",
       "Monocular visual-inertial odometry (KLT front end, sliding-window back end with IMU "
       "preintegration and marginalisation): a pose, velocity, biases and status for every frame");
-  command->add_option("dataset", args->dataset,
-                      "EuRoC dataset (folder containing mav0/) or a ROS 1 bag")
+  command
+      ->add_option("dataset", args->dataset,
+                   "EuRoC dataset (folder containing mav0/) or a ROS 1 bag")
       ->required();
   command->add_option("--out", args->out, "Output folder")->required();
   AddCalibrationOptions(command, &args->calibration);

@@ -118,8 +118,8 @@ std::vector<Rigid3d> P3PEstimator::Estimate(const std::vector<X_t>& x, const std
   return models;
 }
 
-void P3PEstimator::Residuals(const std::vector<X_t>& x, const std::vector<Y_t>& y,
-                             const M_t& model, std::vector<double>* squared_residuals) {
+void P3PEstimator::Residuals(const std::vector<X_t>& x, const std::vector<Y_t>& y, const M_t& model,
+                             std::vector<double>* squared_residuals) {
   squared_residuals->resize(x.size());
   const Eigen::Matrix3d rotation = model.rotation.toRotationMatrix();
   for (size_t i = 0; i < x.size(); ++i) {
@@ -287,8 +287,7 @@ size_t CountAbsolutePoseInliers(const std::vector<Eigen::Vector2d>& points_norma
 
 AbsolutePoseResult EstimateAbsolutePose(const std::vector<Eigen::Vector2d>& points_normalized,
                                         const std::vector<Eigen::Vector3d>& points_in_world,
-                                        double focal_length_px,
-                                        const AbsolutePoseOptions& options,
+                                        double focal_length_px, const AbsolutePoseOptions& options,
                                         const std::optional<Rigid3d>& predicted) {
   VIOSFM_CHECK(options.Check()) << options.Validate();
   VIOSFM_CHECK_EQ(points_normalized.size(), points_in_world.size());
@@ -323,8 +322,8 @@ AbsolutePoseResult EstimateAbsolutePose(const std::vector<Eigen::Vector2d>& poin
         inlier_world.push_back(points_in_world[i]);
       }
       if (inlier_points.size() < 6) break;
-      pose = RefineAbsolutePose(inlier_points, inlier_world, pose, 20,
-                                0.5 * ransac_options.max_error);
+      pose =
+          RefineAbsolutePose(inlier_points, inlier_world, pose, 20, 0.5 * ransac_options.max_error);
       std::vector<double> residuals;
       P3PEstimator::Residuals(points_normalized, points_in_world, pose, &residuals);
       for (size_t i = 0; i < mask.size(); ++i) {

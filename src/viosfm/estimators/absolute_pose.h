@@ -95,8 +95,7 @@ struct AbsolutePoseResult {
 // refinement on the inliers. focal_length_px converts max_error_px.
 AbsolutePoseResult EstimateAbsolutePose(const std::vector<Eigen::Vector2d>& points_normalized,
                                         const std::vector<Eigen::Vector3d>& points_in_world,
-                                        double focal_length_px,
-                                        const AbsolutePoseOptions& options,
+                                        double focal_length_px, const AbsolutePoseOptions& options,
                                         const std::optional<Rigid3d>& predicted = std::nullopt);
 
 // Correspondences that `cam_from_world` reprojects within max_error_px.

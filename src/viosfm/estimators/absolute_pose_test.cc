@@ -22,18 +22,17 @@ Rigid3d RandomPose(Random* random) {
 
 // Points in front of the camera (depth 2-8 m, within +-40 degrees), in world
 // coordinates, with their normalised image points (noise in pixels).
-void MakeCorrespondences(const Rigid3d& cam_from_world, int count, double noise_px,
-                         Random* random, std::vector<Eigen::Vector2d>* image,
-                         std::vector<Eigen::Vector3d>* world) {
+void MakeCorrespondences(const Rigid3d& cam_from_world, int count, double noise_px, Random* random,
+                         std::vector<Eigen::Vector2d>* image, std::vector<Eigen::Vector3d>* world) {
   const Rigid3d world_from_cam = cam_from_world.Inverse();
   for (int i = 0; i < count; ++i) {
     const double depth = random->Uniform(2.0, 8.0);
     const Eigen::Vector3d in_cam(random->Uniform(-0.8, 0.8) * depth,
                                  random->Uniform(-0.6, 0.6) * depth, depth);
     world->push_back(world_from_cam * in_cam);
-    image->push_back(in_cam.hnormalized() + Eigen::Vector2d(random->Normal(0, noise_px),
-                                                            random->Normal(0, noise_px)) /
-                                                kFocalPx);
+    image->push_back(in_cam.hnormalized() +
+                     Eigen::Vector2d(random->Normal(0, noise_px), random->Normal(0, noise_px)) /
+                         kFocalPx);
   }
 }
 
@@ -53,7 +52,8 @@ TEST(P3P, RecoversTheExactPoseAmongItsSolutions) {
     ASSERT_LE(solutions.size(), 4u);
     double best = 1e9;
     for (const Rigid3d& pose : solutions) {
-      best = std::min(best, PositionError(pose, truth) + pose.rotation.angularDistance(truth.rotation));
+      best = std::min(best,
+                      PositionError(pose, truth) + pose.rotation.angularDistance(truth.rotation));
       // Every solution reprojects the three points.
       std::vector<double> residuals;
       P3PEstimator::Residuals(image, world, pose, &residuals);
@@ -88,8 +88,9 @@ TEST(AbsolutePose, RansacWithOutliersAndNoise) {
     // 40 % outliers: image points anywhere in the view.
     for (int i = 0; i < 80; ++i) {
       image.emplace_back(random.Uniform(-0.8, 0.8), random.Uniform(-0.6, 0.6));
-      world.push_back(world[random.UniformInt(0, 119)] +
-                      Eigen::Vector3d(random.Normal(0, 1), random.Normal(0, 1), random.Normal(0, 1)));
+      world.push_back(world[random.UniformInt(0, 119)] + Eigen::Vector3d(random.Normal(0, 1),
+                                                                         random.Normal(0, 1),
+                                                                         random.Normal(0, 1)));
     }
     AbsolutePoseOptions options;
     options.seed = trial;
@@ -111,8 +112,9 @@ TEST(AbsolutePose, PredictionIsScoredAndAWrongOneIsReplaced) {
   MakeCorrespondences(truth, 100, 0.5, &random, &image, &world);
   AbsolutePoseOptions options;
   // A good prediction (1 mm, 0.2 mrad off): all inliers, few trials.
-  const Rigid3d good(truth.rotation * Eigen::Quaterniond(Eigen::AngleAxisd(2e-4, Eigen::Vector3d::UnitY())),
-                     truth.translation + Eigen::Vector3d(0.001, 0, 0));
+  const Rigid3d good(
+      truth.rotation * Eigen::Quaterniond(Eigen::AngleAxisd(2e-4, Eigen::Vector3d::UnitY())),
+      truth.translation + Eigen::Vector3d(0.001, 0, 0));
   const AbsolutePoseResult with_good = EstimateAbsolutePose(image, world, kFocalPx, options, good);
   EXPECT_GE(with_good.num_predicted_inliers, 98u);
   EXPECT_TRUE(with_good.success);
@@ -265,8 +267,7 @@ TEST(AbsolutePoseRealData, RegistersAFountainImageFromItsMatchesAlone) {
   }
   ASSERT_GT(image5.size(), 100u);
   AbsolutePoseOptions options;
-  const AbsolutePoseResult result =
-      EstimateAbsolutePose(image5, world, camera5.k(0, 0), options);
+  const AbsolutePoseResult result = EstimateAbsolutePose(image5, world, camera5.k(0, 0), options);
   ASSERT_TRUE(result.success);
   RecordProperty("correspondences", static_cast<int>(image5.size()));
   RecordProperty("inliers", static_cast<int>(result.num_inliers));

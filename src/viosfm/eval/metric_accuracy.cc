@@ -20,16 +20,15 @@ MetricAccuracy EvaluateMetricAccuracy(const Trajectory& estimate, const Trajecto
   eval_options.alignment = AlignmentMode::kSE3;
   accuracy.ate_se3_m = EvaluateTrajectories(estimate, reference, eval_options).ate_translation_m;
   eval_options.alignment = AlignmentMode::kPosYaw;
-  accuracy.ate_posyaw_m =
-      EvaluateTrajectories(estimate, reference, eval_options).ate_translation_m;
+  accuracy.ate_posyaw_m = EvaluateTrajectories(estimate, reference, eval_options).ate_translation_m;
   return accuracy;
 }
 
 std::string FormatMetricAccuracy(const MetricAccuracy& accuracy) {
   std::ostringstream out;
-  out << std::fixed << std::setprecision(4) << "Sim(3) " << accuracy.ate_sim3_m.rmse
-      << " m, SE(3) " << accuracy.ate_se3_m.rmse << " m, pos+yaw " << accuracy.ate_posyaw_m.rmse
-      << " m, scale " << accuracy.scale << " (" << std::showpos << std::setprecision(2)
+  out << std::fixed << std::setprecision(4) << "Sim(3) " << accuracy.ate_sim3_m.rmse << " m, SE(3) "
+      << accuracy.ate_se3_m.rmse << " m, pos+yaw " << accuracy.ate_posyaw_m.rmse << " m, scale "
+      << accuracy.scale << " (" << std::showpos << std::setprecision(2)
       << 100.0 * accuracy.scale_error() << " %)";
   return out.str();
 }

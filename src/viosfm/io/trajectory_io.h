@@ -18,8 +18,8 @@
 // a warning, as evo keeps it: the TUM fr2/desk ground truth has one) and
 // rotations within the one tolerance of every reader (io/rotation_checks.h):
 // a quaternion of norm 1 +- 1e-3 (then normalised), a KITTI rotation block
-// orthonormal to 1e-3 with determinant +1 (a mirrored frame is rejected). Writers use enough digits (17 significant, 9 decimal
-// places of seconds for TUM) that write -> read reproduces every number.
+// orthonormal to 1e-3 with determinant +1 (a mirrored frame is rejected). Writers use enough digits
+// (17 significant, 9 decimal places of seconds for TUM) that write -> read reproduces every number.
 #pragma once
 
 #include <filesystem>

@@ -268,7 +268,8 @@ TEST(TumTrajectory, StampsBeyondTheRangeAreRejected) {
   WriteTextFile(folder / "far.txt", "1 0 0 0 0 0 0 1\n9223372036 0 0 0 0 0 0 1\n");
   EXPECT_THAT(InputErrorMessage([&] { ReadTumTrajectory(folder / "far.txt"); }),
               HasSubstr("far.txt:2: column 1 (timestamp): expected decimal seconds within"));
-  WriteTextFile(folder / "near.txt", "-4611686018.427387904 0 0 0 0 0 0 1\n4611686018 0 0 0 0 0 0 1\n");
+  WriteTextFile(folder / "near.txt",
+                "-4611686018.427387904 0 0 0 0 0 0 1\n4611686018 0 0 0 0 0 0 1\n");
   EXPECT_EQ(ReadTumTrajectory(folder / "near.txt").poses[0].timestamp_ns, -kMaxAbsTimestampNs);
 }
 

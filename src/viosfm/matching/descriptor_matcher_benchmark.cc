@@ -53,7 +53,8 @@ const Pair& MakePair() {
     };
     for (int i = 0; i < kNum; ++i) {
       const Eigen::Vector2d pixel(752.0 * uniform(rng), 480.0 * uniform(rng));
-      const Eigen::Vector3d point = (K.inverse() * pixel.homogeneous()) * (2.0 + 6.0 * uniform(rng));
+      const Eigen::Vector3d point =
+          (K.inverse() * pixel.homogeneous()) * (2.0 + 6.0 * uniform(rng));
       const Eigen::VectorXd descriptor = random_descriptor();
       set_row(raw1, i, descriptor);
       p.points1.push_back(pixel);

@@ -1,5 +1,6 @@
 #include "viosfm/matching/verification_driver.h"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
@@ -14,8 +15,6 @@
 
 #include "viosfm/features/feature_extraction.h"
 #include "viosfm/features/sift.h"
-#include <Eigen/Eigenvalues>
-
 #include "viosfm/geometry/epipolar.h"
 #include "viosfm/sensor/camera_models.h"
 #include "viosfm/util/errors.h"
@@ -242,8 +241,8 @@ VerificationResult RunVerification(const Sequence& sequence, const Trajectory& v
                 : std::vector<VioOdometer>();
   for (ImageInfo& info : images) {
     if (use_prior) {
-      if (const std::optional<size_t> index = NearestPose(
-              vio_world_from_body, info.timestamp_ns, options.max_pose_time_difference_ns)) {
+      if (const std::optional<size_t> index = NearestPose(vio_world_from_body, info.timestamp_ns,
+                                                          options.max_pose_time_difference_ns)) {
         info.world_from_body = vio_world_from_body.poses[*index].world_from_frame;
         info.odometer = odometers[*index];
       }
@@ -420,9 +419,9 @@ VerificationResult RunVerification(const Sequence& sequence, const Trajectory& v
         PriorVerificationOptions prior = options.prior;
         if (options.band_follows_drift) {
           const VioSample frame1{info1.timestamp_ns, *info1.world_from_body * body_from_cam,
-                                info1.odometer};
+                                 info1.odometer};
           const VioSample frame2{info2.timestamp_ns, *info2.world_from_body * body_from_cam,
-                                info2.odometer};
+                                 info2.odometer};
           const Rigid3d cam2_from_cam1 = RelativePoseFromVio(
               *info1.world_from_body, *info2.world_from_body, body_from_cam, body_from_cam);
           prior.max_epipolar_error_px = DriftEpipolarBandPx(

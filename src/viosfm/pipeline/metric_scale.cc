@@ -26,8 +26,9 @@ MetricScaleSummary ApplyImuMetricScale(const Sequence& sequence, const SensorRig
     body.poses.push_back(
         {rig.CamToImuTime(*image.timestamp_ns), image.cam_from_world.Inverse() * cam_from_body});
   }
-  std::sort(body.poses.begin(), body.poses.end(),
-            [](const StampedPose& a, const StampedPose& b) { return a.timestamp_ns < b.timestamp_ns; });
+  std::sort(body.poses.begin(), body.poses.end(), [](const StampedPose& a, const StampedPose& b) {
+    return a.timestamp_ns < b.timestamp_ns;
+  });
   summary.estimated = true;
   summary.imu = EstimateImuScale(body, sequence.imu, rig.imu_noise, options);
   std::ostringstream message;

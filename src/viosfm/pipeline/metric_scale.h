@@ -19,8 +19,8 @@
 namespace viosfm {
 
 struct MetricScaleSummary {
-  bool estimated = false;  // the dataset had an IMU and enough frames were posed
-  ImuScaleResult imu;      // the IMU's estimate
+  bool estimated = false;      // the dataset had an IMU and enough frames were posed
+  ImuScaleResult imu;          // the IMU's estimate
   double applied_scale = 1.0;  // what the reconstruction was multiplied by
   std::string message;
 };

@@ -149,12 +149,9 @@ void WriteJsonFile(const fs::path& path, const std::string& text) {
 }
 
 ordered_json MetricJson(const MetricAccuracy& m) {
-  return {{"ate_sim3_rmse_m", m.ate_sim3_m.rmse},
-          {"ate_se3_rmse_m", m.ate_se3_m.rmse},
-          {"ate_posyaw_rmse_m", m.ate_posyaw_m.rmse},
-          {"scale", m.scale},
-          {"scale_error", m.scale_error()},
-          {"num_poses", m.num_poses}};
+  return {{"ate_sim3_rmse_m", m.ate_sim3_m.rmse},     {"ate_se3_rmse_m", m.ate_se3_m.rmse},
+          {"ate_posyaw_rmse_m", m.ate_posyaw_m.rmse}, {"scale", m.scale},
+          {"scale_error", m.scale_error()},           {"num_poses", m.num_poses}};
 }
 
 ordered_json StatsJson(const PipelineEvaluation& e) {
@@ -676,9 +673,8 @@ PipelineSummary RunPipeline(const PipelineOptions& options) {
 
   // 5. Pairs and the two-step verification (resumable).
   clock.Begin("verification");
-  const VerificationResult verification =
-      RunVerification(selected, vio, &database, options.EffectiveVerificationOptions(),
-                      vio_poses.segments);
+  const VerificationResult verification = RunVerification(
+      selected, vio, &database, options.EffectiveVerificationOptions(), vio_poses.segments);
   summary.verification = verification.summary;
   VIOSFM_LOG(INFO) << "run: verification " << FormatVerificationSummary(verification.summary);
   clock.End();
@@ -735,8 +731,8 @@ PipelineSummary RunPipeline(const PipelineOptions& options) {
   VIOSFM_LOG(INFO) << "run: mapper " << summary.mapper.ToString();
   if (options.use_imu_scale) {
     summary.metric_scale = ApplyImuMetricScale(
-        sequence, vio_poses.own_vio_rig.value_or(sequence.rig),
-        options.vio_uncertainty.scale_sigma, options.imu_scale, &reconstruction);
+        sequence, vio_poses.own_vio_rig.value_or(sequence.rig), options.vio_uncertainty.scale_sigma,
+        options.imu_scale, &reconstruction);
     VIOSFM_LOG(INFO) << "run: metric scale: " << summary.metric_scale.message;
   }
   summary.num_frames_registered = static_cast<size_t>(summary.mapper.num_supported);

@@ -72,12 +72,12 @@
 #include <utility>
 #include <vector>
 
+#include "viosfm/eval/metric_accuracy.h"
 #include "viosfm/features/feature_extraction.h"
 #include "viosfm/features/sift.h"
-#include "viosfm/eval/metric_accuracy.h"
 #include "viosfm/io/image_folder.h"
-#include "viosfm/io/rosbag_dataset.h"
 #include "viosfm/io/kalibr.h"
+#include "viosfm/io/rosbag_dataset.h"
 #include "viosfm/io/sequence.h"
 #include "viosfm/io/trajectory_io.h"
 #include "viosfm/matching/frame_selection.h"
@@ -200,7 +200,7 @@ struct PipelineEvaluation {
   double ate_max_m = 0.0;
   double vio_ate_rmse_m = 0.0;  // the input VIO on the same frames
   double vio_ate_median_m = 0.0;
-  size_t num_poses = 0;  // associated poses
+  size_t num_poses = 0;       // associated poses
   MetricAccuracy metric;      // the estimate
   MetricAccuracy vio_metric;  // the input VIO on the same frames (one alignment over all segments)
 };
@@ -213,7 +213,7 @@ struct PipelineSummary {
   std::filesystem::path output_folder;
   std::string started_utc;  // "2026-11-21T07:38:16Z"
   size_t num_frames_in = 0;
-  size_t num_frames_selected = 0;  // selected (with or without a VIO pose)
+  size_t num_frames_selected = 0;          // selected (with or without a VIO pose)
   size_t num_frames_without_vio_pose = 0;  // selected frames without a VIO pose
   // Posed frames whose pose the images support (registered), placed by the
   // VIO only, and frames without any pose (mapper.frames says why).

@@ -166,12 +166,14 @@ TEST(RunFingerprint, JsonRoundTripAndComparison) {
   EXPECT_NE(stored.Hash(), current.Hash());
 
   testing::WriteTextFile(folder / "bad.json", "{\"entries\": {\"a\": 1}}");
-  EXPECT_NE(testing::InputErrorMessage([&] { ReadRunFingerprint(folder / "bad.json"); })
-                .find("\"a\" is not a string"),
+  EXPECT_NE(testing::InputErrorMessage([&] {
+              ReadRunFingerprint(folder / "bad.json");
+            }).find("\"a\" is not a string"),
             std::string::npos);
   testing::WriteTextFile(folder / "bad.json", "not json");
-  EXPECT_NE(testing::InputErrorMessage([&] { ReadRunFingerprint(folder / "bad.json"); })
-                .find("--overwrite"),
+  EXPECT_NE(testing::InputErrorMessage([&] {
+              ReadRunFingerprint(folder / "bad.json");
+            }).find("--overwrite"),
             std::string::npos);
 }
 
@@ -186,13 +188,15 @@ TEST(RunFingerprint, CheckStoredRunDataNamesWhatChanged) {
   EXPECT_NO_THROW(CheckStoredRunData(out, current, true));
   // A database without its fingerprint.
   testing::WriteTextFile(out / "database.db", "");
-  EXPECT_NE(testing::InputErrorMessage([&] { CheckStoredRunData(out, current, true); })
-                .find("without the fingerprint.json"),
+  EXPECT_NE(testing::InputErrorMessage([&] {
+              CheckStoredRunData(out, current, true);
+            }).find("without the fingerprint.json"),
             std::string::npos);
   WriteFileAtomically(out / "fingerprint.json",
                       [&](std::ostream& stream) { stream << RunFingerprintToJson(stored); });
   EXPECT_NO_THROW(CheckStoredRunData(out, stored, true));
-  const InputError error = testing::ExpectInputError([&] { CheckStoredRunData(out, current, true); });
+  const InputError error =
+      testing::ExpectInputError([&] { CheckStoredRunData(out, current, true); });
   EXPECT_EQ(error.path(), (out / "fingerprint.json").string());
   const std::string message = error.what();
   EXPECT_NE(message.find("sift.max_num_features was '600', is now '300'"), std::string::npos)
@@ -204,10 +208,10 @@ TEST(RunFingerprint, CheckStoredRunDataNamesWhatChanged) {
 TEST(RunFingerprint, OverwriteRemovesTheRunsOutputsOnly) {
   const fs::path out = testing::MakeScratchFolder("fingerprint_overwrite");
   const PipelineOptions options = Options("dataset", out);
-  for (const char* file : {"database.db", "database.db-wal", "fingerprint.json", "summary.json",
-                           "points.ply", "trajectory_body.tum", "verification/pairs.csv",
-                           "model/images.bin", "vio/states.csv", "bag/mav0/cam0/data/1.png",
-                           "notes.txt", "model_mine/x.txt", "report.html"}) {
+  for (const char* file :
+       {"database.db", "database.db-wal", "fingerprint.json", "summary.json", "points.ply",
+        "trajectory_body.tum", "verification/pairs.csv", "model/images.bin", "vio/states.csv",
+        "bag/mav0/cam0/data/1.png", "notes.txt", "model_mine/x.txt", "report.html"}) {
     fs::create_directories((out / file).parent_path());
     testing::WriteTextFile(out / file, "x");
   }

@@ -64,10 +64,9 @@ VioPoses RunOwnVio(const Sequence& sequence, const PipelineOptions& options) {
   poses.segment_rule =
       "the own VIO's segments (a new one after every reset it did not re-localise)";
   VIOSFM_LOG(INFO) << "run: own VIO: " << poses.world_from_body.size() << " of "
-                   << result.frames.size() << " frames posed in " << segment + 1
-                   << " segment(s) (" << result.summary.num_resets << " reset(s)), "
-                   << result.summary.cpu_seconds << " CPU s (output in "
-                   << (options.output_folder / "vio").string() << ")";
+                   << result.frames.size() << " frames posed in " << segment + 1 << " segment(s) ("
+                   << result.summary.num_resets << " reset(s)), " << result.summary.cpu_seconds
+                   << " CPU s (output in " << (options.output_folder / "vio").string() << ")";
   return poses;
 }
 

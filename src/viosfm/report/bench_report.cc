@@ -421,7 +421,8 @@ std::string FormatBenchMarkdown(const BenchResults& results,
   for (const std::string& sequence : sequences) {
     md << "\n## " << sequence << "\n\n"
        << "| method | registered / frames | ATE RMSE (mm) | ATE median (mm) | SE(3) ATE (mm) | "
-          "scale | time (s) | CPU (s) | peak memory (MiB) |\n|---|---|---|---|---|---|---|---|---|\n";
+          "scale | time (s) | CPU (s) | peak memory (MiB) "
+          "|\n|---|---|---|---|---|---|---|---|---|\n";
     std::vector<std::string> notes;
     for (const BenchRun& run : results.runs) {
       if (run.sequence != sequence) continue;

@@ -35,9 +35,9 @@ struct BenchRun {
   std::string method;    // e.g. "viosfm", "colmap_same_pairs", "batch 25"
   std::filesystem::path folder;
   bool failed = false;
-  int frames_in = 0;          // images of the sequence
-  int frames_registered = 0;  // poses evaluated (0 without eval.json)
-  int num_models = 0;         // COLMAP: models written (0 for others)
+  int frames_in = 0;                   // images of the sequence
+  int frames_registered = 0;           // poses evaluated (0 without eval.json)
+  int num_models = 0;                  // COLMAP: models written (0 for others)
   std::optional<double> ate_rmse_m;    // Sim(3)
   std::optional<double> ate_median_m;  // Sim(3)
   // Metric accuracy: the SE(3) ATE RMSE (eval_se3.json) and the run's scale

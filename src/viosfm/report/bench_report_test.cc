@@ -104,7 +104,8 @@ TEST(BenchReport, MarkdownHasTheNumbers) {
                             "verified matches of viosfm;"));
   EXPECT_THAT(md,
               HasSubstr("| COLMAP 3.8, sequential matcher | 3 / 4 (2 models) | 500.00 | 250.00 |"));
-  EXPECT_THAT(md, HasSubstr("| input VIO (emulated) | - | 200.00 | 150.00 | n/a | n/a | - | - | - |"));
+  EXPECT_THAT(md,
+              HasSubstr("| input VIO (emulated) | - | 200.00 | 150.00 | n/a | n/a | - | - | - |"));
   EXPECT_THAT(md, HasSubstr("| 10 | 4 | 20.00 | 8.0 |"));
   // The version of each sweep run: its version.txt, else meta.txt's.
   EXPECT_THAT(md, HasSubstr("| 10 | 4 | 20.00 | 8.0 | n/a | n/a | abc1234 |"));

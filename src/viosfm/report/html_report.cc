@@ -302,8 +302,8 @@ void SummarySection(const RunData& run, Page* page) {
       {"selected frames without a VIO pose", Integer(Number(s, "frames/without_vio_pose"))},
       {"frames re-posed from the images (the VIO disagreed)",
        Integer(Number(s, "frames/reposed_from_images"))},
-      {"VIO segments (joined)", Integer(Number(s, "vio/segments")) + " (" +
-                                    Integer(Number(s, "vio/segments_joined")) + ")"},
+      {"VIO segments (joined)",
+       Integer(Number(s, "vio/segments")) + " (" + Integer(Number(s, "vio/segments_joined")) + ")"},
       {"3D points", Integer(Number(s, "points"))},
       {"observations", Integer(Number(s, "observations"))},
       {"mean track length", Fixed(Number(s, "mean_track_length"), 2)},
@@ -324,8 +324,8 @@ void SummarySection(const RunData& run, Page* page) {
   rows.push_back({"total time (s)", Fixed(Number(s, "total_seconds"), 2)});
   rows.push_back({"peak memory (MB)", Fixed(Number(s, "peak_memory_mb"), 1)});
   page->KeyValueTable("summary-table", rows);
-  if (const Json* unposed = Find(s, "unposed_frames"); unposed && unposed->is_array() &&
-                                                        !unposed->empty()) {
+  if (const Json* unposed = Find(s, "unposed_frames");
+      unposed && unposed->is_array() && !unposed->empty()) {
     std::vector<std::vector<std::string>> unposed_rows;
     for (const Json& frame : *unposed) {
       unposed_rows.push_back({Integer(Number(frame, "image_id")), Text(frame, "reason")});

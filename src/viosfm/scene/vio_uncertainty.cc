@@ -105,16 +105,15 @@ std::vector<std::pair<std::string, std::string>> VioUncertaintyModel::ToKeyValue
 }
 
 Eigen::Matrix<double, 6, 6> RelativePoseCovariance(const VioUncertaintyModel& model,
-                                                   const VioSample& frame1, const VioSample& frame2) {
+                                                   const VioSample& frame1,
+                                                   const VioSample& frame2) {
   VIOSFM_CHECK(model.Check()) << model.Validate();
   VIOSFM_CHECK_EQ(frame1.odometer.segment, frame2.odometer.segment)
       << "a relative pose across VIO segments";
-  const double dt =
-      std::abs(static_cast<double>(frame2.timestamp_ns - frame1.timestamp_ns)) * 1e-9;
+  const double dt = std::abs(static_cast<double>(frame2.timestamp_ns - frame1.timestamp_ns)) * 1e-9;
   const double distance = std::abs(frame2.odometer.distance_m - frame1.odometer.distance_m);
   const double turned = std::abs(frame2.odometer.rotation_rad - frame1.odometer.rotation_rad);
-  const Eigen::Vector3d d =
-      frame2.world_from_cam.translation - frame1.world_from_cam.translation;
+  const Eigen::Vector3d d = frame2.world_from_cam.translation - frame1.world_from_cam.translation;
   const Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
 
   // World-frame covariance of [rotation error; translation error].
@@ -174,8 +173,7 @@ Eigen::Matrix<double, 6, 6> SqrtInformationFromCovariance(
   // covariance = L L^T  =>  covariance^-1 = L^-T L^-1, S = L^-1 (lower
   // triangular; any S with S^T S = covariance^-1 weighs alike).
   const Eigen::LLT<Eigen::Matrix<double, 6, 6>> llt(covariance);
-  VIOSFM_CHECK(llt.info() == Eigen::Success) << "covariance not positive definite:\n"
-                                              << covariance;
+  VIOSFM_CHECK(llt.info() == Eigen::Success) << "covariance not positive definite:\n" << covariance;
   const Eigen::Matrix<double, 6, 6> lower = llt.matrixL();
   return lower.triangularView<Eigen::Lower>().solve(Eigen::Matrix<double, 6, 6>::Identity());
 }
@@ -220,8 +218,8 @@ std::vector<VioOdometer> ComputeVioOdometers(const Trajectory& world_from_frame,
     const Rigid3d& after = world_from_frame.poses[k].world_from_frame;
     odometer.distance_m =
         odometers[k - 1].distance_m + (after.translation - before.translation).norm();
-    odometer.rotation_rad = odometers[k - 1].rotation_rad +
-                            before.rotation.angularDistance(after.rotation);
+    odometer.rotation_rad =
+        odometers[k - 1].rotation_rad + before.rotation.angularDistance(after.rotation);
   }
   return odometers;
 }

@@ -62,15 +62,15 @@ namespace viosfm {
 // The rates of the model above (standard deviations; "per sqrt X": the
 // variance grows linearly with X).
 struct VioUncertaintyModel {
-  double position_per_sqrt_m = 0.01;    // m / sqrt(m travelled), each axis. Default 0.01
-  double position_per_sqrt_s = 0.002;   // m / sqrt(s), each axis. Default 0.002
-  double yaw_per_sqrt_m = 0.003;        // rad / sqrt(m travelled). Default 0.003
-  double yaw_per_sqrt_s = 0.0005;       // rad / sqrt(s). Default 0.0005
-  double yaw_per_sqrt_rad = 0.003;      // rad / sqrt(rad turned). Default 0.003
-  double tilt_per_sqrt_s = 0.0001;      // rad / sqrt(s), roll and pitch. Default 0.0001
-  double scale_sigma = 0.02;            // relative error of displacements. Default 0.02
-  double position_noise_m = 0.002;      // m, white noise per frame and axis. Default 0.002
-  double rotation_noise_rad = 0.001;    // rad, white noise per frame and axis. Default 0.001
+  double position_per_sqrt_m = 0.01;   // m / sqrt(m travelled), each axis. Default 0.01
+  double position_per_sqrt_s = 0.002;  // m / sqrt(s), each axis. Default 0.002
+  double yaw_per_sqrt_m = 0.003;       // rad / sqrt(m travelled). Default 0.003
+  double yaw_per_sqrt_s = 0.0005;      // rad / sqrt(s). Default 0.0005
+  double yaw_per_sqrt_rad = 0.003;     // rad / sqrt(rad turned). Default 0.003
+  double tilt_per_sqrt_s = 0.0001;     // rad / sqrt(s), roll and pitch. Default 0.0001
+  double scale_sigma = 0.02;           // relative error of displacements. Default 0.02
+  double position_noise_m = 0.002;     // m, white noise per frame and axis. Default 0.002
+  double rotation_noise_rad = 0.001;   // rad, white noise per frame and axis. Default 0.001
   // Slowly varying frame noise (first-order Gauss-Markov) with correlation
   // time noise_correlation_s. Defaults 0.002 m, 0.001 rad, 1 s.
   double correlated_position_noise_m = 0.002;
@@ -110,7 +110,8 @@ struct VioSample {
 // the top of the file); its order in time does not matter. CHECKs that both
 // frames are in the same segment.
 Eigen::Matrix<double, 6, 6> RelativePoseCovariance(const VioUncertaintyModel& model,
-                                                   const VioSample& frame1, const VioSample& frame2);
+                                                   const VioSample& frame1,
+                                                   const VioSample& frame2);
 
 // The upper-triangular S with S^T S = covariance^-1 (so |S r|^2 is r's
 // Mahalanobis distance): what weights a residual. CHECKs that the

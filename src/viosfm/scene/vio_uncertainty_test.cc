@@ -10,7 +10,7 @@ namespace viosfm {
 namespace {
 
 VioSample Frame(double t_s, const Eigen::Vector3d& center, double yaw_rad, double distance_m,
-               double rotation_rad = 0.0, int segment = 0) {
+                double rotation_rad = 0.0, int segment = 0) {
   VioSample frame;
   frame.timestamp_ns = static_cast<timestamp_ns_t>(std::llround(t_s * 1e9));
   frame.world_from_cam =
@@ -26,8 +26,8 @@ TEST(VioUncertainty, CovarianceGrowsWithTimeDistanceAndRotation) {
   double previous_translation = 0.0;
   for (const double seconds : {0.05, 1.0, 7.0, 60.0}) {
     // Walking at 0.4 m/s along x, turning 0.2 rad/s.
-    const VioSample later = Frame(seconds, Eigen::Vector3d(0.4 * seconds, 0, 0), 0.0,
-                                 0.4 * seconds, 0.2 * seconds);
+    const VioSample later =
+        Frame(seconds, Eigen::Vector3d(0.4 * seconds, 0, 0), 0.0, 0.4 * seconds, 0.2 * seconds);
     const Eigen::Matrix<double, 6, 6> cov = RelativePoseCovariance(model, start, later);
     EXPECT_LT((cov - cov.transpose()).norm(), 1e-15);
     using Solver = Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>>;
@@ -42,9 +42,9 @@ TEST(VioUncertainty, CovarianceGrowsWithTimeDistanceAndRotation) {
   const Eigen::Matrix<double, 6, 6> close =
       RelativePoseCovariance(model, start, Frame(0.05, Eigen::Vector3d(0.02, 0, 0), 0.0, 0.02));
   const double rho = std::exp(-0.05 / model.noise_correlation_s);
-  const double noise = 2.0 * (model.position_noise_m * model.position_noise_m +
-                              model.correlated_position_noise_m *
-                                  model.correlated_position_noise_m * (1.0 - rho));
+  const double noise =
+      2.0 * (model.position_noise_m * model.position_noise_m +
+             model.correlated_position_noise_m * model.correlated_position_noise_m * (1.0 - rho));
   // The camera looks along world x (identity rotation): world z is camera z.
   // Frame 1's rotation noise turns the 2 cm displacement too.
   const double lever = (model.rotation_noise_rad * model.rotation_noise_rad +
@@ -55,15 +55,15 @@ TEST(VioUncertainty, CovarianceGrowsWithTimeDistanceAndRotation) {
                   model.position_per_sqrt_m * model.position_per_sqrt_m * 0.02,
               1e-15);
   // Yaw drift after 60 s and 24 m and 12 rad, about world z = camera z here.
-  const Eigen::Matrix<double, 6, 6> far = RelativePoseCovariance(
-      model, start, Frame(60.0, Eigen::Vector3d(24, 0, 0), 0.0, 24.0, 12.0));
+  const Eigen::Matrix<double, 6, 6> far =
+      RelativePoseCovariance(model, start, Frame(60.0, Eigen::Vector3d(24, 0, 0), 0.0, 24.0, 12.0));
   const double yaw_var = model.yaw_per_sqrt_s * model.yaw_per_sqrt_s * 60 +
                          model.yaw_per_sqrt_m * model.yaw_per_sqrt_m * 24 +
                          model.yaw_per_sqrt_rad * model.yaw_per_sqrt_rad * 12;
-  const double rotation_noise = 2.0 * (model.rotation_noise_rad * model.rotation_noise_rad +
-                                       model.correlated_rotation_noise_rad *
-                                           model.correlated_rotation_noise_rad *
-                                           (1.0 - std::exp(-60.0)));
+  const double rotation_noise =
+      2.0 * (model.rotation_noise_rad * model.rotation_noise_rad +
+             model.correlated_rotation_noise_rad * model.correlated_rotation_noise_rad *
+                 (1.0 - std::exp(-60.0)));
   EXPECT_NEAR(far(2, 2), yaw_var + rotation_noise, 1e-12);
   // The yaw error moves the 24 m displacement sideways (world y): its
   // lateral variance includes yaw_var * 24^2 / 3, correlated with the yaw.
@@ -89,8 +89,9 @@ TEST(VioUncertainty, CovarianceIsInTheSecondCamerasFrame) {
 
 TEST(VioUncertainty, SqrtInformationWhitens) {
   const VioUncertaintyModel model;
-  const Eigen::Matrix<double, 6, 6> cov = RelativePoseCovariance(
-      model, Frame(0, Eigen::Vector3d::Zero(), 0, 0), Frame(3, Eigen::Vector3d(1, 1, 0), 0.5, 1.5, 0.6));
+  const Eigen::Matrix<double, 6, 6> cov =
+      RelativePoseCovariance(model, Frame(0, Eigen::Vector3d::Zero(), 0, 0),
+                             Frame(3, Eigen::Vector3d(1, 1, 0), 0.5, 1.5, 0.6));
   const Eigen::Matrix<double, 6, 6> s = SqrtInformationFromCovariance(cov);
   EXPECT_LT((s * cov * s.transpose() - Eigen::Matrix<double, 6, 6>::Identity()).norm(), 1e-8);
 }
@@ -103,8 +104,9 @@ TEST(VioUncertainty, ScaledAndValidate) {
   EXPECT_DOUBLE_EQ(doubled.noise_correlation_s, model.noise_correlation_s);
   const VioSample a = Frame(0, Eigen::Vector3d::Zero(), 0, 0);
   const VioSample b = Frame(2, Eigen::Vector3d(1, 0, 0), 0, 1);
-  EXPECT_LT((RelativePoseCovariance(doubled, a, b) - 4 * RelativePoseCovariance(model, a, b)).norm(),
-            1e-15);
+  EXPECT_LT(
+      (RelativePoseCovariance(doubled, a, b) - 4 * RelativePoseCovariance(model, a, b)).norm(),
+      1e-15);
   VioUncertaintyModel bad = model;
   bad.rotation_noise_rad = 0;
   EXPECT_NE(bad.Validate().find("rotation_noise_rad"), std::string::npos);

@@ -371,8 +371,7 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
   };
   std::vector<image_t> registered;  // in order of registration
   std::vector<size_t> newly_registered;
-  const auto register_frame = [&](size_t i, const Rigid3d& cam_from_world,
-                                  FramePoseSource source) {
+  const auto register_frame = [&](size_t i, const Rigid3d& cam_from_world, FramePoseSource source) {
     Image& image = reconstruction.GetImage(input.images[i].image_id);
     image.cam_from_world = cam_from_world;
     image.cam_from_world.rotation.normalize();
@@ -400,14 +399,12 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
           reconstruction, tracks, tracks_of_image[i], input.images[i].image_id);
       status.num_correspondences = static_cast<int>(correspondences.size());
       if (static_cast<int>(correspondences.size()) >= registration.min_num_correspondences) {
-        const Camera& camera =
-            reconstruction.GetCamera(input.images[i].camera_id);
+        const Camera& camera = reconstruction.GetCamera(input.images[i].camera_id);
         AbsolutePoseOptions pnp = registration.pnp;
         pnp.seed = registration.pnp.seed + input.images[i].image_id;
         const AbsolutePoseResult result =
-            EstimateAbsolutePose(correspondences.points_normalized,
-                                 correspondences.points_in_world, MeanFocalLength(camera), pnp,
-                                 predicted);
+            EstimateAbsolutePose(correspondences.points_normalized, correspondences.points_in_world,
+                                 MeanFocalLength(camera), pnp, predicted);
         status.num_predicted_inliers = static_cast<int>(result.num_predicted_inliers);
         status.num_pnp_inliers = result.success ? static_cast<int>(result.num_inliers) : 0;
         if (result.success && !predicted) {
@@ -425,10 +422,9 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
           }
           // How far the images' pose is from the VIO's, against the drift
           // the model allows between the frame and its reference.
-          const RelativePoseSigmas sigmas = LargestSigmas(
-              RelativePoseCovariance(options.vio_uncertainty,
-                                     VioSampleOfImage(input.images[*reference]),
-                                     VioSampleOfImage(input.images[i])));
+          const RelativePoseSigmas sigmas = LargestSigmas(RelativePoseCovariance(
+              options.vio_uncertainty, VioSampleOfImage(input.images[*reference]),
+              VioSampleOfImage(input.images[i])));
           const double position_difference =
               (ProjectionCenter(result.cam_from_world) - ProjectionCenter(*predicted)).norm();
           const double rotation_difference =
@@ -451,8 +447,8 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
             status.vio_break = true;
             VIOSFM_LOG(INFO) << "batched mapper: " << DescribeImage(input.images[i])
                              << ": the VIO's pose is " << position_difference << " m and "
-                             << rotation_difference << " rad off the images' ("
-                             << predicted_inliers << " of " << pnp_inliers
+                             << rotation_difference << " rad off the images' (" << predicted_inliers
+                             << " of " << pnp_inliers
                              << " inliers): a VIO jump, no prior crosses it";
             register_frame(i, result.cam_from_world, FramePoseSource::kImagesReposed);
             return true;
@@ -460,9 +456,9 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
           // A weak PnP, or an ambiguous one (repeated structure: the images
           // support the VIO's pose too, and another far from it): the VIO's
           // pose stands.
-          register_frame(i, *predicted,
-                         prediction_supported ? FramePoseSource::kVioVerified
-                                              : FramePoseSource::kVio);
+          register_frame(
+              i, *predicted,
+              prediction_supported ? FramePoseSource::kVioVerified : FramePoseSource::kVio);
           return true;
         }
       }
@@ -577,7 +573,8 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
     size_t window_begin = 0;
     if (!global && options.ba_window_batches > 0 &&
         registered.size() > static_cast<size_t>(options.ba_window_batches) * batch_size) {
-      window_begin = registered.size() - static_cast<size_t>(options.ba_window_batches) * batch_size;
+      window_begin =
+          registered.size() - static_cast<size_t>(options.ba_window_batches) * batch_size;
     }
     if (options.ba_after_each_batch || global) {
       const BundleAdjustmentSummary ba_summary = adjust(window_begin, global);

@@ -146,9 +146,9 @@ struct MapperFrameStatus {
   FramePoseSource source = FramePoseSource::kNone;
   // The pose is supported by the images (frame_registration.h).
   bool supported = false;
-  int num_correspondences = 0;        // 2D-3D matches when it was registered
-  int num_pnp_inliers = 0;            // of the images' pose (0: PnP not run or failed)
-  int num_predicted_inliers = 0;      // of the VIO's prediction
+  int num_correspondences = 0;    // 2D-3D matches when it was registered
+  int num_pnp_inliers = 0;        // of the images' pose (0: PnP not run or failed)
+  int num_predicted_inliers = 0;  // of the VIO's prediction
   int num_supporting_observations = 0;
   bool vio_break = false;  // the VIO jumped here (FrameRegistrationOptions::break_sigmas)
   // Why a frame is not posed (empty if it is).
@@ -175,8 +175,8 @@ struct BatchedMapperSummary {
   int num_supported = 0;
   int num_vio_only = 0;
   int num_unposed = 0;
-  int num_without_vio_pose = 0;     // input frames without a VIO pose
-  int num_reposed = 0;              // FramePoseSource::kImagesReposed
+  int num_without_vio_pose = 0;        // input frames without a VIO pose
+  int num_reposed = 0;                 // FramePoseSource::kImagesReposed
   int num_registered_without_vio = 0;  // FramePoseSource::kImagesWithoutVio
   int num_vio_breaks = 0;
   int num_vio_segments = 0;         // VIO segments among the input frames

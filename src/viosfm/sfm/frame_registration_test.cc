@@ -63,8 +63,8 @@ double CleanMaxCenterError(int num_frames, uint64_t seed) {
 // by `offset` and turned by `yaw` about the world's z axis.
 void MoveVioPoses(size_t begin, size_t end, const Eigen::Vector3d& offset, double yaw,
                   BatchedMapperInput* input) {
-  const Rigid3d vio_from_world(
-      Eigen::Quaterniond(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ())), offset);
+  const Rigid3d vio_from_world(Eigen::Quaterniond(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ())),
+                               offset);
   for (size_t i = begin; i < end; ++i) {
     input->images[i].vio_cam_from_world =
         *input->images[i].vio_cam_from_world * vio_from_world.Inverse();

@@ -106,7 +106,8 @@ ImuScaleResult EstimateImuScale(const Trajectory& world_from_body,
     }
     for (int w = 0; w < num_windows; ++w) {
       const Eigen::LDLT<Eigen::Matrix3d> ldlt(normal[w]);
-      if (ldlt.info() == Eigen::Success && normal[w].trace() > 0.0) gyro_bias[w] = ldlt.solve(rhs[w]);
+      if (ldlt.info() == Eigen::Success && normal[w].trace() > 0.0)
+        gyro_bias[w] = ldlt.solve(rhs[w]);
     }
     for (Pair& pair : pairs) {
       pair.preintegration->Repropagate(gyro_bias[pair.window], Eigen::Vector3d::Zero());
@@ -118,8 +119,8 @@ ImuScaleResult EstimateImuScale(const Trajectory& world_from_body,
   // two pairs), iterated on the gravity direction.
   const int num_frames = static_cast<int>(frames.size());
   const int col_scale = 0;
-  const int col_gravity = 1;                 // 2: tangent correction of the gravity direction
-  const int col_bias = 3;                    // 3 per window
+  const int col_gravity = 1;                     // 2: tangent correction of the gravity direction
+  const int col_bias = 3;                        // 3 per window
   const int col_velocity = 3 + 3 * num_windows;  // 3 per frame
   const int num_unknowns = col_velocity + 3 * num_frames;
   const double g_norm = kStandardGravity;
@@ -140,26 +141,27 @@ ImuScaleResult EstimateImuScale(const Trajectory& world_from_body,
     Eigen::VectorXd rhs = Eigen::VectorXd::Zero(num_unknowns);
     double whitened_b2 = 0.0;
     int num_rows = 0;
-    const auto accumulate = [&](const std::vector<std::pair<int, Eigen::Matrix<double, 6, 3>>>& blocks,
-                                const Eigen::Matrix<double, 6, 1>& b,
-                                const Eigen::Matrix<double, 6, 6>& whiten) {
-      // Rows whitened: W A x = W b; normal equations (W A)^T (W A), (W A)^T W b.
-      std::vector<std::pair<int, Eigen::Matrix<double, 6, 3>>> white;
-      for (const auto& [col, block] : blocks) white.emplace_back(col, whiten * block);
-      const Eigen::Matrix<double, 6, 1> wb = whiten * b;
-      whitened_b2 += wb.squaredNorm();
-      for (const auto& [col_a, a] : white) {
-        rhs.segment<3>(col_a) += a.transpose() * wb;
-        for (const auto& [col_b, bb] : white) {
-          const Eigen::Matrix3d product = a.transpose() * bb;
-          for (int r = 0; r < 3; ++r) {
-            for (int c = 0; c < 3; ++c) {
-              if (product(r, c) != 0.0) triplets.emplace_back(col_a + r, col_b + c, product(r, c));
+    const auto accumulate =
+        [&](const std::vector<std::pair<int, Eigen::Matrix<double, 6, 3>>>& blocks,
+            const Eigen::Matrix<double, 6, 1>& b, const Eigen::Matrix<double, 6, 6>& whiten) {
+          // Rows whitened: W A x = W b; normal equations (W A)^T (W A), (W A)^T W b.
+          std::vector<std::pair<int, Eigen::Matrix<double, 6, 3>>> white;
+          for (const auto& [col, block] : blocks) white.emplace_back(col, whiten * block);
+          const Eigen::Matrix<double, 6, 1> wb = whiten * b;
+          whitened_b2 += wb.squaredNorm();
+          for (const auto& [col_a, a] : white) {
+            rhs.segment<3>(col_a) += a.transpose() * wb;
+            for (const auto& [col_b, bb] : white) {
+              const Eigen::Matrix3d product = a.transpose() * bb;
+              for (int r = 0; r < 3; ++r) {
+                for (int c = 0; c < 3; ++c) {
+                  if (product(r, c) != 0.0)
+                    triplets.emplace_back(col_a + r, col_b + c, product(r, c));
+                }
+              }
             }
           }
-        }
-      }
-    };
+        };
     for (const Pair& pair : pairs) {
       const ImuPreintegration& p = *pair.preintegration;
       const double dt = p.delta_t_s();
@@ -192,7 +194,8 @@ ImuScaleResult EstimateImuScale(const Trajectory& world_from_body,
       covariance.topRightCorner<3, 3>() = ri * c.block<3, 3>(3, 6) * ri.transpose();
       covariance.bottomLeftCorner<3, 3>() = covariance.topRightCorner<3, 3>().transpose();
       covariance.bottomRightCorner<3, 3>() = ri * c.block<3, 3>(6, 6) * ri.transpose();
-      const double walk2 = std::pow(noise.accel_random_walk, 2) * (0.5 * options.bias_window_s + dt);
+      const double walk2 =
+          std::pow(noise.accel_random_walk, 2) * (0.5 * options.bias_window_s + dt);
       const Eigen::Matrix3d eye = Eigen::Matrix3d::Identity();
       covariance.topLeftCorner<3, 3>() += walk2 * dt * dt * eye;
       covariance.topRightCorner<3, 3>() += walk2 * 0.5 * dt * dt * dt * eye;
@@ -201,12 +204,13 @@ ImuScaleResult EstimateImuScale(const Trajectory& world_from_body,
       const double rotation2 = rotation_sigma * rotation_sigma + std::pow(1e-4 * dt, 2);
       covariance.topLeftCorner<3, 3>() += rotation2 * dv.squaredNorm() * eye;
       covariance.bottomRightCorner<3, 3>() +=
-          (rotation2 * dp.squaredNorm() + 2.0 * options.position_sigma_m * options.position_sigma_m) *
+          (rotation2 * dp.squaredNorm() +
+           2.0 * options.position_sigma_m * options.position_sigma_m) *
           eye;
       const Eigen::LLT<Eigen::Matrix<double, 6, 6>> llt(covariance);
       if (llt.info() != Eigen::Success) continue;
-      const Eigen::Matrix<double, 6, 6> whiten = llt.matrixL().solve(
-          Eigen::Matrix<double, 6, 6>::Identity());
+      const Eigen::Matrix<double, 6, 6> whiten =
+          llt.matrixL().solve(Eigen::Matrix<double, 6, 6>::Identity());
       num_rows += 6;
       accumulate({{col_scale, globals},
                   {col_bias + 3 * pair.window, bias},
@@ -226,8 +230,7 @@ ImuScaleResult EstimateImuScale(const Trajectory& world_from_body,
     }
     solution = solver.solve(rhs);
     scale = solution[col_scale];
-    const Eigen::Vector3d corrected =
-        gravity + tangent * solution.segment<2>(col_gravity);
+    const Eigen::Vector3d corrected = gravity + tangent * solution.segment<2>(col_gravity);
     gravity = g_norm * corrected.normalized();
     if (iteration + 1 == options.gravity_iterations) {
       // The scale's variance: (A^T A)^-1 at (0, 0).
@@ -256,9 +259,8 @@ ImuScaleResult EstimateImuScale(const Trajectory& world_from_body,
   result.num_pairs = static_cast<int>(pairs.size());
   std::ostringstream message;
   message << std::fixed << std::setprecision(5) << "IMU scale " << scale << " +- "
-          << result.scale_sigma * scale << " from " << result.num_pairs
-          << " frame pairs (residual " << std::setprecision(2) << result.residual_ratio
-          << " times the expected)";
+          << result.scale_sigma * scale << " from " << result.num_pairs << " frame pairs (residual "
+          << std::setprecision(2) << result.residual_ratio << " times the expected)";
   if (!(scale > 1.0 / options.max_scale_factor && scale < options.max_scale_factor)) {
     message << ": outside [1/" << options.max_scale_factor << ", " << options.max_scale_factor
             << "], not used";

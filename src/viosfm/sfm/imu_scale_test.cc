@@ -69,7 +69,8 @@ Trajectory Reconstruction(const std::vector<double>& stamps_s, double true_scale
     const Eigen::Vector3d noise_angle(random.Normal(0, 5e-4), random.Normal(0, 5e-4),
                                       random.Normal(0, 5e-4));
     const Eigen::Matrix3d rotation =
-        Rotation(t) * Eigen::AngleAxisd(noise_angle.norm(), noise_angle.normalized()).toRotationMatrix();
+        Rotation(t) *
+        Eigen::AngleAxisd(noise_angle.norm(), noise_angle.normalized()).toRotationMatrix();
     const Eigen::Vector3d position =
         Position(t) / true_scale +
         Eigen::Vector3d(random.Normal(0, 0.001), random.Normal(0, 0.001), random.Normal(0, 0.001));
@@ -83,7 +84,8 @@ TEST(ImuScale, RecoversTheScaleOfA10HzTrajectory) {
   const Data data = MakeImu(62.0, 1);
   std::vector<double> stamps;
   for (int k = 0; k <= 600; ++k) stamps.push_back(1.0 + 0.1 * k);
-  const ImuScaleResult result = EstimateImuScale(Reconstruction(stamps, 1.02, 2), data.imu, data.noise);
+  const ImuScaleResult result =
+      EstimateImuScale(Reconstruction(stamps, 1.02, 2), data.imu, data.noise);
   ASSERT_TRUE(result.usable) << result.message;
   EXPECT_NEAR(result.scale, 1.02, 0.002) << result.message;
   EXPECT_LT(result.scale_sigma, 0.002);  // (measured 0.1 %)
@@ -98,15 +100,18 @@ TEST(ImuScale, RecoversTheScaleOfKeyframesWithIrregularGaps) {
   for (double t = 1.0; t < 149.0; t += std::exp(random.Uniform(std::log(0.05), std::log(7.0)))) {
     stamps.push_back(t);
   }
-  const ImuScaleResult result = EstimateImuScale(Reconstruction(stamps, 0.985, 5), data.imu, data.noise);
+  const ImuScaleResult result =
+      EstimateImuScale(Reconstruction(stamps, 0.985, 5), data.imu, data.noise);
   ASSERT_TRUE(result.usable) << result.message;  // (sigma 0.35 %)
   EXPECT_NEAR(result.scale, 0.985, 0.003) << result.message;
 }
 
 TEST(ImuScale, TooFewFramesOrNoImuIsNotUsable) {
   const Data data = MakeImu(5.0, 6);
-  EXPECT_FALSE(EstimateImuScale(Reconstruction({1.0, 2.0, 3.0}, 1.0, 7), data.imu, data.noise).usable);
-  EXPECT_FALSE(EstimateImuScale(Reconstruction({1.0, 2.0, 3.0, 4.0}, 1.0, 7), {}, data.noise).usable);
+  EXPECT_FALSE(
+      EstimateImuScale(Reconstruction({1.0, 2.0, 3.0}, 1.0, 7), data.imu, data.noise).usable);
+  EXPECT_FALSE(
+      EstimateImuScale(Reconstruction({1.0, 2.0, 3.0, 4.0}, 1.0, 7), {}, data.noise).usable);
 }
 
 }  // namespace

@@ -53,8 +53,8 @@ RelativePosePriors MakeRelativePosePriors(const BatchedMapperInput& input,
                                           const RelativePosePriorOptions& options) {
   const std::unordered_map<image_pair_t, int> num_matches = MatchCounts(input);
   const auto matches_of = [&](size_t i, size_t j) {
-    const auto it = num_matches.find(
-        ImagePairToPairId(input.images[i].image_id, input.images[j].image_id));
+    const auto it =
+        num_matches.find(ImagePairToPairId(input.images[i].image_id, input.images[j].image_id));
     return it == num_matches.end() ? 0 : it->second;
   };
   const bool covariance = options.weighting == PriorWeighting::kCovariance;
@@ -113,8 +113,8 @@ RelativePosePriors MakeRelativePosePriors(const BatchedMapperInput& input,
       const size_t span = static_cast<size_t>(span_int);
       if (span < 2 || span >= frames.size()) continue;
       for (size_t k = 0; k + span < frames.size(); ++k) {
-        const int weakest = *std::min_element(connectivity.begin() + k,
-                                              connectivity.begin() + k + span);
+        const int weakest =
+            *std::min_element(connectivity.begin() + k, connectivity.begin() + k + span);
         if (weakest >= options.bridge_max_matches) continue;
         const int fewest = *std::min_element(consecutive_matches.begin() + k,
                                              consecutive_matches.begin() + k + span);

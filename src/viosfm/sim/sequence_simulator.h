@@ -30,8 +30,8 @@ namespace viosfm {
 // outputs a pose per camera frame).
 struct KeyframeSelectionOptions {
   bool enabled = false;
-  double min_gap_s = 0.05;  // s. Default 0.05
-  double max_gap_s = 7.0;   // s. Default 7
+  double min_gap_s = 0.05;       // s. Default 0.05
+  double max_gap_s = 7.0;        // s. Default 7
   std::string Validate() const;  // empty if valid, else names the bad field
 };
 
@@ -113,7 +113,7 @@ struct SimulatedSequence {
   // Scene, regions, exposure. Without options.render_images its textures
   // are coarse (8 texels/m): only the geometry is meant to be used.
   std::shared_ptr<const Scenario> scenario;
-  BodyTrajectory motion;           // continuous-time truth
+  BodyTrajectory motion;  // continuous-time truth
   // Emulated VIO, world_from_body at the stamps of the camera-rate grid
   // (the image stamps unless keyframes are selected), none while it
   // re-initialises; and the segment of each pose.
@@ -158,8 +158,8 @@ void RenderSimulatedImages(const std::filesystem::path& folder, const SimulatedS
 // Writes <out>/mav0/{cam0/{data.csv, data/*.png, sensor.yaml}, imu0,
 // state_groundtruth_estimate0}, <out>/frames.csv (per frame: stamp, region,
 // floor, camera centre), <out>/vio_emulated.tum (world_from_body at the
-// stamps of the camera-rate grid, none while it re-initialises), <out>/scene.csv (every textured quad with its region,
-// floor, texture id and world geometry: io/scene_structure_io.h),
+// stamps of the camera-rate grid, none while it re-initialises), <out>/scene.csv (every textured
+// quad with its region, floor, texture id and world geometry: io/scene_structure_io.h),
 // <out>/camera_stamps.txt and <out>/simulation.yaml (the options used); with
 // auto exposure also <out>/exposure.csv (per frame: stamp, gain). Without
 // options.render_images, cam0 has sensor.yaml only.

@@ -333,7 +333,7 @@ TEST(SequenceSimulator, KeyframesWithARealisticReinitialisingVio) {
   EXPECT_GE(shortest, 0.05 - 1e-9);
   EXPECT_LE(longest, 7.0 + 0.05);
   EXPECT_GT(longest / shortest, 5.0);
-  EXPECT_EQ(sequence.ground_truth.size(), 801u);  // the 20 Hz grid
+  EXPECT_EQ(sequence.ground_truth.size(), 801u);     // the 20 Hz grid
   EXPECT_EQ(simulated.vio_body.size(), 801u - 20u);  // 1 s re-initialising
   EXPECT_EQ(simulated.vio_segments.back(), 1);
   EXPECT_EQ(simulated.frame_regions.size(), sequence.images.size());

@@ -141,10 +141,9 @@ EmulatedVio EmulateRealisticVio(const Trajectory& ground_truth,
       const double distance = step.norm();
       const double turned = before.rotation.angularDistance(gt.rotation);
       const double tilt_sigma = m.tilt_per_sqrt_s * std::sqrt(dt);
-      const double yaw_sigma =
-          std::sqrt(m.yaw_per_sqrt_s * m.yaw_per_sqrt_s * dt +
-                    m.yaw_per_sqrt_m * m.yaw_per_sqrt_m * distance +
-                    m.yaw_per_sqrt_rad * m.yaw_per_sqrt_rad * turned);
+      const double yaw_sigma = std::sqrt(m.yaw_per_sqrt_s * m.yaw_per_sqrt_s * dt +
+                                         m.yaw_per_sqrt_m * m.yaw_per_sqrt_m * distance +
+                                         m.yaw_per_sqrt_rad * m.yaw_per_sqrt_rad * turned);
       const Eigen::Vector3d drift_step(random.Normal(0.0, tilt_sigma),
                                        random.Normal(0.0, tilt_sigma),
                                        random.Normal(0.0, yaw_sigma));
@@ -153,9 +152,8 @@ EmulatedVio EmulateRealisticVio(const Trajectory& ground_truth,
             Eigen::Quaterniond(Eigen::AngleAxisd(drift_step.norm(), drift_step.normalized())) *
             drift_rotation;
       }
-      const double walk_sigma =
-          std::sqrt(m.position_per_sqrt_s * m.position_per_sqrt_s * dt +
-                    m.position_per_sqrt_m * m.position_per_sqrt_m * distance);
+      const double walk_sigma = std::sqrt(m.position_per_sqrt_s * m.position_per_sqrt_s * dt +
+                                          m.position_per_sqrt_m * m.position_per_sqrt_m * distance);
       position += drift_rotation * ((1.0 + options.scale_error) * step) + normal3(walk_sigma);
       const double rho = std::exp(-dt / m.noise_correlation_s);
       const double innovation = std::sqrt(std::max(0.0, 1.0 - rho * rho));

@@ -101,7 +101,7 @@ Eigen::Matrix<double, 6, 1> RelativePoseResidual(const Rigid3d& true1, const Rig
 }
 
 VioSample FrameAt(const Trajectory& trajectory, const std::vector<VioOdometer>& odometers,
-                 size_t k) {
+                  size_t k) {
   return {trajectory.poses[k].timestamp_ns, trajectory.poses[k].world_from_frame, odometers[k]};
 }
 
@@ -121,8 +121,7 @@ TEST(RealisticVioEmulator, CovarianceMatchesMonteCarlo) {
   const std::vector<Span> spans = {
       {100, 101, 0.08}, {100, 120, 0.08}, {200, 300, 0.1}, {100, 500, 0.2}};
   const int num_runs = 1200;
-  std::vector<Eigen::Matrix<double, 6, 6>> sums(spans.size(),
-                                                Eigen::Matrix<double, 6, 6>::Zero());
+  std::vector<Eigen::Matrix<double, 6, 6>> sums(spans.size(), Eigen::Matrix<double, 6, 6>::Zero());
   Random scale_random(5);
   for (int run = 0; run < num_runs; ++run) {
     RealisticVioOptions options;

@@ -1,5 +1,4 @@
 #include "viosfm/vio/feature_tracker.h"
-#include "viosfm/util/logging.h"
 
 #include <algorithm>
 #include <cmath>
@@ -15,6 +14,7 @@
 
 #include "viosfm/sensor/camera_models.h"
 #include "viosfm/util/errors.h"
+#include "viosfm/util/logging.h"
 
 namespace viosfm {
 
@@ -141,7 +141,8 @@ struct FeatureTracker::State {
   std::unordered_map<uint64_t, Eigen::Vector2d> keyframe_pixels;
 
   cv::Size WindowSize() const {
-    const int side = 2 * static_cast<int>(std::lround(0.5 * (options.klt_window_size * pixel_scale - 1.0))) + 1;
+    const int side =
+        2 * static_cast<int>(std::lround(0.5 * (options.klt_window_size * pixel_scale - 1.0))) + 1;
     return {std::max(3, side), std::max(3, side)};
   }
 
@@ -244,10 +245,12 @@ struct FeatureTracker::State {
     std::vector<cv::Point2f> a(corners.size());
     std::vector<cv::Point2f> b(corners.size());
     for (size_t i = 0; i < corners.size(); ++i) {
-      a[i] = cv::Point2f(static_cast<float>(kReferenceFocalLengthPx * previous_normalized[i].x() + cx),
-                         static_cast<float>(kReferenceFocalLengthPx * previous_normalized[i].y() + cy));
-      b[i] = cv::Point2f(static_cast<float>(kReferenceFocalLengthPx * corners[i].normalized.x() + cx),
-                         static_cast<float>(kReferenceFocalLengthPx * corners[i].normalized.y() + cy));
+      a[i] = cv::Point2f(
+          static_cast<float>(kReferenceFocalLengthPx * previous_normalized[i].x() + cx),
+          static_cast<float>(kReferenceFocalLengthPx * previous_normalized[i].y() + cy));
+      b[i] =
+          cv::Point2f(static_cast<float>(kReferenceFocalLengthPx * corners[i].normalized.x() + cx),
+                      static_cast<float>(kReferenceFocalLengthPx * corners[i].normalized.y() + cy));
     }
     std::vector<uint8_t> inliers;
     const cv::Mat model =
@@ -428,8 +431,8 @@ FrameFeatures FeatureTracker::Track(timestamp_ns_t timestamp_ns, const GreyImage
       previous_normalized[i] = previous_normalized_by_id.at(s.corners[i].track_id);
     }
     s.RejectOutliers(previous_normalized);
-    VIOSFM_LOG(DEBUG) << "tracker: " << num_before << " corners, " << num_tracked
-                      << " tracked, " << s.corners.size() << " after RANSAC";
+    VIOSFM_LOG(DEBUG) << "tracker: " << num_before << " corners, " << num_tracked << " tracked, "
+                      << s.corners.size() << " after RANSAC";
   } else {
     s.corners.clear();
   }

@@ -69,8 +69,8 @@ std::pair<double, double> MeasureWhiteNoiseDensities(const std::vector<ImuSample
   }
   gyro_var /= static_cast<double>(count - 1);
   accel_var /= static_cast<double>(count - 1);
-  const double dt = NsToSeconds((end - 1)->timestamp_ns - begin->timestamp_ns) /
-                    static_cast<double>(count - 1);
+  const double dt =
+      NsToSeconds((end - 1)->timestamp_ns - begin->timestamp_ns) / static_cast<double>(count - 1);
   const double root_dt = std::sqrt(dt);
   return {gyro_var.cwiseSqrt().mean() * root_dt, accel_var.cwiseSqrt().mean() * root_dt};
 }

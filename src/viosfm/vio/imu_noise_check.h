@@ -53,9 +53,9 @@ struct ImuNoiseCheckOptions {
 };
 
 struct ImuNoiseCheck {
-  ImuNoise given;  // as the calibration states
-  ImuNoise used;   // what the VIO uses
-  bool measured = false;  // whether a static interval was measured
+  ImuNoise given;                       // as the calibration states
+  ImuNoise used;                        // what the VIO uses
+  bool measured = false;                // whether a static interval was measured
   double measured_gyro_density = 0.0;   // rad/s/sqrt(Hz), when measured
   double measured_accel_density = 0.0;  // m/s^2/sqrt(Hz), when measured
   std::vector<std::string> changes;     // one line per changed figure

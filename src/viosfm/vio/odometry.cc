@@ -240,9 +240,7 @@ VisualInertialOdometry::VisualInertialOdometry(const SensorRig& rig,
                                                timestamp_ns_t first_frame_ns,
                                                timestamp_ns_t last_frame_ns,
                                                const VioOptions& options)
-    : rig_(rig),
-      imu_(imu),
-      options_(options) {
+    : rig_(rig), imu_(imu), options_(options) {
   if (const std::string error = options.Validate(); !error.empty()) {
     throw InputError("invalid VIO options: " + error);
   }
@@ -254,8 +252,8 @@ VisualInertialOdometry::VisualInertialOdometry(const SensorRig& rig,
       from = std::max(imu_.front().timestamp_ns,
                       first_image - SecondsToNs(options_.static_init.lookback_s));
     }
-    summary_.static_init = DetectStaticStart(imu_, std::min(from, first_image),
-                                             rig_.CamToImuTime(last_frame_ns), options_.static_init);
+    summary_.static_init = DetectStaticStart(
+        imu_, std::min(from, first_image), rig_.CamToImuTime(last_frame_ns), options_.static_init);
     StaticInitResult& init = summary_.static_init;
     if (init.is_static() &&
         first_image - init.end_ns > SecondsToNs(options_.static_init.max_propagation_s)) {
@@ -267,10 +265,9 @@ VisualInertialOdometry::VisualInertialOdometry(const SensorRig& rig,
   }
   // The IMU noise the window uses (imu_noise_check.h): measured on the
   // static interval, which may lie before the first image.
-  summary_.imu_noise = CheckImuNoise(rig_.imu_noise, imu_,
-                                     summary_.static_init.is_static() ? &summary_.static_init
-                                                                       : nullptr,
-                                     options_.imu_noise);
+  summary_.imu_noise = CheckImuNoise(
+      rig_.imu_noise, imu_, summary_.static_init.is_static() ? &summary_.static_init : nullptr,
+      options_.imu_noise);
   rig_.imu_noise = summary_.imu_noise.used;
   if (summary_.imu_noise.changes.empty()) {
     VIOSFM_LOG(INFO) << "vio: " << summary_.imu_noise.message;
@@ -289,9 +286,10 @@ VisualInertialOdometry::VisualInertialOdometry(const SensorRig& rig,
     last_good_state_ = static_state_;
     have_good_state_ = true;
     VIOSFM_LOG(INFO) << "vio: static start over " << NsToSeconds(init.end_ns - init.start_ns)
-                     << " s (ending " << FormatNsAsSeconds(init.end_ns - rig_.CamToImuTime(first_frame_ns), 2)
-                     << " s from the first image): roll " << init.roll_rad * 180.0 / M_PI << " deg, pitch "
-                     << init.pitch_rad * 180.0 / M_PI << " deg, gyro bias "
+                     << " s (ending "
+                     << FormatNsAsSeconds(init.end_ns - rig_.CamToImuTime(first_frame_ns), 2)
+                     << " s from the first image): roll " << init.roll_rad * 180.0 / M_PI
+                     << " deg, pitch " << init.pitch_rad * 180.0 / M_PI << " deg, gyro bias "
                      << init.gyro_bias.transpose();
   } else {
     VIOSFM_LOG(INFO) << "vio: no static start (" << summary_.static_init.message
@@ -379,15 +377,17 @@ bool VisualInertialOdometry::TryVisualInertialInitialization(const FrameFeatures
     // at its first keyframe) is placed in the VIO's world so that its first
     // keyframe lands where the IMU carries the last good state.
     const ImuState at_first = Propagate(last_good_state_, states.front().timestamp_ns);
-    const Eigen::Matrix3d delta = at_first.world_from_body.rotation.toRotationMatrix() *
-                                  states.front().world_from_body.rotation.toRotationMatrix().transpose();
+    const Eigen::Matrix3d delta =
+        at_first.world_from_body.rotation.toRotationMatrix() *
+        states.front().world_from_body.rotation.toRotationMatrix().transpose();
     const double yaw = std::atan2(delta(1, 0) - delta(0, 1), delta(0, 0) + delta(1, 1));
     const Eigen::Quaterniond rotation(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()));
-    const Eigen::Vector3d translation =
-        at_first.world_from_body.translation - rotation * states.front().world_from_body.translation;
+    const Eigen::Vector3d translation = at_first.world_from_body.translation -
+                                        rotation * states.front().world_from_body.translation;
     for (ImuState& state : states) {
       state.world_from_body.rotation = (rotation * state.world_from_body.rotation).normalized();
-      state.world_from_body.translation = rotation * state.world_from_body.translation + translation;
+      state.world_from_body.translation =
+          rotation * state.world_from_body.translation + translation;
       state.velocity_in_world = rotation * state.velocity_in_world;
     }
     for (auto& [track_id, point] : points) point = rotation * point + translation;
@@ -421,9 +421,8 @@ VioFrameResult VisualInertialOdometry::ProcessFrame(const FrameFeatures& feature
       summary_.resets.push_back(reset);
       relocalization_pending_ = false;
       init_keyframes_.clear();
-    } else if (relocalization_pending_ &&
-               NsToSeconds(frame.timestamp_ns - restart_ns_) >=
-                   options_.window.relocalization_window_s) {
+    } else if (relocalization_pending_ && NsToSeconds(frame.timestamp_ns - restart_ns_) >=
+                                              options_.window.relocalization_window_s) {
       relocalization_pending_ = false;
       VioReset& reset = summary_.resets.back();
       reset.relocalized = window_->relocalized();
@@ -457,7 +456,8 @@ VioFrameResult VisualInertialOdometry::ProcessFrame(const FrameFeatures& feature
     // velocity is known less well the longer that took.
     InitialStateSigmas sigmas = options_.static_start_sigmas;
     const double carried_s = NsToSeconds(frame.timestamp_ns - last_good_state_.timestamp_ns);
-    sigmas.velocity_mps = std::hypot(sigmas.velocity_mps, kCarriedVelocitySigmaPerSecond * carried_s);
+    sigmas.velocity_mps =
+        std::hypot(sigmas.velocity_mps, kCarriedVelocitySigmaPerSecond * carried_s);
     StartWindow(start, sigmas, frame);
     result.state = start;
   } else {
@@ -528,7 +528,8 @@ VioResult RunVio(const Sequence& sequence, const VioOptions& options) {
   result.frames.reserve(num_frames);
   const auto read_and_track = [&](size_t k, const std::optional<Eigen::Quaterniond>& prior) {
     const SequenceImage& image = sequence.images[k];
-    const FrameFeatures features = tracker.Track(image.timestamp_ns, ReadGreyImage(image.path), prior);
+    const FrameFeatures features =
+        tracker.Track(image.timestamp_ns, ReadGreyImage(image.path), prior);
     progress.Update();
     return features;
   };
@@ -546,9 +547,9 @@ VioResult RunVio(const Sequence& sequence, const VioOptions& options) {
     for (; k < num_frames; ++k) {
       std::optional<Eigen::Quaterniond> prior;
       if (options.gyro_rotation_prior && k > 0) {
-        prior = GyroRotationPrior(rig, sequence.imu, Eigen::Vector3d::Zero(),
-                                  sequence.images[k - 1].timestamp_ns,
-                                  sequence.images[k].timestamp_ns);
+        prior =
+            GyroRotationPrior(rig, sequence.imu, Eigen::Vector3d::Zero(),
+                              sequence.images[k - 1].timestamp_ns, sequence.images[k].timestamp_ns);
       }
       startup.push_back(read_and_track(k, prior));
       if (startup.size() >= 2) {
@@ -563,9 +564,8 @@ VioResult RunVio(const Sequence& sequence, const VioOptions& options) {
       }
     }
     time_offset =
-        EstimateTimeOffset(startup, sequence.imu, rig.body_from_cam,
-                           rig.cam_time_offset_ns, MeanFocalLength(rig.camera),
-                           options.time_offset);
+        EstimateTimeOffset(startup, sequence.imu, rig.body_from_cam, rig.cam_time_offset_ns,
+                           MeanFocalLength(rig.camera), options.time_offset);
     VIOSFM_LOG(INFO) << "vio: " << time_offset.message;
     rig.cam_time_offset_ns = time_offset.offset_ns;
   }
@@ -604,8 +604,7 @@ VioResult RunVio(const Sequence& sequence, const VioOptions& options) {
                         << " frame(s) lie after the last IMU sample ("
                         << FormatNsAsSeconds(last_imu_ns, 3)
                         << " s on the IMU clock, camera-IMU offset "
-                        << NsToSeconds(rig.cam_time_offset_ns) * 1e3
-                        << " ms): no pose for them";
+                        << NsToSeconds(rig.cam_time_offset_ns) * 1e3 << " ms): no pose for them";
   }
   // Segments: a reset that did not re-localise starts a new one at its lost frame.
   int segment = 0;
@@ -685,9 +684,10 @@ std::string FormatVioSummary(const VioSummary& summary) {
   out << "num_resets: " << summary.num_resets << "\n";
   out << "num_segments: " << summary.num_segments << "\n";
   for (const VioReset& reset : summary.resets) {
-    out << "reset: {timestamp_ns: " << reset.timestamp_ns << ", relocalized: "
-        << (reset.relocalized ? "true" : "false") << ", map_point_observations: "
-        << reset.num_map_points << ", message: \"" << reset.message << "\"}\n";
+    out << "reset: {timestamp_ns: " << reset.timestamp_ns
+        << ", relocalized: " << (reset.relocalized ? "true" : "false")
+        << ", map_point_observations: " << reset.num_map_points << ", message: \"" << reset.message
+        << "\"}\n";
   }
   out << "cpu_seconds: " << summary.cpu_seconds << "\n";
   out << "wall_seconds: " << summary.wall_seconds << "\n";
@@ -714,7 +714,8 @@ void WriteVioResult(const std::filesystem::path& folder, const VioResult& result
       for (const Eigen::Vector3d* v : {&s.velocity_in_world, &s.gyro_bias, &s.accel_bias}) {
         out << "," << v->x() << "," << v->y() << "," << v->z();
       }
-      for (int i = 0; i < 6; ++i) out << "," << std::sqrt(std::max(0.0, frame.pose_covariance(i, i)));
+      for (int i = 0; i < 6; ++i)
+        out << "," << std::sqrt(std::max(0.0, frame.pose_covariance(i, i)));
       out << "," << frame.segment << "," << (frame.has_pose ? 1 : 0);
       out << "\n";
     }

@@ -110,13 +110,13 @@ struct VioSummary {
   size_t num_frames = 0;
   // Frames per status, indexed by static_cast<int>(VioStatus).
   std::array<size_t, 4> status_counts{};
-  StaticInitResult static_init;  // status kNotStatic/kNotEnoughData when not a static start
-  ImuNoiseCheck imu_noise;       // the calibration's IMU noise and what was used
+  StaticInitResult static_init;    // status kNotStatic/kNotEnoughData when not a static start
+  ImuNoiseCheck imu_noise;         // the calibration's IMU noise and what was used
   TimeOffsetEstimate time_offset;  // the camera-IMU time offset used (time_offset.h)
   bool visual_initialized = false;
   // Camera stamp of the first kTracking frame (-1: never).
   timestamp_ns_t first_tracking_ns = -1;
-  int num_resets = 0;  // kLost events
+  int num_resets = 0;            // kLost events
   std::vector<VioReset> resets;  // one per kLost event, in order
   int num_segments = 0;          // distinct VioFrameResult::segment values
   int num_keyframes = 0;

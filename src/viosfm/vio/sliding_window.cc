@@ -6,7 +6,6 @@
 #include <ceres/solver.h>
 
 #include <Eigen/Cholesky>
-
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -789,9 +788,9 @@ WindowFrameEstimate SlidingWindowEstimator::AddFrame(const FrameFeatures& featur
     if (frame_pointer->observations.count(landmark->track_id) > 0) ++estimate.num_landmarks;
   }
   VIOSFM_LOG(DEBUG) << "window: frame " << FormatNsAsSeconds(frame_pointer->timestamp_ns, 3)
-                    << " s, " << frames_.size() << " frames, keyframe " << frame_pointer->is_keyframe
-                    << ", " << frame_pointer->observations.size() << " observations, "
-                    << estimate.num_window_landmarks << " landmarks used, "
+                    << " s, " << frames_.size() << " frames, keyframe "
+                    << frame_pointer->is_keyframe << ", " << frame_pointer->observations.size()
+                    << " observations, " << estimate.num_window_landmarks << " landmarks used, "
                     << estimate.num_landmarks << " seen by the frame";
   if (estimate.num_landmarks >= options_.min_tracked_landmarks) {
     has_tracked_ = true;
@@ -800,11 +799,11 @@ WindowFrameEstimate SlidingWindowEstimator::AddFrame(const FrameFeatures& featur
     // The map a later restart would re-localise against.
     map_points_.clear();
     for (const Landmark* landmark : selected) {
-      map_points_.emplace(landmark->track_id,
-                          InverseDepthPointInWorld(
-                              StateOf(landmark->anchor->parameters, 0).world_from_body,
-                              body_from_cam_, landmark->anchor->observations.at(landmark->track_id),
-                              landmark->inverse_depth));
+      map_points_.emplace(
+          landmark->track_id,
+          InverseDepthPointInWorld(
+              StateOf(landmark->anchor->parameters, 0).world_from_body, body_from_cam_,
+              landmark->anchor->observations.at(landmark->track_id), landmark->inverse_depth));
     }
   } else if (!has_tracked_) {
     estimate.status = VioStatus::kInitializing;

@@ -1,13 +1,12 @@
 #include "viosfm/vio/time_offset.h"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
 #include <optional>
 #include <sstream>
 #include <unordered_map>
-
-#include <Eigen/Eigenvalues>
 
 #include "viosfm/geometry/lie.h"
 #include "viosfm/util/errors.h"
@@ -24,8 +23,9 @@ std::optional<Eigen::Quaterniond> GyroRotation(const std::vector<ImuSample>& imu
       imu.back().timestamp_ns < to) {
     return std::nullopt;
   }
-  auto it = std::upper_bound(imu.begin(), imu.end(), from,
-                             [](timestamp_ns_t t, const ImuSample& s) { return t < s.timestamp_ns; });
+  auto it =
+      std::upper_bound(imu.begin(), imu.end(), from,
+                       [](timestamp_ns_t t, const ImuSample& s) { return t < s.timestamp_ns; });
   ImuSample previous = InterpolateImu(*(it - 1), *it, from);
   Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();
   const auto step = [&](const ImuSample& a, const ImuSample& b) {
@@ -86,7 +86,9 @@ std::optional<double> RotationFlowCost(const std::vector<FramePair>& pairs,
     if (!body1_from_body2) continue;
     // cam2_from_cam1 = (cam_from_body * body1_from_body2 * body_from_cam)^-1.
     const Eigen::Matrix3d cam2_from_cam1 =
-        (body_from_cam.conjugate() * *body1_from_body2 * body_from_cam).conjugate().toRotationMatrix();
+        (body_from_cam.conjugate() * *body1_from_body2 * body_from_cam)
+            .conjugate()
+            .toRotationMatrix();
     // Epipolar residuals with the rotation fixed: for the unit translation
     // t, x2^T [t]x R x1 = t . ((R x1) x x2) = t . a. t is the eigenvector of
     // the smallest eigenvalue of sum a a^T (least squares), refitted on the
@@ -109,7 +111,8 @@ std::optional<double> RotationFlowCost(const std::vector<FramePair>& pairs,
     errors.clear();
     for (const Eigen::Vector3d& row : rows) errors.push_back(std::abs(t.dot(row)));
     std::vector<size_t> order = all;
-    std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return errors[a] < errors[b]; });
+    std::sort(order.begin(), order.end(),
+              [&](size_t a, size_t b) { return errors[a] < errors[b]; });
     order.resize(std::max<size_t>(5, order.size() * 7 / 10));
     t = fit(rows, order);
     errors.clear();
@@ -146,8 +149,8 @@ double GyroRotationSumDeg(const std::vector<FrameFeatures>& frames,
                           const std::vector<ImuSample>& imu, timestamp_ns_t offset_ns) {
   double sum = 0.0;
   for (size_t k = 0; k + 1 < frames.size(); ++k) {
-    const std::optional<Eigen::Quaterniond> rotation =
-        GyroRotation(imu, frames[k].timestamp_ns + offset_ns, frames[k + 1].timestamp_ns + offset_ns);
+    const std::optional<Eigen::Quaterniond> rotation = GyroRotation(
+        imu, frames[k].timestamp_ns + offset_ns, frames[k + 1].timestamp_ns + offset_ns);
     if (rotation) sum += So3Log(*rotation).norm();
   }
   return sum * 180.0 / M_PI;
@@ -181,8 +184,8 @@ TimeOffsetEstimate EstimateTimeOffset(const std::vector<FrameFeatures>& frames,
   estimate.calibration_cost_px = *calibration_cost * focal_length_px;
   estimate.cost_px = estimate.calibration_cost_px;
   if (estimate.total_rotation_deg < options.min_total_rotation_deg) {
-    message << "too little rotation (" << estimate.total_rotation_deg << " deg over " << pairs.size()
-            << " frame pairs, " << options.min_total_rotation_deg
+    message << "too little rotation (" << estimate.total_rotation_deg << " deg over "
+            << pairs.size() << " frame pairs, " << options.min_total_rotation_deg
             << " needed); the calibration's offset is kept";
     estimate.message = message.str();
     return estimate;
@@ -225,16 +228,16 @@ TimeOffsetEstimate EstimateTimeOffset(const std::vector<FrameFeatures>& frames,
   if (refined_cost < best_cost) best_cost = refined_cost;
 
   const double reduction = 1.0 - best_cost / *calibration_cost;
-  message << std::setprecision(1) << "camera-IMU time offset "
-          << NsToSeconds(refined) * 1e3 << " ms (calibration "
-          << NsToSeconds(calibration_offset_ns) * 1e3 << " ms): median epipolar residual with the gyro's "
+  message << std::setprecision(1) << "camera-IMU time offset " << NsToSeconds(refined) * 1e3
+          << " ms (calibration " << NsToSeconds(calibration_offset_ns) * 1e3
+          << " ms): median epipolar residual with the gyro's "
           << "rotation " << std::setprecision(2) << best_cost * focal_length_px << " px against "
           << *calibration_cost * focal_length_px << " px at the calibration's offset, "
-          << pairs.size() << " frame pairs, " << std::setprecision(0)
-          << estimate.total_rotation_deg << " deg of rotation";
+          << pairs.size() << " frame pairs, " << std::setprecision(0) << estimate.total_rotation_deg
+          << " deg of rotation";
   if (at_edge) {
-    message << "; not trusted: the minimum is at the edge of the +-"
-            << options.max_offset_s * 1e3 << " ms search range";
+    message << "; not trusted: the minimum is at the edge of the +-" << options.max_offset_s * 1e3
+            << " ms search range";
   } else if (reduction < options.min_cost_reduction) {
     estimate.offset_ns = calibration_offset_ns;
     estimate.estimated = false;
