@@ -1,32 +1,10 @@
 #include "viosfm/ba/cost_functions.h"
 
-#include <ceres/product_manifold.h>
-
 #include <cmath>
 
 #include "viosfm/util/errors.h"
 
 namespace viosfm {
-
-PoseParameters ToPoseParameters(const Rigid3d& cam_from_world) {
-  const Eigen::Quaterniond rotation = cam_from_world.rotation.normalized();
-  return {rotation.x(),
-          rotation.y(),
-          rotation.z(),
-          rotation.w(),
-          cam_from_world.translation.x(),
-          cam_from_world.translation.y(),
-          cam_from_world.translation.z()};
-}
-
-Rigid3d FromPoseParameters(const PoseParameters& pose) {
-  return Rigid3d(Eigen::Quaterniond(pose[3], pose[0], pose[1], pose[2]).normalized(),
-                 Eigen::Vector3d(pose[4], pose[5], pose[6]));
-}
-
-ceres::Manifold* CreatePoseManifold() {
-  return new ceres::ProductManifold<ceres::EigenQuaternionManifold, ceres::EuclideanManifold<3>>();
-}
 
 ceres::CostFunction* CreateReprojectionCost(CameraModelId model_id, const Eigen::Vector2d& observed,
                                             const Eigen::Matrix2d& sqrt_information) {

@@ -24,19 +24,13 @@
 #include <array>
 
 #include "viosfm/geometry/lie.h"
+#include "viosfm/geometry/pose_parameters.h"
 #include "viosfm/geometry/rigid3.h"
 #include "viosfm/sensor/camera_models.h"
 
 namespace viosfm {
 
-// A cam_from_world pose as one parameter block: [qx, qy, qz, qw, tx, ty, tz].
-using PoseParameters = std::array<double, 7>;
-PoseParameters ToPoseParameters(const Rigid3d& cam_from_world);
-Rigid3d FromPoseParameters(const PoseParameters& pose);
-// The manifold of a pose block: EigenQuaternionManifold x R^3 (6 degrees of
-// freedom; the quaternion stays unit). The caller owns it (ceres::Problem
-// does once it is set).
-ceres::Manifold* CreatePoseManifold();
+// Pose blocks (ToPoseParameters, CreatePoseManifold): geometry/pose_parameters.h.
 
 // residual = sqrt_information * (observed - Project(params, cam_from_world * X)),
 // in pixels for the identity weight. Blocks: (pose[7] (PoseParameters),

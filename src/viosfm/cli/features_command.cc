@@ -9,7 +9,7 @@
 #include "viosfm/cli/commands.h"
 #include "viosfm/features/feature_extraction.h"
 #include "viosfm/io/colmap_database.h"
-#include "viosfm/io/euroc.h"
+#include "viosfm/io/dataset.h"
 #include "viosfm/io/image_folder.h"
 #include "viosfm/sensor/camera_models.h"
 #include "viosfm/util/errors.h"
@@ -58,41 +58,15 @@ Camera ParseCameraOption(const std::string& text) {
                     std::move(params));
 }
 
-bool IsEurocDataset(const fs::path& root) {
-  return fs::is_directory(root / "mav0") ||
-         (root.filename() == "mav0" && fs::is_directory(root / "cam0"));
-}
-
-Sequence ReadDataset(const FeaturesArguments& args) {
-  const fs::path root = args.dataset;
-  if (HasRosbagExtension(root)) {
-    // The images go beside the database, as a EuRoC folder (OUT/bag).
-    const fs::path database = fs::absolute(args.database);
-    Sequence sequence =
-        ReadRosbagDataset(root, MakeRosbagOptions(args.bag, database.parent_path() / "bag"));
-    ApplyCalibrationFiles(args.calibration, &sequence);
-    return sequence;
-  }
-  if (!fs::is_directory(root)) throw InputError(args.dataset, 0, "dataset folder not found");
-  if (IsEurocDataset(root)) {
-    EurocReadOptions options;
-    options.require_imu = false;  // features need only the camera
-    Sequence sequence = ReadEurocDataset(root, options);
-    ApplyCalibrationFiles(args.calibration, &sequence);
-    return sequence;
-  }
-  ImageFolderOptions options;
-  options.timestamps_file = args.timestamps;
-  options.camera_yaml = args.bag.camera_yaml;
-  if (!args.camera.empty()) options.camera = ParseCameraOption(args.camera);
-  if (const std::string error = options.Validate(); !error.empty()) {
-    throw InputError(args.dataset, 0,
-                     "not a EuRoC dataset (no mav0/), so read as an image folder: " + error +
-                         " (give --camera-yaml or --camera)");
-  }
-  Sequence sequence = ReadImageFolder(root, options);
-  ApplyCalibrationFiles(args.calibration, &sequence);
-  return sequence;
+Sequence ReadFeaturesDataset(const FeaturesArguments& args) {
+  DatasetReadOptions options;
+  // A bag's images go beside the database, as a EuRoC folder (OUT/bag).
+  options.rosbag = MakeRosbagOptions(args.bag, fs::absolute(args.database).parent_path() / "bag");
+  options.image_folder.timestamps_file = args.timestamps;
+  options.image_folder.camera_yaml = args.bag.camera_yaml;
+  if (!args.camera.empty()) options.image_folder.camera = ParseCameraOption(args.camera);
+  options.calibration = args.calibration;
+  return ReadDataset(args.dataset, options);
 }
 
 void RunFeatures(const FeaturesArguments& args) {
@@ -101,7 +75,7 @@ void RunFeatures(const FeaturesArguments& args) {
   if (const std::string error = options.Validate(); !error.empty()) {
     throw InputError("invalid feature options: " + error);
   }
-  const Sequence sequence = ReadDataset(args);
+  const Sequence sequence = ReadFeaturesDataset(args);
   const fs::path database_path = args.database;
   if (database_path.has_parent_path()) fs::create_directories(database_path.parent_path());
   ColmapDatabase database = ColmapDatabase::Open(database_path);

@@ -9,10 +9,12 @@
 #include "viosfm/cli/commands.h"
 #include "viosfm/cli/vio_uncertainty_options.h"
 #include "viosfm/io/colmap_database.h"
-#include "viosfm/io/euroc.h"
+#include "viosfm/io/dataset.h"
 #include "viosfm/io/trajectory_io.h"
 #include "viosfm/io/verification_report.h"
 #include "viosfm/matching/verification_driver.h"
+#include "viosfm/pipeline/pipeline_options.h"
+#include "viosfm/pipeline/stage_vio.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/logging.h"
 #include "viosfm/util/string_util.h"
@@ -53,35 +55,21 @@ void RunMatch(MatchArguments args) {
   if (const std::string error = options.Validate(); !error.empty()) {
     throw InputError("invalid match options: " + error);
   }
-  const std::string frame = ToLower(args.vio_frame);
-  if (frame != "body" && frame != "cam") {
-    throw InputError("--vio-frame '" + args.vio_frame + "': expected 'body' or 'cam'");
-  }
+  const VioFrame vio_frame = ParseVioFrame(args.vio_frame);
   if (options.use_vio_prior && args.vio_trajectory.empty()) {
     throw InputError("--vio-trajectory is required unless --no-vio-prior is given");
   }
 
-  const fs::path root = args.dataset;
-  Sequence sequence;
-  if (HasRosbagExtension(root)) {
-    // As `viosfm features` does: the images go beside the database (OUT/bag).
-    const fs::path database = fs::absolute(args.database);
-    sequence = ReadRosbagDataset(root, MakeRosbagOptions(args.bag, database.parent_path() / "bag"));
-  } else {
-    if (!fs::is_directory(root)) throw InputError(args.dataset, 0, "dataset folder not found");
-    EurocReadOptions read_options;
-    read_options.require_imu = false;  // matching needs the camera and its extrinsics
-    sequence = ReadEurocDataset(root, read_options);
-  }
-  ApplyCalibrationFiles(args.calibration, &sequence);
+  DatasetReadOptions read;
+  // As `viosfm features` does: a bag's images go beside the database (OUT/bag).
+  read.rosbag = MakeRosbagOptions(args.bag, fs::absolute(args.database).parent_path() / "bag");
+  read.calibration = args.calibration;
+  const Sequence sequence = ReadDataset(args.dataset, read);
 
   Trajectory vio;
   if (options.use_vio_prior) {
-    vio = ReadTrajectory(args.vio_trajectory, GuessTrajectoryFormat(args.vio_trajectory));
-    if (!vio.has_timestamps) {
-      throw InputError(args.vio_trajectory, 0, "the VIO trajectory needs timestamps");
-    }
-    if (frame == "cam") vio = CameraToBodyTrajectory(vio, sequence.rig.body_from_cam);
+    vio = ReadVioTrajectoryFile(args.vio_trajectory, GuessTrajectoryFormat(args.vio_trajectory),
+                                vio_frame, sequence.rig.body_from_cam);
   }
 
   const fs::path database_path = args.database;

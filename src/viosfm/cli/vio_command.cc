@@ -7,7 +7,7 @@
 
 #include "viosfm/cli/bag_options.h"
 #include "viosfm/cli/commands.h"
-#include "viosfm/io/euroc.h"
+#include "viosfm/io/dataset.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/logging.h"
 #include "viosfm/vio/odometry.h"
@@ -27,24 +27,14 @@ struct VioArguments {
 
 void RunVioCommand(VioArguments args) {
   const fs::path root = args.dataset;
-  const bool is_bag = HasRosbagExtension(root);
-  if (!is_bag && !fs::is_directory(root)) {
-    throw InputError(args.dataset, 0, "dataset folder not found");
-  }
   if (const std::string error = args.options.Validate(); !error.empty()) {
     throw InputError("invalid vio options: " + error);
   }
-  Sequence sequence;
-  if (is_bag) {
-    RosbagDatasetOptions bag_options = MakeRosbagOptions(args.bag, fs::path(args.out) / "bag");
-    bag_options.require_imu = true;
-    sequence = ReadRosbagDataset(root, bag_options);
-  } else {
-    EurocReadOptions read_options;
-    read_options.require_imu = true;
-    sequence = ReadEurocDataset(root, read_options);
-  }
-  ApplyCalibrationFiles(args.calibration, &sequence);
+  DatasetReadOptions read;
+  read.rosbag = MakeRosbagOptions(args.bag, fs::path(args.out) / "bag");
+  read.calibration = args.calibration;
+  read.require_imu = true;
+  const Sequence sequence = ReadDataset(root, read);
   VIOSFM_LOG(INFO) << "vio: " << sequence.images.size() << " images, " << sequence.imu.size()
                    << " IMU samples from " << args.dataset;
   const VioResult result = RunVio(sequence, args.options);

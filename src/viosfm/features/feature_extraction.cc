@@ -98,10 +98,6 @@ std::vector<Task> RegisterImages(const Sequence& sequence, ColmapDatabase* datab
 
 }  // namespace
 
-std::string DatabaseImageName(const SequenceImage& image) {
-  return image.path.filename().string();
-}
-
 std::string FeatureExtractionSummary::ToString() const {
   std::ostringstream text;
   text << num_images << " images (" << num_extracted << " extracted, " << num_skipped

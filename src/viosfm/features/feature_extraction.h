@@ -24,7 +24,7 @@
 
 #include "viosfm/features/sift.h"
 #include "viosfm/io/colmap_database.h"
-#include "viosfm/io/sequence.h"
+#include "viosfm/scene/sequence.h"
 
 namespace viosfm {
 
@@ -41,9 +41,6 @@ struct FeatureExtractionSummary {
   // "95 images (90 extracted, 5 already stored), 1523.4 features per image, 3.2 s"
   std::string ToString() const;
 };
-
-// The database name of an image file: its file name.
-std::string DatabaseImageName(const SequenceImage& image);
 
 // Extracts the features of every image of `sequence` that the database does
 // not hold yet. With show_progress, draws a progress bar (util/progress.h).

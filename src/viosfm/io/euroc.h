@@ -44,7 +44,7 @@
 #include <string>
 #include <vector>
 
-#include "viosfm/io/sequence.h"
+#include "viosfm/scene/sequence.h"
 
 namespace viosfm {
 

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "viosfm/io/sequence.h"
+#include "viosfm/scene/sequence.h"
 
 namespace viosfm {
 
@@ -23,8 +23,7 @@ void WriteEurocCameraYaml(const std::filesystem::path& yaml, const Camera& camer
 void WriteEurocImuYaml(const std::filesystem::path& yaml, const ImuNoise& noise);
 // The texts of those two files (InputError for a camera model without a
 // EuRoC equivalent).
-std::string EurocCameraYamlText(const Camera& camera, const Rigid3d& body_from_cam,
-                                double rate_hz);
+std::string EurocCameraYamlText(const Camera& camera, const Rigid3d& body_from_cam, double rate_hz);
 std::string EurocImuYamlText(const ImuNoise& noise);
 
 // Writes <root>/mav0/{cam0/{data.csv,sensor.yaml}, imu0/{data.csv,sensor.yaml},

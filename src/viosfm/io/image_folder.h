@@ -30,7 +30,7 @@
 #include <optional>
 #include <string>
 
-#include "viosfm/io/sequence.h"
+#include "viosfm/scene/sequence.h"
 
 namespace viosfm {
 

@@ -41,7 +41,7 @@
 #include <string>
 
 #include "viosfm/geometry/rigid3.h"
-#include "viosfm/io/sequence.h"
+#include "viosfm/scene/sequence.h"
 #include "viosfm/sensor/camera.h"
 #include "viosfm/sensor/imu.h"
 #include "viosfm/util/timestamp.h"

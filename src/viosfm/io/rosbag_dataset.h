@@ -45,7 +45,7 @@
 #include <string>
 
 #include "viosfm/io/rosbag.h"
-#include "viosfm/io/sequence.h"
+#include "viosfm/scene/sequence.h"
 
 namespace viosfm {
 

@@ -13,7 +13,6 @@
 #include <unordered_map>
 #include <unordered_set>
 
-#include "viosfm/features/feature_extraction.h"
 #include "viosfm/features/sift.h"
 #include "viosfm/geometry/epipolar.h"
 #include "viosfm/sensor/camera_models.h"
@@ -49,30 +48,6 @@ struct ImageData {
   std::vector<Eigen::Vector2d> points_px;               // undistorted pixels (guided matching)
   std::shared_ptr<const FloatDescriptors> descriptors;  // null if not needed
 };
-
-// The index of the pose of `trajectory` nearest in time to `stamp`, if
-// within `tolerance`.
-std::optional<size_t> NearestPose(const Trajectory& trajectory, timestamp_ns_t stamp,
-                                  timestamp_ns_t tolerance) {
-  if (trajectory.empty()) return std::nullopt;
-  const auto it = std::lower_bound(
-      trajectory.poses.begin(), trajectory.poses.end(), stamp,
-      [](const StampedPose& pose, timestamp_ns_t t) { return pose.timestamp_ns < t; });
-  const StampedPose* best = nullptr;
-  timestamp_ns_t best_gap = 0;
-  const auto consider = [&](const StampedPose& pose) {
-    const timestamp_ns_t gap =
-        pose.timestamp_ns > stamp ? pose.timestamp_ns - stamp : stamp - pose.timestamp_ns;
-    if (best == nullptr || gap < best_gap) {
-      best = &pose;
-      best_gap = gap;
-    }
-  };
-  if (it != trajectory.poses.end()) consider(*it);
-  if (it != trajectory.poses.begin()) consider(*(it - 1));
-  if (best == nullptr || best_gap > tolerance) return std::nullopt;
-  return static_cast<size_t>(best - trajectory.poses.data());
-}
 
 std::string FormatDouble(double value) {
   std::ostringstream stream;
@@ -196,7 +171,30 @@ double DriftEpipolarBandPx(const Eigen::Matrix<double, 6, 6>& covariance,
 VerificationResult RunVerification(const Sequence& sequence, const Trajectory& vio_world_from_body,
                                    ColmapDatabase* database, const VerificationOptions& options,
                                    const std::vector<int>& vio_segments) {
+  VIOSFM_CHECK(vio_segments.empty() || vio_segments.size() == vio_world_from_body.size())
+      << vio_segments.size() << " segment indices for " << vio_world_from_body.size() << " poses";
+  std::vector<std::optional<FrameVioPose>> frame_poses(sequence.images.size());
+  if (options.use_vio_prior && !vio_world_from_body.empty()) {
+    const std::vector<VioOdometer> odometers =
+        ComputeVioOdometers(vio_world_from_body, vio_segments);
+    for (size_t i = 0; i < sequence.images.size(); ++i) {
+      if (const std::optional<size_t> index =
+              NearestPoseIndex(vio_world_from_body, sequence.images[i].timestamp_ns,
+                               options.max_pose_time_difference_ns)) {
+        frame_poses[i] =
+            FrameVioPose{vio_world_from_body.poses[*index].world_from_frame, odometers[*index]};
+      }
+    }
+  }
+  return RunVerification(sequence, frame_poses, database, options);
+}
+
+VerificationResult RunVerification(const Sequence& sequence,
+                                   const std::vector<std::optional<FrameVioPose>>& frame_poses,
+                                   ColmapDatabase* database, const VerificationOptions& options) {
   VIOSFM_CHECK(database != nullptr);
+  VIOSFM_CHECK(frame_poses.size() == sequence.images.size())
+      << frame_poses.size() << " frame poses for " << sequence.images.size() << " images";
   if (const std::string error = options.Validate(); !error.empty()) {
     throw InputError("invalid verification options: " + error);
   }
@@ -209,14 +207,14 @@ VerificationResult RunVerification(const Sequence& sequence, const Trajectory& v
 
   // Images: the database's images that belong to the sequence, in time order.
   Timer step_timer;
-  std::unordered_map<std::string, timestamp_ns_t> stamps_by_name;
-  for (const SequenceImage& image : sequence.images) {
-    stamps_by_name.emplace(DatabaseImageName(image), image.timestamp_ns);
+  std::unordered_map<std::string, size_t> frame_by_name;
+  for (size_t i = 0; i < sequence.images.size(); ++i) {
+    frame_by_name.emplace(DatabaseImageName(sequence.images[i]), i);
   }
   std::vector<ImageInfo> images;
   for (const DatabaseImage& row : database->ReadAllImages()) {
-    const auto it = stamps_by_name.find(row.name);
-    if (it == stamps_by_name.end()) continue;
+    const auto it = frame_by_name.find(row.name);
+    if (it == frame_by_name.end()) continue;
     if (!database->ExistsFeatures(row.image_id)) {
       throw InputError(database_path, 0,
                        "image '" + row.name +
@@ -227,26 +225,20 @@ VerificationResult RunVerification(const Sequence& sequence, const Trajectory& v
     info.image_id = row.image_id;
     info.name = row.name;
     info.camera_id = row.camera_id;
-    info.timestamp_ns = it->second;
+    info.timestamp_ns = sequence.images[it->second].timestamp_ns;
+    if (options.use_vio_prior && frame_poses[it->second]) {
+      info.world_from_body = frame_poses[it->second]->world_from_body;
+      info.odometer = frame_poses[it->second]->odometer;
+    }
     images.push_back(std::move(info));
   }
   std::sort(images.begin(), images.end(),
             [](const ImageInfo& a, const ImageInfo& b) { return a.timestamp_ns < b.timestamp_ns; });
   summary.num_images = images.size();
-  const bool use_prior = options.use_vio_prior && !vio_world_from_body.empty();
-  VIOSFM_CHECK(vio_segments.empty() || vio_segments.size() == vio_world_from_body.size())
-      << vio_segments.size() << " segment indices for " << vio_world_from_body.size() << " poses";
-  const std::vector<VioOdometer> odometers =
-      use_prior ? ComputeVioOdometers(vio_world_from_body, vio_segments)
-                : std::vector<VioOdometer>();
-  for (ImageInfo& info : images) {
-    if (use_prior) {
-      if (const std::optional<size_t> index = NearestPose(vio_world_from_body, info.timestamp_ns,
-                                                          options.max_pose_time_difference_ns)) {
-        info.world_from_body = vio_world_from_body.poses[*index].world_from_frame;
-        info.odometer = odometers[*index];
-      }
-    }
+  bool any_prior = false;
+  for (const std::optional<FrameVioPose>& pose : frame_poses) any_prior = any_prior || pose;
+  const bool use_prior = options.use_vio_prior && any_prior;
+  for (const ImageInfo& info : images) {
     if (info.world_from_body) ++summary.num_images_with_prior;
   }
   if (use_prior && summary.num_images_with_prior < images.size()) {

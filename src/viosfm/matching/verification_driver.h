@@ -47,11 +47,11 @@
 #include "viosfm/estimators/prior_verification.h"
 #include "viosfm/estimators/two_view_geometry.h"
 #include "viosfm/io/colmap_database.h"
-#include "viosfm/io/sequence.h"
 #include "viosfm/matching/descriptor_matcher.h"
 #include "viosfm/matching/pair_generator.h"
 #include "viosfm/retrieval/image_retrieval.h"
 #include "viosfm/scene/pair_decision.h"
+#include "viosfm/scene/sequence.h"
 #include "viosfm/scene/trajectory.h"
 #include "viosfm/scene/vio_uncertainty.h"
 
@@ -138,7 +138,7 @@ struct VerificationResult {
 // top of this file). `vio_world_from_body` is the VIO trajectory as
 // world_from_body poses (the sequence's rig.body_from_cam gives the camera
 // poses); empty, or options.use_vio_prior false: RANSAC only.
-// `vio_segments` gives each VIO pose's segment (vio_input.h; empty: one
+// `vio_segments` gives each VIO pose's segment (stage_vio.h; empty: one
 // segment): a pair whose frames lie in two segments has no VIO prior (a
 // relative pose across a re-initialisation means nothing) and is verified
 // by RANSAC only. Throws InputError for invalid options, a database image
@@ -146,6 +146,18 @@ struct VerificationResult {
 VerificationResult RunVerification(const Sequence& sequence, const Trajectory& vio_world_from_body,
                                    ColmapDatabase* database, const VerificationOptions& options,
                                    const std::vector<int>& vio_segments = {});
+
+// A frame's VIO pose and its place along the VIO's track.
+struct FrameVioPose {
+  Rigid3d world_from_body;
+  VioOdometer odometer;  // ComputeVioOdometers over the VIO's track
+};
+// The same with the frames' VIO poses already known: frame_poses[i] is
+// sequence.images[i]'s (none: RANSAC only for its pairs); nothing is
+// associated by time here.
+VerificationResult RunVerification(const Sequence& sequence,
+                                   const std::vector<std::optional<FrameVioPose>>& frame_poses,
+                                   ColmapDatabase* database, const VerificationOptions& options);
 
 // The epipolar band (pixels) of a pair whose VIO relative pose
 // cam2_from_cam1 has covariance `covariance` (of [Log R_E; t_E],

@@ -332,7 +332,7 @@ TEST(VerificationDriver, ReverifyStoredMatchesWithAndWithoutDepthCheck) {
   VerificationResult baseline;
   {
     ColmapDatabase database = ColmapDatabase::Open(matched_path);
-    baseline = RunVerification(f.sequence, {}, &database, ransac_only);
+    baseline = RunVerification(f.sequence, Trajectory{}, &database, ransac_only);
   }
   ASSERT_GT(baseline.summary.num_accepted, 0u);
   EXPECT_TRUE(SmallOptions().prior.check_depth);

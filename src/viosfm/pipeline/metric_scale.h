@@ -12,8 +12,8 @@
 
 #include <string>
 
-#include "viosfm/io/sequence.h"
 #include "viosfm/scene/reconstruction.h"
+#include "viosfm/scene/sequence.h"
 #include "viosfm/sfm/imu_scale.h"
 
 namespace viosfm {

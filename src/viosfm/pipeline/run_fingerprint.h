@@ -47,8 +47,8 @@
 #include <utility>
 #include <vector>
 
-#include "viosfm/io/sequence.h"
-#include "viosfm/pipeline/pipeline.h"
+#include "viosfm/pipeline/pipeline_options.h"
+#include "viosfm/scene/sequence.h"
 #include "viosfm/scene/trajectory.h"
 
 namespace viosfm {
@@ -102,29 +102,5 @@ struct FingerprintDifference {
 std::vector<FingerprintDifference> CompareFingerprints(const RunFingerprint& stored,
                                                        const RunFingerprint& current,
                                                        bool complete);
-
-// Throws InputError if `output_folder` holds stored features and matches
-// (database.db) made from other inputs than `current` says: naming
-// fingerprint.json, every changed key with its stored and its current value,
-// and --overwrite; or if the database has no fingerprint.json beside it.
-// Nothing stored: no check.
-void CheckStoredRunData(const std::filesystem::path& output_folder, const RunFingerprint& current,
-                        bool complete);
-
-// The files and folders a run writes into its output folder (top level):
-// database.db with its SQLite -wal, -shm and -journal files, fingerprint.json,
-// options.json, summary.json, model/, model_txt/, verification/, vio/,
-// points.ply, the .tum trajectories, eval.json, eval_vio.json, and bag/ when
-// a bag is extracted to its default place.
-std::vector<std::string> RunOutputNames(const PipelineOptions& options);
-
-// --overwrite: removes every output of RunOutputNames and the leftovers of
-// interrupted atomic writes, nothing else. Returns how many entries it removed.
-size_t RemoveRunOutputs(const PipelineOptions& options);
-
-// Removes what interrupted atomic writes of the run's outputs left behind
-// ("<output>.tmp-<pid>", "<output>.old-<pid>", util/file_util.h), at the top
-// level and inside the run's own folders. Returns how many it removed.
-size_t RemoveAtomicWriteLeftovers(const PipelineOptions& options);
 
 }  // namespace viosfm

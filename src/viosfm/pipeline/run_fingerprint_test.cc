@@ -6,6 +6,7 @@
 #include <set>
 #include <string>
 
+#include "viosfm/pipeline/run_folder.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/file_util.h"
 #include "viosfm/util/hash.h"

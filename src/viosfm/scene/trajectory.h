@@ -2,6 +2,7 @@
 // frame, ordered by time.
 #pragma once
 
+#include <optional>
 #include <vector>
 
 #include "viosfm/geometry/rigid3.h"
@@ -29,5 +30,16 @@ struct Trajectory {
 // extrinsics: world_from_body = world_from_cam * cam_from_body, and back.
 Trajectory CameraToBodyTrajectory(const Trajectory& world_from_cam, const Rigid3d& body_from_cam);
 Trajectory BodyToCameraTrajectory(const Trajectory& world_from_body, const Rigid3d& body_from_cam);
+
+// The index of the pose nearest in time to `t` if at most `max_dt` away
+// (of two equally near, the later).
+std::optional<size_t> NearestPoseIndex(const Trajectory& trajectory, timestamp_ns_t t,
+                                       timestamp_ns_t max_dt);
+
+// The pose at `t`: the pose stamped `t`, or interpolated (linear position,
+// slerp rotation) between the two poses around `t` when they are at most
+// `max_gap` apart; none before the first or after the last pose.
+std::optional<Rigid3d> InterpolatePose(const Trajectory& trajectory, timestamp_ns_t t,
+                                       timestamp_ns_t max_gap);
 
 }  // namespace viosfm

@@ -127,25 +127,17 @@ PairTruthLabeller PairTruthLabeller::FromSimulation(const std::filesystem::path&
   std::vector<PairTruthFrame> frames;
   frames.reserve(sequence.images.size());
   for (const SequenceImage& image : sequence.images) {
-    const auto it = std::lower_bound(
-        sequence.ground_truth.begin(), sequence.ground_truth.end(), image.timestamp_ns,
-        [](const GroundTruthState& state, timestamp_ns_t t) { return state.timestamp_ns < t; });
-    const GroundTruthState* best = nullptr;
-    const auto gap = [&](const GroundTruthState& state) {
-      return std::abs(state.timestamp_ns - image.timestamp_ns);
-    };
-    if (it != sequence.ground_truth.end()) best = &*it;
-    if (it != sequence.ground_truth.begin() && (best == nullptr || gap(*(it - 1)) < gap(*best))) {
-      best = &*(it - 1);
-    }
-    if (best == nullptr || gap(*best) > kMaxGroundTruthGapNs) {
+    const std::optional<size_t> nearest =
+        NearestStampIndex(sequence.ground_truth, image.timestamp_ns, kMaxGroundTruthGapNs,
+                          [](const GroundTruthState& state) { return state.timestamp_ns; });
+    if (!nearest) {
       throw InputError(
           folder.string(), 0,
           "image " + image.path.filename().string() + " has no ground-truth state within 1 ms");
     }
+    const GroundTruthState* best = &sequence.ground_truth[*nearest];
     PairTruthFrame frame;
-    // The database image name (features/feature_extraction.h: the file name).
-    frame.name = image.path.filename().string();
+    frame.name = DatabaseImageName(image);
     frame.timestamp_ns = image.timestamp_ns;
     frame.cam_from_world = (best->world_from_body * sequence.rig.body_from_cam).Inverse();
     frames.push_back(std::move(frame));

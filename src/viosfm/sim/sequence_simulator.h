@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "viosfm/io/sequence.h"
+#include "viosfm/scene/sequence.h"
 #include "viosfm/sim/imu_synthesis.h"
 #include "viosfm/sim/renderer.h"
 #include "viosfm/sim/robustness.h"

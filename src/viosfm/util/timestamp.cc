@@ -82,4 +82,8 @@ std::string FormatNsAsSeconds(timestamp_ns_t ns, int decimals) {
   return out;
 }
 
+std::string FormatNsSpan(timestamp_ns_t first, timestamp_ns_t last) {
+  return "[" + FormatNsAsSeconds(first, 3) + ", " + FormatNsAsSeconds(last, 3) + "] s";
+}
+
 }  // namespace viosfm

@@ -2,6 +2,7 @@
 // and from the decimal seconds that some file formats use, digit-exactly.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -40,5 +41,41 @@ std::optional<timestamp_ns_t> ParseNs(std::string_view text);
 // Writes ns as decimal seconds with exactly `decimals` fractional digits
 // (0..9), rounding half away from zero: 1403715273262142976 -> "1403715273.262142976".
 std::string FormatNsAsSeconds(timestamp_ns_t ns, int decimals = 9);
+
+// "[first, last] s" with millisecond digits, for messages.
+std::string FormatNsSpan(timestamp_ns_t first, timestamp_ns_t last);
+
+// The index of the element of `items` (ordered by time) nearest in time to
+// `t`, if it is at most `max_dt` away; of two equally near, the later.
+// `stamp_of(item)` gives an element's stamp. The one time lookup of
+// viosfm: poses at image stamps (scene/trajectory.h NearestPoseIndex),
+// ground-truth states at image stamps.
+template <class Items, class StampOf>
+std::optional<size_t> NearestStampIndex(const Items& items, timestamp_ns_t t, timestamp_ns_t max_dt,
+                                        StampOf stamp_of) {
+  size_t low = 0;  // first element with a stamp >= t
+  size_t high = items.size();
+  while (low < high) {
+    const size_t middle = low + (high - low) / 2;
+    if (stamp_of(items[middle]) < t) {
+      low = middle + 1;
+    } else {
+      high = middle;
+    }
+  }
+  std::optional<size_t> best;
+  timestamp_ns_t best_dt = max_dt;
+  const auto consider = [&](size_t index) {
+    const timestamp_ns_t stamp = stamp_of(items[index]);
+    const timestamp_ns_t dt = stamp > t ? stamp - t : t - stamp;
+    if (dt <= best_dt) {
+      best_dt = dt;
+      best = index;
+    }
+  };
+  if (low > 0) consider(low - 1);
+  if (low < items.size()) consider(low);
+  return best;
+}
 
 }  // namespace viosfm

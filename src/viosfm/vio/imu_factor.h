@@ -24,8 +24,8 @@
 #include <array>
 #include <memory>
 
-#include "viosfm/ba/cost_functions.h"  // CreatePoseManifold
 #include "viosfm/geometry/lie.h"
+#include "viosfm/geometry/pose_parameters.h"
 #include "viosfm/vio/imu_preintegration.h"
 
 namespace viosfm {

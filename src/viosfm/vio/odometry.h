@@ -27,7 +27,7 @@
 #include <utility>
 #include <vector>
 
-#include "viosfm/io/sequence.h"
+#include "viosfm/scene/sequence.h"
 #include "viosfm/scene/trajectory.h"
 #include "viosfm/vio/feature_tracker.h"
 #include "viosfm/vio/imu_noise_check.h"

@@ -31,7 +31,7 @@
 #include <string>
 #include <vector>
 
-#include "viosfm/io/sequence.h"
+#include "viosfm/scene/sequence.h"
 #include "viosfm/scene/trajectory.h"
 
 namespace viosfm {

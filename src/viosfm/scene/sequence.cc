@@ -1,9 +1,13 @@
-#include "viosfm/io/sequence.h"
+#include "viosfm/scene/sequence.h"
 
 #include <algorithm>
 #include <cstdint>
 
 namespace viosfm {
+
+std::string DatabaseImageName(const SequenceImage& image) {
+  return image.path.filename().string();
+}
 
 double EstimateFrameRateHz(const std::vector<SequenceImage>& images) {
   if (images.size() < 2) return 0.0;

@@ -1,4 +1,4 @@
-#include "viosfm/pipeline/vio_input.h"
+#include "viosfm/pipeline/stage_vio.h"
 
 #include <algorithm>
 #include <filesystem>
@@ -72,6 +72,18 @@ VioPoses RunOwnVio(const Sequence& sequence, const PipelineOptions& options) {
 
 }  // namespace
 
+Trajectory ReadVioTrajectoryFile(const fs::path& path, TrajectoryFormat format, VioFrame frame,
+                                 const Rigid3d& body_from_cam) {
+  if (!fs::is_regular_file(path))
+    throw InputError(path.string(), 0, "VIO trajectory file not found");
+  Trajectory vio = ReadTrajectory(path, format);
+  if (!vio.has_timestamps)
+    throw InputError(path.string(), 0, "the VIO trajectory needs timestamps");
+  if (vio.empty()) throw InputError(path.string(), 0, "the VIO trajectory has no poses");
+  if (frame == VioFrame::kCam) vio = CameraToBodyTrajectory(vio, body_from_cam);
+  return vio;
+}
+
 Trajectory LoadVioTrajectory(const Sequence& sequence, const PipelineOptions& options) {
   if (options.vio_source) {
     Trajectory vio = options.vio_source(sequence);
@@ -81,17 +93,8 @@ Trajectory LoadVioTrajectory(const Sequence& sequence, const PipelineOptions& op
   if (options.vio_trajectory.empty()) {
     throw InputError("no VIO trajectory given (and viosfm's own VIO is run by LoadVioPoses)");
   }
-  const std::string path = options.vio_trajectory.string();
-  if (!fs::is_regular_file(options.vio_trajectory)) {
-    throw InputError(path, 0, "VIO trajectory file not found");
-  }
-  Trajectory vio = ReadTrajectory(options.vio_trajectory, options.vio_format);
-  if (!vio.has_timestamps) throw InputError(path, 0, "the VIO trajectory needs timestamps");
-  if (vio.empty()) throw InputError(path, 0, "the VIO trajectory has no poses");
-  if (options.vio_frame == VioFrame::kCam) {
-    vio = CameraToBodyTrajectory(vio, sequence.rig.body_from_cam);
-  }
-  return vio;
+  return ReadVioTrajectoryFile(options.vio_trajectory, options.vio_format, options.vio_frame,
+                               sequence.rig.body_from_cam);
 }
 
 VioPoses LoadVioPoses(const Sequence& sequence, const PipelineOptions& options) {
@@ -112,27 +115,11 @@ VioPoses LoadVioPoses(const Sequence& sequence, const PipelineOptions& options) 
                         << " segments (split at " << poses.segment_rule
                         << "); no relative pose joins two segments, the images do";
   }
+  const Trajectory& vio = poses.world_from_body;
+  VIOSFM_LOG(INFO) << "run: " << vio.size() << " VIO poses over "
+                   << FormatNsSpan(vio.poses.front().timestamp_ns, vio.poses.back().timestamp_ns)
+                   << " in " << poses.num_segments() << " segment(s)";
   return poses;
-}
-
-std::optional<size_t> NearestVioPose(const Trajectory& trajectory, timestamp_ns_t t,
-                                     timestamp_ns_t max_dt) {
-  const auto& poses = trajectory.poses;
-  const auto it = std::lower_bound(
-      poses.begin(), poses.end(), t,
-      [](const StampedPose& pose, timestamp_ns_t stamp) { return pose.timestamp_ns < stamp; });
-  std::optional<size_t> best;
-  timestamp_ns_t best_dt = max_dt;
-  const auto consider = [&](std::vector<StampedPose>::const_iterator candidate) {
-    const timestamp_ns_t dt = std::abs(candidate->timestamp_ns - t);
-    if (dt <= best_dt) {
-      best_dt = dt;
-      best = static_cast<size_t>(candidate - poses.begin());
-    }
-  };
-  if (it != poses.begin()) consider(std::prev(it));
-  if (it != poses.end()) consider(it);
-  return best;
 }
 
 }  // namespace viosfm

@@ -1,5 +1,5 @@
-// The VIO poses of a `viosfm run` (stage 2) and their association with the
-// selected frames (stage 3).
+// Stage 2 of a `viosfm run` (pipeline.h): the VIO poses of the whole
+// sequence, from viosfm's own VIO, a trajectory file or a VioSource.
 //
 // Segments. A VIO that loses track and re-initialises gives no pose for a
 // while, then poses in a new world frame; a relative pose between the two
@@ -15,11 +15,12 @@
 // split).
 #pragma once
 
+#include <filesystem>
 #include <optional>
 #include <string>
 #include <vector>
 
-#include "viosfm/pipeline/pipeline.h"
+#include "viosfm/pipeline/pipeline_options.h"
 #include "viosfm/scene/vio_uncertainty.h"
 
 namespace viosfm {
@@ -37,12 +38,20 @@ struct VioPoses {
   int num_segments() const { return segments.empty() ? 0 : segments.back() + 1; }
 };
 
-// The VIO poses as the options say (see LoadVioTrajectory) with their
-// segments and odometers.
-VioPoses LoadVioPoses(const Sequence& sequence, const PipelineOptions& options);
+// A VIO trajectory file: world_from_body poses with stamps (`frame` kCam
+// poses are converted with body_from_cam). Throws InputError naming the
+// file when it is missing, unreadable, without stamps or without poses.
+Trajectory ReadVioTrajectoryFile(const std::filesystem::path& path, TrajectoryFormat format,
+                                 VioFrame frame, const Rigid3d& body_from_cam);
 
-// Index of the pose nearest in time to `t` within max_dt, if any.
-std::optional<size_t> NearestVioPose(const Trajectory& trajectory, timestamp_ns_t t,
-                                     timestamp_ns_t max_dt);
+// The VIO trajectory (world_from_body, stamped) of the sequence, as the
+// options say: vio_source, else the file vio_trajectory. Throws InputError
+// naming the file when none is given, it cannot be read, has no stamps or no
+// poses.
+Trajectory LoadVioTrajectory(const Sequence& sequence, const PipelineOptions& options);
+
+// The VIO poses as the options say (viosfm's own VIO without a source or
+// file, else LoadVioTrajectory) with their segments and odometers.
+VioPoses LoadVioPoses(const Sequence& sequence, const PipelineOptions& options);
 
 }  // namespace viosfm

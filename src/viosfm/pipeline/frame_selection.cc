@@ -1,4 +1,4 @@
-#include "viosfm/matching/frame_selection.h"
+#include "viosfm/pipeline/frame_selection.h"
 
 #include <algorithm>
 #include <cmath>

@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 #include <filesystem>
+#include <string>
 #include <vector>
 
 #include "viosfm/geometry/rigid3.h"
@@ -51,6 +52,9 @@ struct Sequence {
   bool has_ground_truth() const { return !ground_truth.empty(); }
   size_t num_images() const { return images.size(); }
 };
+
+// The name of an image in a COLMAP database and model: its file name.
+std::string DatabaseImageName(const SequenceImage& image);
 
 // Frame rate from the median interval between consecutive images; 0 with
 // fewer than two images.

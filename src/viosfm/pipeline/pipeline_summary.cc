@@ -1,0 +1,147 @@
+#include "viosfm/pipeline/pipeline_summary.h"
+
+#include <iomanip>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#ifndef VIOSFM_VERSION
+#define VIOSFM_VERSION "unknown"
+#endif
+
+namespace viosfm {
+namespace {
+
+using ordered_json = nlohmann::ordered_json;
+
+ordered_json MetricJson(const MetricAccuracy& m) {
+  return {{"ate_sim3_rmse_m", m.ate_sim3_m.rmse},     {"ate_se3_rmse_m", m.ate_se3_m.rmse},
+          {"ate_posyaw_rmse_m", m.ate_posyaw_m.rmse}, {"scale", m.scale},
+          {"scale_error", m.scale_error()},           {"num_poses", m.num_poses}};
+}
+
+ordered_json StatsJson(const PipelineEvaluation& e) {
+  ordered_json json;
+  json["alignment"] = "sim3";
+  json["ate_rmse_m"] = e.ate_rmse_m;
+  json["ate_median_m"] = e.ate_median_m;
+  json["ate_mean_m"] = e.ate_mean_m;
+  json["ate_max_m"] = e.ate_max_m;
+  json["vio_ate_rmse_m"] = e.vio_ate_rmse_m;
+  json["vio_ate_median_m"] = e.vio_ate_median_m;
+  json["num_poses"] = e.num_poses;
+  json["metric"] = MetricJson(e.metric);
+  json["vio_metric"] = MetricJson(e.vio_metric);
+  return json;
+}
+
+}  // namespace
+
+std::string ViosfmVersion() {
+  return VIOSFM_VERSION;
+}
+
+std::string PipelineSummary::ToString() const {
+  std::ostringstream out;
+  out << std::fixed << std::setprecision(3);
+  out << "frames: " << num_frames_in << " in, " << num_frames_selected << " selected ("
+      << num_frames_without_vio_pose << " without a VIO pose), " << num_frames_registered
+      << " registered (pose supported by the images), " << num_frames_vio_only
+      << " placed by the VIO only, " << num_frames_unposed << " without a pose\n";
+  out << "VIO: " << num_vio_segments << " segment(s), " << mapper.num_vio_segments_joined
+      << " joined; " << mapper.num_reposed << " frame(s) re-posed from the images, "
+      << mapper.num_registered_without_vio << " registered from the images without a VIO pose, "
+      << mapper.num_vio_breaks << " VIO jump(s) found\n";
+  if (!metric_scale.message.empty()) out << "metric scale: " << metric_scale.message << "\n";
+  out << "pairs: " << verification.num_pairs << " candidates, " << verification.num_accepted
+      << " accepted, " << verification.num_vio_rejected << " rejected by VIO, "
+      << verification.num_ransac_rejected << " by RANSAC, " << verification.num_no_matches
+      << " without matches\n";
+  out << "points: " << num_points << ", observations " << num_observations << ", mean track length "
+      << mean_track_length << ", mean reprojection error " << mean_reprojection_error_px << " px\n";
+  if (evaluation) {
+    out << "ATE (Sim(3), " << evaluation->num_poses << " poses): RMSE " << evaluation->ate_rmse_m
+        << " m, median " << evaluation->ate_median_m << " m; input VIO RMSE "
+        << evaluation->vio_ate_rmse_m << " m, median " << evaluation->vio_ate_median_m << " m\n";
+    out << "metric: " << FormatMetricAccuracy(evaluation->metric) << "\n";
+    out << "input VIO: " << FormatMetricAccuracy(evaluation->vio_metric) << "\n";
+    out << std::fixed << std::setprecision(3);
+  } else {
+    out << "ATE: no ground truth\n";
+  }
+  out << std::setprecision(1) << "time: " << total_seconds << " s (";
+  for (size_t i = 0; i < stages.size(); ++i) {
+    out << (i > 0 ? ", " : "") << stages[i].name << " " << stages[i].seconds;
+  }
+  out << "), peak memory " << peak_memory_mb << " MB\n";
+  out << "output: " << output_folder.string()
+      << " (model/, model_txt/, points.ply, trajectory_body.tum, summary.json)";
+  return out.str();
+}
+
+std::string PipelineSummaryToJson(const PipelineSummary& s) {
+  ordered_json json;
+  json["viosfm_version"] = ViosfmVersion();
+  json["dataset"] = s.dataset;
+  json["started_utc"] = s.started_utc;
+  json["frames"] = {{"in", s.num_frames_in},
+                    {"selected", s.num_frames_selected},
+                    {"without_vio_pose", s.num_frames_without_vio_pose},
+                    {"registered", s.num_frames_registered},
+                    {"vio_only", s.num_frames_vio_only},
+                    {"unposed", s.num_frames_unposed},
+                    {"reposed_from_images", s.mapper.num_reposed},
+                    {"registered_without_vio", s.mapper.num_registered_without_vio}};
+  json["imu_scale"] = {{"estimated", s.metric_scale.estimated},
+                       {"usable", s.metric_scale.imu.usable},
+                       {"imu_scale", s.metric_scale.imu.scale},
+                       {"imu_scale_sigma", s.metric_scale.imu.scale_sigma},
+                       {"applied_scale", s.metric_scale.applied_scale},
+                       {"message", s.metric_scale.message}};
+  json["vio"] = {{"segments", s.num_vio_segments},
+                 {"segments_joined", s.mapper.num_vio_segments_joined},
+                 {"segment_rule", s.vio_segment_rule},
+                 {"jumps_found", s.mapper.num_vio_breaks}};
+  ordered_json unposed = ordered_json::array();
+  for (const MapperFrameStatus& frame : s.mapper.frames) {
+    if (!frame.reason.empty()) {
+      unposed.push_back({{"image_id", frame.image_id}, {"reason", frame.reason}});
+    }
+  }
+  json["unposed_frames"] = unposed;
+  json["pairs"] = {{"candidates", s.verification.num_pairs},
+                   {"accepted", s.verification.num_accepted},
+                   {"vio_rejected", s.verification.num_vio_rejected},
+                   {"ransac_rejected", s.verification.num_ransac_rejected},
+                   {"no_matches", s.verification.num_no_matches}};
+  json["points"] = s.num_points;
+  json["observations"] = s.num_observations;
+  json["mean_track_length"] = s.mean_track_length;
+  json["mean_reprojection_error_px"] = s.mean_reprojection_error_px;
+  json["relative_pose_priors"] = {{"consecutive", s.mapper.num_consecutive_priors},
+                                  {"bridging", s.mapper.num_bridging_priors}};
+  ordered_json batches = ordered_json::array();
+  for (const MapperBatchStatistics& batch : s.mapper.batches) {
+    batches.push_back({{"index", batch.batch_index},
+                       {"images", batch.num_images},
+                       {"registered_total", batch.num_registered_total},
+                       {"points_total", batch.num_points_total},
+                       {"mean_reprojection_error_px", batch.mean_reprojection_error_px},
+                       {"seconds_ba", batch.seconds_ba},
+                       {"ba_iterations", batch.num_ba_iterations},
+                       {"ba_solver", BaLinearSolverName(batch.ba_linear_solver)}});
+  }
+  json["batches"] = batches;
+  ordered_json stages = ordered_json::array();
+  for (const PipelineStageTime& stage : s.stages) {
+    stages.push_back({{"name", stage.name}, {"seconds", stage.seconds}});
+  }
+  json["stages"] = stages;
+  json["total_seconds"] = s.total_seconds;
+  json["peak_memory_mb"] = s.peak_memory_mb;
+  if (s.evaluation) json["eval"] = StatsJson(*s.evaluation);
+  json["options_file"] = "options.json";
+  json["fingerprint"] = s.fingerprint;
+  return json.dump(2);
+}
+
+}  // namespace viosfm

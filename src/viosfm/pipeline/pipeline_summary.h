@@ -1,0 +1,82 @@
+// What a `viosfm run` did (pipeline.h): frame counts (selected, registered,
+// placed by the VIO only, unposed and why), the stages' summaries, the
+// model's size, the accuracy against the ground truth when there is one,
+// the time of each stage and the peak memory; summary.json's document.
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "viosfm/eval/metric_accuracy.h"
+#include "viosfm/features/feature_extraction.h"
+#include "viosfm/matching/verification_driver.h"
+#include "viosfm/pipeline/frame_selection.h"
+#include "viosfm/pipeline/metric_scale.h"
+#include "viosfm/sfm/batched_mapper.h"
+
+namespace viosfm {
+
+// The version written to summary.json.
+std::string ViosfmVersion();
+
+struct PipelineStageTime {
+  std::string name;
+  double seconds = 0.0;
+};
+
+// Accuracy against the ground truth (metres): the Sim(3)-aligned ATE
+// statistics, and the metric figures (eval/metric_accuracy.h) of the
+// estimate and of the input VIO on the same frames.
+struct PipelineEvaluation {
+  double ate_rmse_m = 0.0;
+  double ate_median_m = 0.0;
+  double ate_mean_m = 0.0;
+  double ate_max_m = 0.0;
+  double vio_ate_rmse_m = 0.0;  // the input VIO on the same frames
+  double vio_ate_median_m = 0.0;
+  size_t num_poses = 0;       // associated poses
+  MetricAccuracy metric;      // the estimate
+  MetricAccuracy vio_metric;  // the input VIO on the same frames (one alignment over all segments)
+};
+
+struct PipelineSummary {
+  std::string dataset;
+  // The hash of the run's fingerprint (run_fingerprint.h, RunFingerprint::Hash):
+  // runs with equal ones were made from the same inputs and data-shaping options.
+  std::string fingerprint;
+  std::filesystem::path output_folder;
+  std::string started_utc;  // "2026-11-21T07:38:16Z"
+  size_t num_frames_in = 0;
+  size_t num_frames_selected = 0;          // selected (with or without a VIO pose)
+  size_t num_frames_without_vio_pose = 0;  // selected frames without a VIO pose
+  // Posed frames whose pose the images support (registered), placed by the
+  // VIO only, and frames without any pose (mapper.frames says why).
+  size_t num_frames_registered = 0;
+  size_t num_frames_vio_only = 0;
+  size_t num_frames_unposed = 0;
+  int num_vio_segments = 0;  // in the VIO input
+  std::string vio_segment_rule;
+  FrameSelection frame_selection;
+  FeatureExtractionSummary features;
+  MetricScaleSummary metric_scale;
+  VerificationSummary verification;
+  BatchedMapperSummary mapper;
+  size_t num_points = 0;
+  size_t num_observations = 0;
+  double mean_track_length = 0.0;
+  double mean_reprojection_error_px = 0.0;
+  std::optional<PipelineEvaluation> evaluation;  // with ground truth only
+  std::vector<PipelineStageTime> stages;
+  double total_seconds = 0.0;
+  double peak_memory_mb = 0.0;  // getrusage ru_maxrss
+
+  // A few lines for the terminal.
+  std::string ToString() const;
+};
+
+// summary.json's document (see the top of this file for the keys).
+std::string PipelineSummaryToJson(const PipelineSummary& summary);
+
+}  // namespace viosfm

@@ -1,0 +1,48 @@
+#include "viosfm/pipeline/stage_dataset.h"
+
+#include "viosfm/util/errors.h"
+#include "viosfm/util/logging.h"
+
+namespace viosfm {
+
+namespace fs = std::filesystem;
+
+DatasetReadOptions PipelineDatasetReadOptions(const PipelineOptions& options) {
+  DatasetReadOptions read;
+  read.image_folder = options.image_folder;
+  read.rosbag = options.EffectiveRosbagOptions();
+  read.calibration = options.calibration;
+  read.require_imu = false;  // the IMU only helps (frame selection, metric scale)
+  return read;
+}
+
+Sequence ReadPipelineDataset(const fs::path& dataset, const ImageFolderOptions& image_folder,
+                             const CalibrationFiles& calibration) {
+  if (HasRosbagExtension(dataset)) {
+    throw InputError(dataset.string(), 0, "a bag needs its extract folder (ReadDatasetStage)");
+  }
+  DatasetReadOptions read;
+  read.image_folder = image_folder;
+  read.calibration = calibration;
+  return ReadDataset(dataset, read);
+}
+
+Sequence ReadDatasetStage(const PipelineOptions& options, const RunFolder& folder,
+                          RunFingerprint* fingerprint) {
+  folder.CheckStoredData(*fingerprint, /*complete=*/false);
+  // A bag's images are extracted into the folder: the folder is incomplete
+  // from here until summary.json is written again, last. A refused run
+  // leaves an earlier run's complete folder as it was.
+  if (HasRosbagExtension(options.dataset)) folder.MarkIncomplete();
+  const Sequence sequence = ReadDataset(options.dataset, PipelineDatasetReadOptions(options));
+  AddSequenceToFingerprint(sequence, fingerprint);
+  folder.CheckStoredData(*fingerprint, /*complete=*/false);
+  folder.MarkIncomplete();
+  VIOSFM_LOG(INFO) << "run: " << sequence.images.size() << " images"
+                   << (sequence.has_imu() ? ", IMU" : "")
+                   << (sequence.has_ground_truth() ? ", ground truth" : "") << " in "
+                   << options.dataset.string();
+  return sequence;
+}
+
+}  // namespace viosfm

@@ -1,0 +1,88 @@
+#include "viosfm/pipeline/stage_evaluation.h"
+
+#include "viosfm/util/errors.h"
+#include "viosfm/util/logging.h"
+
+namespace viosfm {
+namespace {
+
+// Ground truth is interpolated between two states at most this far apart (ns).
+constexpr timestamp_ns_t kMaxGroundTruthGapNs = 50'000'000;
+
+}  // namespace
+
+TrajectoryEvaluation EvaluateStage(const Sequence& sequence, const SelectedFrames& frames,
+                                   const VioPoses& vio, const BatchedMapperInput& input,
+                                   const Reconstruction& reconstruction) {
+  TrajectoryEvaluation result;
+  Trajectory vio_registered;  // the input VIO at the posed frames that have a VIO pose
+  const Rigid3d cam_from_body = frames.sequence.rig.body_from_cam.Inverse();
+  for (size_t i = 0; i < input.images.size(); ++i) {
+    const image_t image_id = input.images[i].image_id;
+    if (!reconstruction.ExistsImage(image_id)) continue;
+    const Image& image = reconstruction.GetImage(image_id);
+    if (!image.registered) continue;
+    const timestamp_ns_t stamp = input.images[i].timestamp_ns;
+    const Rigid3d world_from_cam = image.cam_from_world.Inverse();
+    result.estimated_cam.poses.push_back({stamp, world_from_cam});
+    result.estimated_body.poses.push_back({stamp, world_from_cam * cam_from_body});
+    if (const std::optional<size_t> pose_index = frames.vio_index[i]) {
+      vio_registered.poses.push_back(
+          {stamp, vio.world_from_body.poses[*pose_index].world_from_frame});
+    }
+  }
+  std::optional<EvaluationResult>& evaluation = result.estimate;
+  std::optional<EvaluationResult>& evaluation_vio = result.vio;
+  std::optional<MetricAccuracy> metric;
+  std::optional<MetricAccuracy> vio_metric;
+  EvaluationOptions& eval_options = result.options;
+  eval_options.alignment = AlignmentMode::kSim3;
+  eval_options.association = AssociationMethod::kNearest;
+  if (sequence.has_ground_truth()) {
+    const Trajectory ground_truth = GroundTruthBodyTrajectory(sequence);
+    for (const SequenceImage& image : frames.sequence.images) {
+      if (const std::optional<Rigid3d> pose =
+              InterpolatePose(ground_truth, image.timestamp_ns, kMaxGroundTruthGapNs)) {
+        result.ground_truth_at_frames.poses.push_back({image.timestamp_ns, *pose});
+      }
+    }
+    if (result.ground_truth_at_frames.size() >= 3 && result.estimated_body.size() >= 3 &&
+        vio_registered.size() >= 3) {
+      try {
+        evaluation = EvaluateTrajectories(result.estimated_body, result.ground_truth_at_frames,
+                                          eval_options);
+        evaluation_vio =
+            EvaluateTrajectories(vio_registered, result.ground_truth_at_frames, eval_options);
+        metric = EvaluateMetricAccuracy(result.estimated_body, result.ground_truth_at_frames,
+                                        eval_options);
+        vio_metric =
+            EvaluateMetricAccuracy(vio_registered, result.ground_truth_at_frames, eval_options);
+      } catch (const InputError& error) {
+        // A degenerate alignment (e.g. frames on a line) on valid input.
+        VIOSFM_LOG(WARNING) << "run: no evaluation: " << error.what();
+        evaluation.reset();
+        evaluation_vio.reset();
+      }
+    } else {
+      VIOSFM_LOG(WARNING) << "run: no evaluation: " << result.ground_truth_at_frames.size()
+                          << " frames with ground truth, " << result.estimated_body.size()
+                          << " registered (3 of each needed)";
+    }
+  }
+  if (evaluation && evaluation_vio && metric && vio_metric) {
+    PipelineEvaluation e;
+    e.metric = *metric;
+    e.vio_metric = *vio_metric;
+    e.ate_rmse_m = evaluation->ate_translation_m.rmse;
+    e.ate_median_m = evaluation->ate_translation_m.median;
+    e.ate_mean_m = evaluation->ate_translation_m.mean;
+    e.ate_max_m = evaluation->ate_translation_m.max;
+    e.vio_ate_rmse_m = evaluation_vio->ate_translation_m.rmse;
+    e.vio_ate_median_m = evaluation_vio->ate_translation_m.median;
+    e.num_poses = evaluation->pairs.size();
+    result.summary = e;
+  }
+  return result;
+}
+
+}  // namespace viosfm

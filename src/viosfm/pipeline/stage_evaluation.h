@@ -1,0 +1,33 @@
+// Stage 9 of a `viosfm run` (pipeline.h): the estimated trajectories of the
+// posed frames and, with ground truth, their accuracy: the Sim(3)-aligned
+// ATE (eval/traj_eval.h) and the metric figures (eval/metric_accuracy.h) of
+// the estimate and of the input VIO on the same frames.
+#pragma once
+
+#include <optional>
+
+#include "viosfm/eval/traj_eval.h"
+#include "viosfm/pipeline/pipeline_summary.h"
+#include "viosfm/pipeline/stage_frames.h"
+#include "viosfm/pipeline/stage_vio.h"
+#include "viosfm/scene/reconstruction.h"
+#include "viosfm/sfm/batched_mapper.h"
+
+namespace viosfm {
+
+struct TrajectoryEvaluation {
+  Trajectory estimated_cam;                  // world_from_cam of the posed frames
+  Trajectory estimated_body;                 // world_from_body of the posed frames
+  Trajectory ground_truth_at_frames;         // at the selected frames (empty without ground truth)
+  EvaluationOptions options;                 // Sim(3), nearest stamps
+  std::optional<EvaluationResult> estimate;  // with ground truth on enough frames
+  std::optional<EvaluationResult> vio;       // the input VIO on the same frames
+  std::optional<PipelineEvaluation> summary;
+};
+
+// input.images[i] is frames.sequence.images[i] (LoadMapperInputStage).
+TrajectoryEvaluation EvaluateStage(const Sequence& sequence, const SelectedFrames& frames,
+                                   const VioPoses& vio, const BatchedMapperInput& input,
+                                   const Reconstruction& reconstruction);
+
+}  // namespace viosfm

@@ -1,0 +1,19 @@
+#include "viosfm/pipeline/stage_features.h"
+
+#include "viosfm/util/logging.h"
+
+namespace viosfm {
+
+FeaturesStageOutput ExtractFeaturesStage(const SelectedFrames& frames,
+                                         const PipelineOptions& options, const RunFolder& folder,
+                                         const RunFingerprint& fingerprint) {
+  // What the database's content is made from, before the database changes.
+  folder.WriteRecords(fingerprint, options.ToKeyValues());
+  FeaturesStageOutput output{ColmapDatabase::Open(folder.path() / "database.db"), {}};
+  output.summary = ExtractFeatures(frames.sequence, options.EffectiveSiftOptions(),
+                                   &output.database, options.show_progress);
+  VIOSFM_LOG(INFO) << "run: features " << output.summary.ToString();
+  return output;
+}
+
+}  // namespace viosfm

@@ -1,0 +1,58 @@
+#include "viosfm/pipeline/stage_frames.h"
+
+#include "viosfm/util/errors.h"
+#include "viosfm/util/logging.h"
+
+namespace viosfm {
+SelectedFrames SelectFramesStage(const Sequence& sequence, const VioPoses& vio,
+                                 const PipelineOptions& options, const std::string& vio_name) {
+  SelectedFrames frames;
+  frames.selection = SelectFrames(sequence, options.frame_selection, &vio.world_from_body);
+  if (!frames.selection.ok()) {
+    throw InputError(options.dataset.string(), 0,
+                     "no frames to reconstruct: " + frames.selection.message);
+  }
+  frames.sequence = sequence;
+  frames.sequence.images.clear();
+  for (const size_t index : frames.selection.kept) {
+    const SequenceImage& image = sequence.images[index];
+    const std::optional<size_t> pose_index = NearestPoseIndex(
+        vio.world_from_body, image.timestamp_ns, options.max_vio_time_difference_ns);
+    frames.sequence.images.push_back(image);
+    frames.vio_index.push_back(pose_index);
+    if (pose_index) {
+      frames.vio_at_frames.poses.push_back(
+          {image.timestamp_ns, vio.world_from_body.poses[*pose_index].world_from_frame});
+    } else {
+      ++frames.num_without_vio_pose;
+    }
+  }
+  if (frames.vio_at_frames.size() < 2) {
+    throw InputError(vio_name, 0,
+                     "the VIO poses " +
+                         FormatNsSpan(vio.world_from_body.poses.front().timestamp_ns,
+                                      vio.world_from_body.poses.back().timestamp_ns) +
+                         " do not overlap the selected images " +
+                         FormatNsSpan(sequence.images.front().timestamp_ns,
+                                      sequence.images.back().timestamp_ns) +
+                         " in time: " + std::to_string(frames.vio_at_frames.size()) + " of " +
+                         std::to_string(frames.selection.kept.size()) +
+                         " images have a pose within " +
+                         FormatNsAsSeconds(options.max_vio_time_difference_ns, 3) +
+                         " s (at least 2 are needed)");
+  }
+  if (frames.num_without_vio_pose > 0) {
+    VIOSFM_LOG(WARNING) << "run: " << frames.num_without_vio_pose << " of "
+                        << frames.sequence.images.size()
+                        << " selected frames have no VIO pose within "
+                        << FormatNsAsSeconds(options.max_vio_time_difference_ns, 3)
+                        << " s (VIO not initialised, lost or re-initialising): they are "
+                           "registered from the images where these allow";
+  }
+  VIOSFM_LOG(INFO) << "run: " << frames.selection.message << "; "
+                   << frames.sequence.images.size() - frames.num_without_vio_pose
+                   << " frames with a VIO pose";
+  return frames;
+}
+
+}  // namespace viosfm

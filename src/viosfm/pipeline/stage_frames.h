@@ -1,0 +1,37 @@
+// Stage 3 of a `viosfm run` (pipeline.h): the frames to reconstruct.
+// Static start/end trimming and downsampling (frame_selection.h), then each
+// selected frame's VIO pose: the VIO pose nearest in time within
+// max_vio_time_difference_ns, with its segment and odometer. A frame without
+// one is kept (counted, logged) and registered from the images where they
+// allow. The later stages take the frames' poses from here; nothing
+// associates the VIO track with the frames again.
+#pragma once
+
+#include <optional>
+#include <vector>
+
+#include "viosfm/pipeline/frame_selection.h"
+#include "viosfm/pipeline/pipeline_options.h"
+#include "viosfm/pipeline/stage_vio.h"
+#include "viosfm/scene/sequence.h"
+#include "viosfm/scene/trajectory.h"
+
+namespace viosfm {
+
+struct SelectedFrames {
+  FrameSelection selection;  // which frames of the sequence, and why
+  // The sequence with only the selected images (rig, IMU, ground truth as read).
+  Sequence sequence;
+  // Per selected frame: the index of its pose in VioPoses, if any.
+  std::vector<std::optional<size_t>> vio_index;
+  // world_from_body at the selected frames with a VIO pose (vio_body.tum).
+  Trajectory vio_at_frames;
+  size_t num_without_vio_pose = 0;
+};
+
+// The stage. Throws InputError naming the dataset when no frame is left,
+// and naming the VIO (`vio_name`) when fewer than two frames have a pose.
+SelectedFrames SelectFramesStage(const Sequence& sequence, const VioPoses& vio,
+                                 const PipelineOptions& options, const std::string& vio_name);
+
+}  // namespace viosfm

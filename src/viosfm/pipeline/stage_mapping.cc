@@ -1,0 +1,82 @@
+#include "viosfm/pipeline/stage_mapping.h"
+
+#include <map>
+
+#include "viosfm/pipeline/metric_scale.h"
+#include "viosfm/scene/reprojection.h"
+#include "viosfm/util/logging.h"
+
+namespace viosfm {
+
+BatchedMapperInput LoadMapperInputStage(const SelectedFrames& frames, const VioPoses& vio,
+                                        const VerificationResult& verification,
+                                        ColmapDatabase* database) {
+  BatchedMapperInput input;
+  std::map<camera_t, bool> camera_ids;
+  for (size_t i = 0; i < frames.sequence.images.size(); ++i) {
+    const SequenceImage& image = frames.sequence.images[i];
+    const std::string name = DatabaseImageName(image);
+    const std::optional<DatabaseImage> row = database->ReadImageWithName(name);
+    VIOSFM_CHECK(row.has_value()) << "image " << name << " missing after feature extraction";
+    MapperImage mapper_image;
+    mapper_image.image_id = row->image_id;
+    mapper_image.camera_id = row->camera_id;
+    mapper_image.name = name;
+    mapper_image.timestamp_ns = image.timestamp_ns;
+    mapper_image.keypoints = database->ReadKeypoints(row->image_id);
+    if (const std::optional<size_t> pose_index = frames.vio_index[i]) {
+      mapper_image.vio_cam_from_world = (vio.world_from_body.poses[*pose_index].world_from_frame *
+                                         frames.sequence.rig.body_from_cam)
+                                            .Inverse();
+      mapper_image.vio_odometer = vio.odometers[*pose_index];
+    }
+    camera_ids[row->camera_id] = true;
+    input.images.push_back(std::move(mapper_image));
+  }
+  for (const auto& [camera_id, unused] : camera_ids) {
+    input.cameras.push_back(database->ReadCamera(camera_id));
+  }
+  size_t num_inlier_matches = 0;
+  for (const PairDecision& decision : verification.decisions) {
+    if (!decision.accepted) continue;
+    ImagePairMatches pair;
+    pair.image_id1 = decision.image_id1;
+    pair.image_id2 = decision.image_id2;
+    pair.matches =
+        database->ReadTwoViewGeometry(decision.image_id1, decision.image_id2).inlier_matches;
+    num_inlier_matches += pair.matches.size();
+    input.verified_pairs.push_back(std::move(pair));
+  }
+  VIOSFM_LOG(INFO) << "run: " << input.verified_pairs.size() << " accepted pairs, "
+                   << num_inlier_matches << " inlier matches";
+  return input;
+}
+
+Reconstruction MapStage(const BatchedMapperInput& input, const Sequence& sequence,
+                        const VioPoses& vio, const PipelineOptions& options,
+                        PipelineSummary* summary) {
+  Reconstruction reconstruction =
+      RunBatchedMapper(input, options.EffectiveMapperOptions(), &summary->mapper);
+  VIOSFM_LOG(INFO) << "run: mapper " << summary->mapper.ToString();
+  if (options.use_imu_scale) {
+    summary->metric_scale = ApplyImuMetricScale(sequence, vio.own_vio_rig.value_or(sequence.rig),
+                                                options.vio_uncertainty.scale_sigma,
+                                                options.imu_scale, &reconstruction);
+    VIOSFM_LOG(INFO) << "run: metric scale: " << summary->metric_scale.message;
+  }
+  summary->num_frames_registered = static_cast<size_t>(summary->mapper.num_supported);
+  summary->num_frames_vio_only = static_cast<size_t>(summary->mapper.num_vio_only);
+  summary->num_frames_unposed = static_cast<size_t>(summary->mapper.num_unposed);
+  for (size_t i = 0; i < summary->mapper.frames.size(); ++i) {
+    const MapperFrameStatus& frame = summary->mapper.frames[i];
+    if (frame.reason.empty()) continue;
+    VIOSFM_LOG(WARNING) << "run: no pose for " << input.images[i].name << ": " << frame.reason;
+  }
+  summary->num_points = reconstruction.NumPoints3D();
+  summary->num_observations = reconstruction.ComputeNumObservations();
+  summary->mean_track_length = reconstruction.ComputeMeanTrackLength();
+  summary->mean_reprojection_error_px = UpdateReprojectionErrors(&reconstruction);
+  return reconstruction;
+}
+
+}  // namespace viosfm

@@ -1,0 +1,23 @@
+// Stage 10 of a `viosfm run` (pipeline.h): the output files (each written
+// atomically): verification/pairs.csv and verification.json, model/ (COLMAP
+// binary) and model_txt/, points.ply, trajectory_cam.tum,
+// trajectory_body.tum, vio_body.tum, and with ground truth
+// groundtruth_body.tum, eval.json and eval_vio.json (removed when this run
+// has none, so nothing stale stays). summary.json is not written here: it
+// is the run's last write (RunFolder::WriteSummary).
+#pragma once
+
+#include <filesystem>
+
+#include "viosfm/matching/verification_driver.h"
+#include "viosfm/pipeline/stage_evaluation.h"
+#include "viosfm/pipeline/stage_frames.h"
+#include "viosfm/scene/reconstruction.h"
+
+namespace viosfm {
+
+void WriteOutputsStage(const std::filesystem::path& out, const VerificationResult& verification,
+                       const Reconstruction& reconstruction, const SelectedFrames& frames,
+                       const TrajectoryEvaluation& evaluation);
+
+}  // namespace viosfm

@@ -1,0 +1,22 @@
+#include "viosfm/pipeline/stage_verification.h"
+
+#include "viosfm/util/logging.h"
+
+namespace viosfm {
+
+VerificationResult VerifyPairsStage(const SelectedFrames& frames, const VioPoses& vio,
+                                    const PipelineOptions& options, ColmapDatabase* database) {
+  std::vector<std::optional<FrameVioPose>> frame_poses(frames.vio_index.size());
+  for (size_t i = 0; i < frames.vio_index.size(); ++i) {
+    if (const std::optional<size_t> index = frames.vio_index[i]) {
+      frame_poses[i] =
+          FrameVioPose{vio.world_from_body.poses[*index].world_from_frame, vio.odometers[*index]};
+    }
+  }
+  VerificationResult result = RunVerification(frames.sequence, frame_poses, database,
+                                              options.EffectiveVerificationOptions());
+  VIOSFM_LOG(INFO) << "run: verification " << FormatVerificationSummary(result.summary);
+  return result;
+}
+
+}  // namespace viosfm
