@@ -1,8 +1,8 @@
-#Checks that no file of src / viosfm / includes a header of a higher layer
-#(cmake / ViosfmLayers.cmake).Tests, benchmarks and test fixtures
-#(* _test.cc, * _benchmark.cc, * _test_fixture.h) may also include the
-#simulator(sim /).Fails naming every offending include.
-#Usage : cmake - DSOURCE_DIR = < repository> - P cmake / CheckLayers.cmake
+# Checks that no file of src/viosfm/ includes a header of a higher layer
+# (cmake/ViosfmLayers.cmake). Tests, benchmarks and test fixtures
+# (*_test.cc, *_benchmark.cc, *_test_fixture.h) may also include the
+# simulator (sim/). Fails naming every offending include.
+# Usage: cmake -DSOURCE_DIR=<repository> -P cmake/CheckLayers.cmake
 include(${CMAKE_CURRENT_LIST_DIR}/ViosfmLayers.cmake)
 if(NOT SOURCE_DIR)
   message(FATAL_ERROR "CheckLayers.cmake: pass -DSOURCE_DIR=<repository>")
@@ -16,7 +16,7 @@ foreach(file ${files})
   string(REGEX MATCH "^[^/]+" layer "${file}")
   list(FIND VIOSFM_LAYERS "${layer}" own)
   if(own EQUAL -1)
-    continue()  # a file outside the layer folders (CMakeLists.txt)
+    continue()  # a file outside the layer folders
   endif()
   math(EXPR num_files "${num_files} + 1")
   set(is_test FALSE)

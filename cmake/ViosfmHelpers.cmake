@@ -1,5 +1,5 @@
-#viosfm_add_library(NAME SRCS...[PUBLIC_DEPS...][PRIVATE_DEPS...])
-#Creates the target viosfm_ < NAME>(alias viosfm:: <NAME>)for one layer folder.
+# viosfm_add_library(NAME SRCS ... [PUBLIC_DEPS ...] [PRIVATE_DEPS ...])
+# Creates the target viosfm_<NAME> (alias viosfm::<NAME>) for one layer folder.
 function(viosfm_add_library NAME)
   cmake_parse_arguments(ARG "" "" "SRCS;PUBLIC_DEPS;PRIVATE_DEPS" ${ARGN})
   set(target viosfm_${NAME})
@@ -11,12 +11,12 @@ function(viosfm_add_library NAME)
   target_link_libraries(${target} PUBLIC ${ARG_PUBLIC_DEPS} PRIVATE ${ARG_PRIVATE_DEPS})
 endfunction()
 
-#viosfm_add_test(MODULE NAME[DEPS...])
-#Builds NAME.cc of the current folder into a GoogleTest binary registered
-#with ctest as MODULE / NAME.A binary whose every test calls GTEST_SKIP(e.g.
-#its dataset is absent) is reported as skipped(exit code 77, see
-#util / testing_main.cc); a binary with some skipped tests passes, and fails
-#if any test fails.
+# viosfm_add_test(MODULE NAME [DEPS ...])
+# Builds NAME.cc of the current folder into a GoogleTest binary registered
+# with ctest as MODULE/NAME. A binary whose every test calls GTEST_SKIP (e.g.
+# its dataset is absent) is reported as skipped (exit code 77, see
+# util/testing_main.cc); a binary with some skipped tests passes, and fails
+# if any test fails.
 function(viosfm_add_test MODULE NAME)
   if(NOT VIOSFM_BUILD_TESTS)
     return()
@@ -35,13 +35,13 @@ function(viosfm_add_test MODULE NAME)
     WORKING_DIRECTORY ${CMAKE_CURRENT_BINARY_DIR})
 endfunction()
 
-#viosfm_add_layer(NAME[PUBLIC_DEPS...][PRIVATE_DEPS...][TEST_DEPS...])
-#One library per layer folder : every*.cc of the folder except* _test.cc and
-#* _benchmark.cc goes into viosfm_ <NAME>; every * _test.cc becomes the ctest
-#test < NAME> / < file>.
+# viosfm_add_layer(NAME [PUBLIC_DEPS ...] [PRIVATE_DEPS ...] [TEST_DEPS ...])
+# One library per layer folder: every *.cc of the folder except *_test.cc and
+# *_benchmark.cc goes into viosfm_<NAME>; every *_test.cc becomes the ctest
+# test <NAME>/<file>.
 function(viosfm_add_layer NAME)
   cmake_parse_arguments(ARG "" "" "PUBLIC_DEPS;PRIVATE_DEPS;TEST_DEPS" ${ARGN})
-#Links only downward(cmake / ViosfmLayers.cmake); tests may link the simulator.
+  # Links only downward (cmake/ViosfmLayers.cmake); tests may link the simulator.
   list(FIND VIOSFM_LAYERS ${NAME} own)
   foreach(dep ${ARG_PUBLIC_DEPS} ${ARG_PRIVATE_DEPS})
     if(dep MATCHES "^viosfm_(.+)$")
@@ -52,8 +52,7 @@ function(viosfm_add_layer NAME)
       endif()
     endif()
   endforeach()
-  file(GLOB sources CONFIGURE_DEPENDS ${
-  CMAKE_CURRENT_SOURCE_DIR}/*.cc)
+  file(GLOB sources CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/*.cc)
   list(FILTER sources EXCLUDE REGEX "_(test|benchmark)\\.cc$")
   if(sources)
     viosfm_add_library(${NAME} SRCS ${sources}
