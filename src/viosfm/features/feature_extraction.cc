@@ -107,7 +107,8 @@ std::string FeatureExtractionSummary::ToString() const {
 }
 
 FeatureExtractionSummary ExtractFeatures(const Sequence& sequence, const SiftOptions& options,
-                                         ColmapDatabase* database, bool show_progress) {
+                                         ColmapDatabase* database, bool show_progress,
+                                         const FeatureImageAccess& access) {
   VIOSFM_CHECK(database != nullptr);
   if (const std::string error = options.Validate(); !error.empty()) {
     throw InputError("SiftOptions: " + error);
@@ -141,7 +142,10 @@ FeatureExtractionSummary ExtractFeatures(const Sequence& sequence, const SiftOpt
         const size_t t = next_task++;
         if (t >= tasks.size()) break;
         const SequenceImage& image = sequence.images[tasks[t].sequence_index];
-        const GreyImage pixels = ReadGreyImage(image.path);
+        const std::shared_ptr<const GreyImage> decoded =
+            access.frames != nullptr ? access.frames->Take(image.path)
+                                     : std::make_shared<const GreyImage>(ReadGreyImage(image.path));
+        const GreyImage& pixels = *decoded;
         if (static_cast<uint64_t>(pixels.width) != camera.width ||
             static_cast<uint64_t>(pixels.height) != camera.height) {
           throw InputError(image.path.string(), 0,
@@ -151,6 +155,9 @@ FeatureExtractionSummary ExtractFeatures(const Sequence& sequence, const SiftOpt
                                std::to_string(camera.height));
         }
         Result result{tasks[t].image_id, ExtractSift(pixels, options)};
+        if (access.on_extracted) {
+          access.on_extracted(result.image_id, pixels, result.features.keypoints);
+        }
         std::unique_lock<std::mutex> lock(mutex);
         space_ready.wait(lock, [&] { return results.size() < max_queued || stop; });
         results.push_back(std::move(result));

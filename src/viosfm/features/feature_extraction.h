@@ -20,10 +20,12 @@
 #pragma once
 
 #include <cstddef>
+#include <functional>
 #include <string>
 
 #include "viosfm/features/sift.h"
 #include "viosfm/io/colmap_database.h"
+#include "viosfm/io/frame_cache.h"
 #include "viosfm/scene/sequence.h"
 
 namespace viosfm {
@@ -42,12 +44,24 @@ struct FeatureExtractionSummary {
   std::string ToString() const;
 };
 
+// Where feature extraction gets the pixels, and who else sees them.
+struct FeatureImageAccess {
+  // Images taken from here (io/frame_cache.h, each for the last time);
+  // null: read from their files.
+  FrameCache* frames = nullptr;
+  // Called from the worker threads with each extracted image's id, pixels
+  // and keypoints (so that a later stage needs no decode); must be
+  // thread-safe. Empty: none.
+  std::function<void(image_t, const GreyImage&, const FeatureKeypoints&)> on_extracted;
+};
+
 // Extracts the features of every image of `sequence` that the database does
 // not hold yet. With show_progress, draws a progress bar (util/progress.h).
 // Throws InputError for an unreadable image, an image whose size is not the
 // camera's, duplicate image names, or an image already in the database with
 // a different camera.
 FeatureExtractionSummary ExtractFeatures(const Sequence& sequence, const SiftOptions& options,
-                                         ColmapDatabase* database, bool show_progress = true);
+                                         ColmapDatabase* database, bool show_progress = true,
+                                         const FeatureImageAccess& access = {});
 
 }  // namespace viosfm

@@ -318,20 +318,15 @@ Sequence ReadEurocDataset(const fs::path& root, const EurocReadOptions& options)
     }
 
     const fs::path imu_csv = imu_folder / "data.csv";
-    const timestamp_ns_t first_image = sequence.images.front().timestamp_ns;
-    const timestamp_ns_t last_image = sequence.images.back().timestamp_ns;
-    const timestamp_ns_t first_imu = sequence.imu.front().timestamp_ns;
-    const timestamp_ns_t last_imu = sequence.imu.back().timestamp_ns;
-    const std::string spans = "images span [" + std::to_string(first_image) + ", " +
-                              std::to_string(last_image) + "] ns, IMU samples span [" +
-                              std::to_string(first_imu) + ", " + std::to_string(last_imu) + "] ns";
-    if (last_imu < first_image || first_imu > last_image) {
+    const ImuCoverage coverage = CheckImuCoverage(sequence);
+    if (!coverage.overlaps) {
       throw InputError(
           imu_csv.string(), 0,
-          "expected IMU samples over the time span of the images, found none: " + spans);
+          "expected IMU samples over the time span of the images, found none: " + coverage.spans);
     }
-    if (first_imu > first_image || last_imu < last_image) {
-      const std::string message = "the IMU does not cover the whole image time span: " + spans;
+    if (!coverage.complete) {
+      const std::string message =
+          "the IMU does not cover the whole image time span: " + coverage.spans;
       if (options.require_imu_coverage) throw InputError(imu_csv.string(), 0, message);
       VIOSFM_LOG(WARNING) << imu_csv.string() << ": " << message;
     }

@@ -526,18 +526,14 @@ Sequence ReadRosbagDataset(const fs::path& bag, const RosbagDatasetOptions& opti
     throw InputError(p, 0, "calibration (" + calibration_source + "): " + problem);
   }
   if (sequence.has_imu()) {
-    const timestamp_ns_t first_image = sequence.images.front().timestamp_ns;
-    const timestamp_ns_t last_image = sequence.images.back().timestamp_ns;
-    const timestamp_ns_t first_imu = sequence.imu.front().timestamp_ns;
-    const timestamp_ns_t last_imu = sequence.imu.back().timestamp_ns;
-    const std::string spans = "images span [" + std::to_string(first_image) + ", " +
-                              std::to_string(last_image) + "] ns, IMU samples span [" +
-                              std::to_string(first_imu) + ", " + std::to_string(last_imu) + "] ns";
-    if (last_imu < first_image || first_imu > last_image) {
-      throw InputError(p, 0, "topic '" + imu_topic + "': no IMU sample over the images: " + spans);
+    const ImuCoverage coverage = CheckImuCoverage(sequence);
+    if (!coverage.overlaps) {
+      throw InputError(
+          p, 0, "topic '" + imu_topic + "': no IMU sample over the images: " + coverage.spans);
     }
-    if (first_imu > first_image || last_imu < last_image) {
-      VIOSFM_LOG(WARNING) << p << ": the IMU does not cover the whole image time span: " << spans;
+    if (!coverage.complete) {
+      VIOSFM_LOG(WARNING) << p << ": the IMU does not cover the whole image time span: "
+                          << coverage.spans;
     }
   }
 

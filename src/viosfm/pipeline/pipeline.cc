@@ -32,6 +32,11 @@ constexpr const char* kStageNames[] = {"read_dataset", "vio",          "select_f
                                        "evaluation",   "write_outputs"};
 constexpr int kNumStages = static_cast<int>(std::size(kStageNames));
 
+// Pixels of decoded frames held between the VIO and feature extraction
+// (io/frame_cache.h): 768 MiB, about 2100 frames of 752 x 480; frames past it
+// are decoded again when their features are extracted.
+constexpr size_t kFrameCacheBytes = size_t{768} << 20;
+
 std::string UtcNow() {
   const std::time_t now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
   std::tm tm{};
@@ -102,6 +107,8 @@ PipelineSummary RunPipeline(const PipelineOptions& options) {
   // (--overwrite), or its stored data checked against this run's inputs
   // before anything changes.
   const RunFolder folder(options);
+  FrameCache frame_cache(kFrameCacheBytes);
+  KeypointGreyValues keypoint_values;
   RunFingerprint fingerprint = FingerprintOfInputs(options);
 
   const Sequence sequence =
@@ -109,7 +116,7 @@ PipelineSummary RunPipeline(const PipelineOptions& options) {
   summary.num_frames_in = sequence.images.size();
 
   const VioPoses vio = clock.Run([&] {
-    VioPoses poses = LoadVioPoses(sequence, options);
+    VioPoses poses = LoadVioPoses(sequence, options, &frame_cache);
     AddVioPosesToFingerprint(poses.world_from_body, poses.segments, &fingerprint);
     folder.CheckStoredData(fingerprint, /*complete=*/true);
     return poses;
@@ -119,13 +126,15 @@ PipelineSummary RunPipeline(const PipelineOptions& options) {
   summary.vio_segment_rule = vio.segment_rule;
 
   const SelectedFrames frames =
-      clock.Run([&] { return SelectFramesStage(sequence, vio, options, vio_name); });
+      clock.Run([&] { return SelectFramesStage(sequence, vio, options, vio_name, &frame_cache); });
   summary.frame_selection = frames.selection;
   summary.num_frames_selected = frames.sequence.images.size();
   summary.num_frames_without_vio_pose = frames.num_without_vio_pose;
 
-  FeaturesStageOutput features =
-      clock.Run([&] { return ExtractFeaturesStage(frames, options, folder, fingerprint); });
+  FeaturesStageOutput features = clock.Run([&] {
+    return ExtractFeaturesStage(frames, options, folder, fingerprint, &frame_cache,
+                                &keypoint_values);
+  });
   summary.features = features.summary;
 
   const VerificationResult verification =
@@ -138,7 +147,10 @@ PipelineSummary RunPipeline(const PipelineOptions& options) {
   Reconstruction reconstruction =
       clock.Run([&] { return MapStage(input, sequence, vio, options, &summary); });
 
-  clock.Run([&] { ColorPointsStage(frames, input, options.show_progress, &reconstruction); });
+  clock.Run([&] {
+    ColorPointsStage(frames, input, options.show_progress, &keypoint_values, &frame_cache,
+                     &reconstruction);
+  });
 
   const TrajectoryEvaluation evaluation =
       clock.Run([&] { return EvaluateStage(sequence, frames, vio, input, reconstruction); });
@@ -148,6 +160,11 @@ PipelineSummary RunPipeline(const PipelineOptions& options) {
     WriteOutputsStage(options.output_folder, verification, reconstruction, frames, evaluation);
   });
 
+  summary.images = frame_cache.counts();
+  summary.frame_cache_max_bytes = frame_cache.max_bytes();
+  VIOSFM_LOG(INFO) << "run: " << summary.images.decodes << " image decodes for "
+                   << summary.num_frames_in << " images (" << summary.images.reuses
+                   << " taken from the frame cache)";
   summary.total_seconds = total_timer.ElapsedSeconds();
   summary.peak_memory_mb = PeakMemoryMb();
   folder.WriteSummary(PipelineSummaryToJson(summary));

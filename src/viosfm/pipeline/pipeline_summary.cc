@@ -68,6 +68,11 @@ std::string PipelineSummary::ToString() const {
   } else {
     out << "ATE: no ground truth\n";
   }
+  out << "images: " << images.decodes << " decoded, " << images.reuses
+      << " taken from the frame cache instead of decoded again, " << images.not_kept
+      << " not kept for lack of room (cache peak " << std::setprecision(1)
+      << static_cast<double>(images.peak_bytes) / (1 << 20) << " of "
+      << static_cast<double>(frame_cache_max_bytes) / (1 << 20) << " MiB)\n";
   out << std::setprecision(1) << "time: " << total_seconds << " s (";
   for (size_t i = 0; i < stages.size(); ++i) {
     out << (i > 0 ? ", " : "") << stages[i].name << " " << stages[i].seconds;
@@ -136,6 +141,11 @@ std::string PipelineSummaryToJson(const PipelineSummary& s) {
     stages.push_back({{"name", stage.name}, {"seconds", stage.seconds}});
   }
   json["stages"] = stages;
+  json["images"] = {{"decoded", s.images.decodes},
+                    {"reused", s.images.reuses},
+                    {"not_kept", s.images.not_kept},
+                    {"cache_peak_bytes", s.images.peak_bytes},
+                    {"cache_max_bytes", s.frame_cache_max_bytes}};
   json["total_seconds"] = s.total_seconds;
   json["peak_memory_mb"] = s.peak_memory_mb;
   if (s.evaluation) json["eval"] = StatsJson(*s.evaluation);

@@ -11,6 +11,7 @@
 
 #include "viosfm/eval/metric_accuracy.h"
 #include "viosfm/features/feature_extraction.h"
+#include "viosfm/io/frame_cache.h"
 #include "viosfm/matching/verification_driver.h"
 #include "viosfm/pipeline/frame_selection.h"
 #include "viosfm/pipeline/metric_scale.h"
@@ -68,6 +69,11 @@ struct PipelineSummary {
   double mean_track_length = 0.0;
   double mean_reprojection_error_px = 0.0;
   std::optional<PipelineEvaluation> evaluation;  // with ground truth only
+  // Image decodes of the run (io/frame_cache.h): each image the run reads
+  // is decoded once unless the cache had no room for it (not_kept) or an
+  // earlier run stored its features (decoded once more for the colours).
+  FrameCache::Counts images;
+  size_t frame_cache_max_bytes = 0;
   std::vector<PipelineStageTime> stages;
   double total_seconds = 0.0;
   double peak_memory_mb = 0.0;  // getrusage ru_maxrss

@@ -18,6 +18,8 @@ TEST(PipelineTest, RegistersEverySelectedFrame) {
   const double motion_start_s = 1.0;
   EXPECT_NEAR(0.1 * static_cast<double>(s.frame_selection.kept.front()), motion_start_s, 0.2);
   EXPECT_EQ(s.num_frames_selected, 46u - s.frame_selection.kept.front());
+  // With a VIO file, the selected frames' features are the only decodes.
+  EXPECT_EQ(s.images.decodes, s.num_frames_selected);
 
   // Every selected frame is in the model, and each is held by the images,
   // counted again from the written model: at least 15 observations of points
@@ -230,6 +232,16 @@ TEST(PipelineTest, WithoutVioTrajectoryOwnVioGivesThePoses) {
   EXPECT_EQ(again.fingerprint, summary.fingerprint);
   EXPECT_EQ(again.features.num_extracted, 0u);
   EXPECT_EQ(again.verification.num_resumed, summary.verification.num_pairs);
+  // Each image decoded once per run: the own VIO decodes every image and
+  // the features stage takes the selected ones from the frame cache; the
+  // colours need no decode (sampled as the features were extracted).
+  EXPECT_EQ(summary.images.decodes, summary.num_frames_in);
+  EXPECT_EQ(summary.images.reuses, summary.num_frames_selected);
+  EXPECT_EQ(summary.images.not_kept, 0u);
+  // Resumed: the features are stored, so the colours take the registered
+  // frames from the cache, still without a second decode.
+  EXPECT_EQ(again.images.decodes, again.num_frames_in);
+  EXPECT_EQ(again.images.reuses, again.num_frames_registered + again.num_frames_vio_only);
   std::cout << "own VIO: " << summary.num_frames_registered << " frames, ATE "
             << summary.evaluation->ate_rmse_m << " m, VIO " << summary.evaluation->vio_ate_rmse_m
             << " m\n";

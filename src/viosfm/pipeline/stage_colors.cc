@@ -2,38 +2,70 @@
 
 #include <algorithm>
 #include <cmath>
-#include <filesystem>
-#include <unordered_map>
 #include <utility>
 
-#include "viosfm/io/image_io.h"
 #include "viosfm/util/logging.h"
 #include "viosfm/util/progress.h"
 
 namespace viosfm {
 namespace {
 
-namespace fs = std::filesystem;
+std::vector<uint8_t> SampleValues(const GreyImage& pixels, const FeatureKeypoints& keypoints) {
+  std::vector<uint8_t> values;
+  values.reserve(keypoints.size());
+  for (const FeatureKeypoint& keypoint : keypoints) {
+    const int x = std::clamp(static_cast<int>(std::lround(static_cast<double>(keypoint.x))), 0,
+                             pixels.width - 1);
+    const int y = std::clamp(static_cast<int>(std::lround(static_cast<double>(keypoint.y))), 0,
+                             pixels.height - 1);
+    values.push_back(pixels.at(x, y));
+  }
+  return values;
+}
 
-// Mean grey value of each point over its observations in registered images.
-void ColorPoints(const std::unordered_map<image_t, fs::path>& image_paths, bool show_progress,
-                 Reconstruction* reconstruction) {
+}  // namespace
+
+void KeypointGreyValues::Sample(image_t image_id, const GreyImage& pixels,
+                                const FeatureKeypoints& keypoints) {
+  std::vector<uint8_t> values = SampleValues(pixels, keypoints);
+  std::lock_guard<std::mutex> lock(mutex_);
+  values_[image_id] = std::move(values);
+}
+
+const std::vector<uint8_t>* KeypointGreyValues::Find(image_t image_id) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const auto it = values_.find(image_id);
+  return it == values_.end() ? nullptr : &it->second;
+}
+
+void ColorPointsStage(const SelectedFrames& frames, const BatchedMapperInput& input,
+                      bool show_progress, KeypointGreyValues* values, FrameCache* frame_cache,
+                      Reconstruction* reconstruction) {
+  std::unordered_map<image_t, size_t> frame_of_image;
+  for (size_t i = 0; i < input.images.size(); ++i) frame_of_image[input.images[i].image_id] = i;
   std::unordered_map<point3D_t, std::pair<double, int>> sums;
   const std::vector<image_t> image_ids = reconstruction->RegImageIds();
   ProgressBar progress("colors", static_cast<int64_t>(image_ids.size()),
                        show_progress ? ProgressBar::Mode::kAuto : ProgressBar::Mode::kNever);
   for (const image_t image_id : image_ids) {
     const Image& image = reconstruction->GetImage(image_id);
-    const auto path = image_paths.find(image_id);
-    VIOSFM_CHECK(path != image_paths.end()) << "image " << image_id << " has no file";
-    const GreyImage pixels = ReadGreyImage(path->second);
-    for (const Point2D& point2D : image.points2D) {
+    const std::vector<uint8_t>* image_values = values->Find(image_id);
+    if (image_values == nullptr) {
+      // Features stored by an earlier run: sampled from the image now.
+      const auto frame = frame_of_image.find(image_id);
+      VIOSFM_CHECK(frame != frame_of_image.end()) << "image " << image_id << " has no file";
+      values->Sample(image_id, *frame_cache->Take(frames.sequence.images[frame->second].path),
+                     input.images[frame->second].keypoints);
+      image_values = values->Find(image_id);
+    }
+    VIOSFM_CHECK(image_values->size() == image.points2D.size())
+        << "image " << image_id << ": " << image_values->size() << " sampled values for "
+        << image.points2D.size() << " keypoints";
+    for (size_t j = 0; j < image.points2D.size(); ++j) {
+      const Point2D& point2D = image.points2D[j];
       if (!point2D.HasPoint3D()) continue;
-      // viosfm's pixel convention: pixel (x, y) has its centre at (x, y).
-      const int x = std::clamp(static_cast<int>(std::lround(point2D.xy.x())), 0, pixels.width - 1);
-      const int y = std::clamp(static_cast<int>(std::lround(point2D.xy.y())), 0, pixels.height - 1);
       auto& [sum, count] = sums[point2D.point3D_id];
-      sum += pixels.at(x, y);
+      sum += (*image_values)[j];
       ++count;
     }
     progress.Update();
@@ -46,17 +78,6 @@ void ColorPoints(const std::unordered_map<image_t, fs::path>& image_paths, bool 
         std::clamp(std::lround(it->second.first / it->second.second), 0L, 255L));
     reconstruction->GetPoint3D(point3D_id).color = Vector3ub::Constant(value);
   }
-}
-
-}  // namespace
-
-void ColorPointsStage(const SelectedFrames& frames, const BatchedMapperInput& input,
-                      bool show_progress, Reconstruction* reconstruction) {
-  std::unordered_map<image_t, fs::path> image_paths;
-  for (size_t i = 0; i < input.images.size(); ++i) {
-    image_paths.emplace(input.images[i].image_id, frames.sequence.images[i].path);
-  }
-  ColorPoints(image_paths, show_progress, reconstruction);
 }
 
 }  // namespace viosfm

@@ -6,12 +6,19 @@ namespace viosfm {
 
 FeaturesStageOutput ExtractFeaturesStage(const SelectedFrames& frames,
                                          const PipelineOptions& options, const RunFolder& folder,
-                                         const RunFingerprint& fingerprint) {
+                                         const RunFingerprint& fingerprint, FrameCache* frame_cache,
+                                         KeypointGreyValues* values) {
   // What the database's content is made from, before the database changes.
   folder.WriteRecords(fingerprint, options.ToKeyValues());
   FeaturesStageOutput output{ColmapDatabase::Open(folder.path() / "database.db"), {}};
+  FeatureImageAccess access;
+  access.frames = frame_cache;
+  access.on_extracted = [values](image_t image_id, const GreyImage& pixels,
+                                 const FeatureKeypoints& keypoints) {
+    values->Sample(image_id, pixels, keypoints);
+  };
   output.summary = ExtractFeatures(frames.sequence, options.EffectiveSiftOptions(),
-                                   &output.database, options.show_progress);
+                                   &output.database, options.show_progress, access);
   VIOSFM_LOG(INFO) << "run: features " << output.summary.ToString();
   return output;
 }

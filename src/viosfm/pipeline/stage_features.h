@@ -8,6 +8,7 @@
 #include "viosfm/io/colmap_database.h"
 #include "viosfm/pipeline/pipeline_options.h"
 #include "viosfm/pipeline/run_folder.h"
+#include "viosfm/pipeline/stage_colors.h"
 #include "viosfm/pipeline/stage_frames.h"
 
 namespace viosfm {
@@ -18,9 +19,11 @@ struct FeaturesStageOutput {
 };
 
 // Writes fingerprint.json and options.json, opens the database and
-// extracts the features it lacks.
+// extracts the features it lacks, taking the images from `frame_cache` and
+// sampling each keypoint's grey value into `values` (stage_colors.h).
 FeaturesStageOutput ExtractFeaturesStage(const SelectedFrames& frames,
                                          const PipelineOptions& options, const RunFolder& folder,
-                                         const RunFingerprint& fingerprint);
+                                         const RunFingerprint& fingerprint, FrameCache* frame_cache,
+                                         KeypointGreyValues* values);
 
 }  // namespace viosfm

@@ -5,7 +5,8 @@
 
 namespace viosfm {
 SelectedFrames SelectFramesStage(const Sequence& sequence, const VioPoses& vio,
-                                 const PipelineOptions& options, const std::string& vio_name) {
+                                 const PipelineOptions& options, const std::string& vio_name,
+                                 FrameCache* frame_cache) {
   SelectedFrames frames;
   frames.selection = SelectFrames(sequence, options.frame_selection, &vio.world_from_body);
   if (!frames.selection.ok()) {
@@ -52,6 +53,9 @@ SelectedFrames SelectFramesStage(const Sequence& sequence, const VioPoses& vio,
   VIOSFM_LOG(INFO) << "run: " << frames.selection.message << "; "
                    << frames.sequence.images.size() - frames.num_without_vio_pose
                    << " frames with a VIO pose";
+  std::vector<std::filesystem::path> selected_paths;
+  for (const SequenceImage& image : frames.sequence.images) selected_paths.push_back(image.path);
+  frame_cache->RetainOnly(selected_paths);
   return frames;
 }
 

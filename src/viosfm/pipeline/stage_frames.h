@@ -10,6 +10,7 @@
 #include <optional>
 #include <vector>
 
+#include "viosfm/io/frame_cache.h"
 #include "viosfm/pipeline/frame_selection.h"
 #include "viosfm/pipeline/pipeline_options.h"
 #include "viosfm/pipeline/stage_vio.h"
@@ -31,7 +32,9 @@ struct SelectedFrames {
 
 // The stage. Throws InputError naming the dataset when no frame is left,
 // and naming the VIO (`vio_name`) when fewer than two frames have a pose.
+// Releases the decoded images of the frames not selected from `frame_cache`.
 SelectedFrames SelectFramesStage(const Sequence& sequence, const VioPoses& vio,
-                                 const PipelineOptions& options, const std::string& vio_name);
+                                 const PipelineOptions& options, const std::string& vio_name,
+                                 FrameCache* frame_cache);
 
 }  // namespace viosfm

@@ -15,7 +15,7 @@ namespace fs = std::filesystem;
 
 // viosfm's own VIO on the sequence: every posed frame, a new segment after
 // every stretch without a pose.
-VioPoses RunOwnVio(const Sequence& sequence, const PipelineOptions& options) {
+VioPoses RunOwnVio(const Sequence& sequence, const PipelineOptions& options, FrameCache* frames) {
   if (!sequence.has_imu()) {
     throw InputError(sequence.root.string(), 0,
                      "no VIO poses: the dataset has no IMU for viosfm's own VIO; pass "
@@ -24,7 +24,7 @@ VioPoses RunOwnVio(const Sequence& sequence, const PipelineOptions& options) {
   VIOSFM_LOG(INFO) << "run: no VIO trajectory given: running viosfm's own VIO";
   VioOptions vio_options = options.own_vio;
   vio_options.show_progress = vio_options.show_progress && options.show_progress;
-  const VioResult result = RunVio(sequence, vio_options);
+  const VioResult result = RunVio(sequence, vio_options, frames);
   WriteVioResult(options.output_folder / "vio", result);
   // Every frame the VIO gives a pose (tracking, IMU-only, or held at a
   // static start), in the VIO's own segments: a reset it re-localised stays
@@ -97,10 +97,11 @@ Trajectory LoadVioTrajectory(const Sequence& sequence, const PipelineOptions& op
                                sequence.rig.body_from_cam);
 }
 
-VioPoses LoadVioPoses(const Sequence& sequence, const PipelineOptions& options) {
+VioPoses LoadVioPoses(const Sequence& sequence, const PipelineOptions& options,
+                      FrameCache* frames) {
   VioPoses poses;
   if (!options.vio_source && options.vio_trajectory.empty()) {
-    poses = RunOwnVio(sequence, options);
+    poses = RunOwnVio(sequence, options, frames);
   } else {
     poses.world_from_body = LoadVioTrajectory(sequence, options);
     poses.segments = SegmentsFromTimeGaps(poses.world_from_body, options.vio_max_gap_ns);

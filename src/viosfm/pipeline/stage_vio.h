@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "viosfm/io/frame_cache.h"
 #include "viosfm/pipeline/pipeline_options.h"
 #include "viosfm/scene/vio_uncertainty.h"
 
@@ -52,6 +53,9 @@ Trajectory LoadVioTrajectory(const Sequence& sequence, const PipelineOptions& op
 
 // The VIO poses as the options say (viosfm's own VIO without a source or
 // file, else LoadVioTrajectory) with their segments and odometers.
-VioPoses LoadVioPoses(const Sequence& sequence, const PipelineOptions& options);
+// viosfm's own VIO reads the images through `frames` (kept there for the
+// features stage) when given.
+VioPoses LoadVioPoses(const Sequence& sequence, const PipelineOptions& options,
+                      FrameCache* frames = nullptr);
 
 }  // namespace viosfm

@@ -9,6 +9,21 @@ std::string DatabaseImageName(const SequenceImage& image) {
   return image.path.filename().string();
 }
 
+ImuCoverage CheckImuCoverage(const Sequence& sequence) {
+  ImuCoverage coverage;
+  if (sequence.images.empty() || sequence.imu.empty()) return coverage;
+  const timestamp_ns_t first_image = sequence.images.front().timestamp_ns;
+  const timestamp_ns_t last_image = sequence.images.back().timestamp_ns;
+  const timestamp_ns_t first_imu = sequence.imu.front().timestamp_ns;
+  const timestamp_ns_t last_imu = sequence.imu.back().timestamp_ns;
+  coverage.spans = "images span [" + std::to_string(first_image) + ", " +
+                   std::to_string(last_image) + "] ns, IMU samples span [" +
+                   std::to_string(first_imu) + ", " + std::to_string(last_imu) + "] ns";
+  coverage.overlaps = !(last_imu < first_image || first_imu > last_image);
+  coverage.complete = first_imu <= first_image && last_imu >= last_image;
+  return coverage;
+}
+
 double EstimateFrameRateHz(const std::vector<SequenceImage>& images) {
   if (images.size() < 2) return 0.0;
   std::vector<timestamp_ns_t> intervals;

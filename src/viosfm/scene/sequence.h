@@ -60,6 +60,15 @@ std::string DatabaseImageName(const SequenceImage& image);
 // fewer than two images.
 double EstimateFrameRateHz(const std::vector<SequenceImage>& images);
 
+// How the IMU covers the images' time span. With IMU and images only.
+struct ImuCoverage {
+  bool overlaps = false;  // some IMU sample lies within the images' span
+  bool complete = false;  // the samples span every image
+  // "images span [a, b] ns, IMU samples span [c, d] ns", for messages.
+  std::string spans;
+};
+ImuCoverage CheckImuCoverage(const Sequence& sequence);
+
 // The ground truth as world_from_body poses.
 Trajectory GroundTruthBodyTrajectory(const Sequence& sequence);
 // The ground truth as world_from_cam poses: world_from_body * body_from_cam.

@@ -8,6 +8,7 @@
 
 #include "viosfm/io/image_io.h"
 #include "viosfm/io/trajectory_io.h"
+#include "viosfm/io/vio_states_io.h"
 #include "viosfm/sensor/camera_models.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/file_util.h"
@@ -505,7 +506,7 @@ double ProcessCpuSeconds() {
 
 }  // namespace
 
-VioResult RunVio(const Sequence& sequence, const VioOptions& options) {
+VioResult RunVio(const Sequence& sequence, const VioOptions& options, FrameCache* frames) {
   if (const std::string error = options.Validate(); !error.empty()) {
     throw InputError("invalid VIO options: " + error);
   }
@@ -529,7 +530,9 @@ VioResult RunVio(const Sequence& sequence, const VioOptions& options) {
   const auto read_and_track = [&](size_t k, const std::optional<Eigen::Quaterniond>& prior) {
     const SequenceImage& image = sequence.images[k];
     const FrameFeatures features =
-        tracker.Track(image.timestamp_ns, ReadGreyImage(image.path), prior);
+        frames != nullptr
+            ? tracker.Track(image.timestamp_ns, *frames->Read(image.path, /*keep=*/true), prior)
+            : tracker.Track(image.timestamp_ns, ReadGreyImage(image.path), prior);
     progress.Update();
     return features;
   };
@@ -701,25 +704,24 @@ void WriteVioResult(const std::filesystem::path& folder, const VioResult& result
   if (error) throw InputError(folder.string(), 0, "cannot create the output folder");
   WriteTumTrajectory(folder / "trajectory_body.tum", result.BodyTrajectory());
   WriteTumTrajectory(folder / "trajectory_cam.tum", result.CameraTrajectory());
-  WriteFileAtomically(folder / "states.csv", [&](std::ostream& out) {
-    out << "#timestamp [ns],status,px,py,pz,qw,qx,qy,qz,vx,vy,vz,bgx,bgy,bgz,bax,bay,baz,"
-           "sigma_roll,sigma_pitch,sigma_yaw,sigma_px,sigma_py,sigma_pz,segment,has_pose\n";
-    out << std::setprecision(17);
-    for (const VioFrameResult& frame : result.frames) {
-      const ImuState& s = frame.state;
-      const Eigen::Quaterniond q = s.world_from_body.rotation.normalized();
-      const Eigen::Vector3d& p = s.world_from_body.translation;
-      out << frame.timestamp_ns << "," << VioStatusName(frame.status) << "," << p.x() << ","
-          << p.y() << "," << p.z() << "," << q.w() << "," << q.x() << "," << q.y() << "," << q.z();
-      for (const Eigen::Vector3d* v : {&s.velocity_in_world, &s.gyro_bias, &s.accel_bias}) {
-        out << "," << v->x() << "," << v->y() << "," << v->z();
-      }
-      for (int i = 0; i < 6; ++i)
-        out << "," << std::sqrt(std::max(0.0, frame.pose_covariance(i, i)));
-      out << "," << frame.segment << "," << (frame.has_pose ? 1 : 0);
-      out << "\n";
+  std::vector<VioStateRecord> records;
+  records.reserve(result.frames.size());
+  for (const VioFrameResult& frame : result.frames) {
+    VioStateRecord record;
+    record.timestamp_ns = frame.timestamp_ns;
+    record.status = VioStatusName(frame.status);
+    record.world_from_body = frame.state.world_from_body;
+    record.velocity_in_world = frame.state.velocity_in_world;
+    record.gyro_bias = frame.state.gyro_bias;
+    record.accel_bias = frame.state.accel_bias;
+    for (int i = 0; i < 6; ++i) {
+      record.pose_sigma[i] = std::sqrt(std::max(0.0, frame.pose_covariance(i, i)));
     }
-  });
+    record.segment = frame.segment;
+    record.has_pose = frame.has_pose;
+    records.push_back(std::move(record));
+  }
+  WriteVioStatesCsv(folder / "states.csv", records);
   WriteFileAtomically(folder / "vio_summary.txt",
                       [&](std::ostream& out) { out << FormatVioSummary(result.summary); });
 }

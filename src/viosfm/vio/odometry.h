@@ -27,6 +27,7 @@
 #include <utility>
 #include <vector>
 
+#include "viosfm/io/frame_cache.h"
 #include "viosfm/scene/sequence.h"
 #include "viosfm/scene/trajectory.h"
 #include "viosfm/vio/feature_tracker.h"
@@ -194,10 +195,11 @@ Eigen::Quaterniond GyroRotationPrior(const SensorRig& rig, const std::vector<Imu
                                      const Eigen::Vector3d& gyro_bias, timestamp_ns_t from_ns,
                                      timestamp_ns_t to_ns);
 
-// Runs the VIO over a sequence: every image is read once (ReadGreyImage),
-// tracked, and processed. Throws InputError if the sequence has no IMU or
-// the options are invalid.
-VioResult RunVio(const Sequence& sequence, const VioOptions& options);
+// Runs the VIO over a sequence: every image is read once, tracked, and
+// processed. Images are read through `frames` when given (each kept there
+// for a later stage, io/frame_cache.h), else from their files. Throws
+// InputError if the sequence has no IMU or the options are invalid.
+VioResult RunVio(const Sequence& sequence, const VioOptions& options, FrameCache* frames = nullptr);
 
 // Writes into `folder` (created if needed), each file atomically:
 //   trajectory_body.tum, trajectory_cam.tum   TUM, every frame

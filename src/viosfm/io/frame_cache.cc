@@ -1,0 +1,70 @@
+#include "viosfm/io/frame_cache.h"
+
+#include <algorithm>
+#include <set>
+
+#include "viosfm/io/image_io.h"
+
+namespace viosfm {
+
+namespace fs = std::filesystem;
+
+std::shared_ptr<const GreyImage> FrameCache::Read(const fs::path& path, bool keep) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (const auto it = held_.find(path); it != held_.end()) {
+      ++counts_.reuses;
+      return it->second;
+    }
+  }
+  auto image = std::make_shared<const GreyImage>(ReadGreyImage(path));
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++counts_.decodes;
+  if (keep) {
+    const size_t bytes = image->pixels.size();
+    if (held_bytes_ + bytes <= max_bytes_) {
+      if (held_.emplace(path, image).second) held_bytes_ += bytes;
+      counts_.peak_bytes = std::max(counts_.peak_bytes, held_bytes_);
+    } else {
+      ++counts_.not_kept;
+    }
+  }
+  return image;
+}
+
+std::shared_ptr<const GreyImage> FrameCache::Take(const fs::path& path) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (const auto it = held_.find(path); it != held_.end()) {
+      std::shared_ptr<const GreyImage> image = std::move(it->second);
+      held_bytes_ -= image->pixels.size();
+      held_.erase(it);
+      ++counts_.reuses;
+      return image;
+    }
+  }
+  auto image = std::make_shared<const GreyImage>(ReadGreyImage(path));
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++counts_.decodes;
+  return image;
+}
+
+void FrameCache::RetainOnly(const std::vector<fs::path>& paths) {
+  const std::set<fs::path> wanted(paths.begin(), paths.end());
+  std::lock_guard<std::mutex> lock(mutex_);
+  for (auto it = held_.begin(); it != held_.end();) {
+    if (wanted.count(it->first) > 0) {
+      ++it;
+    } else {
+      held_bytes_ -= it->second->pixels.size();
+      it = held_.erase(it);
+    }
+  }
+}
+
+FrameCache::Counts FrameCache::counts() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return counts_;
+}
+
+}  // namespace viosfm

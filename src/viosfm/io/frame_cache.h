@@ -1,0 +1,54 @@
+// The decoded images of one run, so that each image file is decoded once.
+//
+// The VIO decodes every frame of the sequence; the frames a later stage
+// needs (the selected frames, for feature extraction) are kept here and
+// taken from here instead of being decoded again. Colours need no image:
+// feature extraction samples each keypoint's grey value as it goes.
+//
+// Bounded: a frame past max_bytes of held pixels is not kept (it is decoded
+// again when taken, and counted so). Thread-safe.
+#pragma once
+
+#include <cstddef>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <vector>
+
+#include "viosfm/sensor/grey_image.h"
+
+namespace viosfm {
+
+class FrameCache {
+ public:
+  struct Counts {
+    size_t decodes = 0;     // image files decoded
+    size_t reuses = 0;      // images taken from the cache instead of decoded
+    size_t not_kept = 0;    // frames not kept for lack of room
+    size_t peak_bytes = 0;  // most pixel bytes held at once
+  };
+
+  explicit FrameCache(size_t max_bytes) : max_bytes_(max_bytes) {}
+
+  // The image at `path` as 8-bit grey (io/image_io.h ReadGreyImage): the
+  // held copy if there is one, else decoded now; with `keep`, held for a
+  // later Take if there is room. Throws InputError as ReadGreyImage does.
+  std::shared_ptr<const GreyImage> Read(const std::filesystem::path& path, bool keep);
+  // The image for the last time: the held copy, released, or decoded now.
+  std::shared_ptr<const GreyImage> Take(const std::filesystem::path& path);
+  // Releases every held image whose path is not in `paths`.
+  void RetainOnly(const std::vector<std::filesystem::path>& paths);
+
+  Counts counts() const;
+  size_t max_bytes() const { return max_bytes_; }
+
+ private:
+  const size_t max_bytes_;
+  mutable std::mutex mutex_;
+  std::map<std::filesystem::path, std::shared_ptr<const GreyImage>> held_;
+  size_t held_bytes_ = 0;
+  Counts counts_;
+};
+
+}  // namespace viosfm
