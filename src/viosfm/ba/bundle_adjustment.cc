@@ -40,6 +40,16 @@ const char* BaLinearSolverName(BaLinearSolver solver) {
   return "auto";
 }
 
+BaLinearSolver ParseBaLinearSolver(const std::string& name) {
+  for (const BaLinearSolver solver :
+       {BaLinearSolver::kAuto, BaLinearSolver::kSparseSchur, BaLinearSolver::kDenseSchur,
+        BaLinearSolver::kIterativeSchur}) {
+    if (name == BaLinearSolverName(solver)) return solver;
+  }
+  throw InputError("linear solver '" + name +
+                   "': expected auto, SPARSE_SCHUR, DENSE_SCHUR or ITERATIVE_SCHUR");
+}
+
 const char* PriorWeightingName(PriorWeighting weighting) {
   return weighting == PriorWeighting::kPaper ? "paper" : "covariance";
 }

@@ -22,6 +22,7 @@
 #include "viosfm/geometry/rigid3.h"
 #include "viosfm/scene/reconstruction.h"
 #include "viosfm/scene/reprojection.h"
+#include "viosfm/util/option_fields.h"
 #include "viosfm/util/types.h"
 
 namespace viosfm {
@@ -49,6 +50,13 @@ enum class PriorWeighting { kCovariance, kPaper };
 // "covariance", "paper"; ParsePriorWeighting throws InputError otherwise.
 const char* PriorWeightingName(PriorWeighting weighting);
 PriorWeighting ParsePriorWeighting(const std::string& name);
+// The option texts (util/option_fields.h).
+inline std::string OptionText(PriorWeighting value) {
+  return PriorWeightingName(value);
+}
+inline void ParseOptionText(const std::string& text, PriorWeighting* value) {
+  *value = ParsePriorWeighting(text);
+}
 
 struct BundleAdjustmentOptions {
   // Cauchy loss scale on the reprojection error, pixels (default 1.0): an
@@ -117,10 +125,52 @@ struct BundleAdjustmentOptions {
 
   std::string Validate() const;  // empty if valid, else names the bad field
   bool Check() const { return Validate().empty(); }
+
+  template <class Self, class Visitor>
+  static void VisitFields(Self& self, Visitor&& visit) {
+    visit({"loss_scale_px", "px, scale of the reprojection errors' robust loss", kRunOnly},
+          self.loss_scale_px);
+    visit({"refine_intrinsics", "refine the focal length and distortion", kRunOnly},
+          self.refine_intrinsics);
+    visit({"refine_principal_point", "refine the principal point as well", kRunOnly},
+          self.refine_principal_point);
+    visit({"use_relative_pose_priors", "the VIO's relative-pose priors", kRunOnly},
+          self.use_relative_pose_priors);
+    visit({"prior_alpha", "the paper's prior weight alpha", kRunOnly}, self.prior_alpha);
+    visit({"prior_beta", "the paper's connectivity decay beta", kRunOnly}, self.prior_beta);
+    visit({"prior_rotation_sigma_rad", "rad, fixed prior sigma (paper weighting)", kRunOnly},
+          self.prior_rotation_sigma_rad);
+    visit({"prior_translation_sigma_m", "m, fixed prior sigma (paper weighting)", kRunOnly},
+          self.prior_translation_sigma_m);
+    visit({"prior_weighting", "covariance or paper", kRunOnly}, self.prior_weighting);
+    visit({"prior_loss_scale", "sigmas, scale of the priors' Tukey loss", kRunOnly},
+          self.prior_loss_scale);
+    visit({"max_num_iterations", "Levenberg-Marquardt iterations", kRunOnly},
+          self.max_num_iterations);
+    visit({"num_threads", "Jacobian and linear solver threads", kRunOnly}, self.num_threads);
+    visit({"max_images_for_sparse_schur", "images up to which auto uses SPARSE_SCHUR", kRunOnly},
+          self.max_images_for_sparse_schur);
+    visit({"linear_solver", "auto, SPARSE_SCHUR, DENSE_SCHUR or ITERATIVE_SCHUR", kRunOnly},
+          self.linear_solver);
+    visit({"function_tolerance", "relative cost change to stop", kRunOnly},
+          self.function_tolerance);
+    visit({"gradient_tolerance", "gradient tolerance to stop", kRunOnly}, self.gradient_tolerance);
+    visit({"parameter_tolerance", "relative step size to stop", kRunOnly},
+          self.parameter_tolerance);
+  }
 };
 
 // "SPARSE_SCHUR", "DENSE_SCHUR", "ITERATIVE_SCHUR" or "auto".
 const char* BaLinearSolverName(BaLinearSolver solver);
+// The inverse of BaLinearSolverName; InputError for another name.
+BaLinearSolver ParseBaLinearSolver(const std::string& name);
+// The option texts (util/option_fields.h).
+inline std::string OptionText(BaLinearSolver value) {
+  return BaLinearSolverName(value);
+}
+inline void ParseOptionText(const std::string& text, BaLinearSolver* value) {
+  *value = ParseBaLinearSolver(text);
+}
 
 // The VIO's relative pose between two (normally consecutive) frames.
 struct RelativePosePrior {

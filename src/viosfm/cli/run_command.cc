@@ -4,6 +4,7 @@
 #include <iostream>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "viosfm/cli/bag_options.h"
 #include "viosfm/cli/commands.h"
@@ -12,6 +13,7 @@
 #include "viosfm/pipeline/pipeline.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/logging.h"
+#include "viosfm/util/option_fields.h"
 #include "viosfm/util/timestamp.h"
 
 namespace viosfm::cli {
@@ -37,8 +39,20 @@ struct RunArguments {
   bool no_rpc = false;
   bool no_bridging = false;
   bool no_progress = false;
+  // --set KEY=VALUE, applied after every other flag.
+  std::vector<std::string> set_options;
   PipelineOptions options;
 };
+
+// --list-options: every option key with its default, whether it shapes the
+// stored data (a re-run with another value cannot reuse them) and its help.
+void ListOptions() {
+  for (const OptionDescription& option : OptionDescriptions<PipelineOptions>()) {
+    std::cout << option.key << " = " << option.default_text << "  ["
+              << (option.effect == kShapesStoredData ? "stored data" : "run only") << "]  "
+              << option.help << "\n";
+  }
+}
 
 void RunRun(RunArguments args) {
   PipelineOptions& options = args.options;
@@ -62,6 +76,13 @@ void RunRun(RunArguments args) {
   options.mapper.ba.use_relative_pose_priors = !args.no_rpc;
   if (args.no_bridging) options.mapper.bridge_spans.clear();
   options.show_progress = !args.no_progress;
+  for (const std::string& assignment : args.set_options) {
+    const size_t equals = assignment.find('=');
+    if (equals == std::string::npos) {
+      throw InputError("--set " + assignment + ": expected KEY=VALUE");
+    }
+    SetOptionFromText(options, assignment.substr(0, equals), assignment.substr(equals + 1));
+  }
   if (const std::string error = options.Validate(); !error.empty()) {
     throw InputError("invalid run options: " + error);
   }
@@ -210,6 +231,18 @@ void RegisterRun(CLI::App& app) {
                     "afresh (without it a re-run reuses them, and refuses a folder whose "
                     "fingerprint.json says they were made from other inputs or options)");
   command->add_flag("--no-progress", args->no_progress, "No progress bars");
+  command->add_option("--set", args->set_options,
+                      "KEY=VALUE: set any option by its options.json key (repeatable; applied "
+                      "after the other flags; --list-options lists the keys)");
+  // Runs while the arguments are parsed, before the required ones are checked.
+  command->add_flag_callback(
+      "--list-options",
+      [] {
+        ListOptions();
+        throw CLI::Success();
+      },
+      "List every option key (for --set) with its default, whether it shapes the stored "
+      "features and matches, and its help; then exit");
   command->callback([args] { RunRun(*args); });
 }
 

@@ -30,6 +30,7 @@
 #include "viosfm/scene/features.h"
 #include "viosfm/sensor/camera.h"
 #include "viosfm/sensor/grey_image.h"
+#include "viosfm/util/option_fields.h"
 
 namespace viosfm {
 
@@ -59,6 +60,21 @@ struct SiftOptions {
 
   std::string Validate() const;  // empty if valid, else names the bad field
   bool Check() const { return Validate().empty(); }
+
+  template <class Self, class Visitor>
+  static void VisitFields(Self& self, Visitor&& visit) {
+    visit({"max_num_features", "keypoints kept per image, the strongest", kShapesStoredData},
+          self.max_num_features);
+    visit({"root_sift", "RootSIFT (true) or L2-normalised SIFT descriptors", kShapesStoredData},
+          self.root_sift);
+    visit({"peak_threshold", "minimum absolute DoG value of a keypoint", kShapesStoredData},
+          self.peak_threshold);
+    visit({"edge_threshold", "maximum ratio of principal curvatures", kShapesStoredData},
+          self.edge_threshold);
+    visit({"num_octave_layers", "DoG levels per octave", kShapesStoredData},
+          self.num_octave_layers);
+    visit({"num_threads", "worker threads of the extraction", kRunOnly}, self.num_threads);
+  }
 };
 
 struct ImageFeatures {

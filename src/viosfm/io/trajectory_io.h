@@ -35,6 +35,13 @@ enum class TrajectoryFormat { kTum, kEuroc, kKitti, kColmap };
 // "tum", "euroc", "kitti", "colmap" (case-insensitive); throws InputError otherwise.
 TrajectoryFormat ParseTrajectoryFormat(const std::string& name);
 std::string TrajectoryFormatName(TrajectoryFormat format);
+// The option texts (util/option_fields.h).
+inline std::string OptionText(TrajectoryFormat value) {
+  return TrajectoryFormatName(value);
+}
+inline void ParseOptionText(const std::string& text, TrajectoryFormat* value) {
+  *value = ParseTrajectoryFormat(text);
+}
 // A folder -> COLMAP; a file: guesses from its first data line: 8
 // whitespace-separated columns -> TUM, 12 -> KITTI, a comma-separated line
 // with >= 8 fields -> EuRoC. Throws InputError if no guess fits.

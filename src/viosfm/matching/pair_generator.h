@@ -30,6 +30,13 @@ enum class PairMode { kExhaustive, kSequential, kTemporalRetrieval, kPairList };
 // throws InputError otherwise.
 PairMode ParsePairMode(const std::string& name);
 std::string PairModeName(PairMode mode);
+// The option texts (util/option_fields.h).
+inline std::string OptionText(PairMode value) {
+  return PairModeName(value);
+}
+inline void ParseOptionText(const std::string& text, PairMode* value) {
+  *value = ParsePairMode(text);
+}
 
 struct PairGeneratorOptions {
   PairMode mode = PairMode::kTemporalRetrieval;  // default: the paper's

@@ -49,12 +49,6 @@ struct ImageData {
   std::shared_ptr<const FloatDescriptors> descriptors;  // null if not needed
 };
 
-std::string FormatDouble(double value) {
-  std::ostringstream stream;
-  stream << std::setprecision(10) << value;
-  return stream.str();
-}
-
 // The result of one pair's worker.
 struct PairWork {
   PairDecision decision;
@@ -93,41 +87,7 @@ std::string VerificationOptions::Validate() const {
 }
 
 std::vector<std::pair<std::string, std::string>> VerificationOptions::ToKeyValues() const {
-  return {
-      {"pairs.mode", PairModeName(pairs.mode)},
-      {"pairs.num_temporal_neighbors", std::to_string(pairs.num_temporal_neighbors)},
-      {"pairs.num_retrieval_neighbors", std::to_string(pairs.num_retrieval_neighbors)},
-      {"retrieval.vocabulary_path", retrieval.vocabulary_path},
-      {"retrieval.vocabulary.branching", std::to_string(retrieval.vocabulary.branching)},
-      {"retrieval.vocabulary.depth", std::to_string(retrieval.vocabulary.depth)},
-      {"matching.max_ratio", FormatDouble(matching.max_ratio)},
-      {"matching.max_distance", FormatDouble(matching.max_distance)},
-      {"matching.cross_check", matching.cross_check ? "true" : "false"},
-      {"use_vio_prior", use_vio_prior ? "true" : "false"},
-      {"prior.max_epipolar_error_px", FormatDouble(prior.max_epipolar_error_px)},
-      {"prior.max_outlier_ratio", FormatDouble(prior.max_outlier_ratio)},
-      {"prior.min_baseline_m", FormatDouble(prior.min_baseline_m)},
-      {"prior.check_depth", prior.check_depth ? "true" : "false"},
-      {"prior.max_scene_depth_m", FormatDouble(prior.max_scene_depth_m)},
-      {"prior.depth_tolerance_px", FormatDouble(prior.depth_tolerance_px)},
-      {"prior.min_depth_parallax_px", FormatDouble(prior.min_depth_parallax_px)},
-      {"band_follows_drift", band_follows_drift ? "true" : "false"},
-      {"band_sigmas", FormatDouble(band_sigmas)},
-      {"band_depth_m", FormatDouble(band_depth_m)},
-      {"guided_matching", guided_matching ? "true" : "false"},
-      {"reverify_stored_matches", reverify_stored_matches ? "true" : "false"},
-      {"guided_band_px", FormatDouble(guided_band_px)},
-      {"geometry.max_error_px", FormatDouble(geometry.max_error_px)},
-      {"geometry.min_num_inliers", std::to_string(geometry.min_num_inliers)},
-      {"geometry.confidence", FormatDouble(geometry.confidence)},
-      {"geometry.min_num_trials", std::to_string(geometry.min_num_trials)},
-      {"geometry.max_num_trials", std::to_string(geometry.max_num_trials)},
-      {"geometry.local_optimization", geometry.local_optimization ? "true" : "false"},
-      {"geometry.refine_relative_pose", geometry.refine_relative_pose ? "true" : "false"},
-      {"max_pose_time_difference_ns", std::to_string(max_pose_time_difference_ns)},
-      {"num_threads", std::to_string(num_threads)},
-      {"seed", std::to_string(seed)},
-  };
+  return OptionsToKeyValues(*this);
 }
 
 std::string FormatVerificationSummary(const VerificationSummary& s) {

@@ -54,6 +54,7 @@
 #include "viosfm/scene/sequence.h"
 #include "viosfm/scene/trajectory.h"
 #include "viosfm/scene/vio_uncertainty.h"
+#include "viosfm/util/option_fields.h"
 
 namespace viosfm {
 
@@ -126,6 +127,86 @@ struct VerificationOptions {
   bool Check() const { return Validate().empty(); }
   // Every option as (name, value) text, for the report.
   std::vector<std::pair<std::string, std::string>> ToKeyValues() const;
+
+  // The fields of the sub-structs that are options of a run are described
+  // here (pairs., retrieval., matching., prior., geometry.).
+  template <class Self, class Visitor>
+  static void VisitFields(Self& self, Visitor&& visit) {
+    visit({"pairs.mode", "temporal_retrieval, sequential or exhaustive", kShapesStoredData},
+          self.pairs.mode);
+    visit({"pairs.num_temporal_neighbors", "N1, temporal neighbours per image", kShapesStoredData},
+          self.pairs.num_temporal_neighbors);
+    visit(
+        {"pairs.num_retrieval_neighbors", "N2, retrieval neighbours per image", kShapesStoredData},
+        self.pairs.num_retrieval_neighbors);
+    visit(
+        {"retrieval.vocabulary_path", "vocabulary file (content hashed); empty: trained", kRunOnly},
+        self.retrieval.vocabulary_path);
+    visit(
+        {"retrieval.vocabulary.branching", "children per vocabulary tree node", kShapesStoredData},
+        self.retrieval.vocabulary.branching);
+    visit({"retrieval.vocabulary.depth", "levels of the vocabulary tree", kShapesStoredData},
+          self.retrieval.vocabulary.depth);
+    visit({"matching.max_ratio", "descriptor ratio test", kShapesStoredData},
+          self.matching.max_ratio);
+    visit({"matching.max_distance", "largest descriptor distance", kShapesStoredData},
+          self.matching.max_distance);
+    visit({"matching.cross_check", "keep mutual nearest neighbours only", kShapesStoredData},
+          self.matching.cross_check);
+    visit({"use_vio_prior", "step 1, the VIO-prior check; false: RANSAC only", kShapesStoredData},
+          self.use_vio_prior);
+    visit(
+        {"prior.max_epipolar_error_px", "T_EE, px from the VIO's epipolar line", kShapesStoredData},
+        self.prior.max_epipolar_error_px);
+    visit(
+        {"prior.max_outlier_ratio", "pairs with more VIO outliers are rejected", kShapesStoredData},
+        self.prior.max_outlier_ratio);
+    visit({"prior.min_baseline_m", "m, shorter VIO baselines skip the check", kShapesStoredData},
+          self.prior.min_baseline_m);
+    visit({"prior.check_depth", "the depth-consistency check", kShapesStoredData},
+          self.prior.check_depth);
+    visit({"prior.max_scene_depth_m", "m, depth of the farthest point of the check",
+           kShapesStoredData},
+          self.prior.max_scene_depth_m);
+    visit({"prior.depth_tolerance_px", "px, tolerance of the depth check", kShapesStoredData},
+          self.prior.depth_tolerance_px);
+    visit({"prior.min_depth_parallax_px", "px, parallax from which the depth check applies",
+           kShapesStoredData},
+          self.prior.min_depth_parallax_px);
+    visit({"band_follows_drift", "the epipolar band follows the VIO's drift", kShapesStoredData},
+          self.band_follows_drift);
+    visit({"band_sigmas", "sigmas of the expected epipolar error added to the band",
+           kShapesStoredData},
+          self.band_sigmas);
+    visit({"band_depth_m", "m, depth that turns the translation error into px", kShapesStoredData},
+          self.band_depth_m);
+    visit({"guided_matching", "match inside the VIO epipolar band", kShapesStoredData},
+          self.guided_matching);
+    visit({"reverify_stored_matches", "verify stored matches again", kShapesStoredData},
+          self.reverify_stored_matches);
+    visit({"guided_band_px", "px, half width of the guided-matching band", kShapesStoredData},
+          self.guided_band_px);
+    visit({"geometry.max_error_px", "px, RANSAC's Sampson error threshold", kShapesStoredData},
+          self.geometry.max_error_px);
+    visit({"geometry.min_num_inliers", "inliers for a pair to be kept", kShapesStoredData},
+          self.geometry.min_num_inliers);
+    visit({"geometry.confidence", "RANSAC confidence", kShapesStoredData},
+          self.geometry.confidence);
+    visit({"geometry.min_num_trials", "fewest RANSAC trials", kShapesStoredData},
+          self.geometry.min_num_trials);
+    visit({"geometry.max_num_trials", "most RANSAC trials", kShapesStoredData},
+          self.geometry.max_num_trials);
+    visit({"geometry.local_optimization", "LO-RANSAC", kShapesStoredData},
+          self.geometry.local_optimization);
+    visit({"geometry.refine_relative_pose", "refine the relative pose on the inliers",
+           kShapesStoredData},
+          self.geometry.refine_relative_pose);
+    visit({"max_pose_time_difference_ns", "ns, largest gap between an image and its VIO pose",
+           kShapesStoredData},
+          self.max_pose_time_difference_ns);
+    visit({"num_threads", "worker threads over pairs", kRunOnly}, self.num_threads);
+    visit({"seed", "seeds RANSAC and the vocabulary training", kShapesStoredData}, self.seed);
+  }
 };
 
 struct VerificationResult {

@@ -33,6 +33,7 @@
 
 #include "viosfm/scene/sequence.h"
 #include "viosfm/scene/trajectory.h"
+#include "viosfm/util/option_fields.h"
 
 namespace viosfm {
 
@@ -45,6 +46,13 @@ enum class StaticSource {
 // "auto", "imu", "trajectory", "imu_and_trajectory"; InputError otherwise.
 StaticSource ParseStaticSource(const std::string& name);
 std::string StaticSourceName(StaticSource source);
+// The option texts (util/option_fields.h).
+inline std::string OptionText(StaticSource value) {
+  return StaticSourceName(value);
+}
+inline void ParseOptionText(const std::string& text, StaticSource* value) {
+  *value = ParseStaticSource(text);
+}
 
 struct FrameSelectionOptions {
   // Remove the static frames at the beginning and the end. Default true (the paper).
@@ -71,6 +79,38 @@ struct FrameSelectionOptions {
 
   std::string Validate() const;  // empty if valid, else names the bad field
   bool Check() const { return Validate().empty(); }
+
+  template <class Self, class Visitor>
+  static void VisitFields(Self& self, Visitor&& visit) {
+    visit(
+        {"trim_static", "remove the static frames at the beginning and the end", kShapesStoredData},
+        self.trim_static);
+    visit({"static_source",
+           "what detects the static frames: auto, imu, trajectory, imu_and_trajectory",
+           kShapesStoredData},
+          self.static_source);
+    visit({"static_window_s", "s, length of the sliding window", kShapesStoredData},
+          self.static_window_s);
+    visit({"imu_lowpass_s", "s, moving-average length applied to the IMU", kShapesStoredData},
+          self.imu_lowpass_s);
+    visit(
+        {"max_static_gyro_stddev_rad_s", "rad/s, static below this gyro spread", kShapesStoredData},
+        self.max_static_gyro_stddev_rad_s);
+    visit({"max_static_gyro_mean_rad_s", "rad/s, static below this mean angular rate",
+           kShapesStoredData},
+          self.max_static_gyro_mean_rad_s);
+    visit({"max_static_accel_stddev_m_s2", "m/s^2, static below this accelerometer spread",
+           kShapesStoredData},
+          self.max_static_accel_stddev_m_s2);
+    visit({"max_static_translation_m", "m, trajectory: static within this of the window's start",
+           kShapesStoredData},
+          self.max_static_translation_m);
+    visit({"max_static_rotation_rad", "rad, trajectory: static within this of the window's start",
+           kShapesStoredData},
+          self.max_static_rotation_rad);
+    visit({"target_rate_hz", "Hz, downsample to this rate; 0 keeps every frame", kShapesStoredData},
+          self.target_rate_hz);
+  }
 };
 
 enum class FrameDecision {

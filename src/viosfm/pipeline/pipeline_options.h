@@ -7,6 +7,7 @@
 
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -23,6 +24,7 @@
 #include "viosfm/scene/vio_uncertainty.h"
 #include "viosfm/sfm/batched_mapper.h"
 #include "viosfm/sfm/imu_scale.h"
+#include "viosfm/util/option_fields.h"
 #include "viosfm/util/timestamp.h"
 #include "viosfm/vio/odometry.h"
 
@@ -33,10 +35,25 @@ enum class VioFrame { kBody, kCam };
 // "body", "cam" (case-insensitive); InputError otherwise.
 VioFrame ParseVioFrame(const std::string& name);
 std::string VioFrameName(VioFrame frame);
+// The option texts (util/option_fields.h).
+inline std::string OptionText(VioFrame frame) {
+  return VioFrameName(frame);
+}
+inline void ParseOptionText(const std::string& text, VioFrame* frame) {
+  *frame = ParseVioFrame(text);
+}
 
 // A VIO run over a whole sequence, returning world_from_body poses with
 // stamps (the hook for viosfm's own VIO).
 using VioSource = std::function<Trajectory(const Sequence& sequence)>;
+
+// The option texts (util/option_fields.h) of what only code can give:
+// "function" or "file" for a VioSource, "given in code" or "" for a rig.
+// Neither can be set from text (InputError).
+std::string OptionText(const VioSource& source);
+void ParseOptionText(const std::string& text, VioSource* source);
+std::string OptionText(const std::optional<SensorRig>& rig);
+void ParseOptionText(const std::string& text, std::optional<SensorRig>* rig);
 
 struct PipelineOptions {
   // EuRoC dataset (the folder containing mav0/, or mav0 itself) or a folder
@@ -110,6 +127,12 @@ struct PipelineOptions {
   // Every option as (name, value) text, in a fixed order (options.json). The
   // stage options carry the thread count, seed and progress set here.
   std::vector<std::pair<std::string, std::string>> ToKeyValues() const;
+  // The options of ToKeyValues that shape the stored features and matches
+  // (marked kShapesStoredData where they are described): the fingerprint's
+  // options (run_fingerprint.h).
+  std::vector<std::pair<std::string, std::string>> StoredDataKeyValues() const;
+  // These options with the Effective*Options() applied.
+  PipelineOptions WithEffectiveStageOptions() const;
   // The stage options with num_threads, seed, show_progress and the VIO
   // time difference applied.
   SiftOptions EffectiveSiftOptions() const;
@@ -117,6 +140,68 @@ struct PipelineOptions {
   BatchedMapperOptions EffectiveMapperOptions() const;
   // rosbag with the default extract folder applied.
   RosbagDatasetOptions EffectiveRosbagOptions() const;
+
+  // Every option of a run, in the order of options.json (see
+  // util/option_fields.h). The stage options' own fields are described by
+  // their structs.
+  template <class Self, class Visitor>
+  static void VisitFields(Self& self, Visitor&& visit) {
+    const bool is_bag = HasRosbagExtension(self.dataset);
+    const bool own_vio_runs = !self.vio_source && self.vio_trajectory.empty();
+    // The uncertainty model widens the verification's epipolar band (and
+    // weighs the mapper's priors, which stores nothing).
+    const OptionEffect uncertainty_effect =
+        self.verification.use_vio_prior && self.verification.band_follows_drift ? kShapesStoredData
+                                                                                : kRunOnly;
+    visit({"dataset", "EuRoC folder, image folder or ROS 1 bag (content hashed)", kRunOnly},
+          self.dataset);
+    visit({"image_folder.timestamps_file", "image folder: 'filename timestamp' lines", kRunOnly},
+          self.image_folder.timestamps_file);
+    visit({"image_folder.camera_yaml", "image folder: the camera's sensor.yaml", kRunOnly},
+          self.image_folder.camera_yaml);
+    visit({"calibration.camchain", "Kalibr camchain.yaml replacing the calibration", kRunOnly},
+          self.calibration.camchain);
+    visit({"calibration.imu", "Kalibr imu.yaml (needs camchain)", kRunOnly}, self.calibration.imu);
+    visit({"output_folder", "the output folder", kRunOnly}, self.output_folder);
+    visit({"vio.source", "function (given in code) or file", kRunOnly}, self.vio_source);
+    visit({"vio.trajectory", "VIO trajectory file; empty: viosfm's own VIO", kRunOnly},
+          self.vio_trajectory);
+    visit({"vio.format", "tum, euroc, kitti or colmap", kShapesStoredData}, self.vio_format);
+    visit({"vio.frame", "body or cam: the moving frame of the file's poses", kShapesStoredData},
+          self.vio_frame);
+    visit({"vio.max_time_difference_ns", "ns, largest gap between an image and its VIO pose",
+           kShapesStoredData},
+          self.max_vio_time_difference_ns);
+    visit({"vio.max_gap_ns", "ns, VIO segments split at longer gaps; 0: one segment",
+           kShapesStoredData},
+          self.vio_max_gap_ns);
+    VisitOptionGroup({"frame_selection", "", kShapesStoredData}, self.frame_selection, visit);
+    visit(
+        {"rosbag.image_topic", "bag: image topic; empty: found by type", kShapesStoredData, is_bag},
+        self.rosbag.image_topic);
+    visit({"rosbag.imu_topic", "bag: IMU topic; empty: found by type", kShapesStoredData, is_bag},
+          self.rosbag.imu_topic);
+    visit({"rosbag.groundtruth_topic", "bag: ground-truth topic", kShapesStoredData, is_bag},
+          self.rosbag.groundtruth_topic);
+    visit({"rosbag.camera_yaml", "bag: camera sensor.yaml (content hashed)", kRunOnly, is_bag},
+          self.rosbag.camera_yaml);
+    visit({"rosbag.imu_yaml", "bag: IMU sensor.yaml (content hashed)", kRunOnly, is_bag},
+          self.rosbag.imu_yaml);
+    visit({"rosbag.rig", "bag: calibration given in code", kRunOnly, is_bag}, self.rosbag.rig);
+    visit({"rosbag.extract_folder", "bag: where its images are written; default OUT/bag", kRunOnly,
+           is_bag},
+          self.rosbag.extract_folder);
+    VisitOptionGroup({"vio_uncertainty", "", uncertainty_effect}, self.vio_uncertainty, visit);
+    VisitOptionGroup({"own_vio", "", kShapesStoredData, own_vio_runs}, self.own_vio, visit);
+    VisitOptionGroup({"sift", "", kShapesStoredData}, self.sift, visit);
+    VisitOptionGroup({"verification", "", kShapesStoredData}, self.verification, visit);
+    VisitOptionGroup({"mapper", "", kRunOnly}, self.mapper, visit);
+    visit({"use_imu_scale", "the metric scale from the IMU", kRunOnly}, self.use_imu_scale);
+    VisitOptionGroup({"imu_scale", "", kRunOnly}, self.imu_scale, visit);
+    visit({"num_threads", "worker threads of every stage", kRunOnly}, self.num_threads);
+    visit({"seed", "seed of every random choice", kRunOnly}, self.seed);
+    visit({"show_progress", "progress bars", kRunOnly}, self.show_progress);
+  }
 };
 
 }  // namespace viosfm

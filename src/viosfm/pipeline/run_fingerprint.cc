@@ -60,28 +60,10 @@ std::string RunFingerprint::Hash() const {
 }
 
 bool ShapesStoredData(const std::string& key, const PipelineOptions& options) {
-  static const std::set<std::string> kNotShaping = {
-      // Paths: their content is hashed instead, or they are where outputs go.
-      "dataset", "output_folder", "vio.trajectory", "image_folder.timestamps_file",
-      "image_folder.camera_yaml", "calibration.camchain", "calibration.imu", "rosbag.camera_yaml",
-      "rosbag.imu_yaml", "rosbag.extract_folder", "verification.retrieval.vocabulary_path",
-      // Said by vio.input and dataset.rig.
-      "vio.source", "rosbag.rig",
-      // After the verification.
-      "use_imu_scale",
-      // The verification's seed is verification.seed.
-      "seed",
-      // How, not what.
-      "num_threads", "show_progress"};
-  if (kNotShaping.count(key) > 0) return false;
-  if (StartsWith(key, "mapper.") || StartsWith(key, "imu_scale.")) return false;
-  if (EndsWith(key, ".num_threads") || EndsWith(key, ".show_progress")) return false;
-  if (StartsWith(key, "vio_uncertainty.")) {
-    // The model widens the verification's epipolar band (and weighs the
-    // mapper's priors, which stores nothing).
-    return options.verification.use_vio_prior && options.verification.band_follows_drift;
+  for (const auto& [stored_key, value] : options.StoredDataKeyValues()) {
+    if (stored_key == key) return true;
   }
-  return true;
+  return false;
 }
 
 RunFingerprint FingerprintOfInputs(const PipelineOptions& options) {
@@ -130,9 +112,7 @@ RunFingerprint FingerprintOfInputs(const PipelineOptions& options) {
   if (!options.verification.retrieval.vocabulary_path.empty()) {
     fingerprint.Set("vocabulary.file", FileValue(options.verification.retrieval.vocabulary_path));
   }
-  for (const auto& [key, value] : options.ToKeyValues()) {
-    if (ShapesStoredData(key, options)) fingerprint.Set(key, value);
-  }
+  for (const auto& [key, value] : options.StoredDataKeyValues()) fingerprint.Set(key, value);
   return fingerprint;
 }
 

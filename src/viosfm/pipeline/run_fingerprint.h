@@ -29,7 +29,10 @@
 //   vio.poses                     the VIO's poses and segments as the run uses
 //                                 them: count, segments, hash (bit for bit)
 //   <option>                      every option of options.json that shapes
-//                                 the stored data (ShapesStoredData): frame
+//                                 the stored data: the fields marked
+//                                 kShapesStoredData in their struct's
+//                                 VisitFields (util/option_fields.h;
+//                                 PipelineOptions::StoredDataKeyValues): frame
 //                                 selection, sift.*, verification.* (pairs
 //                                 N1/N2, vocabulary, matching, VIO check,
 //                                 RANSAC, seed), the VIO file's format,
@@ -69,12 +72,9 @@ struct RunFingerprint {
 inline constexpr const char* kRunFingerprintVersion = "1";
 
 // Whether the option `key` of PipelineOptions::ToKeyValues shapes the
-// features or matches a run stores. Conservative: every key is taken to
-// shape them except the mapper's and what follows it (mapper.*, imu_scale.*,
-// use_imu_scale), thread counts, progress bars, paths whose content is
-// hashed instead (dataset, calibration, VIO and vocabulary files) and the
-// output folder; vio_uncertainty.* shapes them only when the verification
-// uses the VIO prior with a band that follows the drift.
+// features or matches a run stores: whether it is one of
+// options.StoredDataKeyValues() (the fields marked kShapesStoredData where
+// they are described, util/option_fields.h).
 bool ShapesStoredData(const std::string& key, const PipelineOptions& options);
 
 // What is known before the dataset is read: the input files and the

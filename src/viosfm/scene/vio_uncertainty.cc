@@ -12,12 +12,6 @@
 namespace viosfm {
 namespace {
 
-std::string Text(double value) {
-  std::ostringstream stream;
-  stream << std::setprecision(10) << value;
-  return stream.str();
-}
-
 Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
   Eigen::Matrix3d m;
   m << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
@@ -88,20 +82,7 @@ std::string VioUncertaintyModel::Validate() const {
 }
 
 std::vector<std::pair<std::string, std::string>> VioUncertaintyModel::ToKeyValues() const {
-  return {
-      {"position_per_sqrt_m", Text(position_per_sqrt_m)},
-      {"position_per_sqrt_s", Text(position_per_sqrt_s)},
-      {"yaw_per_sqrt_m", Text(yaw_per_sqrt_m)},
-      {"yaw_per_sqrt_s", Text(yaw_per_sqrt_s)},
-      {"yaw_per_sqrt_rad", Text(yaw_per_sqrt_rad)},
-      {"tilt_per_sqrt_s", Text(tilt_per_sqrt_s)},
-      {"scale_sigma", Text(scale_sigma)},
-      {"position_noise_m", Text(position_noise_m)},
-      {"rotation_noise_rad", Text(rotation_noise_rad)},
-      {"correlated_position_noise_m", Text(correlated_position_noise_m)},
-      {"correlated_rotation_noise_rad", Text(correlated_rotation_noise_rad)},
-      {"noise_correlation_s", Text(noise_correlation_s)},
-  };
+  return OptionsToKeyValues(*this);
 }
 
 Eigen::Matrix<double, 6, 6> RelativePoseCovariance(const VioUncertaintyModel& model,

@@ -55,6 +55,7 @@
 
 #include "viosfm/geometry/rigid3.h"
 #include "viosfm/scene/trajectory.h"
+#include "viosfm/util/option_fields.h"
 #include "viosfm/util/timestamp.h"
 
 namespace viosfm {
@@ -88,6 +89,31 @@ struct VioUncertaintyModel {
   bool Check() const { return Validate().empty(); }
   // Every rate as (name, value) text, for options.json.
   std::vector<std::pair<std::string, std::string>> ToKeyValues() const;
+
+  template <class Self, class Visitor>
+  static void VisitFields(Self& self, Visitor&& visit) {
+    visit({"position_per_sqrt_m", "m / sqrt(m travelled), each axis", kShapesStoredData},
+          self.position_per_sqrt_m);
+    visit({"position_per_sqrt_s", "m / sqrt(s), each axis", kShapesStoredData},
+          self.position_per_sqrt_s);
+    visit({"yaw_per_sqrt_m", "rad / sqrt(m travelled)", kShapesStoredData}, self.yaw_per_sqrt_m);
+    visit({"yaw_per_sqrt_s", "rad / sqrt(s)", kShapesStoredData}, self.yaw_per_sqrt_s);
+    visit({"yaw_per_sqrt_rad", "rad / sqrt(rad turned)", kShapesStoredData}, self.yaw_per_sqrt_rad);
+    visit({"tilt_per_sqrt_s", "rad / sqrt(s), roll and pitch", kShapesStoredData},
+          self.tilt_per_sqrt_s);
+    visit({"scale_sigma", "relative error of displacements", kShapesStoredData}, self.scale_sigma);
+    visit({"position_noise_m", "m, white noise per frame and axis", kShapesStoredData},
+          self.position_noise_m);
+    visit({"rotation_noise_rad", "rad, white noise per frame and axis", kShapesStoredData},
+          self.rotation_noise_rad);
+    visit({"correlated_position_noise_m", "m, slowly varying frame noise", kShapesStoredData},
+          self.correlated_position_noise_m);
+    visit({"correlated_rotation_noise_rad", "rad, slowly varying frame noise", kShapesStoredData},
+          self.correlated_rotation_noise_rad);
+    visit({"noise_correlation_s", "s, correlation time of the slowly varying noise",
+           kShapesStoredData},
+          self.noise_correlation_s);
+  }
 };
 
 // What the model needs to know of one VIO pose besides the pose itself.

@@ -47,6 +47,7 @@
 #include "viosfm/sfm/relative_pose_priors.h"
 #include "viosfm/sfm/tracks.h"
 #include "viosfm/sfm/triangulator.h"
+#include "viosfm/util/option_fields.h"
 #include "viosfm/util/timestamp.h"
 #include "viosfm/util/types.h"
 
@@ -121,6 +122,33 @@ struct BatchedMapperOptions {
 
   std::string Validate() const;  // empty if valid, else names the bad field
   bool Check() const { return Validate().empty(); }
+
+  // The mapper stores nothing in the database: every field is run-only.
+  template <class Self, class Visitor>
+  static void VisitFields(Self& self, Visitor&& visit) {
+    visit({"batch_size", "frames registered per batch (the paper's k)", kRunOnly}, self.batch_size);
+    visit({"ba_window_batches", "batches in the local BA window; 0: all", kRunOnly},
+          self.ba_window_batches);
+    visit({"batch_ba_max_num_iterations", "iterations of each batch's BA", kRunOnly},
+          self.batch_ba_max_num_iterations);
+    visit({"bridge_spans", "frame spans of the bridge pairs, comma-separated", kRunOnly},
+          self.bridge_spans);
+    visit({"bridge_max_matches", "consecutive pairs with fewer verified matches get bridge priors",
+           kRunOnly},
+          self.bridge_max_matches);
+    VisitOptionGroup({"tracks", "", kRunOnly}, self.tracks, visit);
+    VisitOptionGroup({"triangulation", "", kRunOnly}, self.triangulation, visit);
+    VisitOptionGroup({"ba", "", kRunOnly}, self.ba, visit);
+    VisitOptionGroup({"filter", "", kRunOnly}, self.filter, visit);
+    VisitOptionGroup({"registration", "", kRunOnly}, self.registration, visit);
+    visit({"retriangulate", "re-triangulate tracks without a point after each filtering", kRunOnly},
+          self.retriangulate);
+    visit({"ba_after_each_batch", "bundle adjustment after each batch", kRunOnly},
+          self.ba_after_each_batch);
+    visit({"final_global_ba", "a global bundle adjustment at the end", kRunOnly},
+          self.final_global_ba);
+    visit({"num_threads", "worker threads", kRunOnly}, self.num_threads);
+  }
 };
 
 struct MapperBatchStatistics {

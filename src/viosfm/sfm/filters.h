@@ -10,6 +10,7 @@
 #include <string>
 
 #include "viosfm/scene/reconstruction.h"
+#include "viosfm/util/option_fields.h"
 
 namespace viosfm {
 
@@ -25,6 +26,14 @@ struct PointFilterOptions {
 
   std::string Validate() const;  // empty if valid, else names the bad field
   bool Check() const { return Validate().empty(); }
+
+  template <class Self, class Visitor>
+  static void VisitFields(Self& self, Visitor&& visit) {
+    visit({"max_reprojection_error_px", "px, observations farther are removed", kRunOnly},
+          self.max_reprojection_error_px);
+    visit({"min_triangulation_angle_deg", "deg, points seen under less are removed", kRunOnly},
+          self.min_triangulation_angle_deg);
+  }
 };
 
 struct PointFilterStatistics {

@@ -17,6 +17,7 @@
 #include "viosfm/estimators/absolute_pose.h"
 #include "viosfm/scene/reconstruction.h"
 #include "viosfm/sfm/tracks.h"
+#include "viosfm/util/option_fields.h"
 
 namespace viosfm {
 
@@ -65,6 +66,27 @@ struct FrameRegistrationOptions {
 
   std::string Validate() const;  // empty if valid, else names the bad field
   bool Check() const { return Validate().empty(); }
+
+  // Of pnp only max_error_px and min_num_inliers are options of a run.
+  template <class Self, class Visitor>
+  static void VisitFields(Self& self, Visitor&& visit) {
+    visit({"verify_with_images", "check each frame's VIO pose against the model", kRunOnly},
+          self.verify_with_images);
+    visit({"pnp.max_error_px", "px, PnP RANSAC inlier threshold", kRunOnly}, self.pnp.max_error_px);
+    visit({"pnp.min_num_inliers", "PnP inliers needed", kRunOnly}, self.pnp.min_num_inliers);
+    visit({"min_num_correspondences", "2D-3D correspondences needed to check a frame", kRunOnly},
+          self.min_num_correspondences);
+    visit({"min_predicted_inlier_ratio", "the VIO pose is kept above this inlier ratio", kRunOnly},
+          self.min_predicted_inlier_ratio);
+    visit({"min_reposing_inliers", "PnP inliers needed to re-pose a frame", kRunOnly},
+          self.min_reposing_inliers);
+    visit({"break_sigmas", "sigmas of the VIO's expected drift that make a break", kRunOnly},
+          self.break_sigmas);
+    visit({"min_supporting_observations", "observations that support a frame's pose", kRunOnly},
+          self.min_supporting_observations);
+    visit({"support_max_error_px", "px, largest error of a supporting observation", kRunOnly},
+          self.support_max_error_px);
+  }
 };
 
 // Where a frame's pose came from.

@@ -30,6 +30,7 @@
 
 #include "viosfm/scene/trajectory.h"
 #include "viosfm/sensor/imu.h"
+#include "viosfm/util/option_fields.h"
 
 namespace viosfm {
 
@@ -62,6 +63,16 @@ struct ImuScaleOptions {
 
   std::string Validate() const;  // empty if valid, else names the bad field
   bool Check() const { return Validate().empty(); }
+
+  // Only these two are written to options.json (the others keep their
+  // defaults there).
+  template <class Self, class Visitor>
+  static void VisitFields(Self& self, Visitor&& visit) {
+    visit({"bias_window_s", "s, one accelerometer and gyro bias per window", kRunOnly},
+          self.bias_window_s);
+    visit({"max_scale_sigma", "usable when the scale's relative sigma is at most this", kRunOnly},
+          self.max_scale_sigma);
+  }
 };
 
 struct ImuScaleResult {

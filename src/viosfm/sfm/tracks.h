@@ -30,6 +30,7 @@
 
 #include "viosfm/scene/features.h"
 #include "viosfm/scene/reconstruction.h"
+#include "viosfm/util/option_fields.h"
 #include "viosfm/util/types.h"
 
 namespace viosfm {
@@ -54,6 +55,19 @@ enum class TrackConflictPolicy {
   kSplit,  // rebuild with best-supported matches first, refusing conflicts
   kDrop,   // discard the whole inconsistent component
 };
+// "split", "drop": the option texts (util/option_fields.h).
+inline std::string OptionText(TrackConflictPolicy policy) {
+  return policy == TrackConflictPolicy::kSplit ? "split" : "drop";
+}
+inline void ParseOptionText(const std::string& text, TrackConflictPolicy* policy) {
+  if (text == "split") {
+    *policy = TrackConflictPolicy::kSplit;
+  } else if (text == "drop") {
+    *policy = TrackConflictPolicy::kDrop;
+  } else {
+    throw InputError("expected split or drop");
+  }
+}
 
 struct TrackBuilderOptions {
   // Tracks with fewer observations are discarded, >= 2. Default 2.
@@ -64,6 +78,14 @@ struct TrackBuilderOptions {
 
   std::string Validate() const;  // empty if valid, else names the bad field
   bool Check() const { return Validate().empty(); }
+
+  template <class Self, class Visitor>
+  static void VisitFields(Self& self, Visitor&& visit) {
+    visit({"min_track_length", "tracks with fewer observations are discarded", kRunOnly},
+          self.min_track_length);
+    visit({"conflict_policy", "split or drop a track holding two keypoints of one image", kRunOnly},
+          self.conflict_policy);
+  }
 };
 
 struct TrackStatistics {

@@ -14,6 +14,7 @@
 #include "viosfm/scene/reprojection.h"
 #include "viosfm/sensor/camera.h"
 #include "viosfm/sfm/tracks.h"
+#include "viosfm/util/option_fields.h"
 #include "viosfm/util/types.h"
 
 namespace viosfm {
@@ -33,6 +34,16 @@ struct TriangulationOptions {
 
   std::string Validate() const;  // empty if valid, else names the bad field
   bool Check() const { return Validate().empty(); }
+
+  template <class Self, class Visitor>
+  static void VisitFields(Self& self, Visitor&& visit) {
+    visit({"min_angle_deg", "deg, smallest triangulation angle", kRunOnly}, self.min_angle_deg);
+    visit({"max_reprojection_error_px", "px, largest reprojection error", kRunOnly},
+          self.max_reprojection_error_px);
+    visit({"refine", "refine each point by Gauss-Newton", kRunOnly}, self.refine);
+    visit({"max_refine_iterations", "iterations of the refinement", kRunOnly},
+          self.max_refine_iterations);
+  }
 };
 
 // One view of a track: its camera (intrinsics, not owned; must outlive the

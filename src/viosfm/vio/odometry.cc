@@ -27,29 +27,9 @@ namespace {
 // 0.3 m/s^2, the size a consumer IMU's bias reaches (BMI055: 70 mg offset).
 constexpr double kCarriedVelocitySigmaPerSecond = 0.3;
 
-// Builds the key-value list of VioOptions::ToKeyValues.
-class KeyValueList {
- public:
-  explicit KeyValueList(std::vector<std::pair<std::string, std::string>>* out) : out_(out) {}
-  void Add(const std::string& key, double value) {
-    std::ostringstream stream;
-    stream << std::setprecision(10) << value;
-    out_->emplace_back(key, stream.str());
-  }
-  void Add(const std::string& key, int value) { out_->emplace_back(key, std::to_string(value)); }
-  void Add(const std::string& key, uint64_t value) {
-    out_->emplace_back(key, std::to_string(value));
-  }
-  void Add(const std::string& key, bool value) {
-    out_->emplace_back(key, value ? "true" : "false");
-  }
-  void Add(const std::string& key, const char* value) { out_->emplace_back(key, value); }
+}  // namespace
 
- private:
-  std::vector<std::pair<std::string, std::string>>* out_;
-};
-
-const char* EqualizationName(ContrastEqualization equalization) {
+std::string OptionText(ContrastEqualization equalization) {
   switch (equalization) {
     case ContrastEqualization::kNever: return "never";
     case ContrastEqualization::kAlways: return "always";
@@ -58,123 +38,20 @@ const char* EqualizationName(ContrastEqualization equalization) {
   return "when_dark";
 }
 
-void AddSigmas(const std::string& prefix, const InitialStateSigmas& sigmas, KeyValueList* list) {
-  list->Add(prefix + ".position_m", sigmas.position_m);
-  list->Add(prefix + ".yaw_rad", sigmas.yaw_rad);
-  list->Add(prefix + ".roll_pitch_rad", sigmas.roll_pitch_rad);
-  list->Add(prefix + ".velocity_mps", sigmas.velocity_mps);
-  list->Add(prefix + ".gyro_bias", sigmas.gyro_bias);
-  list->Add(prefix + ".accel_bias", sigmas.accel_bias);
+void ParseOptionText(const std::string& text, ContrastEqualization* equalization) {
+  for (const ContrastEqualization value :
+       {ContrastEqualization::kNever, ContrastEqualization::kAlways,
+        ContrastEqualization::kWhenDark}) {
+    if (text == OptionText(value)) {
+      *equalization = value;
+      return;
+    }
+  }
+  throw InputError("expected never, always or when_dark");
 }
 
-}  // namespace
-
 std::vector<std::pair<std::string, std::string>> VioOptions::ToKeyValues() const {
-  std::vector<std::pair<std::string, std::string>> values;
-  KeyValueList list(&values);
-  const FeatureTrackerOptions& t = tracker;
-  list.Add("tracker.max_num_features", t.max_num_features);
-  list.Add("tracker.min_distance_px", t.min_distance_px);
-  list.Add("tracker.min_corner_quality", t.min_corner_quality);
-  list.Add("tracker.detection_pyramid_level", t.detection_pyramid_level);
-  list.Add("tracker.border_margin_px", t.border_margin_px);
-  list.Add("tracker.klt_window_size", t.klt_window_size);
-  list.Add("tracker.klt_max_level", t.klt_max_level);
-  list.Add("tracker.klt_backward_max_level", t.klt_backward_max_level);
-  list.Add("tracker.klt_max_iterations", t.klt_max_iterations);
-  list.Add("tracker.klt_epsilon_px", t.klt_epsilon_px);
-  list.Add("tracker.max_forward_backward_error_px", t.max_forward_backward_error_px);
-  list.Add("tracker.ransac", t.ransac);
-  list.Add("tracker.ransac_essential", t.ransac_essential);
-  list.Add("tracker.ransac_threshold_px", t.ransac_threshold_px);
-  list.Add("tracker.ransac_confidence", t.ransac_confidence);
-  list.Add("tracker.ransac_min_tracks", t.ransac_min_tracks);
-  list.Add("tracker.equalization", EqualizationName(t.equalization));
-  list.Add("tracker.dark_mean_intensity", t.dark_mean_intensity);
-  list.Add("tracker.clahe_clip_limit", t.clahe_clip_limit);
-  list.Add("tracker.clahe_tile_grid_size", t.clahe_tile_grid_size);
-  list.Add("tracker.keyframe_parallax_px", t.keyframe_parallax_px);
-  list.Add("tracker.keyframe_min_tracked_ratio", t.keyframe_min_tracked_ratio);
-  const SlidingWindowOptions& w = window;
-  list.Add("window.window_size", w.window_size);
-  list.Add("window.keyframe_parallax_px", w.keyframe_parallax_px);
-  list.Add("window.keyframe_min_shared_tracks", w.keyframe_min_shared_tracks);
-  list.Add("window.max_keyframe_interval_s", w.max_keyframe_interval_s);
-  list.Add("window.pixel_sigma_px", w.pixel_sigma_px);
-  list.Add("window.cauchy_loss_scale", w.cauchy_loss_scale);
-  list.Add("window.min_triangulation_angle_deg", w.min_triangulation_angle_deg);
-  list.Add("window.min_depth_m", w.min_depth_m);
-  list.Add("window.max_depth_m", w.max_depth_m);
-  list.Add("window.max_reprojection_error_px", w.max_reprojection_error_px);
-  list.Add("window.max_landmarks", w.max_landmarks);
-  list.Add("window.max_num_iterations", w.max_num_iterations);
-  list.Add("window.num_threads", w.num_threads);
-  list.Add("window.min_tracked_landmarks", w.min_tracked_landmarks);
-  list.Add("window.max_imu_only_s", w.max_imu_only_s);
-  list.Add("window.max_speed_mps", w.max_speed_mps);
-  list.Add("window.max_gyro_bias", w.max_gyro_bias);
-  list.Add("window.max_accel_bias", w.max_accel_bias);
-  list.Add("window.max_position_correction_m", w.max_position_correction_m);
-  list.Add("window.fallback_triangulation_angle_deg", w.fallback_triangulation_angle_deg);
-  list.Add("window.fallback_target_landmarks", w.fallback_target_landmarks);
-  list.Add("window.compute_covariance", w.compute_covariance);
-  list.Add("window.preintegration.gyro_bias_repropagation_threshold",
-           w.preintegration.gyro_bias_repropagation_threshold);
-  list.Add("window.preintegration.accel_bias_repropagation_threshold",
-           w.preintegration.accel_bias_repropagation_threshold);
-  const StaticInitOptions& s = static_init;
-  list.Add("static_init.window_s", s.window_s);
-  list.Add("static_init.step_s", s.step_s);
-  list.Add("static_init.smoothing_s", s.smoothing_s);
-  list.Add("static_init.max_accel_stddev", s.max_accel_stddev);
-  list.Add("static_init.max_gyro_stddev", s.max_gyro_stddev);
-  list.Add("static_init.max_gyro_norm", s.max_gyro_norm);
-  list.Add("static_init.max_gravity_norm_error", s.max_gravity_norm_error);
-  list.Add("static_init.gravity_magnitude", s.gravity_magnitude);
-  list.Add("static_init.motion_margin_s", s.motion_margin_s);
-  list.Add("static_init.min_static_s", s.min_static_s);
-  list.Add("static_init.lookback_s", s.lookback_s);
-  list.Add("static_init.max_propagation_s", s.max_propagation_s);
-  list.Add("static_init.estimate_accel_bias_along_gravity", s.estimate_accel_bias_along_gravity);
-  const ViInitOptions& v = vi_init;
-  list.Add("vi_init.window_size", v.window_size);
-  list.Add("vi_init.min_num_frames", v.min_num_frames);
-  list.Add("vi_init.focal_length_px", v.focal_length_px);
-  list.Add("vi_init.min_parallax_px", v.min_parallax_px);
-  list.Add("vi_init.min_triangulation_angle_deg", v.min_triangulation_angle_deg);
-  list.Add("vi_init.min_pair_correspondences", v.min_pair_correspondences);
-  list.Add("vi_init.essential_max_error_px", v.essential_max_error_px);
-  list.Add("vi_init.max_reprojection_error_px", v.max_reprojection_error_px);
-  list.Add("vi_init.min_landmark_triangulation_angle_deg", v.min_landmark_triangulation_angle_deg);
-  list.Add("vi_init.min_pnp_correspondences", v.min_pnp_correspondences);
-  list.Add("vi_init.max_ba_iterations", v.max_ba_iterations);
-  list.Add("vi_init.min_accel_stddev", v.min_accel_stddev);
-  list.Add("vi_init.max_gravity_norm_error", v.max_gravity_norm_error);
-  list.Add("vi_init.gravity_magnitude", v.gravity_magnitude);
-  list.Add("vi_init.gravity_refinement_iterations", v.gravity_refinement_iterations);
-  list.Add("vi_init.min_baseline_m", v.min_baseline_m);
-  list.Add("vi_init.max_baseline_m", v.max_baseline_m);
-  list.Add("vi_init.seed", static_cast<uint64_t>(v.seed));
-  const TimeOffsetOptions& o = time_offset;
-  list.Add("time_offset.estimate", o.estimate);
-  list.Add("time_offset.max_offset_s", o.max_offset_s);
-  list.Add("time_offset.coarse_step_s", o.coarse_step_s);
-  list.Add("time_offset.fine_step_s", o.fine_step_s);
-  list.Add("time_offset.min_tracks_per_pair", o.min_tracks_per_pair);
-  list.Add("time_offset.min_total_rotation_deg", o.min_total_rotation_deg);
-  list.Add("time_offset.max_wait_s", o.max_wait_s);
-  list.Add("time_offset.min_cost_reduction", o.min_cost_reduction);
-  list.Add("imu_noise.enabled", imu_noise.enabled);
-  list.Add("imu_noise.min_ratio", imu_noise.min_ratio);
-  list.Add("imu_noise.max_ratio", imu_noise.max_ratio);
-  list.Add("imu_noise.min_static_s", imu_noise.min_static_s);
-  list.Add("use_static_init", use_static_init);
-  AddSigmas("static_start_sigmas", static_start_sigmas, &list);
-  AddSigmas("restart_sigmas", restart_sigmas, &list);
-  list.Add("gyro_rotation_prior", gyro_rotation_prior);
-  list.Add("max_frames", max_frames);
-  list.Add("show_progress", show_progress);
-  return values;
+  return OptionsToKeyValues(*this);
 }
 
 std::string VioOptions::Validate() const {

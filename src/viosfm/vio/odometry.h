@@ -30,6 +30,7 @@
 #include "viosfm/io/frame_cache.h"
 #include "viosfm/scene/sequence.h"
 #include "viosfm/scene/trajectory.h"
+#include "viosfm/util/option_fields.h"
 #include "viosfm/vio/feature_tracker.h"
 #include "viosfm/vio/imu_noise_check.h"
 #include "viosfm/vio/sliding_window.h"
@@ -38,6 +39,10 @@
 #include "viosfm/vio/vi_initializer.h"
 
 namespace viosfm {
+
+// "never", "always", "when_dark": the option texts (util/option_fields.h).
+std::string OptionText(ContrastEqualization equalization);
+void ParseOptionText(const std::string& text, ContrastEqualization* equalization);
 
 struct VioOptions {
   FeatureTrackerOptions tracker;
@@ -67,6 +72,277 @@ struct VioOptions {
   bool Check() const { return Validate().empty(); }
   // Every option as "group.name" -> value text (for a run's options.json).
   std::vector<std::pair<std::string, std::string>> ToKeyValues() const;
+
+  // The fields of the sub-structs are described here (tracker., window.,
+  // static_init., vi_init., time_offset., imu_noise.).
+  template <class Self, class Visitor>
+  static void VisitFields(Self& self, Visitor&& visit) {
+    visit({"tracker.max_num_features", "corners tracked per image", kShapesStoredData},
+          self.tracker.max_num_features);
+    visit(
+        {"tracker.min_distance_px", "px, minimum distance between two corners", kShapesStoredData},
+        self.tracker.min_distance_px);
+    visit({"tracker.min_corner_quality",
+           "shi-Tomasi quality relative to the image's strongest corner", kShapesStoredData},
+          self.tracker.min_corner_quality);
+    visit({"tracker.detection_pyramid_level", "pyramid level on which new corners are detected",
+           kShapesStoredData},
+          self.tracker.detection_pyramid_level);
+    visit({"tracker.border_margin_px", "px, corners closer to the image border are dropped",
+           kShapesStoredData},
+          self.tracker.border_margin_px);
+    visit({"tracker.klt_window_size", "px, side of the KLT window (at the reference focal length)",
+           kShapesStoredData},
+          self.tracker.klt_window_size);
+    visit({"tracker.klt_max_level", "pyramid levels above the full-resolution image",
+           kShapesStoredData},
+          self.tracker.klt_max_level);
+    visit({"tracker.klt_backward_max_level",
+           "pyramid levels of the backward track of the forward-backward check", kShapesStoredData},
+          self.tracker.klt_backward_max_level);
+    visit({"tracker.klt_max_iterations", "KLT iteration limit at each level", kShapesStoredData},
+          self.tracker.klt_max_iterations);
+    visit({"tracker.klt_epsilon_px", "px, KLT stopping step", kShapesStoredData},
+          self.tracker.klt_epsilon_px);
+    visit({"tracker.max_forward_backward_error_px", "px, largest forward-backward tracking error",
+           kShapesStoredData},
+          self.tracker.max_forward_backward_error_px);
+    visit({"tracker.ransac", "RANSAC between consecutive images", kShapesStoredData},
+          self.tracker.ransac);
+    visit({"tracker.ransac_essential", "the RANSAC on the essential matrix (else fundamental)",
+           kShapesStoredData},
+          self.tracker.ransac_essential);
+    visit({"tracker.ransac_threshold_px",
+           "px, RANSAC inlier threshold (at the reference focal length)", kShapesStoredData},
+          self.tracker.ransac_threshold_px);
+    visit({"tracker.ransac_confidence", "RANSAC confidence", kShapesStoredData},
+          self.tracker.ransac_confidence);
+    visit({"tracker.ransac_min_tracks", "RANSAC runs only with at least this many tracks",
+           kShapesStoredData},
+          self.tracker.ransac_min_tracks);
+    visit({"tracker.equalization", "contrast equalisation: never, always or when_dark",
+           kShapesStoredData},
+          self.tracker.equalization);
+    visit({"tracker.dark_mean_intensity", "grey level (0-255) below which an image is dark",
+           kShapesStoredData},
+          self.tracker.dark_mean_intensity);
+    visit({"tracker.clahe_clip_limit", "CLAHE clip limit", kShapesStoredData},
+          self.tracker.clahe_clip_limit);
+    visit({"tracker.clahe_tile_grid_size", "CLAHE tiles per image side", kShapesStoredData},
+          self.tracker.clahe_tile_grid_size);
+    visit({"tracker.keyframe_parallax_px",
+           "px, mean parallax to the last keyframe that makes a keyframe", kShapesStoredData},
+          self.tracker.keyframe_parallax_px);
+    visit({"tracker.keyframe_min_tracked_ratio",
+           "keyframe when fewer of max_num_features are shared", kShapesStoredData},
+          self.tracker.keyframe_min_tracked_ratio);
+    visit({"window.window_size", "keyframes kept in the window (besides the newest frame)",
+           kShapesStoredData},
+          self.window.window_size);
+    visit({"window.keyframe_parallax_px",
+           "px, mean parallax to the last keyframe that makes a keyframe", kShapesStoredData},
+          self.window.keyframe_parallax_px);
+    visit({"window.keyframe_min_shared_tracks",
+           "fewer tracks shared with the last keyframe make a keyframe", kShapesStoredData},
+          self.window.keyframe_min_shared_tracks);
+    visit(
+        {"window.max_keyframe_interval_s", "s, longest time between keyframes", kShapesStoredData},
+        self.window.max_keyframe_interval_s);
+    visit({"window.pixel_sigma_px", "px, standard deviation of a feature position",
+           kShapesStoredData},
+          self.window.pixel_sigma_px);
+    visit({"window.cauchy_loss_scale", "cauchy loss scale on the whitened reprojection residual",
+           kShapesStoredData},
+          self.window.cauchy_loss_scale);
+    visit({"window.min_triangulation_angle_deg", "deg, ray angle needed to triangulate a landmark",
+           kShapesStoredData},
+          self.window.min_triangulation_angle_deg);
+    visit({"window.min_depth_m", "m, nearest accepted landmark", kShapesStoredData},
+          self.window.min_depth_m);
+    visit({"window.max_depth_m", "m, farthest accepted landmark", kShapesStoredData},
+          self.window.max_depth_m);
+    visit({"window.max_reprojection_error_px", "px, landmarks with a larger error are dropped",
+           kShapesStoredData},
+          self.window.max_reprojection_error_px);
+    visit({"window.max_landmarks",
+           "most landmarks in one optimisation (the longest-observed first)", kShapesStoredData},
+          self.window.max_landmarks);
+    visit({"window.max_num_iterations", "ceres iterations per frame", kShapesStoredData},
+          self.window.max_num_iterations);
+    visit({"window.num_threads", "threads of the Ceres solver", kRunOnly}, self.window.num_threads);
+    visit({"window.min_tracked_landmarks", "fewer landmarks seen by the newest frame: kImuOnly",
+           kShapesStoredData},
+          self.window.min_tracked_landmarks);
+    visit({"window.max_imu_only_s", "s, kImuOnly for longer than this: kLost", kShapesStoredData},
+          self.window.max_imu_only_s);
+    visit({"window.max_speed_mps", "m/s, plausibility limit of the speed", kShapesStoredData},
+          self.window.max_speed_mps);
+    visit({"window.max_gyro_bias", "rad/s, plausibility limit of the gyro bias", kShapesStoredData},
+          self.window.max_gyro_bias);
+    visit(
+        {"window.max_accel_bias", "m/s^2, plausibility limit of the accel bias", kShapesStoredData},
+        self.window.max_accel_bias);
+    visit({"window.max_position_correction_m", "m, plausibility limit of a position correction",
+           kShapesStoredData},
+          self.window.max_position_correction_m);
+    visit({"window.fallback_triangulation_angle_deg", "deg, ray angle used while landmarks are few",
+           kShapesStoredData},
+          self.window.fallback_triangulation_angle_deg);
+    visit({"window.fallback_target_landmarks", "landmarks below which the fallback angle is used",
+           kShapesStoredData},
+          self.window.fallback_target_landmarks);
+    visit({"window.compute_covariance", "the newest pose's marginal covariance", kShapesStoredData},
+          self.window.compute_covariance);
+    visit({"window.preintegration.gyro_bias_repropagation_threshold",
+           "rad/s, gyro bias change that re-propagates", kShapesStoredData},
+          self.window.preintegration.gyro_bias_repropagation_threshold);
+    visit({"window.preintegration.accel_bias_repropagation_threshold",
+           "m/s^2, accel bias change that re-propagates", kShapesStoredData},
+          self.window.preintegration.accel_bias_repropagation_threshold);
+    visit({"static_init.window_s", "s, length of one detection window", kShapesStoredData},
+          self.static_init.window_s);
+    visit({"static_init.step_s", "s, shift between consecutive windows", kShapesStoredData},
+          self.static_init.step_s);
+    visit({"static_init.smoothing_s", "s, readings are averaged over blocks of this length",
+           kShapesStoredData},
+          self.static_init.smoothing_s);
+    visit({"static_init.max_accel_stddev", "m/s^2, largest spread of the block-mean accel vectors",
+           kShapesStoredData},
+          self.static_init.max_accel_stddev);
+    visit({"static_init.max_gyro_stddev", "rad/s, the same for the gyro", kShapesStoredData},
+          self.static_init.max_gyro_stddev);
+    visit({"static_init.max_gyro_norm", "rad/s, largest norm of a window's mean gyro reading",
+           kShapesStoredData},
+          self.static_init.max_gyro_norm);
+    visit({"static_init.max_gravity_norm_error",
+           "m/s^2, largest | |mean accel| - gravity | of a window", kShapesStoredData},
+          self.static_init.max_gravity_norm_error);
+    visit({"static_init.gravity_magnitude", "m/s^2, gravity magnitude", kShapesStoredData},
+          self.static_init.gravity_magnitude);
+    visit({"static_init.motion_margin_s", "s, dropped from the end of a static interval",
+           kShapesStoredData},
+          self.static_init.motion_margin_s);
+    visit(
+        {"static_init.min_static_s",
+         "s, shortest static interval accepted once motion_margin_s is dropped", kShapesStoredData},
+        self.static_init.min_static_s);
+    visit({"static_init.lookback_s", "s, IMU readings searched before the first image",
+           kShapesStoredData},
+          self.static_init.lookback_s);
+    visit({"static_init.max_propagation_s", "s, a static interval ending longer before is not used",
+           kShapesStoredData},
+          self.static_init.max_propagation_s);
+    visit({"static_init.estimate_accel_bias_along_gravity",
+           "estimate the accel bias along gravity (true) or leave it zero", kShapesStoredData},
+          self.static_init.estimate_accel_bias_along_gravity);
+    visit({"vi_init.window_size", "keyframes used (the last ones)", kShapesStoredData},
+          self.vi_init.window_size);
+    visit({"vi_init.min_num_frames", "fewest keyframes needed", kShapesStoredData},
+          self.vi_init.min_num_frames);
+    visit({"vi_init.focal_length_px", "px, converts the pixel thresholds to normalised coordinates",
+           kShapesStoredData},
+          self.vi_init.focal_length_px);
+    visit({"vi_init.min_parallax_px", "px, mean displacement of the reference pair",
+           kShapesStoredData},
+          self.vi_init.min_parallax_px);
+    visit({"vi_init.min_triangulation_angle_deg",
+           "deg, median triangulation angle of the reference pair", kShapesStoredData},
+          self.vi_init.min_triangulation_angle_deg);
+    visit({"vi_init.min_pair_correspondences", "fewest correspondences of the reference pair",
+           kShapesStoredData},
+          self.vi_init.min_pair_correspondences);
+    visit({"vi_init.essential_max_error_px",
+           "px, RANSAC inlier threshold (Sampson distance) of the essential matrix",
+           kShapesStoredData},
+          self.vi_init.essential_max_error_px);
+    visit({"vi_init.max_reprojection_error_px",
+           "px, observations beyond this after the BA are dropped", kShapesStoredData},
+          self.vi_init.max_reprojection_error_px);
+    visit({"vi_init.min_landmark_triangulation_angle_deg",
+           "deg, ray angle needed to triangulate a landmark", kShapesStoredData},
+          self.vi_init.min_landmark_triangulation_angle_deg);
+    visit({"vi_init.min_pnp_correspondences", "fewest landmarks for a keyframe's PnP",
+           kShapesStoredData},
+          self.vi_init.min_pnp_correspondences);
+    visit({"vi_init.max_ba_iterations", "bundle adjustment iterations (each pass)",
+           kShapesStoredData},
+          self.vi_init.max_ba_iterations);
+    visit({"vi_init.min_accel_stddev", "m/s^2, smallest spread of the specific force (excitation)",
+           kShapesStoredData},
+          self.vi_init.min_accel_stddev);
+    visit({"vi_init.max_gravity_norm_error",
+           "m/s^2, largest error of the linear alignment's gravity", kShapesStoredData},
+          self.vi_init.max_gravity_norm_error);
+    visit({"vi_init.gravity_magnitude", "m/s^2, gravity magnitude imposed by the refinement",
+           kShapesStoredData},
+          self.vi_init.gravity_magnitude);
+    visit({"vi_init.gravity_refinement_iterations",
+           "iterations of the gravity refinement on the sphere", kShapesStoredData},
+          self.vi_init.gravity_refinement_iterations);
+    visit({"vi_init.min_baseline_m", "m, shortest metric baseline of the reference pair",
+           kShapesStoredData},
+          self.vi_init.min_baseline_m);
+    visit({"vi_init.max_baseline_m", "m, longest metric baseline of the reference pair",
+           kShapesStoredData},
+          self.vi_init.max_baseline_m);
+    visit({"vi_init.seed", "seed of the RANSAC sampler", kShapesStoredData}, self.vi_init.seed);
+    visit({"time_offset.estimate",
+           "estimate the camera-IMU time offset; false keeps the calibration's", kShapesStoredData},
+          self.time_offset.estimate);
+    visit({"time_offset.max_offset_s",
+           "s, candidates lie within +- this of the calibration's offset", kShapesStoredData},
+          self.time_offset.max_offset_s);
+    visit({"time_offset.coarse_step_s", "s, step of the coarse grid", kShapesStoredData},
+          self.time_offset.coarse_step_s);
+    visit({"time_offset.fine_step_s", "s, step of the fine grid", kShapesStoredData},
+          self.time_offset.fine_step_s);
+    visit({"time_offset.min_tracks_per_pair", "fewest corners tracked in both frames of a pair",
+           kShapesStoredData},
+          self.time_offset.min_tracks_per_pair);
+    visit({"time_offset.min_total_rotation_deg", "deg, gyro rotation needed before estimating",
+           kShapesStoredData},
+          self.time_offset.min_total_rotation_deg);
+    visit({"time_offset.max_wait_s", "s, longest wait for that rotation", kShapesStoredData},
+          self.time_offset.max_wait_s);
+    visit({"time_offset.min_cost_reduction", "relative cost reduction needed to replace the offset",
+           kShapesStoredData},
+          self.time_offset.min_cost_reduction);
+    visit({"imu_noise.enabled", "check the IMU noise figures; false uses them as they are",
+           kShapesStoredData},
+          self.imu_noise.enabled);
+    visit({"imu_noise.min_ratio", "smallest ratio of a file's noise density to the measured one",
+           kShapesStoredData},
+          self.imu_noise.min_ratio);
+    visit({"imu_noise.max_ratio", "largest ratio of a file's noise density to the measured one",
+           kShapesStoredData},
+          self.imu_noise.max_ratio);
+    visit(
+        {"imu_noise.min_static_s", "s, shortest static interval to measure on", kShapesStoredData},
+        self.imu_noise.min_static_s);
+    visit({"use_static_init", "try the static start first", kShapesStoredData},
+          self.use_static_init);
+    VisitSigmas("static_start_sigmas", self.static_start_sigmas, visit);
+    VisitSigmas("restart_sigmas", self.restart_sigmas, visit);
+    visit({"gyro_rotation_prior", "feed the tracker a gyro rotation prior", kShapesStoredData},
+          self.gyro_rotation_prior);
+    visit({"max_frames", "process only the first max_frames images (0: all)", kShapesStoredData},
+          self.max_frames);
+    visit({"show_progress", "progress bar over the frames", kRunOnly}, self.show_progress);
+  }
+  template <class Sigmas, class Visitor>
+  static void VisitSigmas(const std::string& prefix, Sigmas& sigmas, Visitor& visit) {
+    visit({prefix + ".position_m", "m, prior sigma of the position", kShapesStoredData},
+          sigmas.position_m);
+    visit({prefix + ".yaw_rad", "rad, prior sigma of the yaw", kShapesStoredData}, sigmas.yaw_rad);
+    visit({prefix + ".roll_pitch_rad", "rad, prior sigma of roll and pitch", kShapesStoredData},
+          sigmas.roll_pitch_rad);
+    visit({prefix + ".velocity_mps", "m/s, prior sigma of the velocity", kShapesStoredData},
+          sigmas.velocity_mps);
+    visit({prefix + ".gyro_bias", "rad/s, prior sigma of the gyro bias", kShapesStoredData},
+          sigmas.gyro_bias);
+    visit({prefix + ".accel_bias", "m/s^2, prior sigma of the accel bias", kShapesStoredData},
+          sigmas.accel_bias);
+  }
 };
 
 // The estimate for one input frame.

@@ -1,0 +1,115 @@
+#include "viosfm/pipeline/pipeline_options.h"
+
+#include <gtest/gtest.h>
+
+#include <map>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "viosfm/util/errors.h"
+#include "viosfm/util/file_util.h"
+#include "viosfm/util/option_fields.h"
+#include "viosfm/util/testing.h"
+
+namespace viosfm {
+namespace {
+
+// "key\tvalue\t1|0" rows of options.json for each configuration below,
+// frozen from the hand-written lists the descriptions replaced.
+std::map<std::string, std::vector<std::string>> FrozenRows() {
+  std::map<std::string, std::vector<std::string>> rows;
+  std::string section;
+  std::istringstream text(ReadTextFile(testing::SourcePath("pipeline/testdata/options_keys.txt")));
+  std::string line;
+  while (std::getline(text, line)) {
+    if (line.empty() || line.rfind("# ", 0) == 0) continue;
+    if (line.rfind("## ", 0) == 0) {
+      section = line.substr(3);
+    } else {
+      rows[section].push_back(line);
+    }
+  }
+  return rows;
+}
+
+std::vector<std::string> Rows(const PipelineOptions& options) {
+  std::set<std::string> stored;
+  for (const auto& [key, value] : options.StoredDataKeyValues()) stored.insert(key);
+  std::vector<std::string> rows;
+  for (const auto& [key, value] : options.ToKeyValues()) {
+    rows.push_back(key + "\t" + value + "\t" + (stored.count(key) ? "1" : "0"));
+  }
+  return rows;
+}
+
+TEST(PipelineOptions, KeysValuesAndStoredDataAsFrozen) {
+  const auto frozen = FrozenRows();
+  PipelineOptions base;
+  base.dataset = "/data/MH_01";
+  base.output_folder = "/out";
+  std::map<std::string, PipelineOptions> configurations;
+  configurations["default"] = base;
+  PipelineOptions bag = base;
+  bag.dataset = "/data/x.bag";
+  bag.vio_trajectory = "/data/vio.tum";
+  configurations["bag_file"] = bag;
+  PipelineOptions source = base;
+  source.vio_source = [](const Sequence&) { return Trajectory{}; };
+  configurations["source"] = source;
+  PipelineOptions no_drift = base;
+  no_drift.verification.band_follows_drift = false;
+  configurations["nodrift"] = no_drift;
+  PipelineOptions no_prior = base;
+  no_prior.verification.use_vio_prior = false;
+  configurations["noprior"] = no_prior;
+  ASSERT_EQ(frozen.size(), configurations.size());
+  for (const auto& [name, options] : configurations) {
+    ASSERT_EQ(frozen.count(name), 1u) << name;
+    EXPECT_EQ(Rows(options), frozen.at(name)) << name;
+  }
+}
+
+TEST(PipelineOptions, EveryKeyCanBeSetFromItsText) {
+  PipelineOptions options;
+  options.dataset = "/data/MH_01";
+  options.output_folder = "/out";
+  SetOptionFromText(options, "mapper.ba.prior_weighting", "paper");
+  SetOptionFromText(options, "verification.pairs.num_temporal_neighbors", "12");
+  SetOptionFromText(options, "own_vio.tracker.equalization", "always");
+  SetOptionFromText(options, "vio.max_gap_ns", "0");
+  SetOptionFromText(options, "mapper.bridge_spans", "5");
+  EXPECT_EQ(options.mapper.ba.prior_weighting, PriorWeighting::kPaper);
+  EXPECT_EQ(options.verification.pairs.num_temporal_neighbors, 12);
+  EXPECT_EQ(options.own_vio.tracker.equalization, ContrastEqualization::kAlways);
+  EXPECT_EQ(options.vio_max_gap_ns, 0);
+  EXPECT_EQ(options.mapper.bridge_spans, std::vector<int>{5});
+  // Every written text parses back to the same value (except what only code
+  // can give).
+  PipelineOptions copy = options;
+  copy.mapper = BatchedMapperOptions();
+  for (const auto& [key, value] : OptionsToKeyValues(options)) {
+    if (key == "vio.source" || key == "rosbag.rig") continue;
+    SetOptionFromText(copy, key, value);
+  }
+  EXPECT_EQ(OptionsToKeyValues(copy), OptionsToKeyValues(options));
+  EXPECT_THROW(SetOptionFromText(options, "vio.source", "function"), InputError);
+  EXPECT_THROW(SetOptionFromText(options, "vio.frame", "world"), InputError);
+  EXPECT_THROW(SetOptionFromText(options, "no.such_option", "1"), InputError);
+}
+
+TEST(PipelineOptions, DescriptionsCoverEveryKeyWithAHelp) {
+  const std::vector<OptionDescription> descriptions = OptionDescriptions<PipelineOptions>();
+  std::set<std::string> keys;
+  for (const OptionDescription& description : descriptions) {
+    EXPECT_TRUE(keys.insert(description.key).second) << "twice: " << description.key;
+    EXPECT_FALSE(description.help.empty()) << description.key;
+  }
+  PipelineOptions bag;
+  bag.dataset = "x.bag";
+  for (const auto& [key, value] : bag.ToKeyValues()) EXPECT_EQ(keys.count(key), 1u) << key;
+}
+
+}  // namespace
+}  // namespace viosfm
