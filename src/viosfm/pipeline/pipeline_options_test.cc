@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
+#include <fstream>
 #include <map>
 #include <set>
 #include <sstream>
@@ -65,6 +67,13 @@ TEST(PipelineOptions, KeysValuesAndStoredDataAsFrozen) {
   no_prior.verification.use_vio_prior = false;
   configurations["noprior"] = no_prior;
   ASSERT_EQ(frozen.size(), configurations.size());
+  if (const char* dump = std::getenv("VIOSFM_DUMP_OPTION_ROWS")) {
+    std::ofstream out(dump);
+    for (const auto& [name, options] : configurations) {
+      out << "## " << name << "\n";
+      for (const std::string& row : Rows(options)) out << row << "\n";
+    }
+  }
   for (const auto& [name, options] : configurations) {
     ASSERT_EQ(frozen.count(name), 1u) << name;
     EXPECT_EQ(Rows(options), frozen.at(name)) << name;

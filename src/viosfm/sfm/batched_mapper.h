@@ -148,6 +148,7 @@ struct BatchedMapperOptions {
     visit({"final_global_ba", "a global bundle adjustment at the end", kRunOnly},
           self.final_global_ba);
     visit({"num_threads", "worker threads", kRunOnly}, self.num_threads);
+    visit({"show_progress", "progress bars", kRunOnly}, self.show_progress);
   }
 };
 

@@ -64,14 +64,23 @@ struct ImuScaleOptions {
   std::string Validate() const;  // empty if valid, else names the bad field
   bool Check() const { return Validate().empty(); }
 
-  // Only these two are written to options.json (the others keep their
-  // defaults there).
   template <class Self, class Visitor>
   static void VisitFields(Self& self, Visitor&& visit) {
     visit({"bias_window_s", "s, one accelerometer and gyro bias per window", kRunOnly},
           self.bias_window_s);
     visit({"max_scale_sigma", "usable when the scale's relative sigma is at most this", kRunOnly},
           self.max_scale_sigma);
+    visit({"position_sigma_m", "m, noise of a registered frame's position", kRunOnly},
+          self.position_sigma_m);
+    visit({"rotation_sigma_rad", "rad, noise of a registered frame's rotation", kRunOnly},
+          self.rotation_sigma_rad);
+    visit({"gravity_iterations", "refinements of the gravity direction", kRunOnly},
+          self.gravity_iterations);
+    visit({"max_scale_factor", "usable when the scale is within [1/this, this]", kRunOnly},
+          self.max_scale_factor);
+    visit({"max_residual_ratio",
+           "usable when the fit's residual is at most this times the expected", kRunOnly},
+          self.max_residual_ratio);
   }
 };
 
