@@ -33,9 +33,9 @@ constexpr const char* kStageNames[] = {"read_dataset", "vio",          "select_f
 constexpr int kNumStages = static_cast<int>(std::size(kStageNames));
 
 // Pixels of decoded frames held between the VIO and feature extraction
-// (io/frame_cache.h): 768 MiB, about 2100 frames of 752 x 480; frames past it
+// (io/frame_cache.h): 512 MiB, about 1480 frames of 752 x 480; frames past it
 // are decoded again when their features are extracted.
-constexpr size_t kFrameCacheBytes = size_t{768} << 20;
+constexpr size_t kFrameCacheBytes = size_t{512} << 20;
 
 std::string UtcNow() {
   const std::time_t now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
