@@ -143,7 +143,8 @@ struct BundleAdjustmentOptions {
     visit({"prior_translation_sigma_m", "m, fixed prior sigma (paper weighting)", kRunOnly},
           self.prior_translation_sigma_m);
     visit({"prior_weighting", "covariance or paper", kRunOnly}, self.prior_weighting);
-    visit({"prior_loss_scale", "sigmas, scale of the priors' Tukey loss", kRunOnly},
+    visit({"prior_loss_scale", "Tukey loss on the whitened priors, in standard deviations; 0: none",
+           kRunOnly},
           self.prior_loss_scale);
     visit({"max_num_iterations", "Levenberg-Marquardt iterations", kRunOnly},
           self.max_num_iterations);

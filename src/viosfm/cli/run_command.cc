@@ -1,9 +1,12 @@
 // `viosfm run`: the whole VIO-aided reconstruction of a dataset into an
 // output folder (see pipeline/pipeline.h).
+#include <algorithm>
+#include <cctype>
 #include <filesystem>
 #include <iostream>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "viosfm/cli/bag_options.h"
@@ -103,6 +106,54 @@ void RunRun(RunArguments args) {
   std::cout << summary.ToString() << "\n";
 }
 
+// The flags that set one option each. Their help and default come from the
+// option's own description (util/option_fields.h), written once there.
+constexpr std::pair<const char*, const char*> kOptionFlags[] = {
+    {"--rate", "frame_selection.target_rate_hz"},
+    {"--max-features", "sift.max_num_features"},
+    {"--n1", "verification.pairs.num_temporal_neighbors"},
+    {"--n2", "verification.pairs.num_retrieval_neighbors"},
+    {"--batch-size", "mapper.batch_size"},
+    {"--ba-window", "mapper.ba_window_batches"},
+    {"--batch-ba-iterations", "mapper.batch_ba_max_num_iterations"},
+    {"--ba-sparse-max-images", "mapper.ba.max_images_for_sparse_schur"},
+    {"--bridge-spans", "mapper.bridge_spans"},
+    {"--bridge-max-matches", "mapper.bridge_max_matches"},
+    {"--prior-loss-scale", "mapper.ba.prior_loss_scale"},
+    {"--verification-batch", "verification.batch_size"},
+    {"--threads", "num_threads"},
+    {"--seed", "seed"},
+};
+
+// Adds kOptionFlags to `command`, each setting its option of `options`.
+void AddOptionFlags(CLI::App* command, PipelineOptions* options) {
+  const std::vector<OptionDescription> descriptions = OptionDescriptions<PipelineOptions>();
+  for (const auto& [flag, key] : kOptionFlags) {
+    const auto description =
+        std::find_if(descriptions.begin(), descriptions.end(),
+                     [key = key](const OptionDescription& d) { return d.key == key; });
+    VIOSFM_CHECK(description != descriptions.end()) << "no option " << key << " for " << flag;
+    std::string help = description->help;
+    if (!help.empty())
+      help[0] = static_cast<char>(std::toupper(static_cast<unsigned char>(help[0])));
+    command
+        ->add_option(
+            flag,
+            [options, flag = std::string(flag),
+             key = std::string(key)](const CLI::results_t& results) {
+              try {
+                SetOptionFromText(*options, key, results.front());
+              } catch (const InputError& error) {
+                throw InputError(flag + ": " + error.what());
+              }
+              return true;
+            },
+            help + " (option " + key + ")")
+        ->default_str(description->default_text)
+        ->expected(1);
+  }
+}
+
 }  // namespace
 
 void RegisterRun(CLI::App& app) {
@@ -120,6 +171,7 @@ void RegisterRun(CLI::App& app) {
       ->required();
   command->add_option("--out", args->out, "Output folder (created if missing)")->required();
   AddCalibrationOptions(command, &args->options.calibration);
+  AddOptionFlags(command, &args->options);
   command->add_option("--vio-trajectory", args->vio_trajectory,
                       "VIO trajectory (TUM by default), world_from_body unless --vio-frame cam; "
                       "without it viosfm's own VIO runs on the images and IMU");
@@ -131,53 +183,8 @@ void RegisterRun(CLI::App& app) {
       ->add_option("--max-vio-time-difference", args->max_vio_time_difference_s,
                    "Largest gap between an image stamp and its VIO pose (s)")
       ->capture_default_str();
-  command
-      ->add_option("--rate", args->options.frame_selection.target_rate_hz,
-                   "Downsample to this frame rate (Hz); 0 keeps every frame")
-      ->capture_default_str();
   command->add_flag("--no-trim-static", args->no_trim_static,
                     "Keep the static frames at the start and the end");
-  command
-      ->add_option("--max-features", args->options.sift.max_num_features,
-                   "SIFT features kept per image")
-      ->capture_default_str();
-  command
-      ->add_option("--n1", args->options.verification.pairs.num_temporal_neighbors,
-                   "Temporal neighbours per image")
-      ->capture_default_str();
-  command
-      ->add_option("--n2", args->options.verification.pairs.num_retrieval_neighbors,
-                   "Retrieval neighbours per image")
-      ->capture_default_str();
-  command
-      ->add_option("--batch-size", args->options.mapper.batch_size,
-                   "Frames registered per batch (k)")
-      ->capture_default_str();
-  command
-      ->add_option("--ba-window", args->options.mapper.ba_window_batches,
-                   "Bundle adjust only the last N batches after each batch (0: all images, "
-                   "the paper's; the final BA always refines all)")
-      ->capture_default_str();
-  command
-      ->add_option("--batch-ba-iterations", args->options.mapper.batch_ba_max_num_iterations,
-                   "Iterations of each per-batch bundle adjustment (0: as many as the final "
-                   "one)")
-      ->capture_default_str();
-  command
-      ->add_option("--ba-sparse-max-images", args->options.mapper.ba.max_images_for_sparse_schur,
-                   "Above this many images bundle adjustment solves with ITERATIVE_SCHUR "
-                   "instead of SPARSE_SCHUR")
-      ->capture_default_str();
-  command
-      ->add_option("--bridge-spans", args->options.mapper.bridge_spans,
-                   "Rotation-only VIO priors between frames this many apart across poorly "
-                   "matched stretches (comma-separated)")
-      ->delimiter(',')
-      ->capture_default_str();
-  command
-      ->add_option("--bridge-max-matches", args->options.mapper.bridge_max_matches,
-                   "A consecutive pair with fewer verified matches is poorly matched")
-      ->capture_default_str();
   command->add_flag("--no-bridging", args->no_bridging,
                     "Relative-pose priors between consecutive frames only (the paper's)");
   command->add_flag("--no-vio-prior", args->no_vio_prior,
@@ -190,10 +197,6 @@ void RegisterRun(CLI::App& app) {
                    "under a robust loss (covariance) or by the paper's alpha exp(-beta c) with "
                    "fixed sigmas and rotation-only bridging priors (paper: the ablation; the "
                    "verification is the same, see --fixed-band)")
-      ->capture_default_str();
-  command
-      ->add_option("--prior-loss-scale", args->options.mapper.ba.prior_loss_scale,
-                   "Tukey loss on the whitened priors, in standard deviations (0: none)")
       ->capture_default_str();
   command->add_flag("--no-verify-registration", args->no_verify_registration,
                     "Place frames by the VIO alone (the paper's), without checking them "
@@ -210,11 +213,6 @@ void RegisterRun(CLI::App& app) {
                    "at time gaps longer than this, s (0: never)")
       ->capture_default_str();
   AddVioUncertaintyOptions(command, &args->vio_uncertainty);
-  command
-      ->add_option("--verification-batch", args->options.verification.batch_size,
-                   "Pairs matched and verified between two writes to the database (an "
-                   "interrupted run keeps every finished batch; the results do not depend on it)")
-      ->capture_default_str();
   command->add_flag("--guided-matching", args->options.verification.guided_matching,
                     "Match inside the VIO epipolar band instead of by brute force");
   command->add_option("--camera-yaml", args->bag.camera_yaml,
@@ -222,10 +220,6 @@ void RegisterRun(CLI::App& app) {
   AddBagOptions(command, &args->bag, /*add_camera_yaml=*/false);
   command->add_option("--timestamps", args->timestamps,
                       "Image folder: file of 'filename timestamp' lines");
-  command->add_option("--threads", args->options.num_threads, "Worker threads of every stage")
-      ->capture_default_str();
-  command->add_option("--seed", args->options.seed, "Seed of every random choice")
-      ->capture_default_str();
   command->add_flag("--overwrite", args->options.overwrite,
                     "Remove the stored database and outputs of an earlier run in --out and start "
                     "afresh (without it a re-run reuses them, and refuses a folder whose "

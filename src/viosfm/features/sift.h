@@ -63,7 +63,7 @@ struct SiftOptions {
 
   template <class Self, class Visitor>
   static void VisitFields(Self& self, Visitor&& visit) {
-    visit({"max_num_features", "keypoints kept per image, the strongest", kShapesStoredData},
+    visit({"max_num_features", "SIFT keypoints kept per image, the strongest", kShapesStoredData},
           self.max_num_features);
     visit({"root_sift", "RootSIFT (true) or L2-normalised SIFT descriptors", kShapesStoredData},
           self.root_sift);

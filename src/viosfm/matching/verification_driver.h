@@ -206,7 +206,10 @@ struct VerificationOptions {
           self.max_pose_time_difference_ns);
     visit({"num_threads", "worker threads over pairs", kRunOnly}, self.num_threads);
     visit({"seed", "seeds RANSAC and the vocabulary training", kShapesStoredData}, self.seed);
-    visit({"batch_size", "pairs matched and verified per batch (memory)", kRunOnly},
+    visit({"batch_size",
+           "pairs matched and verified between two writes to the database (memory); results do not "
+           "depend on it",
+           kRunOnly},
           self.batch_size);
     visit({"show_progress", "progress bars", kRunOnly}, self.show_progress);
   }

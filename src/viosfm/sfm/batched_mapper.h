@@ -127,14 +127,18 @@ struct BatchedMapperOptions {
   template <class Self, class Visitor>
   static void VisitFields(Self& self, Visitor&& visit) {
     visit({"batch_size", "frames registered per batch (the paper's k)", kRunOnly}, self.batch_size);
-    visit({"ba_window_batches", "batches in the local BA window; 0: all", kRunOnly},
+    visit({"ba_window_batches",
+           "bundle adjust only the last N batches after each batch; 0: all (the paper's); the "
+           "final BA refines all",
+           kRunOnly},
           self.ba_window_batches);
-    visit({"batch_ba_max_num_iterations", "iterations of each batch's BA", kRunOnly},
+    visit({"batch_ba_max_num_iterations",
+           "iterations of each per-batch bundle adjustment; 0: as many as the final one", kRunOnly},
           self.batch_ba_max_num_iterations);
     visit({"bridge_spans", "frame spans of the bridge pairs, comma-separated", kRunOnly},
           self.bridge_spans);
-    visit({"bridge_max_matches", "consecutive pairs with fewer verified matches get bridge priors",
-           kRunOnly},
+    visit({"bridge_max_matches",
+           "a consecutive pair with fewer verified matches is poorly matched (bridged)", kRunOnly},
           self.bridge_max_matches);
     VisitOptionGroup({"tracks", "", kRunOnly}, self.tracks, visit);
     VisitOptionGroup({"triangulation", "", kRunOnly}, self.triangulation, visit);
