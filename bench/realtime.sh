@@ -1,0 +1,100 @@
+#!/usr/bin/env bash
+# Real time: how long `viosfm run` takes to reconstruct a recording, stage
+# by stage, against the recording's own duration.
+#
+# Usage:
+#   bench/realtime.sh [--out DIR] [--scenarios "room two_floors corridor"]
+#                     [--duration S] [--rate HZ] [--threads "2 1"]
+#                     [--build DIR] [-- EXTRA RUN ARGS...]
+#
+# For every scenario it simulates DURATION seconds at RATE Hz (752x480, IMU
+# at 200 Hz, ground truth; default 100 s at 10 Hz, 1000 images), then runs
+# `viosfm run` on it from the images and the IMU alone (viosfm's own VIO)
+# with its defaults (or with EXTRA RUN ARGS, e.g. `-- --n1 10 --n2 5
+# --max-features 1000`), once per thread count, each into a fresh folder,
+# under /usr/bin/time. It writes DIR/realtime.md: per run the wall clock of
+# every stage (summary.json "stages") and in total, the ratio of the total
+# to the recording's duration (1.0 is real time), the registered frames,
+# the Sim(3) and SE(3) ATE, the image decodes and the peak memory.
+#
+# The figures are measured, never asserted: a shared machine is noisy, so
+# repeat a row before trusting a small difference.
+set -euo pipefail
+
+out=out/realtime
+scenarios="room two_floors corridor"
+duration=100
+rate=10
+threads="2 1"
+build=build
+extra=()
+while [[ $# -gt 0 ]]; do
+  case "$1" in
+    --out) out=$2; shift 2 ;;
+    --scenarios) scenarios=$2; shift 2 ;;
+    --duration) duration=$2; shift 2 ;;
+    --rate) rate=$2; shift 2 ;;
+    --threads) threads=$2; shift 2 ;;
+    --build) build=$2; shift 2 ;;
+    --) shift; extra=("$@"); break ;;
+    *) echo "bench/realtime.sh: unknown argument '$1' (see the top of the script)" >&2; exit 2 ;;
+  esac
+done
+viosfm="$build/src/viosfm/cli/viosfm"
+if [[ ! -x "$viosfm" ]]; then
+  echo "bench/realtime.sh: $viosfm not found: build first (make build)" >&2
+  exit 2
+fi
+mkdir -p "$out"
+table="$out/realtime.md"
+{
+  echo "# viosfm run against the recording's duration"
+  echo
+  echo "$(date -u +%Y-%m-%d), $(nproc) cores; ${duration} s at ${rate} Hz per scenario;" \
+       "run arguments: ${extra[*]:-(defaults)}"
+  echo
+  echo "| scenario | threads | vio s | features s | verification s | mapper s | other s |" \
+       "total s | x real time | registered | ATE Sim(3) mm | ATE SE(3) mm | decodes | peak MiB |"
+  echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+} > "$table"
+
+for scenario in $scenarios; do
+  sequence="$out/$scenario/sequence"
+  mkdir -p "$out/$scenario"
+  if [[ ! -f "$sequence/simulation.yaml" ]]; then
+    "$viosfm" simulate --scenario "$scenario" --duration "$duration" --rate "$rate" --seed 0 \
+      --out "$sequence" > "$out/$scenario/simulate.log" 2>&1
+  fi
+  for t in $threads; do
+    run="$out/$scenario/run_t$t"
+    rm -rf "$run"
+    /usr/bin/time -v -o "$out/$scenario/time_t$t.txt" \
+      "$viosfm" run "$sequence" --out "$run" --threads "$t" --no-progress "${extra[@]}" \
+      > "$out/$scenario/run_t$t.log" 2>&1 || {
+        echo "bench/realtime.sh: $scenario with $t thread(s) failed: see $out/$scenario/run_t$t.log" >&2
+        continue
+      }
+    python3 - "$run/summary.json" "$out/$scenario/time_t$t.txt" "$scenario" "$t" "$duration" \
+      >> "$table" <<'EOF'
+import json, re, sys
+summary = json.load(open(sys.argv[1]))
+time_text = open(sys.argv[2]).read()
+scenario, threads, duration = sys.argv[3], sys.argv[4], float(sys.argv[5])
+stages = {s["name"]: s["seconds"] for s in summary["stages"]}
+main = ["vio", "features", "verification", "mapper"]
+other = sum(v for k, v in stages.items() if k not in main)
+total = summary["total_seconds"]
+peak = int(re.search(r"Maximum resident set size \(kbytes\): (\d+)", time_text).group(1)) / 1024
+ev = summary.get("eval", {}).get("metric", {})
+def mm(key):
+    return "%.2f" % (1000 * ev[key]) if key in ev else "n/a"
+print("| %s | %s | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.2f | %d of %d | %s | %s | %d | %.0f |" % (
+    scenario, threads, stages.get("vio", 0), stages.get("features", 0),
+    stages.get("verification", 0), stages.get("mapper", 0), other, total, total / duration,
+    summary["frames"]["registered"], summary["frames"]["selected"],
+    mm("ate_sim3_rmse_m"), mm("ate_se3_rmse_m"), summary.get("images", {}).get("decoded", 0), peak))
+EOF
+  done
+done
+echo "bench/realtime.sh: $table"
+cat "$table"
