@@ -132,6 +132,7 @@ std::string PipelineSummaryToJson(const PipelineSummary& s) {
                        {"points_total", batch.num_points_total},
                        {"mean_reprojection_error_px", batch.mean_reprojection_error_px},
                        {"seconds_ba", batch.seconds_ba},
+                       {"ba_observations", batch.num_ba_observations},
                        {"ba_iterations", batch.num_ba_iterations},
                        {"ba_solver", BaLinearSolverName(batch.ba_linear_solver)}});
   }

@@ -51,14 +51,18 @@ Image CopyImageWithoutPoints(const Image& image) {
 // Bundle adjustment of the poses of `free_images` and of the points they
 // observe. Every other image observing those points is held constant, and so
 // is `held_neighbour` (the image before the window, for its relative-pose
-// term, if valid) and `gauge_image` (if it is free). When `free_images` are
+// term, if valid) and `gauge_image` (if it is free). With max_held_views >
+// 0, each point keeps the observations of at most that many held images,
+// the latest (highest image ids, which follow time): they anchor the point
+// as well as all of them would, and the problem stops growing with the
+// number of older images that saw the point. When `free_images` are
 // all the registered images this is BundleAdjust with the gauge image held;
 // otherwise the sub-problem is solved on a copy and the result copied back.
 BundleAdjustmentSummary AdjustImages(Reconstruction* reconstruction,
                                      const std::vector<image_t>& free_images,
                                      image_t held_neighbour, image_t gauge_image,
                                      const std::vector<RelativePosePrior>& priors,
-                                     const BundleAdjustmentOptions& options) {
+                                     const BundleAdjustmentOptions& options, int max_held_views) {
   if (free_images.size() == reconstruction->NumRegImages()) {
     return BundleAdjust(reconstruction, priors, {gauge_image}, options);
   }
@@ -72,13 +76,27 @@ BundleAdjustmentSummary AdjustImages(Reconstruction* reconstruction,
       held_images.push_back(image_id);
     }
   };
+  // The track of each point in the sub-problem: every free observation, and
+  // the held ones max_held_views allows.
+  std::vector<std::vector<TrackElement>> tracks;
   for (const image_t image_id : free_images) {
     for (const Point2D& point2D : reconstruction->GetImage(image_id).points2D) {
       if (!point2D.HasPoint3D() || !point_seen.insert(point2D.point3D_id).second) continue;
       point_ids.push_back(point2D.point3D_id);
+      std::vector<TrackElement> track;
+      std::vector<TrackElement> held;
       for (const TrackElement& element : reconstruction->GetPoint3D(point2D.point3D_id).track) {
-        hold(element.image_id);
+        (free.count(element.image_id) > 0 ? track : held).push_back(element);
       }
+      if (max_held_views > 0 && held.size() > static_cast<size_t>(max_held_views)) {
+        std::sort(held.begin(), held.end(), [](const TrackElement& a, const TrackElement& b) {
+          return a.image_id != b.image_id ? a.image_id > b.image_id : a.point2D_idx < b.point2D_idx;
+        });
+        held.resize(static_cast<size_t>(max_held_views));
+      }
+      for (const TrackElement& element : held) hold(element.image_id);
+      track.insert(track.end(), held.begin(), held.end());
+      tracks.push_back(std::move(track));
     }
   }
   if (held_neighbour != kInvalidImageId) hold(held_neighbour);
@@ -93,8 +111,10 @@ BundleAdjustmentSummary AdjustImages(Reconstruction* reconstruction,
   for (const image_t image_id : held_images) {
     sub.AddImage(CopyImageWithoutPoints(reconstruction->GetImage(image_id)));
   }
-  for (const point3D_t point3D_id : point_ids) {
-    sub.AddPoint3DWithId(point3D_id, reconstruction->GetPoint3D(point3D_id));
+  for (size_t k = 0; k < point_ids.size(); ++k) {
+    Point3D point3D = reconstruction->GetPoint3D(point_ids[k]);
+    if (max_held_views > 0) point3D.track = std::move(tracks[k]);
+    sub.AddPoint3DWithId(point_ids[k], std::move(point3D));
   }
   std::vector<image_t> constant = held_images;
   if (free.count(gauge_image) > 0) constant.push_back(gauge_image);
@@ -146,6 +166,7 @@ std::string BatchedMapperOptions::Validate() const {
   if (std::string error = ba.Validate(); !error.empty()) return "ba." + error;
   if (std::string error = filter.Validate(); !error.empty()) return "filter." + error;
   if (ba_window_batches < 0) return "ba_window_batches must be >= 0";
+  if (ba_window_max_held_views < 0) return "ba_window_max_held_views must be >= 0";
   if (batch_ba_max_num_iterations < 0) return "batch_ba_max_num_iterations must be >= 0";
   for (const int span : bridge_spans) {
     if (span < 2) return "bridge_spans must be >= 2 frames each";
@@ -528,8 +549,9 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
       batch_ba_options.max_num_iterations = options.batch_ba_max_num_iterations;
     }
     batch_ba_options.linear_solver = solver_chooser.Next(free_images.size(), global);
-    ba_summary = AdjustImages(&reconstruction, free_images, held_neighbour, gauge_image,
-                              active_priors(), batch_ba_options);
+    ba_summary =
+        AdjustImages(&reconstruction, free_images, held_neighbour, gauge_image, active_priors(),
+                     batch_ba_options, global ? 0 : options.ba_window_max_held_views);
     solver_chooser.Record(ba_summary, free_images.size());
     if (!ba_summary.usable && ba_summary.termination != "nothing to adjust") {
       VIOSFM_LOG(WARNING) << "bundle adjustment: " << ba_summary.ToString();
@@ -582,6 +604,7 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
       stats.num_ba_iterations = ba_summary.num_iterations;
       stats.ba_linear_solver = ba_summary.linear_solver;
       stats.num_ba_free_images = static_cast<int>(registered.size() - window_begin);
+      stats.num_ba_observations = ba_summary.num_observations;
       if (global) summary.final_ba = ba_summary;
     }
 

@@ -77,6 +77,11 @@ struct BatchedMapperOptions {
   // only by older images are left out. The final global bundle adjustment
   // refines everything either way.
   int ba_window_batches = 0;
+  // With a window: each of the window's points keeps the observations of at
+  // most this many held (older) images in the per-batch adjustment, the
+  // latest ones; 0: all of them. They anchor the point; more of them only
+  // make the problem grow with the past. Default 0.
+  int ba_window_max_held_views = 0;
   // Levenberg-Marquardt iterations of each per-batch bundle adjustment, >= 1,
   // or 0 for ba.max_num_iterations; the final global bundle adjustment always
   // runs ba.max_num_iterations. Default 10. Every per-batch adjustment starts
@@ -132,6 +137,9 @@ struct BatchedMapperOptions {
            "final BA refines all",
            kRunOnly},
           self.ba_window_batches);
+    visit({"ba_window_max_held_views",
+           "with a window, held (older) images kept per point, the latest; 0: all", kRunOnly},
+          self.ba_window_max_held_views);
     visit({"batch_ba_max_num_iterations",
            "iterations of each per-batch bundle adjustment; 0: as many as the final one", kRunOnly},
           self.batch_ba_max_num_iterations);
@@ -169,8 +177,9 @@ struct MapperBatchStatistics {
   double seconds_triangulation = 0.0;
   double seconds_ba = 0.0;
   double seconds_filtering = 0.0;
-  int num_ba_free_images = 0;  // images whose pose the batch's BA refined
-  double seconds_total = 0.0;  // the whole batch
+  int num_ba_free_images = 0;   // images whose pose the batch's BA refined
+  int num_ba_observations = 0;  // observations in the batch's BA (free and held images)
+  double seconds_total = 0.0;   // the whole batch
 };
 
 // The verdict on one input frame.

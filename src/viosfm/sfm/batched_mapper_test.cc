@@ -391,6 +391,34 @@ TEST(BatchedMapperTest, WindowedBundleAdjustment) {
   EXPECT_EQ(NumMixedObservations(reconstruction, sequence), 0u);
 }
 
+// Capping the held views of the window's points keeps each per-batch
+// problem from growing with the past, and the result as accurate.
+TEST(BatchedMapperTest, WindowWithFewHeldViewsPerPoint) {
+  const SyntheticSequence sequence = MakeSyntheticSequence(SmallSequenceOptions(50, 5));
+  BatchedMapperOptions options = QuietOptions(10);
+  options.ba_window_batches = 2;
+  BatchedMapperSummary all_held;
+  RunBatchedMapper(sequence.input, options, &all_held);
+  options.ba_window_max_held_views = 2;
+  BatchedMapperSummary capped;
+  const Reconstruction reconstruction = RunBatchedMapper(sequence.input, options, &capped);
+  ASSERT_EQ(capped.num_registered, 50);
+  ASSERT_EQ(capped.batches.size(), 5u);
+  // Batches 2 and 3 adjust a window with older images behind it: fewer
+  // observations with the cap. The last one is the global adjustment.
+  for (const size_t b : {2u, 3u}) {
+    EXPECT_LT(capped.batches[b].num_ba_observations, all_held.batches[b].num_ba_observations)
+        << "batch " << b;
+  }
+  // The final adjustment is global either way: every image, every observation.
+  EXPECT_EQ(capped.batches[4].num_ba_free_images, 50);
+  EXPECT_EQ(capped.final_ba.num_observations, capped.batches[4].num_ba_observations);
+  const std::vector<Rigid3d> poses = RegisteredPoses(reconstruction, 50);
+  EXPECT_LT(CenterRmse(sequence.cams_from_world, poses), 0.005);
+  EXPECT_LT(capped.mean_reprojection_error_px, 0.7);
+  EXPECT_EQ(NumMixedObservations(reconstruction, sequence), 0u);
+}
+
 // Above max_images_for_sparse_schur the mapper measures both linear
 // solvers (first SPARSE_SCHUR, then ITERATIVE_SCHUR) and keeps the faster,
 // with the same result as either alone; a solver set in the options is used
@@ -637,6 +665,9 @@ TEST(BatchedMapperTest, BadInputRaisesInputError) {
   bad_options = options;
   bad_options.ba_window_batches = -1;
   ExpectInputError(sequence.input, bad_options, "ba_window_batches");
+  bad_options = options;
+  bad_options.ba_window_max_held_views = -1;
+  ExpectInputError(sequence.input, bad_options, "ba_window_max_held_views");
   bad_options = options;
   bad_options.filter.max_reprojection_error_px = 0.0;
   ExpectInputError(sequence.input, bad_options, "filter.");
