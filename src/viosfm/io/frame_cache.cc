@@ -1,7 +1,6 @@
 #include "viosfm/io/frame_cache.h"
 
 #include <algorithm>
-#include <set>
 
 #include "viosfm/io/image_io.h"
 
@@ -20,7 +19,7 @@ std::shared_ptr<const GreyImage> FrameCache::Read(const fs::path& path, bool kee
   auto image = std::make_shared<const GreyImage>(ReadGreyImage(path));
   std::lock_guard<std::mutex> lock(mutex_);
   ++counts_.decodes;
-  if (keep) {
+  if (keep && (!filtered_ || wanted_.count(path) > 0)) {
     const size_t bytes = image->pixels.size();
     if (held_bytes_ + bytes <= max_bytes_) {
       if (held_.emplace(path, image).second) held_bytes_ += bytes;
@@ -50,10 +49,12 @@ std::shared_ptr<const GreyImage> FrameCache::Take(const fs::path& path) {
 }
 
 void FrameCache::RetainOnly(const std::vector<fs::path>& paths) {
-  const std::set<fs::path> wanted(paths.begin(), paths.end());
+  std::set<fs::path> wanted(paths.begin(), paths.end());
   std::lock_guard<std::mutex> lock(mutex_);
+  filtered_ = true;
+  wanted_ = std::move(wanted);
   for (auto it = held_.begin(); it != held_.end();) {
-    if (wanted.count(it->first) > 0) {
+    if (wanted_.count(it->first) > 0) {
       ++it;
     } else {
       held_bytes_ -= it->second->pixels.size();

@@ -14,6 +14,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <set>
 #include <vector>
 
 #include "viosfm/sensor/grey_image.h"
@@ -37,7 +38,8 @@ class FrameCache {
   std::shared_ptr<const GreyImage> Read(const std::filesystem::path& path, bool keep);
   // The image for the last time: the held copy, released, or decoded now.
   std::shared_ptr<const GreyImage> Take(const std::filesystem::path& path);
-  // Releases every held image whose path is not in `paths`.
+  // Releases every held image whose path is not in `paths`, and from now on
+  // keeps only images in `paths` (the frames a later stage will take).
   void RetainOnly(const std::vector<std::filesystem::path>& paths);
 
   Counts counts() const;
@@ -47,6 +49,8 @@ class FrameCache {
   const size_t max_bytes_;
   mutable std::mutex mutex_;
   std::map<std::filesystem::path, std::shared_ptr<const GreyImage>> held_;
+  bool filtered_ = false;                   // RetainOnly was called
+  std::set<std::filesystem::path> wanted_;  // then: the only paths kept
   size_t held_bytes_ = 0;
   Counts counts_;
 };

@@ -60,6 +60,13 @@ TEST(FrameCacheTest, BudgetAndRetainOnlyBoundWhatIsHeld) {
   EXPECT_EQ(counts.decodes, 5u);
   EXPECT_EQ(counts.reuses, 1u);
   EXPECT_EQ(counts.peak_bytes, 64u);
+  // After RetainOnly only the retained paths are kept.
+  cache.Read(a, true);
+  cache.Read(b, true);
+  cache.Take(a);  // not kept: decoded again
+  cache.Take(b);  // kept
+  EXPECT_EQ(cache.counts().decodes, 8u);
+  EXPECT_EQ(cache.counts().reuses, 2u);
 }
 
 TEST(FrameCacheTest, UnreadableFileIsAnInputError) {

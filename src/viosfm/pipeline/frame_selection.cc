@@ -308,6 +308,17 @@ size_t FrameSelection::Count(FrameDecision decision) const {
   return static_cast<size_t>(std::count(decisions.begin(), decisions.end(), decision));
 }
 
+bool FrameSelectionUsesTrajectory(const Sequence& sequence, const FrameSelectionOptions& options) {
+  if (!options.trim_static) return false;
+  switch (options.static_source) {
+    case StaticSource::kAuto: return !sequence.has_imu();
+    case StaticSource::kImu: return false;
+    case StaticSource::kTrajectory:
+    case StaticSource::kImuAndTrajectory: return true;
+  }
+  return true;
+}
+
 FrameSelection SelectFrames(const Sequence& sequence, const FrameSelectionOptions& options,
                             const Trajectory* trajectory) {
   if (const std::string error = options.Validate(); !error.empty()) {

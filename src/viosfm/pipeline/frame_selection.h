@@ -145,6 +145,11 @@ struct FrameSelection {
   size_t Count(FrameDecision decision) const;
 };
 
+// Whether SelectFrames on `sequence` with `options` reads the trajectory
+// (static trimming from it); if not, the selection is known before any VIO
+// runs.
+bool FrameSelectionUsesTrajectory(const Sequence& sequence, const FrameSelectionOptions& options);
+
 // `trajectory` (any world_from_body or world_from_cam trajectory, e.g. VIO)
 // is used by the trajectory source; null: the sequence's ground truth. A
 // source that is asked for but absent (kImu without IMU, kTrajectory without

@@ -115,6 +115,15 @@ PipelineSummary RunPipeline(const PipelineOptions& options) {
       clock.Run([&] { return ReadDatasetStage(options, folder, &fingerprint); });
   summary.num_frames_in = sequence.images.size();
 
+  // When the frame selection does not need the VIO, the frames the
+  // features stage will take are known now: only those stay decoded.
+  if (!FrameSelectionUsesTrajectory(sequence, options.frame_selection)) {
+    const FrameSelection predicted = SelectFrames(sequence, options.frame_selection, nullptr);
+    std::vector<std::filesystem::path> paths;
+    for (const size_t index : predicted.kept) paths.push_back(sequence.images[index].path);
+    frame_cache.RetainOnly(paths);
+  }
+
   const VioPoses vio = clock.Run([&] {
     VioPoses poses = LoadVioPoses(sequence, options, &frame_cache);
     AddVioPosesToFingerprint(poses.world_from_body, poses.segments, &fingerprint);
