@@ -293,7 +293,7 @@ TEST(PipelineTest, EmptyDatasetIsAnInputError) {
 TEST(PipelineTest, StaticRealSequenceIsAnInputError) {
   VIOSFM_REQUIRE_DATASET(dataset, "euroc_v101_static_micro");
   const fs::path folder = testing::MakeScratchFolder("pipeline_static");
-  const Sequence sequence = ReadPipelineDataset(dataset, {});
+  const Sequence sequence = ReadDataset(dataset, {});
   // The ground truth stands in for a VIO.
   WriteTumTrajectory(folder / "vio.tum", GroundTruthBodyTrajectory(sequence));
   PipelineOptions options;

@@ -82,7 +82,7 @@ RunFingerprint FingerprintOfInputs(const PipelineOptions& options) {
     fingerprint.Set("dataset.kind", "missing");
   } else if (IsEurocDatasetFolder(dataset)) {
     fingerprint.Set("dataset.kind", "euroc");
-    EurocReadOptions read;  // as ReadPipelineDataset reads
+    EurocReadOptions read;  // as ReadDataset (io/dataset.h) reads a run's EuRoC folder
     read.require_imu = false;
     for (const fs::path& file : EurocDatasetFiles(dataset, read)) {
       fingerprint.Set("dataset.file." + file.generic_string(), FileValue(dataset / file));

@@ -5,8 +5,6 @@
 
 namespace viosfm {
 
-namespace fs = std::filesystem;
-
 DatasetReadOptions PipelineDatasetReadOptions(const PipelineOptions& options) {
   DatasetReadOptions read;
   read.image_folder = options.image_folder;
@@ -14,17 +12,6 @@ DatasetReadOptions PipelineDatasetReadOptions(const PipelineOptions& options) {
   read.calibration = options.calibration;
   read.require_imu = false;  // the IMU only helps (frame selection, metric scale)
   return read;
-}
-
-Sequence ReadPipelineDataset(const fs::path& dataset, const ImageFolderOptions& image_folder,
-                             const CalibrationFiles& calibration) {
-  if (HasRosbagExtension(dataset)) {
-    throw InputError(dataset.string(), 0, "a bag needs its extract folder (ReadDatasetStage)");
-  }
-  DatasetReadOptions read;
-  read.image_folder = image_folder;
-  read.calibration = calibration;
-  return ReadDataset(dataset, read);
 }
 
 Sequence ReadDatasetStage(const PipelineOptions& options, const RunFolder& folder,

@@ -15,13 +15,6 @@ namespace viosfm {
 // go to options.EffectiveRosbagOptions().extract_folder).
 DatasetReadOptions PipelineDatasetReadOptions(const PipelineOptions& options);
 
-// Reads a dataset folder: EuRoC if it holds mav0/ (or is mav0), else an
-// image folder read with `image_folder`; then applies `calibration` (if any).
-// Throws InputError naming the folder.
-Sequence ReadPipelineDataset(const std::filesystem::path& dataset,
-                             const ImageFolderOptions& image_folder,
-                             const CalibrationFiles& calibration = {});
-
 // The stage: checks the folder's stored data against the inputs'
 // fingerprint before anything changes (a bag's extraction is the first
 // write), reads the dataset, adds it to `fingerprint` and checks again.
