@@ -46,46 +46,63 @@ struct Fixture {
   timestamp_ns_t first_stamp_ns = 0;
 };
 
-inline PipelineOptions SmallOptions(const Fixture& f, const fs::path& out) {
+// The small settings of the pipeline's tests: `max_features` SIFT
+// features, N1 4, N2 2, a small vocabulary for ~50 images (see
+// verification_driver_test.cc), batches of 10, no progress bars.
+inline PipelineOptions SmallRunOptions(const fs::path& dataset, const fs::path& vio_file,
+                                       const fs::path& out, int max_features) {
   PipelineOptions options;
-  options.dataset = f.dataset;
+  options.dataset = dataset;
   options.output_folder = out;
-  options.vio_trajectory = f.vio_file;
-  options.sift.max_num_features = 600;
+  options.vio_trajectory = vio_file;
+  options.sift.max_num_features = max_features;
   options.verification.pairs.num_temporal_neighbors = 4;
   options.verification.pairs.num_retrieval_neighbors = 2;
-  // A small vocabulary for ~50 images (see verification_driver_test.cc).
   options.verification.retrieval.vocabulary.branching = 8;
   options.verification.retrieval.vocabulary.depth = 3;
   options.mapper.batch_size = 10;
-  options.num_threads = 2;
-  options.seed = 7;
   options.show_progress = false;
   return options;
 }
 
-// The fixture's simulation; another seed gives another dataset with the
-// same image names and stamps (other images, IMU readings and VIO drift).
-inline SimulationOptions FixtureSimulation(uint64_t seed) {
+inline PipelineOptions SmallOptions(const Fixture& f, const fs::path& out) {
+  PipelineOptions options = SmallRunOptions(f.dataset, f.vio_file, out, 600);
+  options.num_threads = 2;
+  options.seed = 7;
+  return options;
+}
+
+// A 3 s walk in the simulated room (0.5 s static start) at 10 Hz and half
+// the default camera's resolution: a few seconds of a whole run.
+inline SimulationOptions HalfResolutionRoom(uint64_t seed) {
   SimulationOptions sim;
   sim.scenario = "room";
-  sim.duration_s = 4.5;
-  sim.static_start_s = 1.0;
+  sim.duration_s = 3.0;
+  sim.static_start_s = 0.5;
   sim.camera_rate_hz = 10.0;
   sim.texels_per_metre = 64.0;
   sim.seed = seed;
-  // A VIO that is locally accurate but drifts (the case the paper's
-  // relative-pose constraints are made for).
-  sim.vio_drift.position_walk_m_per_sqrt_m = 0.05;
-  sim.vio_drift.yaw_walk_rad_per_sqrt_m = 0.01;
-  sim.vio_drift.position_jitter_m = 0.001;
-  sim.vio_drift.rotation_jitter_rad = 0.0005;
   Camera camera = SimulationOptions::DefaultCamera();
   camera.width /= 2;
   camera.height /= 2;
   for (int i = 0; i < 4; ++i)
     camera.params[i] = i < 2 ? camera.params[i] / 2 : (camera.params[i] + 0.5) / 2 - 0.5;
   sim.camera = camera;
+  return sim;
+}
+
+// The fixture's simulation; another seed gives another dataset with the
+// same image names and stamps (other images, IMU readings and VIO drift).
+inline SimulationOptions FixtureSimulation(uint64_t seed) {
+  SimulationOptions sim = HalfResolutionRoom(seed);
+  sim.duration_s = 4.5;
+  sim.static_start_s = 1.0;
+  // A VIO that is locally accurate but drifts (the case the paper's
+  // relative-pose constraints are made for).
+  sim.vio_drift.position_walk_m_per_sqrt_m = 0.05;
+  sim.vio_drift.yaw_walk_rad_per_sqrt_m = 0.01;
+  sim.vio_drift.position_jitter_m = 0.001;
+  sim.vio_drift.rotation_jitter_rad = 0.0005;
   return sim;
 }
 

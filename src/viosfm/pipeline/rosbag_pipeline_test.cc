@@ -16,6 +16,7 @@
 #include "viosfm/io/euroc.h"
 #include "viosfm/io/rosbag_dataset.h"
 #include "viosfm/pipeline/pipeline.h"
+#include "viosfm/pipeline/pipeline_test_fixture.h"
 #include "viosfm/sensor/camera_models.h"
 #include "viosfm/sim/sequence_simulator.h"
 #include "viosfm/util/file_util.h"
@@ -26,40 +27,16 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// A 3 s walk in the simulated room at 10 Hz, a quarter of EuRoC's
-// resolution, the simulator's emulated VIO, and small settings.
 PipelineOptions SmallOptions(const fs::path& dataset, const fs::path& vio, const fs::path& out) {
-  PipelineOptions options;
-  options.dataset = dataset;
-  options.vio_trajectory = vio;
-  options.output_folder = out;
-  options.sift.max_num_features = 400;
-  options.verification.pairs.num_temporal_neighbors = 4;
-  options.verification.pairs.num_retrieval_neighbors = 2;
-  options.verification.retrieval.vocabulary.branching = 8;
-  options.verification.retrieval.vocabulary.depth = 3;
-  options.mapper.batch_size = 10;
+  PipelineOptions options = pipeline_testing::SmallRunOptions(dataset, vio, out, 400);
   options.num_threads = 1;
   options.seed = 7;
-  options.show_progress = false;
   return options;
 }
 
 TEST(RosbagPipeline, BagGivesTheFolderResultByteForByte) {
   const fs::path folder = testing::MakeScratchFolder("rosbag_pipeline");
-  SimulationOptions sim;
-  sim.scenario = "room";
-  sim.duration_s = 3.0;
-  sim.static_start_s = 0.5;
-  sim.camera_rate_hz = 10.0;
-  sim.texels_per_metre = 64.0;
-  sim.seed = 11;
-  Camera camera = SimulationOptions::DefaultCamera();
-  camera.width /= 2;
-  camera.height /= 2;
-  for (int i = 0; i < 4; ++i)
-    camera.params[i] = i < 2 ? camera.params[i] / 2 : (camera.params[i] + 0.5) / 2 - 0.5;
-  sim.camera = camera;
+  const SimulationOptions sim = pipeline_testing::HalfResolutionRoom(11);
   const fs::path dataset = folder / "dataset";
   WriteSimulatedSequence(dataset, SimulateSequence(sim), sim);
 

@@ -14,6 +14,7 @@
 #include "viosfm/io/ply.h"
 #include "viosfm/io/transforms_json.h"
 #include "viosfm/pipeline/pipeline.h"
+#include "viosfm/pipeline/pipeline_test_fixture.h"
 #include "viosfm/sensor/camera_models.h"
 #include "viosfm/sim/sequence_simulator.h"
 #include "viosfm/util/file_util.h"
@@ -37,33 +38,12 @@ const Fixture& SharedFixture() {
   static const Fixture fixture = [] {
     Fixture f;
     f.folder = testing::MakeScratchFolder("run_export");
-    SimulationOptions sim;
-    sim.scenario = "room";
-    sim.duration_s = 3.0;
-    sim.static_start_s = 0.5;
-    sim.camera_rate_hz = 10.0;
-    sim.texels_per_metre = 64.0;
-    sim.seed = 4;
-    Camera camera = SimulationOptions::DefaultCamera();
-    camera.width /= 2;
-    camera.height /= 2;
-    for (int i = 0; i < 4; ++i)
-      camera.params[i] = i < 2 ? camera.params[i] / 2 : (camera.params[i] + 0.5) / 2 - 0.5;
-    sim.camera = camera;
+    const SimulationOptions sim = pipeline_testing::HalfResolutionRoom(4);
     f.dataset = f.folder / "dataset";
     WriteSimulatedSequence(f.dataset, SimulateSequence(sim), sim);
-    PipelineOptions options;
-    options.dataset = f.dataset;
-    options.vio_trajectory = f.dataset / "vio_emulated.tum";
     f.run = f.folder / "run";
-    options.output_folder = f.run;
-    options.sift.max_num_features = 400;
-    options.verification.pairs.num_temporal_neighbors = 4;
-    options.verification.pairs.num_retrieval_neighbors = 2;
-    options.verification.retrieval.vocabulary.branching = 8;
-    options.verification.retrieval.vocabulary.depth = 3;
-    options.mapper.batch_size = 10;
-    options.show_progress = false;
+    const PipelineOptions options =
+        pipeline_testing::SmallRunOptions(f.dataset, f.dataset / "vio_emulated.tum", f.run, 400);
     RunPipeline(options);
     RunExportOptions export_options;
     export_options.run_folder = f.run;
