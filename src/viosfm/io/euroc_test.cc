@@ -122,21 +122,9 @@ void WriteLines(const fs::path& path, const std::vector<std::string>& lines) {
   WriteTextFile(path, text.str());
 }
 
-// A copy of a EuRoC folder in a scratch folder: text files copied, image
-// files symlinked one by one (so that tests may delete or break any of them).
+// A copy of a EuRoC folder in a scratch folder (images linked).
 fs::path CopyDataset(const fs::path& source, const std::string& name) {
-  const fs::path target = testing::MakeScratchFolder(name);
-  for (const fs::directory_entry& entry : fs::recursive_directory_iterator(source)) {
-    const fs::path relative = fs::relative(entry.path(), source);
-    if (entry.is_directory()) {
-      fs::create_directories(target / relative);
-    } else if (entry.path().extension() == ".png") {
-      fs::create_symlink(fs::absolute(entry.path()), target / relative);
-    } else {
-      fs::copy_file(entry.path(), target / relative);
-    }
-  }
-  return target;
+  return testing::CopyFolderLinkingImages(source, testing::MakeScratchFolder(name));
 }
 
 // Line numbers below are 1-based, as in error messages.

@@ -150,18 +150,7 @@ inline fs::path CopyOfTheRun(const Fixture& f, const std::string& name) {
 
 // A copy of a dataset: text files copied, images linked.
 inline fs::path CopyDataset(const fs::path& source, const fs::path& target) {
-  fs::create_directories(target);
-  for (const fs::directory_entry& entry : fs::recursive_directory_iterator(source)) {
-    const fs::path relative = fs::relative(entry.path(), source);
-    if (entry.is_directory()) {
-      fs::create_directories(target / relative);
-    } else if (entry.path().extension() == ".png") {
-      fs::create_symlink(fs::absolute(entry.path()), target / relative);
-    } else {
-      fs::copy_file(entry.path(), target / relative);
-    }
-  }
-  return target;
+  return testing::CopyFolderLinkingImages(source, target);
 }
 
 // world_from_body of every registered image of a COLMAP model, by stamp

@@ -62,6 +62,21 @@ fs::path MakeScratchFolder(const std::string& name) {
   return folder;
 }
 
+fs::path CopyFolderLinkingImages(const fs::path& source, const fs::path& target) {
+  fs::create_directories(target);
+  for (const fs::directory_entry& entry : fs::recursive_directory_iterator(source)) {
+    const fs::path relative = fs::relative(entry.path(), source);
+    if (entry.is_directory()) {
+      fs::create_directories(target / relative);
+    } else if (entry.path().extension() == ".png") {
+      fs::create_symlink(fs::absolute(entry.path()), target / relative);
+    } else {
+      fs::copy_file(entry.path(), target / relative);
+    }
+  }
+  return target;
+}
+
 void WriteTextFile(const fs::path& path, const std::string& text) {
   std::ofstream stream(path, std::ios::binary);
   stream << text;

@@ -18,6 +18,11 @@ std::filesystem::path FindDataset(const std::string& name);
 std::filesystem::path SourcePath(const std::string& relative);
 // A fresh empty folder under the system temp dir, unique per test, removed at exit.
 std::filesystem::path MakeScratchFolder(const std::string& name);
+// Copies the folder `source` into `target` (created): text files copied,
+// .png images symlinked one by one (so that a test may delete or break any
+// of them without touching the source). Returns `target`.
+std::filesystem::path CopyFolderLinkingImages(const std::filesystem::path& source,
+                                              const std::filesystem::path& target);
 
 // Writes `text` to `path` (binary, no newline translation); fails the test on error.
 void WriteTextFile(const std::filesystem::path& path, const std::string& text);
