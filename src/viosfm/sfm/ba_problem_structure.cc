@@ -1,5 +1,8 @@
 #include "viosfm/sfm/ba_problem_structure.h"
 
+#include <Eigen/OrderingMethods>
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
 #include <algorithm>
 #include <bit>
 #include <cstdint>
@@ -15,8 +18,57 @@ double BaProblemStructure::FillPerObservation() const {
          (static_cast<double>(num_free_images) * static_cast<double>(num_observations));
 }
 
+double BaProblemStructure::FactorizationPerObservation() const {
+  if (num_observations == 0) return 0.0;
+  return factorization_block_flops / static_cast<double>(num_observations);
+}
+
+namespace {
+
+// sum_j c_j^2 over the columns of the Cholesky factor of the symmetric
+// pattern `bits` (row i: the upper triangle's columns j > i as n bits),
+// ordered by AMD. The values make the matrix strictly diagonally dominant
+// (diagonal = degree + 1, -1 elsewhere), hence positive definite: no
+// cancellation, so the numeric factor's pattern is the symbolic one.
+double FactorizationBlockFlops(const std::vector<uint64_t>& bits, size_t n, size_t words) {
+  std::vector<Eigen::Triplet<double, int>> entries;
+  std::vector<int> degree(n, 0);
+  for (size_t i = 0; i < n; ++i) {
+    for (size_t w = 0; w < words; ++w) {
+      uint64_t word = bits[i * words + w];
+      while (word != 0) {
+        const size_t j = w * 64 + static_cast<size_t>(std::countr_zero(word));
+        word &= word - 1;
+        entries.emplace_back(static_cast<int>(j), static_cast<int>(i), -1.0);  // lower
+        ++degree[i];
+        ++degree[j];
+      }
+    }
+  }
+  for (size_t i = 0; i < n; ++i) {
+    entries.emplace_back(static_cast<int>(i), static_cast<int>(i), degree[i] + 1.0);
+  }
+  Eigen::SparseMatrix<double, Eigen::ColMajor, int> matrix(static_cast<int>(n),
+                                                           static_cast<int>(n));
+  matrix.setFromTriplets(entries.begin(), entries.end());
+  const Eigen::SimplicialLLT<Eigen::SparseMatrix<double, Eigen::ColMajor, int>, Eigen::Lower,
+                             Eigen::AMDOrdering<int>>
+      cholesky(matrix);
+  if (cholesky.info() != Eigen::Success) return 0.0;
+  const Eigen::SparseMatrix<double, Eigen::ColMajor, int> factor = cholesky.matrixL();
+  double flops = 0.0;
+  for (int j = 0; j < factor.outerSize(); ++j) {
+    const double count = factor.outerIndexPtr()[j + 1] - factor.outerIndexPtr()[j];
+    flops += count * count;
+  }
+  return flops;
+}
+
+}  // namespace
+
 BaProblemStructure ComputeBaProblemStructure(const Reconstruction& reconstruction,
-                                             const std::vector<image_t>& free_images) {
+                                             const std::vector<image_t>& free_images,
+                                             bool with_factorization) {
   BaProblemStructure structure;
   std::unordered_map<image_t, uint32_t> index;  // free image -> 0..n-1
   for (const image_t image_id : free_images) {
@@ -59,6 +111,8 @@ BaProblemStructure ComputeBaProblemStructure(const Reconstruction& reconstructio
     }
   }
   for (const uint64_t word : bits) structure.num_covisible_pairs += std::popcount(word);
+  if (with_factorization)
+    structure.factorization_block_flops = FactorizationBlockFlops(bits, n, words);
   return structure;
 }
 

@@ -91,6 +91,33 @@ TEST(BaProblemStructure, BandedTracksLikeAPath) {
   EXPECT_LT(structure.FillPerObservation(), 3.0);
 }
 
+TEST(BaProblemStructure, FactorizationWorkOfADenseAndABandedMatrix) {
+  // Every camera sees every other: the factor is dense whatever the order,
+  // its column k (from the last) holds k blocks: sum k^2 = n(n+1)(2n+1)/6.
+  const int n = 70;
+  const std::vector<std::vector<image_t>> all(30, Ids(1, n));
+  const Reconstruction room = MakeReconstruction(n, all);
+  EXPECT_EQ(ComputeBaProblemStructure(room, Ids(1, n)).factorization_block_flops, 0.0);
+  const BaProblemStructure dense =
+      ComputeBaProblemStructure(room, Ids(1, n), /*with_factorization=*/true);
+  EXPECT_DOUBLE_EQ(dense.factorization_block_flops, 70.0 * 71.0 * 141.0 / 6.0);
+  EXPECT_DOUBLE_EQ(dense.FactorizationPerObservation(), 70.0 * 71.0 * 141.0 / 6.0 / 2100.0);
+
+  // A band of 3 neighbours (a path): in the path's order the factor keeps
+  // the band (4 blocks a column, fewer in the last 3: 16 * 97 + 9 + 4 + 1);
+  // the minimum degree order does no worse, and every column holds at least
+  // its diagonal block and its pairs with later columns.
+  const int m = 100;
+  std::vector<std::vector<image_t>> band;
+  for (int k = 1; k + 3 <= m; ++k) band.push_back(Ids(k, k + 3));
+  const BaProblemStructure path =
+      ComputeBaProblemStructure(MakeReconstruction(m, band), Ids(1, m), true);
+  EXPECT_LE(path.factorization_block_flops, 16.0 * 97.0 + 14.0);
+  EXPECT_GE(path.factorization_block_flops, static_cast<double>(m + path.num_covisible_pairs));
+  // A fiftieth of the 70-camera room's work, with more cameras.
+  EXPECT_LT(path.factorization_block_flops * 50.0, dense.factorization_block_flops);
+}
+
 TEST(BaProblemStructure, HeldAndUnregisteredImages) {
   // Images 1-5 free, 6-7 held (registered, not free), 8 unregistered.
   const std::vector<std::vector<image_t>> tracks = {{1, 2, 6}, {2, 7, 8}, {3, 4, 5, 8},

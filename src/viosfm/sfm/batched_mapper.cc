@@ -548,7 +548,17 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
     if (!global && options.batch_ba_max_num_iterations > 0) {
       batch_ba_options.max_num_iterations = options.batch_ba_max_num_iterations;
     }
-    batch_ba_options.linear_solver = solver_chooser.Next(free_images.size(), global);
+    if (global && ba_options.linear_solver == BaLinearSolver::kAuto) {
+      const BaProblemStructure structure =
+          ComputeBaProblemStructure(reconstruction, free_images, /*with_factorization=*/true);
+      batch_ba_options.linear_solver = solver_chooser.Next(structure, /*final=*/true);
+      VIOSFM_LOG(INFO) << "final bundle adjustment: " << structure.num_free_images
+                       << " images, factorisation work per observation "
+                       << structure.FactorizationPerObservation() << ": "
+                       << OptionText(batch_ba_options.linear_solver);
+    } else {
+      batch_ba_options.linear_solver = solver_chooser.Next(free_images.size(), global);
+    }
     ba_summary =
         AdjustImages(&reconstruction, free_images, held_neighbour, gauge_image, active_priors(),
                      batch_ba_options, global ? 0 : options.ba_window_max_held_views);

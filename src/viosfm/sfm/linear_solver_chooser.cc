@@ -18,8 +18,14 @@ BaLinearSolver LinearSolverChooser::Choose(size_t num_free_images, double mean_t
   return BaLinearSolver::kSparseSchur;
 }
 
-BaLinearSolver LinearSolverChooser::Next(const BaProblemStructure& structure,
-                                         bool /*final*/) const {
+BaLinearSolver LinearSolverChooser::Next(const BaProblemStructure& structure, bool final) const {
+  if (final && structure.factorization_block_flops > 0.0 &&
+      options_.linear_solver == BaLinearSolver::kAuto &&
+      structure.num_free_images > static_cast<size_t>(options_.max_images_for_sparse_schur)) {
+    return structure.FactorizationPerObservation() <= kMaxFactorizationForFinalSparse
+               ? BaLinearSolver::kSparseSchur
+               : BaLinearSolver::kIterativeSchur;
+  }
   const double track_length = structure.num_points > 0
                                   ? static_cast<double>(structure.num_observations) /
                                         static_cast<double>(structure.num_points)

@@ -37,6 +37,24 @@ namespace viosfm {
 //   X > kMaxFillPerObservation             ITERATIVE_SCHUR   (with the structure)
 //   otherwise                              SPARSE_SCHUR
 //
+// The final adjustment of a run (every image free, starting from the
+// batches' adjusted poses) follows another rule, from the factorisation's
+// work per observation F = BaProblemStructure::FactorizationPerObservation
+// (a symbolic factorisation under AMD; it tells a walk seen once, whose
+// factor hardly fills in, from revisits, whose factor fills in):
+//
+//   n <= max_images_for_sparse_schur       SPARSE_SCHUR
+//   F <= kMaxFactorizationForFinalSparse   SPARSE_SCHUR
+//   otherwise                              ITERATIVE_SCHUR
+//
+// Where the factor stays small the graph is a long chain of cameras, and
+// there the conjugate gradients need many steps at every iteration. Measured
+// on the final adjustment of 100 s simulated walks at 10 Hz (980 images,
+// 2 threads, both solvers from the same batches; docs/benchmarks.md,
+// "Real time"): two_floors F = 10: SPARSE_SCHUR 75 s, ITERATIVE_SCHUR 371 s;
+// corridor F = 147: 78 s and 157 s; room F = 326: 168 s and 28 s. The mean
+// track length (14.4, 12.2, 17.6) would take ITERATIVE_SCHUR for all three.
+//
 // A forced solver (options.linear_solver != kAuto) is always taken. Two scenes
 // fixed the thresholds; a scene between them may get the slower solver, never
 // a different result beyond the solvers' tolerance (both converge to the same
@@ -47,12 +65,16 @@ class LinearSolverChooser {
   static constexpr double kMinTrackLengthForIterative = 9.0;
   // The largest X = E^2 / (n obs) at which SPARSE_SCHUR is taken.
   static constexpr double kMaxFillPerObservation = 20.0;
+  // The largest F at which the final adjustment takes SPARSE_SCHUR: between
+  // the corridor's 147 and the room's 326 (above).
+  static constexpr double kMaxFactorizationForFinalSparse = 200.0;
 
   explicit LinearSolverChooser(const BundleAdjustmentOptions& options);
 
   // The solver for an adjustment of the problem `structure`: the rule above
-  // with the problem's own L and X. `final`: the last adjustment of the run
-  // (the rule is the same).
+  // with the problem's own L and X. `final`: the last adjustment of the run,
+  // decided by F when the structure has it (computed with_factorization),
+  // else as the others.
   BaLinearSolver Next(const BaProblemStructure& structure, bool final) const;
 
   // The solver when only the number of free images is known: the rule above

@@ -73,6 +73,39 @@ TEST(LinearSolverChooserTest, RoomTakesIterativeSchurCorridorSparseSchur) {
   EXPECT_EQ(chooser.Next(dense_short, true), BaLinearSolver::kIterativeSchur);
 }
 
+// The final adjustments of 100 s walks at 10 Hz (linear_solver_chooser.h):
+// long tracks everywhere, but only the room's factor fills in.
+TEST(LinearSolverChooserTest, FinalAdjustmentByFactorizationWork) {
+  const LinearSolverChooser chooser(AutoOptions());
+  const auto with_work = [](BaProblemStructure structure, double per_observation) {
+    structure.factorization_block_flops =
+        per_observation * static_cast<double>(structure.num_observations);
+    return structure;
+  };
+  const BaProblemStructure two_floors = with_work(Structure(978, 774297, 14.4, 71000), 10.1);
+  const BaProblemStructure corridor = with_work(Structure(979, 732541, 12.2, 129000), 146.8);
+  const BaProblemStructure room = with_work(Structure(979, 875136, 17.6, 235000), 326.3);
+  EXPECT_EQ(chooser.Next(two_floors, true), BaLinearSolver::kSparseSchur);
+  EXPECT_EQ(chooser.Next(corridor, true), BaLinearSolver::kSparseSchur);
+  EXPECT_EQ(chooser.Next(room, true), BaLinearSolver::kIterativeSchur);
+  // Not the final one, or without the factorisation's work: the track length.
+  for (const BaProblemStructure& scene : {two_floors, corridor, room}) {
+    EXPECT_EQ(chooser.Next(scene, false), BaLinearSolver::kIterativeSchur);
+    BaProblemStructure unknown = scene;
+    unknown.factorization_block_flops = 0.0;
+    EXPECT_EQ(chooser.Next(unknown, true), BaLinearSolver::kIterativeSchur);
+  }
+  // At the threshold SPARSE_SCHUR; small problems and forced solvers as ever.
+  EXPECT_EQ(
+      chooser.Next(with_work(room, LinearSolverChooser::kMaxFactorizationForFinalSparse), true),
+      BaLinearSolver::kSparseSchur);
+  EXPECT_EQ(chooser.Next(with_work(Structure(100, 90000, 14.0, 4950), 500.0), true),
+            BaLinearSolver::kSparseSchur);
+  BundleAdjustmentOptions forced = AutoOptions();
+  forced.linear_solver = BaLinearSolver::kIterativeSchur;
+  EXPECT_EQ(LinearSolverChooser(forced).Next(two_floors, true), BaLinearSolver::kIterativeSchur);
+}
+
 TEST(LinearSolverChooserTest, Thresholds) {
   const LinearSolverChooser chooser(AutoOptions());
   // L at the threshold takes ITERATIVE_SCHUR, just below it SPARSE_SCHUR.
