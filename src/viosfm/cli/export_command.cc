@@ -49,7 +49,9 @@ void RegisterExport(CLI::App& app) {
                       "The run's image folder (default: from RUN/options.json)");
   command
       ->add_option("--prior-position-stddev", args->options.prior_position_stddev_m,
-                   "Standard deviation of each camera position prior (m, isotropic)")
+                   "Standard deviation of every camera position prior (m, isotropic); 0 "
+                   "(default): each image's covariance from the model (its observations and "
+                   "the metric scale's uncertainty)")
       ->capture_default_str();
   command->callback([args] { RunExport(*args); });
 }

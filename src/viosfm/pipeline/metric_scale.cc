@@ -1,6 +1,7 @@
 #include "viosfm/pipeline/metric_scale.h"
 
 #include <algorithm>
+#include <cmath>
 #include <iomanip>
 #include <sstream>
 
@@ -13,6 +14,7 @@ MetricScaleSummary ApplyImuMetricScale(const Sequence& sequence, const SensorRig
                                        Reconstruction* reconstruction) {
   VIOSFM_CHECK(reconstruction != nullptr);
   MetricScaleSummary summary;
+  summary.applied_scale_sigma = vio_scale_sigma;
   if (!sequence.has_imu()) {
     summary.message = "no IMU in the dataset: the scale is the VIO's";
     return summary;
@@ -40,6 +42,7 @@ MetricScaleSummary ApplyImuMetricScale(const Sequence& sequence, const SensorRig
     summary.applied_scale = (summary.imu.scale / imu_variance + 1.0 / vio_variance) /
                             (1.0 / imu_variance + 1.0 / vio_variance);
     const double s = summary.applied_scale;
+    summary.applied_scale_sigma = std::sqrt(1.0 / (1.0 / imu_variance + 1.0 / vio_variance)) / s;
     for (const image_t image_id : reconstruction->ImageIds()) {
       reconstruction->GetImage(image_id).cam_from_world.translation *= s;
     }

@@ -22,6 +22,9 @@ struct MetricScaleSummary {
   bool estimated = false;      // the dataset had an IMU and enough frames were posed
   ImuScaleResult imu;          // the IMU's estimate
   double applied_scale = 1.0;  // what the reconstruction was multiplied by
+  // Relative standard deviation of the model's scale after that: the fused
+  // one when the IMU's was usable, else the VIO's.
+  double applied_scale_sigma = 0.0;
   std::string message;
 };
 

@@ -101,6 +101,7 @@ std::string PipelineSummaryToJson(const PipelineSummary& s) {
                        {"imu_scale", s.metric_scale.imu.scale},
                        {"imu_scale_sigma", s.metric_scale.imu.scale_sigma},
                        {"applied_scale", s.metric_scale.applied_scale},
+                       {"applied_scale_sigma", s.metric_scale.applied_scale_sigma},
                        {"message", s.metric_scale.message}};
   json["vio"] = {{"segments", s.num_vio_segments},
                  {"segments_joined", s.mapper.num_vio_segments_joined},

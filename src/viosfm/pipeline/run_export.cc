@@ -10,6 +10,7 @@
 #include "viosfm/io/ply.h"
 #include "viosfm/io/rosbag.h"
 #include "viosfm/io/transforms_json.h"
+#include "viosfm/sfm/camera_position_covariance.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/file_util.h"
 #include "viosfm/util/logging.h"
@@ -51,12 +52,37 @@ fs::path ImageFolderOfRun(const fs::path& run_folder) {
   return {};
 }
 
+// imu_scale.applied_scale_sigma of RUN/summary.json (relative); 0 when the
+// run predates it or has none (the priors then leave the scale out).
+double ScaleSigmaOfRun(const fs::path& summary_file) {
+  nlohmann::json summary;
+  try {
+    summary = nlohmann::json::parse(ReadTextFile(summary_file));
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(summary_file.string(), 0, std::string("not valid JSON: ") + e.what());
+  }
+  const nlohmann::json* scale = summary.contains("imu_scale") ? &summary["imu_scale"] : nullptr;
+  if (scale == nullptr || !scale->is_object() || !scale->contains("applied_scale_sigma") ||
+      !(*scale)["applied_scale_sigma"].is_number()) {
+    VIOSFM_LOG(WARNING) << "export: " << summary_file.string()
+                        << " has no imu_scale.applied_scale_sigma (a run of an older viosfm): "
+                           "the priors' covariances leave the scale's uncertainty out";
+    return 0.0;
+  }
+  const double sigma = (*scale)["applied_scale_sigma"].get<double>();
+  if (!(sigma >= 0.0) || !std::isfinite(sigma)) {
+    throw InputError(summary_file.string(), 0,
+                     "imu_scale.applied_scale_sigma must be a non-negative number");
+  }
+  return sigma;
+}
+
 }  // namespace
 
 std::string RunExportOptions::Validate() const {
   if (run_folder.empty()) return "run_folder: a run folder is required";
-  if (!(prior_position_stddev_m > 0) || !std::isfinite(prior_position_stddev_m)) {
-    return "prior_position_stddev_m must be positive";
+  if (!(prior_position_stddev_m >= 0) || !std::isfinite(prior_position_stddev_m)) {
+    return "prior_position_stddev_m must be 0 (the model's covariances) or positive";
   }
   return "";
 }
@@ -85,9 +111,20 @@ RunExportSummary ExportRun(const RunExportOptions& options) {
                         << "/options.json); no images link (give --images)";
   }
 
-  // Pose priors of the registered images: the camera centre, the given or
-  // the default covariance, and (for COLMAP 3.8) the rotation.
-  const double variance = options.prior_position_stddev_m * options.prior_position_stddev_m;
+  // Pose priors of the registered images: the camera centre, the given,
+  // the model's or the isotropic covariance, and (for COLMAP 3.8) the rotation.
+  const bool from_model = options.prior_position_stddev_m == 0.0;
+  const double stddev = from_model ? kFallbackPositionStddevM : options.prior_position_stddev_m;
+  const double variance = stddev * stddev;
+  CameraPositionCovariances model_covariances;
+  if (from_model) {
+    CameraPositionCovarianceOptions covariance_options;
+    covariance_options.scale_sigma = ScaleSigmaOfRun(run / "summary.json");
+    model_covariances = ComputeCameraPositionCovariances(model, covariance_options);
+    summary.keypoint_sigma_px = model_covariances.keypoint_sigma_px;
+    summary.scale_sigma = covariance_options.scale_sigma;
+  }
+  std::vector<double> position_stddevs;
   std::vector<ColmapPosePrior> priors;
   TransformsJson transforms;
   std::vector<image_t> ids = model.RegImageIds();
@@ -99,12 +136,18 @@ RunExportSummary ExportRun(const RunExportOptions& options) {
     prior.position = image.ProjectionCenter();
     prior.cam_from_world_rotation = image.cam_from_world.rotation;
     const auto covariance = options.prior_position_covariances.find(image.name);
+    const auto from_model_entry = model_covariances.by_image.find(image_id);
     if (covariance != options.prior_position_covariances.end()) {
       prior.position_covariance = covariance->second;
       ++summary.num_priors_from_covariances;
+    } else if (from_model_entry != model_covariances.by_image.end()) {
+      prior.position_covariance = from_model_entry->second;
+      ++summary.num_priors_from_model;
     } else {
       prior.position_covariance = variance * Eigen::Matrix3d::Identity();
+      ++summary.num_priors_isotropic;
     }
+    position_stddevs.push_back(std::sqrt(prior.position_covariance.trace() / 3.0));
     priors.push_back(prior);
     transforms.frames.push_back({"images/" + image.name, image.cam_from_world});
   }
@@ -112,6 +155,12 @@ RunExportSummary ExportRun(const RunExportOptions& options) {
     throw InputError(
         (run / "model").string(), 0,
         "transforms.json holds one camera; the model has " + std::to_string(model.NumCameras()));
+  }
+  if (!position_stddevs.empty()) {
+    auto middle =
+        position_stddevs.begin() + static_cast<std::ptrdiff_t>(position_stddevs.size() / 2);
+    std::nth_element(position_stddevs.begin(), middle, position_stddevs.end());
+    summary.median_position_stddev_m = *middle;
   }
   transforms.camera = model.Cameras().begin()->second;
   transforms.ply_file_path = "sparse_pc.ply";
@@ -138,6 +187,12 @@ RunExportSummary ExportRun(const RunExportOptions& options) {
                            ? ""
                            : ", images -> " + summary.image_folder.string())
                    << ")";
+  VIOSFM_LOG(INFO) << "export: pose priors: " << summary.num_priors_from_model
+                   << " with the model's covariance (keypoint sigma " << summary.keypoint_sigma_px
+                   << " px, scale sigma " << summary.scale_sigma << "), "
+                   << summary.num_priors_from_covariances << " given, "
+                   << summary.num_priors_isotropic << " isotropic (" << stddev
+                   << " m); median position stddev " << summary.median_position_stddev_m << " m";
   return summary;
 }
 

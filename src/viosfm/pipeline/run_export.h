@@ -36,6 +36,10 @@
 
 namespace viosfm {
 
+// The isotropic standard deviation (m) of a prior the model does not fix
+// (fewer than three observations, or a degenerate view of them).
+inline constexpr double kFallbackPositionStddevM = 0.1;
+
 struct RunExportOptions {
   // The run folder (with summary.json, model/, database.db). Required.
   std::filesystem::path run_folder;
@@ -44,14 +48,18 @@ struct RunExportOptions {
   // The images the run read; default: from RUN/options.json (the dataset,
   // or the bag's extract folder).
   std::filesystem::path image_folder;
-  // Standard deviation of each camera position prior, isotropic (m), used
-  // for images without an entry in prior_position_covariances. Default
-  // 0.1 m: loose against viosfm's measured accuracy (docs/benchmarks.md:
-  // Sim(3) ATE 1 mm to 2 cm on the simulated suite), so that COLMAP's images
-  // decide locally while the priors hold the metric, gravity-aligned frame.
-  double prior_position_stddev_m = 0.1;
-  // Per-image 3x3 covariance of the camera position (m^2), by image name:
-  // the input for a VIO uncertainty model. Default empty.
+  // The covariance of each camera position prior (images without an entry
+  // in prior_position_covariances). 0 (default): the model's own, per image
+  // (sfm/camera_position_covariance.h): from the image's 2D-3D observations
+  // at the model's keypoint sigma, plus the metric scale's uncertainty
+  // (summary.json imu_scale.applied_scale_sigma) along the camera's offset
+  // from the first image; kFallbackPositionStddevM for an image the model
+  // does not fix. > 0: this standard deviation (m), isotropic, for every
+  // image (e.g. 0.1 m to let COLMAP's images decide locally while the priors
+  // only hold the metric, gravity-aligned frame).
+  double prior_position_stddev_m = 0.0;
+  // Per-image 3x3 covariance of the camera position (m^2), by image name,
+  // taken before either of the above. Default empty.
   std::map<std::string, Eigen::Matrix3d> prior_position_covariances;
 
   std::string Validate() const;  // empty if valid, else names the bad field
@@ -64,6 +72,11 @@ struct RunExportSummary {
   size_t num_images = 0;               // registered images exported
   size_t num_points = 0;
   size_t num_priors_from_covariances = 0;  // priors whose covariance was given
+  size_t num_priors_from_model = 0;        // priors with the model's covariance
+  size_t num_priors_isotropic = 0;         // the given or the fallback stddev
+  double keypoint_sigma_px = 0.0;          // the model's, when used
+  double scale_sigma = 0.0;                // the model's scale's (relative), when used
+  double median_position_stddev_m = 0.0;   // sqrt(trace / 3) of the priors' covariances
 };
 
 // Throws InputError naming the file for a missing or malformed run folder.

@@ -2,10 +2,13 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <regex>
+#include <set>
 #include <string>
 
 #include "viosfm/io/colmap_database.h"
@@ -32,6 +35,7 @@ struct Fixture {
   fs::path dataset;
   fs::path run;
   RunExportSummary summary;
+  double summary_json_ate_m = 0.0;  // the run's Sim(3) ATE against the simulator's truth
 };
 
 const Fixture& SharedFixture() {
@@ -48,6 +52,8 @@ const Fixture& SharedFixture() {
     RunExportOptions export_options;
     export_options.run_folder = f.run;
     f.summary = ExportRun(export_options);
+    const nlohmann::json summary = nlohmann::json::parse(ReadTextFile(f.run / "summary.json"));
+    f.summary_json_ate_m = summary["eval"]["metric"]["ate_sim3_rmse_m"].get<double>();
     return f;
   }();
   return fixture;
@@ -68,15 +74,35 @@ TEST(RunExport, WritesEveryFileWithTheModelsPoses) {
   }
   EXPECT_EQ(ReadPly(e / "sparse_pc.ply").xyz.size(), model.NumPoints3D());
 
-  // Pose priors: the camera centres, the default covariance (0.1 m)^2 I.
+  // Pose priors: the camera centres with the model's covariances: each
+  // image's own (symmetric, positive definite), the scale's part growing
+  // with the distance from the first image, within the simulator's truth:
+  // the model's camera centres are off by about a millimetre (its ATE), a
+  // few standard deviations of its priors, not hundreds.
   const std::vector<ColmapPosePrior> priors = ReadColmapPosePriors(e / "database.db");
   ASSERT_EQ(priors.size(), model.NumRegImages());
+  EXPECT_EQ(f.summary.num_priors_from_model + f.summary.num_priors_isotropic, priors.size());
+  EXPECT_GE(f.summary.num_priors_from_model, priors.size() - 1);
+  EXPECT_GT(f.summary.keypoint_sigma_px, 0.05);
+  EXPECT_LT(f.summary.keypoint_sigma_px, 2.0);
+  EXPECT_GT(f.summary.scale_sigma, 0.0);
+  const double ate_m = f.summary_json_ate_m;
+  ASSERT_GT(ate_m, 0.0);
+  EXPECT_GT(f.summary.median_position_stddev_m, ate_m / 30.0);
+  EXPECT_LT(f.summary.median_position_stddev_m, ate_m * 30.0);
+  std::set<double> traces;
   for (const ColmapPosePrior& prior : priors) {
     const Image& image = model.GetImage(prior.image_id);
     EXPECT_EQ(prior.position, image.ProjectionCenter());
-    EXPECT_EQ(prior.position_covariance, Eigen::Matrix3d(0.1 * 0.1 * Eigen::Matrix3d::Identity()));
+    EXPECT_LT((prior.position_covariance - prior.position_covariance.transpose()).norm(), 1e-18);
+    EXPECT_GT(Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(prior.position_covariance)
+                  .eigenvalues()
+                  .minCoeff(),
+              0.0);
     EXPECT_EQ(prior.coordinate_system, ColmapCoordinateSystem::kCartesian);
+    traces.insert(prior.position_covariance.trace());
   }
+  EXPECT_EQ(traces.size(), priors.size());  // per image, not one for all
   // The rest of the database is the run's.
   ColmapDatabase exported = ColmapDatabase::Open(e / "database.db");
   ColmapDatabase original = ColmapDatabase::Open(f.run / "database.db");
@@ -124,7 +150,7 @@ TEST(RunExport, MissingRunIsAnInputError) {
   EXPECT_NE(testing::InputErrorMessage([&] { ExportRun(options); }).find("run folder"),
             std::string::npos);
   options.run_folder = f.run;
-  options.prior_position_stddev_m = 0;
+  options.prior_position_stddev_m = -1;
   EXPECT_NE(testing::InputErrorMessage([&] { ExportRun(options); }).find("prior_position_stddev_m"),
             std::string::npos);
 }
