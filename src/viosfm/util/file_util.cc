@@ -24,6 +24,20 @@ fs::path TemporarySibling(const fs::path& path) {
 
 }  // namespace
 
+void SyncToDisk(const fs::path& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) {
+    throw InputError(path.string(), 0, std::string("cannot open to sync: ") + std::strerror(errno));
+  }
+  const int result = ::fsync(fd);
+  const int error = errno;
+  ::close(fd);
+  // EINVAL: a file system (or special file) that has nothing to sync.
+  if (result != 0 && error != EINVAL) {
+    throw InputError(path.string(), 0, std::string("cannot sync to disk: ") + std::strerror(error));
+  }
+}
+
 void WriteFileAtomically(const fs::path& path, const std::function<void(std::ostream&)>& write,
                          bool binary) {
   if (path.has_parent_path() && !fs::exists(path.parent_path())) {
@@ -38,7 +52,12 @@ void WriteFileAtomically(const fs::path& path, const std::function<void(std::ost
       stream.flush();
       if (!stream) throw InputError(tmp.string(), 0, "write failed (disk full?)");
     }
+    // The content on disk before the name points at it, and the rename on
+    // disk before the caller goes on (a power loss after a later write must
+    // not find this file empty or missing).
+    SyncToDisk(tmp);
     fs::rename(tmp, path);
+    SyncToDisk(path.has_parent_path() ? path.parent_path() : fs::path("."));
   } catch (...) {
     std::error_code ignored;
     fs::remove(tmp, ignored);
@@ -54,6 +73,10 @@ void WriteFolderAtomically(const fs::path& path,
   fs::create_directories(tmp);
   try {
     write(tmp);
+    for (const fs::directory_entry& entry : fs::recursive_directory_iterator(tmp)) {
+      if (entry.is_regular_file() || entry.is_directory()) SyncToDisk(entry.path());
+    }
+    SyncToDisk(tmp);
     if (fs::exists(path)) {
       const fs::path old = fs::path(path.string() + ".old-" + std::to_string(getpid()));
       fs::rename(path, old);
@@ -62,6 +85,7 @@ void WriteFolderAtomically(const fs::path& path,
     } else {
       fs::rename(tmp, path);
     }
+    SyncToDisk(path.has_parent_path() ? path.parent_path() : fs::path("."));
   } catch (...) {
     fs::remove_all(tmp, ignored);
     throw;

@@ -1,6 +1,7 @@
 // File helpers. Outputs are written atomically: to a temporary name in the
-// same folder, then renamed, so a crash never leaves a half-written file
-// that looks complete.
+// same folder, synced to disk, then renamed (and the rename synced), so
+// neither a crash nor a power loss leaves a half-written file that looks
+// complete.
 #pragma once
 
 #include <filesystem>
@@ -9,6 +10,10 @@
 #include <string>
 
 namespace viosfm {
+
+// fsync of a file or folder (a folder: its entries, i.e. renames in it).
+// Throws InputError naming the path if it cannot be opened or synced.
+void SyncToDisk(const std::filesystem::path& path);
 
 // Calls `write` with a stream on "<path>.tmp-<pid>", then renames it to
 // `path`. If `write` throws or the stream fails, the temporary file is

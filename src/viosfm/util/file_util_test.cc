@@ -46,6 +46,20 @@ TEST(FileUtil, AtomicFolderWrite) {
   EXPECT_EQ(ReadTextFile(model / "b.txt"), "3");
 }
 
+TEST(FileUtil, SyncToDiskTakesFilesAndFoldersAndNamesAMissingPath) {
+  const fs::path dir = testing::MakeScratchFolder("sync");
+  WriteFileAtomically(dir / "a.txt", [](std::ostream& out) { out << "a"; });
+  EXPECT_NO_THROW(SyncToDisk(dir / "a.txt"));
+  EXPECT_NO_THROW(SyncToDisk(dir));
+  try {
+    SyncToDisk(dir / "absent.txt");
+    FAIL() << "a missing path was synced";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("absent.txt: cannot open to sync"), std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(FileUtil, RequireNamesThePath) {
   try {
     RequireFile("/nonexistent/x.csv", "IMU file");
