@@ -311,6 +311,10 @@ const std::filesystem::path& ColmapDatabase::path() const {
   return impl_->path;
 }
 
+void ColmapDatabase::SyncToDisk() {
+  impl_->Execute("PRAGMA wal_checkpoint(FULL)");
+}
+
 ColmapDatabase ColmapDatabase::Open(const std::filesystem::path& path) {
   auto impl = std::make_unique<Impl>();
   impl->path = path;
@@ -327,7 +331,8 @@ ColmapDatabase ColmapDatabase::Open(const std::filesystem::path& path) {
   // database fails here.
   impl->Execute("PRAGMA journal_mode=WAL");
   // With WAL, NORMAL keeps the database valid after a crash (the last
-  // transactions may be lost on power loss, never on a process kill).
+  // transactions may be lost on power loss, never on a process kill, until
+  // SyncToDisk, which a run calls before its summary.json).
   impl->Execute("PRAGMA synchronous=NORMAL");
   impl->Execute("PRAGMA temp_store=MEMORY");
   impl->Execute("PRAGMA foreign_keys=ON");

@@ -104,6 +104,13 @@ class ColmapDatabase {
 
   const std::filesystem::path& path() const;
 
+  // Copies the write-ahead log into the database file and syncs both to
+  // disk (a full checkpoint: with synchronous=NORMAL, SQLite syncs the log
+  // before and the file after it), so that every committed transaction
+  // survives a power loss. Throws InputError naming the file if the
+  // checkpoint cannot complete.
+  void SyncToDisk();
+
   // A transaction (a SAVEPOINT, so transactions nest): the writes between
   // construction and Commit() are stored together or not at all. Destroyed
   // without Commit(), it rolls them back.

@@ -174,6 +174,9 @@ PipelineSummary RunPipeline(const PipelineOptions& options) {
   VIOSFM_LOG(INFO) << "run: " << summary.images.decodes << " image decodes for "
                    << summary.num_frames_in << " images (" << summary.images.reuses
                    << " taken from the frame cache)";
+  // Every output on disk before summary.json says the run is complete (the
+  // other files sync as they are written, util/file_util.h).
+  features.database.SyncToDisk();
   summary.total_seconds = total_timer.ElapsedSeconds();
   summary.peak_memory_mb = PeakMemoryMb();
   folder.WriteSummary(PipelineSummaryToJson(summary));
