@@ -233,7 +233,10 @@ TEST(AbsolutePoseRealData, RegistersAFountainImageFromItsMatchesAlone) {
   const ImageFeatures features4 = features_of("0004");
   const ImageFeatures features5 = features_of("0005");
   const ImageFeatures features6 = features_of("0006");
-  const auto normalized = [](const FountainCamera& camera, const FeatureKeypoint& keypoint) {
+  // (An Eigen::Vector2d, not `auto`: the expression would refer to the
+  // temporary Vector3d after the return.)
+  const auto normalized = [](const FountainCamera& camera,
+                             const FeatureKeypoint& keypoint) -> Eigen::Vector2d {
     return (camera.k.inverse() * Eigen::Vector3d(keypoint.x, keypoint.y, 1.0)).hnormalized();
   };
   // 3D points of image 4's keypoints, from its matches to image 6.

@@ -30,7 +30,16 @@ class Connection {
       throw InputError(path_, 0, "cannot open the database: " + message);
     }
     sqlite3_busy_timeout(db_, 5000);
-    if (!HasTable("images")) {
+    // The destructor does not run for a constructor that throws: close here.
+    bool has_images = false;
+    try {
+      has_images = HasTable("images");
+    } catch (...) {
+      sqlite3_close(db_);
+      throw;
+    }
+    if (!has_images) {
+      sqlite3_close(db_);
       throw InputError(path_, 0, "not a COLMAP database (no images table)");
     }
   }
