@@ -3,6 +3,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <cctype>
 #include <cmath>
 #include <map>
 #include <regex>
@@ -28,38 +29,73 @@ struct Element {
 };
 
 // Parses the tags of `svg`, checking that they are balanced (every opening
-// tag is closed, in order). Returns the opening / self-closing elements.
+// tag is closed, in order) and that every '<' starts a well-formed tag (text
+// is escaped). Returns the opening / self-closing elements. A scanner, not
+// std::regex: libstdc++'s regex recurses per character and overflows the
+// stack on a long polyline under AddressSanitizer.
 std::vector<Element> ParseBalanced(const std::string& svg) {
+  const auto is_name = [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == ':' ||
+           c == '.';
+  };
+  const auto is_space = [](char c) { return std::isspace(static_cast<unsigned char>(c)) != 0; };
   std::vector<Element> elements;
   std::vector<std::string> stack;
-  const std::regex tag(
-      R"(<(/?)([A-Za-z][A-Za-z0-9_-]*)((?:\s+[A-Za-z_:][-A-Za-z0-9_:.]*="[^"<>]*")*)\s*(/?)>)");
-  const std::regex attribute(R"(([A-Za-z_:][-A-Za-z0-9_:.]*)="([^"]*)\")");
-  size_t tags = 0;
-  for (auto it = std::sregex_iterator(svg.begin(), svg.end(), tag); it != std::sregex_iterator();
-       ++it) {
-    const std::smatch& m = *it;
-    ++tags;
-    if (m[1] == "/") {
-      EXPECT_FALSE(stack.empty()) << "closing </" << m[2] << "> without an opening tag";
+  size_t pos = 0;
+  while ((pos = svg.find('<', pos)) != std::string::npos) {
+    size_t i = pos + 1;
+    const bool closing = i < svg.size() && svg[i] == '/';
+    if (closing) ++i;
+    size_t name_end = i;
+    while (name_end < svg.size() && is_name(svg[name_end])) ++name_end;
+    if (name_end == i || !std::isalpha(static_cast<unsigned char>(svg[i]))) {
+      ADD_FAILURE() << "'<' at " << pos << " does not start a tag";
+      return elements;
+    }
+    Element element;
+    element.name = svg.substr(i, name_end - i);
+    i = name_end;
+    bool self_closing = false;
+    while (true) {
+      while (i < svg.size() && is_space(svg[i])) ++i;
+      if (i >= svg.size()) {
+        ADD_FAILURE() << "unterminated tag <" << element.name;
+        return elements;
+      }
+      if (svg[i] == '>') {
+        ++i;
+        break;
+      }
+      if (svg.compare(i, 2, "/>") == 0) {
+        self_closing = true;
+        i += 2;
+        break;
+      }
+      size_t key_end = i;
+      while (key_end < svg.size() && is_name(svg[key_end])) ++key_end;
+      const size_t value_end =
+          svg.compare(key_end, 2, "=\"") == 0 ? svg.find('"', key_end + 2) : std::string::npos;
+      if (closing || key_end == i || value_end == std::string::npos) {
+        ADD_FAILURE() << "malformed tag <" << (closing ? "/" : "") << element.name;
+        return elements;
+      }
+      const std::string value = svg.substr(key_end + 2, value_end - key_end - 2);
+      EXPECT_EQ(value.find_first_of("<>"), std::string::npos) << "'<' or '>' in an attribute";
+      element.attributes[svg.substr(i, key_end - i)] = value;
+      i = value_end + 1;
+    }
+    pos = i;
+    if (closing) {
+      EXPECT_FALSE(stack.empty()) << "closing </" << element.name << "> without an opening tag";
       if (stack.empty()) break;
-      EXPECT_EQ(stack.back(), m[2].str());
+      EXPECT_EQ(stack.back(), element.name);
       stack.pop_back();
       continue;
     }
-    Element element;
-    element.name = m[2];
-    const std::string attrs = m[3];
-    for (auto a = std::sregex_iterator(attrs.begin(), attrs.end(), attribute);
-         a != std::sregex_iterator(); ++a) {
-      element.attributes[(*a)[1]] = (*a)[2];
-    }
-    elements.push_back(element);
-    if (m[4] != "/") stack.push_back(m[2]);
+    if (!self_closing) stack.push_back(element.name);
+    elements.push_back(std::move(element));
   }
   EXPECT_TRUE(stack.empty()) << "unclosed <" << (stack.empty() ? "" : stack.back()) << ">";
-  // Every '<' starts a tag the regex accepted (text is escaped).
-  EXPECT_EQ(tags, static_cast<size_t>(std::count(svg.begin(), svg.end(), '<')));
   return elements;
 }
 
