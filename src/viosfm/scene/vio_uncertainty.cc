@@ -7,16 +7,11 @@
 #include <iomanip>
 #include <sstream>
 
+#include "viosfm/geometry/lie.h"
 #include "viosfm/util/errors.h"
 
 namespace viosfm {
 namespace {
-
-Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d m;
-  m << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
-  return m;
-}
 
 bool NonNegative(double value) {
   return value >= 0.0 && std::isfinite(value);
@@ -129,7 +124,7 @@ Eigen::Matrix<double, 6, 6> RelativePoseCovariance(const VioUncertaintyModel& mo
     if (rotation) {
       rot.diagonal().array() += diff_var;
       // t += [d]x n1: var [d]x var [d]x^T, cov(t, n2 - n1) = [d]x (covar - var).
-      const Eigen::Matrix3d lever = Skew(d);
+      const Eigen::Matrix3d lever = Hat(d);
       pos += var * lever * lever.transpose();
       pos_rot += (covar - var) * lever;
     } else {

@@ -5,17 +5,11 @@
 #include <cmath>
 #include <vector>
 
+#include "viosfm/geometry/lie.h"
 #include "viosfm/sensor/camera_models.h"
 
 namespace viosfm {
 namespace {
-
-// The hat matrix: Skew(a) b = a x b.
-Eigen::Matrix3d Skew(const Eigen::Vector3d& a) {
-  Eigen::Matrix3d m;
-  m << 0, -a.z(), a.y(), a.z(), 0, -a.x(), -a.y(), a.x(), 0;
-  return m;
-}
 
 // Root mean square of the reprojection errors' coordinates (px) over the
 // registered images' observations in front of their cameras; 0 without any.
@@ -57,7 +51,7 @@ CameraPositionCovariances ComputeCameraPositionCovariances(
     const Camera& camera = reconstruction.GetCamera(image.camera_id);
     const Eigen::Matrix3d world_to_cam = image.cam_from_world.rotation.toRotationMatrix();
     // Parameters: the centre c (world) and a rotation d applied in the camera
-    // frame, x = exp(d) R (X - c): dx/dc = -R, dx/dd = -Skew(x).
+    // frame, x = exp(d) R (X - c): dx/dc = -R, dx/dd = -Hat(x).
     Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();
     int observations = 0;
     for (const Point2D& point2D : image.points2D) {
@@ -67,7 +61,7 @@ CameraPositionCovariances ComputeCameraPositionCovariances(
       if (in_cam.z() <= 0.0) continue;
       Eigen::Matrix<double, 3, 6> d_point;
       d_point.leftCols<3>() = -world_to_cam;
-      d_point.rightCols<3>() = -Skew(in_cam);
+      d_point.rightCols<3>() = -Hat(in_cam);
       const Eigen::Matrix<double, 2, 6> jacobian =
           ProjectJacobianWrtPoint(camera, in_cam) * d_point;
       information += jacobian.transpose() * jacobian;
