@@ -206,50 +206,105 @@ void ReadAt(std::ifstream& file, const std::string& path, uint64_t file_size, ui
   }
 }
 
+// The output buffer of a decompression grows with what the data actually
+// gives, up to the size the chunk's header states: a corrupt or hostile header
+// claiming up to 1 GiB then costs memory only in proportion to the data that
+// backs it. The first allocation allows a compression ratio of 16.
+size_t InitialOutputSize(size_t compressed_size, uint32_t stated_size) {
+  constexpr size_t kMinInitial = size_t{1} << 20;
+  return std::min<size_t>(stated_size, std::max(kMinInitial, 16 * compressed_size));
+}
+
+// Doubles `out` (at most to `stated_size`); false when it is already there.
+bool GrowOutput(std::vector<uint8_t>& out, uint32_t stated_size) {
+  if (out.size() >= stated_size) return false;
+  out.resize(std::min<size_t>(stated_size, 2 * out.size()));
+  return true;
+}
+
+std::vector<uint8_t> DecompressBz2(const RecordHeader& header, std::span<const uint8_t> data,
+                                   uint32_t size) {
+  std::vector<uint8_t> out(InitialOutputSize(data.size(), size));
+  bz_stream stream{};
+  if (BZ2_bzDecompressInit(&stream, 0, 0) != BZ_OK) {
+    header.Fail("cannot create a bzip2 decompression context");
+  }
+  stream.next_in = const_cast<char*>(reinterpret_cast<const char*>(data.data()));
+  stream.avail_in = static_cast<unsigned int>(data.size());
+  size_t produced = 0;
+  int status = BZ_OK;
+  bool overflow = false;
+  while (true) {
+    stream.next_out = reinterpret_cast<char*>(out.data() + produced);
+    stream.avail_out = static_cast<unsigned int>(out.size() - produced);
+    status = BZ2_bzDecompress(&stream);
+    produced = out.size() - stream.avail_out;
+    if (status != BZ_OK) break;  // BZ_STREAM_END or an error
+    if (stream.avail_out == 0) {
+      if (!GrowOutput(out, size)) {
+        overflow = true;
+        break;
+      }
+    } else if (stream.avail_in == 0) {
+      break;  // the data ends before the stream does
+    }
+  }
+  BZ2_bzDecompressEnd(&stream);
+  if (status != BZ_STREAM_END || overflow || produced != size) {
+    header.Fail("bz2 chunk does not decompress to the " + std::to_string(size) +
+                " bytes its header states (" +
+                (overflow ? std::string("it gives more")
+                          : "bzip2 status " + std::to_string(status) + ", " +
+                                std::to_string(produced) + " bytes") +
+                ")");
+  }
+  return out;
+}
+
+std::vector<uint8_t> DecompressLz4(const RecordHeader& header, std::span<const uint8_t> data,
+                                   uint32_t size) {
+  std::vector<uint8_t> out(InitialOutputSize(data.size(), size));
+  LZ4F_dctx* context = nullptr;
+  if (LZ4F_isError(LZ4F_createDecompressionContext(&context, LZ4F_VERSION))) {
+    header.Fail("cannot create an lz4 decompression context");
+  }
+  size_t in_offset = 0;
+  size_t out_offset = 0;
+  size_t status = 1;
+  bool overflow = false;
+  // With the input consumed, a call with no input flushes what the decoder
+  // still holds; the loop ends at the frame's end or when nothing moves.
+  while (status != 0) {
+    if (out_offset == out.size() && !GrowOutput(out, size)) {
+      overflow = true;
+      break;
+    }
+    size_t in_size = data.size() - in_offset;
+    size_t out_size = out.size() - out_offset;
+    status = LZ4F_decompress(context, out.data() + out_offset, &out_size, data.data() + in_offset,
+                             &in_size, nullptr);
+    if (LZ4F_isError(status)) {
+      const std::string name = LZ4F_getErrorName(status);
+      LZ4F_freeDecompressionContext(context);
+      header.Fail("lz4 chunk cannot be decompressed (" + name + ")");
+    }
+    in_offset += in_size;
+    out_offset += out_size;
+    if (in_size == 0 && out_size == 0) break;
+  }
+  LZ4F_freeDecompressionContext(context);
+  if (overflow || out_offset != size) {
+    header.Fail("lz4 chunk decompresses to " +
+                (overflow ? "more than " + std::to_string(size) : std::to_string(out_offset)) +
+                " bytes, its header states " + std::to_string(size));
+  }
+  return out;
+}
+
 std::vector<uint8_t> Decompress(const RecordHeader& header, const std::string& compression,
                                 std::span<const uint8_t> data, uint32_t size) {
-  std::vector<uint8_t> out(size);
-  if (compression == "bz2") {
-    unsigned int out_size = size;
-    const int status =
-        BZ2_bzBuffToBuffDecompress(reinterpret_cast<char*>(out.data()), &out_size,
-                                   const_cast<char*>(reinterpret_cast<const char*>(data.data())),
-                                   static_cast<unsigned int>(data.size()), 0, 0);
-    if (status != BZ_OK || out_size != size) {
-      header.Fail("bz2 chunk does not decompress to the " + std::to_string(size) +
-                  " bytes its header states (bzip2 status " + std::to_string(status) + ")");
-    }
-    return out;
-  }
-  if (compression == "lz4") {
-    LZ4F_dctx* context = nullptr;
-    if (LZ4F_isError(LZ4F_createDecompressionContext(&context, LZ4F_VERSION))) {
-      header.Fail("cannot create an lz4 decompression context");
-    }
-    size_t in_offset = 0;
-    size_t out_offset = 0;
-    size_t status = 1;
-    while (status != 0 && in_offset < data.size()) {
-      size_t in_size = data.size() - in_offset;
-      size_t out_size = out.size() - out_offset;
-      status = LZ4F_decompress(context, out.data() + out_offset, &out_size, data.data() + in_offset,
-                               &in_size, nullptr);
-      if (LZ4F_isError(status)) {
-        const std::string name = LZ4F_getErrorName(status);
-        LZ4F_freeDecompressionContext(context);
-        header.Fail("lz4 chunk cannot be decompressed (" + name + ")");
-      }
-      in_offset += in_size;
-      out_offset += out_size;
-      if (in_size == 0 && out_size == 0) break;
-    }
-    LZ4F_freeDecompressionContext(context);
-    if (out_offset != size) {
-      header.Fail("lz4 chunk decompresses to " + std::to_string(out_offset) +
-                  " bytes, its header states " + std::to_string(size));
-    }
-    return out;
-  }
+  if (compression == "bz2") return DecompressBz2(header, data, size);
+  if (compression == "lz4") return DecompressLz4(header, data, size);
   header.Fail("unknown chunk compression '" + compression + "' (expected none, bz2 or lz4)");
 }
 

@@ -1,6 +1,7 @@
 #include "viosfm/io/rosbag.h"
 
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 
 #include <cstring>
 #include <fstream>
@@ -264,6 +265,73 @@ TEST(Rosbag, CorruptCompressedChunkIsAnError) {
   });
   EXPECT_NE(message.find("corrupt.bag: byte offset "), std::string::npos) << message;
   EXPECT_NE(message.find("lz4"), std::string::npos) << message;
+}
+
+// Writes one highly compressible 6 MiB message in a single chunk: the
+// decompressed chunk is hundreds of times its compressed data, far beyond the
+// reader's first output buffer, which has to grow to the stated size.
+fs::path WriteCompressibleBag(const fs::path& path, RosbagCompression compression,
+                              std::vector<uint8_t>& message) {
+  message.assign(6 << 20, 0);
+  for (size_t i = 0; i < message.size(); i += 4096) message[i] = static_cast<uint8_t>(i >> 12);
+  RosbagWriterOptions options;
+  options.compression = compression;
+  options.chunk_threshold_bytes = 16 << 20;
+  RosbagWriter writer(path, options);
+  const uint32_t id = writer.AddConnection("/a", "std_msgs/String", "*", "string data\n");
+  writer.Write(id, 1'000'000'000, message);
+  writer.Close();
+  return path;
+}
+
+TEST(Rosbag, HighlyCompressedChunksDecompressWhole) {
+  const fs::path folder = testing::MakeScratchFolder("rosbag_ratio");
+  for (const RosbagCompression compression : {RosbagCompression::kBz2, RosbagCompression::kLz4}) {
+    SCOPED_TRACE(RosbagCompressionName(compression));
+    std::vector<uint8_t> message;
+    const fs::path path = WriteCompressibleBag(
+        folder / (RosbagCompressionName(compression) + ".bag"), compression, message);
+    EXPECT_LT(fs::file_size(path) * 16, message.size());  // beyond the first buffer
+    const std::vector<ReadMessage> read = ReadAll(path);
+    ASSERT_EQ(read.size(), 1u);
+    EXPECT_TRUE(read[0].data == message);
+  }
+}
+
+// The process's peak resident memory so far.
+long PeakResidentKib() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_maxrss;
+}
+
+// A chunk header may state up to 1 GiB of uncompressed data. The reader must
+// notice that the data does not back the claim, naming the chunk, and not
+// allocate the claimed size up front (make fuzz's malloc limit checks that).
+TEST(Rosbag, ChunkStatingMoreThanItsDataGivesIsAnError) {
+  const fs::path folder = testing::MakeScratchFolder("rosbag_claim");
+  for (const RosbagCompression compression : {RosbagCompression::kBz2, RosbagCompression::kLz4}) {
+    const std::string name = RosbagCompressionName(compression);
+    SCOPED_TRACE(name);
+    std::vector<uint8_t> message;
+    std::string bytes = ReadFileBytes(
+        WriteCompressibleBag(folder / (name + ".bag"), compression, message));
+    const size_t chunk = bytes.find("compression=" + name);
+    ASSERT_NE(chunk, std::string::npos);
+    const size_t size_field = bytes.find("size=", chunk);
+    ASSERT_NE(size_field, std::string::npos);
+    const uint32_t claimed = 900u << 20;
+    std::memcpy(&bytes[size_field + 5], &claimed, 4);
+    const fs::path path = folder / (name + "_claim.bag");
+    WriteFileBytes(path, bytes);
+    const long peak_before_kib = PeakResidentKib();
+    const std::string error = testing::InputErrorMessage([&] { ReadAll(path); });
+    // Zero-filling the claimed 900 MiB up front would raise the peak by as much.
+    EXPECT_LT(PeakResidentKib() - peak_before_kib, 100 * 1024);
+    EXPECT_NE(error.find(name + "_claim.bag: byte offset "), std::string::npos) << error;
+    EXPECT_NE(error.find(std::to_string(claimed)), std::string::npos) << error;
+    EXPECT_NE(error.find("header states"), std::string::npos) << error;
+  }
 }
 
 TEST(Rosbag, WriterRejectsTimesOutsideRosTime) {
