@@ -59,7 +59,7 @@ for name in $fuzzers; do
   start=$(date +%s)
   status=0
   "$build/fuzz/fuzz_$name" -max_total_time="$seconds" -timeout=20 -rss_limit_mb=2048 \
-    -malloc_limit_mb=1024 -max_len=65536 -print_final_stats=1 \
+    -malloc_limit_mb=256 -max_len=65536 -print_final_stats=1 \
     -artifact_prefix="$artifacts/$name-" "$work" "$seeds" >"$log" 2>&1 || status=$?
   elapsed=$(($(date +%s) - start))
   executions=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
