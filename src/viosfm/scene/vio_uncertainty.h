@@ -44,8 +44,10 @@
 // the scale 2 %, the frames 2 mm and 1 mrad apart from it. They are rates
 // of an external VIO of unknown quality, on the pessimistic side: a model
 // that trusts the VIO too much pulls the reconstruction toward its drift, one
-// that trusts it too little only gives the images more say. viosfm's own VIO
-// can fill the same struct with calibrated rates.
+// that trusts it too little only gives the images more say. viosfm's own
+// VIO uses them too: its marginal covariance is overconfident against the
+// simulator's truth (yaw error 2.5-4.5 times its sigma), these rates are
+// not (docs/benchmarks.md, scripts/vio-covariance-consistency.py).
 #pragma once
 
 #include <Eigen/Core>
