@@ -314,8 +314,8 @@ TEST(Rosbag, ChunkStatingMoreThanItsDataGivesIsAnError) {
     const std::string name = RosbagCompressionName(compression);
     SCOPED_TRACE(name);
     std::vector<uint8_t> message;
-    std::string bytes = ReadFileBytes(
-        WriteCompressibleBag(folder / (name + ".bag"), compression, message));
+    std::string bytes =
+        ReadFileBytes(WriteCompressibleBag(folder / (name + ".bag"), compression, message));
     const size_t chunk = bytes.find("compression=" + name);
     ASSERT_NE(chunk, std::string::npos);
     const size_t size_field = bytes.find("size=", chunk);
