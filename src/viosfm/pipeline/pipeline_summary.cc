@@ -100,6 +100,9 @@ std::string PipelineSummaryToJson(const PipelineSummary& s) {
                        {"usable", s.metric_scale.imu.usable},
                        {"imu_scale", s.metric_scale.imu.scale},
                        {"imu_scale_sigma", s.metric_scale.imu.scale_sigma},
+                       {"spaced_scale", s.metric_scale.imu.spaced_scale},
+                       {"spaced_scale_sigma", s.metric_scale.imu.spaced_scale_sigma},
+                       {"spacing_disagrees", s.metric_scale.imu.spacing_disagrees},
                        {"applied_scale", s.metric_scale.applied_scale},
                        {"applied_scale_sigma", s.metric_scale.applied_scale_sigma},
                        {"message", s.metric_scale.message}};

@@ -28,6 +28,8 @@ struct Pair {
 
 std::string ImuScaleOptions::Validate() const {
   if (!(bias_window_s > 0.0)) return "bias_window_s must be > 0";
+  if (!(spacing_check_interval_s >= 0.0)) return "spacing_check_interval_s must be >= 0";
+  if (!(max_spacing_disagreement > 0.0)) return "max_spacing_disagreement must be > 0";
   if (!(position_sigma_m > 0.0)) return "position_sigma_m must be > 0";
   if (!(rotation_sigma_rad >= 0.0)) return "rotation_sigma_rad must be >= 0";
   if (gravity_iterations < 1) return "gravity_iterations must be >= 1";
@@ -37,31 +39,24 @@ std::string ImuScaleOptions::Validate() const {
   return "";
 }
 
-ImuScaleResult EstimateImuScale(const Trajectory& world_from_body,
-                                const std::vector<ImuSample>& imu, const ImuNoise& noise,
-                                const ImuScaleOptions& options) {
-  VIOSFM_CHECK(options.Check()) << options.Validate();
-  ImuScaleResult result;
-  const std::vector<StampedPose>& poses = world_from_body.poses;
-  for (size_t k = 1; k < poses.size(); ++k) {
-    VIOSFM_CHECK_LT(poses[k - 1].timestamp_ns, poses[k].timestamp_ns);
-  }
-  if (imu.size() < 2) {
-    result.message = "no IMU samples";
-    return result;
-  }
-  // Frames covered by the IMU, and the consecutive pairs between them.
-  std::vector<size_t> frames;
-  for (size_t k = 0; k < poses.size(); ++k) {
-    if (poses[k].timestamp_ns >= imu.front().timestamp_ns &&
-        poses[k].timestamp_ns <= imu.back().timestamp_ns) {
-      frames.push_back(k);
-    }
-  }
-  if (frames.size() < 4) {
-    result.message = "fewer than 4 frames within the IMU's time span";
-    return result;
-  }
+namespace {
+
+// One least squares over the consecutive pairs of `frames` (indices into
+// `poses`, at least 4).
+struct ScaleSolution {
+  std::string failure;  // empty when solved
+  double scale = 1.0;
+  double scale_sigma = 0.0;
+  double residual_ratio = 0.0;
+  Eigen::Vector3d gravity_in_world = Eigen::Vector3d::Zero();
+  int num_frames = 0;
+  int num_pairs = 0;
+};
+
+ScaleSolution SolveScale(const std::vector<StampedPose>& poses, const std::vector<size_t>& frames,
+                         const std::vector<ImuSample>& imu, const ImuNoise& noise,
+                         const ImuScaleOptions& options) {
+  ScaleSolution result;
   const timestamp_ns_t t0 = poses[frames.front()].timestamp_ns;
   const auto window_of = [&](timestamp_ns_t t) {
     return static_cast<int>(static_cast<double>(t - t0) * 1e-9 / options.bias_window_s);
@@ -225,7 +220,7 @@ ImuScaleResult EstimateImuScale(const Trajectory& world_from_body,
     normal_matrix.setFromTriplets(triplets.begin(), triplets.end());
     const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(normal_matrix);
     if (solver.info() != Eigen::Success) {
-      result.message = "the least squares is singular";
+      result.failure = "the least squares is singular";
       return result;
     }
     solution = solver.solve(rhs);
@@ -257,10 +252,93 @@ ImuScaleResult EstimateImuScale(const Trajectory& world_from_body,
   result.gravity_in_world = gravity;
   result.num_frames = num_frames;
   result.num_pairs = static_cast<int>(pairs.size());
+  return result;
+}
+
+std::string Describe(const ScaleSolution& solution) {
   std::ostringstream message;
-  message << std::fixed << std::setprecision(5) << "IMU scale " << scale << " +- "
-          << result.scale_sigma * scale << " from " << result.num_pairs << " frame pairs (residual "
-          << std::setprecision(2) << result.residual_ratio << " times the expected)";
+  message << std::fixed << std::setprecision(5) << solution.scale << " +- "
+          << solution.scale_sigma * solution.scale << " from " << solution.num_pairs
+          << " frame pairs (residual " << std::setprecision(2) << solution.residual_ratio
+          << " times the expected)";
+  return message.str();
+}
+
+}  // namespace
+
+ImuScaleResult EstimateImuScale(const Trajectory& world_from_body,
+                                const std::vector<ImuSample>& imu, const ImuNoise& noise,
+                                const ImuScaleOptions& options) {
+  VIOSFM_CHECK(options.Check()) << options.Validate();
+  ImuScaleResult result;
+  const std::vector<StampedPose>& poses = world_from_body.poses;
+  for (size_t k = 1; k < poses.size(); ++k) {
+    VIOSFM_CHECK_LT(poses[k - 1].timestamp_ns, poses[k].timestamp_ns);
+  }
+  if (imu.size() < 2) {
+    result.message = "no IMU samples";
+    return result;
+  }
+  // Frames covered by the IMU; the same frames thinned to at least
+  // spacing_check_interval_s apart.
+  const auto check_interval_ns =
+      static_cast<timestamp_ns_t>(std::llround(options.spacing_check_interval_s * 1e9));
+  std::vector<size_t> frames;
+  std::vector<size_t> spaced_frames;
+  for (size_t k = 0; k < poses.size(); ++k) {
+    if (poses[k].timestamp_ns < imu.front().timestamp_ns ||
+        poses[k].timestamp_ns > imu.back().timestamp_ns) {
+      continue;
+    }
+    frames.push_back(k);
+    if (spaced_frames.empty() ||
+        poses[k].timestamp_ns - poses[spaced_frames.back()].timestamp_ns >= check_interval_ns) {
+      spaced_frames.push_back(k);
+    }
+  }
+  if (frames.size() < 4) {
+    result.message = "fewer than 4 frames within the IMU's time span";
+    return result;
+  }
+  ScaleSolution solution = SolveScale(poses, frames, imu, noise, options);
+  if (!solution.failure.empty()) {
+    result.message = solution.failure;
+    return result;
+  }
+  // The spacing check: over pairs too short for the motion, the frames'
+  // jitter shrinks the scale (ImuScaleOptions::spacing_check_interval_s);
+  // when the spaced frames' scale disagrees, theirs is the estimate.
+  std::string spacing_note;
+  if (spaced_frames.size() >= 4 && spaced_frames.size() < frames.size()) {
+    const ScaleSolution spaced = SolveScale(poses, spaced_frames, imu, noise, options);
+    if (spaced.failure.empty()) {
+      result.spaced_scale = spaced.scale;
+      result.spaced_scale_sigma = spaced.scale_sigma;
+      const double difference = std::abs(spaced.scale - solution.scale);
+      const double sigma =
+          std::hypot(spaced.scale_sigma * spaced.scale, solution.scale_sigma * solution.scale);
+      if (difference > options.max_spacing_disagreement * sigma) {
+        result.spacing_disagrees = true;
+        std::ostringstream note;
+        note << std::fixed << std::setprecision(5) << " (consecutive frames give " << solution.scale
+             << " +- " << solution.scale_sigma * solution.scale
+             << ", shrunk by the frames' jitter: frames at least " << std::setprecision(2)
+             << options.spacing_check_interval_s << " s apart disagree by " << std::setprecision(1)
+             << difference / sigma << " sigma)";
+        spacing_note = note.str();
+        solution = spaced;
+      }
+    }
+  }
+  result.scale = solution.scale;
+  result.scale_sigma = solution.scale_sigma;
+  result.residual_ratio = solution.residual_ratio;
+  result.gravity_in_world = solution.gravity_in_world;
+  result.num_frames = solution.num_frames;
+  result.num_pairs = solution.num_pairs;
+  const double scale = result.scale;
+  std::ostringstream message;
+  message << "IMU scale " << Describe(solution) << spacing_note;
   if (!(scale > 1.0 / options.max_scale_factor && scale < options.max_scale_factor)) {
     message << ": outside [1/" << options.max_scale_factor << ", " << options.max_scale_factor
             << "], not used";

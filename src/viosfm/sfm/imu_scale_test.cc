@@ -12,15 +12,19 @@ namespace viosfm {
 namespace {
 
 // A hand-held-like motion with closed-form derivatives: position a sum of
-// sinusoids (about 0.5 m/s, 0.5 m/s^2), rotation yaw-pitch-roll sinusoids.
+// sinusoids (about 0.5 m/s, 0.5 m/s^2, times `amplitude`), rotation
+// yaw-pitch-roll sinusoids.
+double amplitude = 1.0;
 Eigen::Vector3d Position(double t) {
-  return {1.5 * std::sin(0.6 * t) + 0.3 * std::sin(1.7 * t),
-          1.2 * std::cos(0.45 * t) + 0.2 * std::sin(2.3 * t), 1.2 + 0.2 * std::sin(0.9 * t)};
+  return amplitude * Eigen::Vector3d{1.5 * std::sin(0.6 * t) + 0.3 * std::sin(1.7 * t),
+                                     1.2 * std::cos(0.45 * t) + 0.2 * std::sin(2.3 * t),
+                                     1.2 + 0.2 * std::sin(0.9 * t)};
 }
 Eigen::Vector3d Acceleration(double t) {
-  return {-1.5 * 0.36 * std::sin(0.6 * t) - 0.3 * 2.89 * std::sin(1.7 * t),
-          -1.2 * 0.2025 * std::cos(0.45 * t) - 0.2 * 5.29 * std::sin(2.3 * t),
-          -0.2 * 0.81 * std::sin(0.9 * t)};
+  return amplitude *
+         Eigen::Vector3d{-1.5 * 0.36 * std::sin(0.6 * t) - 0.3 * 2.89 * std::sin(1.7 * t),
+                         -1.2 * 0.2025 * std::cos(0.45 * t) - 0.2 * 5.29 * std::sin(2.3 * t),
+                         -0.2 * 0.81 * std::sin(0.9 * t)};
 }
 Eigen::Matrix3d Rotation(double t) {
   return (Eigen::AngleAxisd(0.8 * std::sin(0.3 * t) + 0.05 * t, Eigen::Vector3d::UnitZ()) *
@@ -61,8 +65,9 @@ Data MakeImu(double duration_s, uint64_t seed) {
 }
 
 // Body poses at the stamps, positions divided by `true_scale` (the
-// reconstruction's units), with 1 mm / 0.5 mrad noise.
-Trajectory Reconstruction(const std::vector<double>& stamps_s, double true_scale, uint64_t seed) {
+// reconstruction's units), with `position_noise_m` (1 mm) / 0.5 mrad noise.
+Trajectory Reconstruction(const std::vector<double>& stamps_s, double true_scale, uint64_t seed,
+                          double position_noise_m = 0.001) {
   Random random(seed);
   Trajectory trajectory;
   for (const double t : stamps_s) {
@@ -72,8 +77,9 @@ Trajectory Reconstruction(const std::vector<double>& stamps_s, double true_scale
         Rotation(t) *
         Eigen::AngleAxisd(noise_angle.norm(), noise_angle.normalized()).toRotationMatrix();
     const Eigen::Vector3d position =
-        Position(t) / true_scale +
-        Eigen::Vector3d(random.Normal(0, 0.001), random.Normal(0, 0.001), random.Normal(0, 0.001));
+        Position(t) / true_scale + Eigen::Vector3d(random.Normal(0, position_noise_m),
+                                                   random.Normal(0, position_noise_m),
+                                                   random.Normal(0, position_noise_m));
     trajectory.poses.push_back({static_cast<timestamp_ns_t>(std::llround(t * 1e9)),
                                 Rigid3d(Eigen::Quaterniond(rotation), position)});
   }
@@ -104,6 +110,45 @@ TEST(ImuScale, RecoversTheScaleOfKeyframesWithIrregularGaps) {
       EstimateImuScale(Reconstruction(stamps, 0.985, 5), data.imu, data.noise);
   ASSERT_TRUE(result.usable) << result.message;  // (sigma 0.35 %)
   EXPECT_NEAR(result.scale, 0.985, 0.003) << result.message;
+}
+
+// The real recording's case: a gentle walk (accelerations of 0.03-0.3
+// m/s^2) whose frames, 0.1 s apart, jitter by 2 mm. Over consecutive
+// frames the jitter is as large as the displacement the acceleration adds,
+// and the fit shrinks the scale (0.81); frames 1 s apart are not shrunk
+// (1.004 +- 0.006).
+TEST(ImuScale, JitterOverShortPairsDoesNotShrinkTheScale) {
+  amplitude = 0.15;
+  const Data data = MakeImu(62.0, 8);
+  std::vector<double> stamps;
+  for (int k = 0; k <= 600; ++k) stamps.push_back(1.0 + 0.1 * k);
+  const Trajectory reconstruction = Reconstruction(stamps, 1.0, 9, 0.002);
+  ImuScaleOptions unchecked;
+  unchecked.spacing_check_interval_s = 0.0;
+  const ImuScaleResult shrunk = EstimateImuScale(reconstruction, data.imu, data.noise, unchecked);
+  const ImuScaleResult result = EstimateImuScale(reconstruction, data.imu, data.noise);
+  amplitude = 1.0;
+  EXPECT_FALSE(shrunk.spacing_disagrees);
+  EXPECT_EQ(shrunk.spaced_scale, 0.0);
+  EXPECT_LT(shrunk.scale, 0.9) << shrunk.message;
+  EXPECT_TRUE(result.spacing_disagrees) << result.message;
+  EXPECT_EQ(result.scale, result.spaced_scale);
+  EXPECT_EQ(result.num_pairs, 60);  // 1 s apart
+  EXPECT_NEAR(result.scale, 1.0, 3.0 * result.scale_sigma) << result.message;
+  EXPECT_NEAR(result.scale, 1.0, 0.02) << result.message;
+}
+
+// Without jitter the two spacings agree and the consecutive frames' more
+// precise estimate stands.
+TEST(ImuScale, AgreeingSpacingsKeepTheConsecutiveFrames) {
+  const Data data = MakeImu(62.0, 1);
+  std::vector<double> stamps;
+  for (int k = 0; k <= 600; ++k) stamps.push_back(1.0 + 0.1 * k);
+  const ImuScaleResult result =
+      EstimateImuScale(Reconstruction(stamps, 1.02, 2), data.imu, data.noise);
+  EXPECT_FALSE(result.spacing_disagrees) << result.message;
+  EXPECT_NEAR(result.spaced_scale, 1.02, 3.0 * result.spaced_scale_sigma * 1.02);
+  EXPECT_EQ(result.num_pairs, 600);
 }
 
 TEST(ImuScale, TooFewFramesOrNoImuIsNotUsable) {
