@@ -45,6 +45,7 @@ struct Task {
 struct Result {
   image_t image_id = kInvalidImageId;
   ImageFeatures features;
+  bool extracted_before = false;  // taken from FeatureImageAccess::take_extracted
 };
 
 // Registers the camera and the images in the database (one transaction) and
@@ -100,9 +101,10 @@ std::vector<Task> RegisterImages(const Sequence& sequence, ColmapDatabase* datab
 
 std::string FeatureExtractionSummary::ToString() const {
   std::ostringstream text;
-  text << num_images << " images (" << num_extracted << " extracted, " << num_skipped
-       << " already stored), " << std::fixed << std::setprecision(1) << MeanFeatures()
-       << " features per image, " << std::setprecision(2) << seconds << " s";
+  text << num_images << " images (" << num_extracted << " extracted";
+  if (num_extracted_before > 0) text << " (" << num_extracted_before << " beside the VIO)";
+  text << ", " << num_skipped << " already stored), " << std::fixed << std::setprecision(1)
+       << MeanFeatures() << " features per image, " << std::setprecision(2) << seconds << " s";
   return text.str();
 }
 
@@ -142,6 +144,16 @@ FeatureExtractionSummary ExtractFeatures(const Sequence& sequence, const SiftOpt
         const size_t t = next_task++;
         if (t >= tasks.size()) break;
         const SequenceImage& image = sequence.images[tasks[t].sequence_index];
+        Result result{tasks[t].image_id, {}};
+        if (access.take_extracted &&
+            access.take_extracted(result.image_id, image, &result.features)) {
+          result.extracted_before = true;
+          std::unique_lock<std::mutex> lock(mutex);
+          space_ready.wait(lock, [&] { return results.size() < max_queued || stop; });
+          results.push_back(std::move(result));
+          results_ready.notify_one();
+          continue;
+        }
         const std::shared_ptr<const GreyImage> decoded =
             access.frames != nullptr ? access.frames->Take(image.path)
                                      : std::make_shared<const GreyImage>(ReadGreyImage(image.path));
@@ -154,7 +166,7 @@ FeatureExtractionSummary ExtractFeatures(const Sequence& sequence, const SiftOpt
                                std::to_string(camera.width) + " x " +
                                std::to_string(camera.height));
         }
-        Result result{tasks[t].image_id, ExtractSift(pixels, options)};
+        result.features = ExtractSift(pixels, options);
         if (access.on_extracted) {
           access.on_extracted(result.image_id, pixels, result.features.keypoints);
         }
@@ -192,6 +204,7 @@ FeatureExtractionSummary ExtractFeatures(const Sequence& sequence, const SiftOpt
       database->WriteFeatures(result.image_id, result.features.keypoints,
                               result.features.descriptors);
       ++summary.num_extracted;
+      if (result.extracted_before) ++summary.num_extracted_before;
       summary.num_features += result.features.keypoints.size();
       progress.Update();
     }

@@ -35,7 +35,10 @@ struct FeatureExtractionSummary {
   size_t num_extracted = 0;  // extracted by this run
   size_t num_skipped = 0;    // already in the database (resume)
   size_t num_features = 0;   // keypoints extracted by this run
-  double seconds = 0.0;      // wall-clock time of the run
+  // Of num_extracted: taken from FeatureImageAccess::take_extracted
+  // (extracted beside the VIO, pipeline/feature_prefetch.h).
+  size_t num_extracted_before = 0;
+  double seconds = 0.0;  // wall-clock time of the run
 
   double MeanFeatures() const {
     return num_extracted == 0 ? 0.0 : static_cast<double>(num_features) / num_extracted;
@@ -53,6 +56,11 @@ struct FeatureImageAccess {
   // and keypoints (so that a later stage needs no decode); must be
   // thread-safe. Empty: none.
   std::function<void(image_t, const GreyImage&, const FeatureKeypoints&)> on_extracted;
+  // The features of an image extracted before this call, with the same
+  // options, if there are: returns true and moves them into `features`
+  // (then neither the image is decoded nor on_extracted called). Called from
+  // the worker threads; must be thread-safe. Empty: none.
+  std::function<bool(image_t, const SequenceImage&, ImageFeatures* features)> take_extracted;
 };
 
 // Extracts the features of every image of `sequence` that the database does

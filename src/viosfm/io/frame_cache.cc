@@ -19,6 +19,7 @@ std::shared_ptr<const GreyImage> FrameCache::Read(const fs::path& path, bool kee
   auto image = std::make_shared<const GreyImage>(ReadGreyImage(path));
   std::lock_guard<std::mutex> lock(mutex_);
   ++counts_.decodes;
+  if (read_.insert(path).second) read_done_.notify_all();
   if (keep && (!filtered_ || wanted_.count(path) > 0)) {
     const size_t bytes = image->pixels.size();
     if (held_bytes_ + bytes <= max_bytes_) {
@@ -46,6 +47,21 @@ std::shared_ptr<const GreyImage> FrameCache::Take(const fs::path& path) {
   std::lock_guard<std::mutex> lock(mutex_);
   ++counts_.decodes;
   return image;
+}
+
+std::shared_ptr<const GreyImage> FrameCache::TakeAfterRead(const fs::path& path) {
+  {
+    std::unique_lock<std::mutex> lock(mutex_);
+    read_done_.wait(lock, [&] { return stop_waiting_ || read_.count(path) > 0; });
+    if (read_.count(path) == 0) return nullptr;
+  }
+  return Take(path);
+}
+
+void FrameCache::StopWaiting() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  stop_waiting_ = true;
+  read_done_.notify_all();
 }
 
 void FrameCache::RetainOnly(const std::vector<fs::path>& paths) {

@@ -9,6 +9,7 @@
 // again when taken, and counted so). Thread-safe.
 #pragma once
 
+#include <condition_variable>
 #include <cstddef>
 #include <filesystem>
 #include <map>
@@ -38,6 +39,13 @@ class FrameCache {
   std::shared_ptr<const GreyImage> Read(const std::filesystem::path& path, bool keep);
   // The image for the last time: the held copy, released, or decoded now.
   std::shared_ptr<const GreyImage> Take(const std::filesystem::path& path);
+  // Take once `path` has been Read (by another thread: a stage that runs
+  // beside the reader takes each frame right after it); blocks until then.
+  // Null if StopWaiting came first.
+  std::shared_ptr<const GreyImage> TakeAfterRead(const std::filesystem::path& path);
+  // Wakes every TakeAfterRead waiting for a path not read yet, and makes
+  // later ones return null at once for such paths (the reader is done).
+  void StopWaiting();
   // Releases every held image whose path is not in `paths`, and from now on
   // keeps only images in `paths` (the frames a later stage will take).
   void RetainOnly(const std::vector<std::filesystem::path>& paths);
@@ -53,6 +61,9 @@ class FrameCache {
   std::set<std::filesystem::path> wanted_;  // then: the only paths kept
   size_t held_bytes_ = 0;
   Counts counts_;
+  std::set<std::filesystem::path> read_;  // paths Read so far
+  bool stop_waiting_ = false;
+  std::condition_variable read_done_;
 };
 
 }  // namespace viosfm

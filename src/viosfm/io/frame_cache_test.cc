@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <thread>
 
 #include "viosfm/io/image_io.h"
 #include "viosfm/util/errors.h"
@@ -67,6 +68,35 @@ TEST(FrameCacheTest, BudgetAndRetainOnlyBoundWhatIsHeld) {
   cache.Take(b);  // kept
   EXPECT_EQ(cache.counts().decodes, 8u);
   EXPECT_EQ(cache.counts().reuses, 2u);
+}
+
+TEST(FrameCacheTest, TakeAfterReadWaitsForTheReaderAndStopsWhenItIsDone) {
+  const fs::path folder = testing::MakeScratchFolder("frame_cache_after_read");
+  const fs::path a = WriteImage(folder, "a.png", 10);
+  const fs::path b = WriteImage(folder, "b.png", 20);
+  const fs::path never = WriteImage(folder, "never.png", 30);
+  FrameCache cache(1 << 20);
+  std::shared_ptr<const GreyImage> taken_a, taken_b, taken_never;
+  std::thread follower([&] {
+    taken_a = cache.TakeAfterRead(a);
+    taken_b = cache.TakeAfterRead(b);
+    taken_never = cache.TakeAfterRead(never);  // never read: waits for StopWaiting
+  });
+  cache.Read(a, /*keep=*/true);
+  cache.Read(b, /*keep=*/true);
+  cache.StopWaiting();
+  follower.join();
+  ASSERT_NE(taken_a, nullptr);
+  ASSERT_NE(taken_b, nullptr);
+  EXPECT_EQ(taken_a->at(3, 2), 11);
+  EXPECT_EQ(taken_b->at(3, 2), 21);
+  EXPECT_EQ(taken_never, nullptr);
+  const FrameCache::Counts counts = cache.counts();
+  EXPECT_EQ(counts.decodes, 2u);  // each read image decoded once, taken from the cache
+  EXPECT_EQ(counts.reuses, 2u);
+  // Read paths stay read after StopWaiting: taken (decoded again, released before).
+  EXPECT_NE(cache.TakeAfterRead(a), nullptr);
+  EXPECT_EQ(cache.TakeAfterRead(never), nullptr);
 }
 
 TEST(FrameCacheTest, UnreadableFileIsAnInputError) {

@@ -6,9 +6,11 @@
 #include <chrono>
 #include <ctime>
 #include <iomanip>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "viosfm/pipeline/feature_prefetch.h"
 #include "viosfm/pipeline/run_fingerprint.h"
 #include "viosfm/pipeline/run_folder.h"
 #include "viosfm/pipeline/stage_colors.h"
@@ -37,6 +39,10 @@ constexpr int kNumStages = static_cast<int>(std::size(kStageNames));
 // (io/frame_cache.h): 512 MiB, about 1480 frames of 752 x 480; frames past it
 // are decoded again when their features are extracted.
 constexpr size_t kFrameCacheBytes = size_t{512} << 20;
+// Features extracted beside viosfm's own VIO (feature_prefetch.h) held until
+// the features stage writes them: 256 MiB, about 1700 frames of 1000
+// features, 200 of 8192; the rest are extracted by the features stage.
+constexpr size_t kFeaturePrefetchBytes = size_t{256} << 20;
 
 std::string UtcNow() {
   const std::time_t now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
@@ -130,15 +136,32 @@ PipelineSummary RunPipeline(const PipelineOptions& options) {
 
   // When the frame selection does not need the VIO, the frames the
   // features stage will take are known now: only those stay decoded.
+  // viosfm's own VIO, which decodes every frame on one core, then has their
+  // features extracted beside it on another (feature_prefetch.h) when the
+  // run has more than one thread, unless the folder holds stored features
+  // (a resumed run extracts only what they lack).
+  std::optional<FeaturePrefetch> prefetch;
   if (!FrameSelectionUsesTrajectory(sequence, options.frame_selection)) {
     const FrameSelection predicted = SelectFrames(sequence, options.frame_selection, nullptr);
     std::vector<std::filesystem::path> paths;
     for (const size_t index : predicted.kept) paths.push_back(sequence.images[index].path);
     frame_cache.RetainOnly(paths);
+    const bool own_vio = !options.vio_source && options.vio_trajectory.empty();
+    if (own_vio && options.num_threads > 1 &&
+        !std::filesystem::exists(folder.path() / "database.db")) {
+      prefetch.emplace(std::move(paths), options.EffectiveSiftOptions(), sequence.rig.camera,
+                       &frame_cache, kFeaturePrefetchBytes);
+    }
   }
 
   const VioPoses vio = clock.Run([&] {
     VioPoses poses = LoadVioPoses(sequence, options, &frame_cache);
+    if (prefetch) {
+      prefetch->Finish();
+      VIOSFM_LOG(INFO) << "run: features of " << prefetch->num_extracted()
+                       << " frames extracted beside the VIO (" << prefetch->peak_bytes() / (1 << 20)
+                       << " MiB held at most)";
+    }
     AddVioPosesToFingerprint(poses.world_from_body, poses.segments, &fingerprint);
     folder.CheckStoredData(fingerprint, /*complete=*/true);
     return poses;
@@ -155,8 +178,9 @@ PipelineSummary RunPipeline(const PipelineOptions& options) {
 
   FeaturesStageOutput features = clock.Run([&] {
     return ExtractFeaturesStage(frames, options, folder, fingerprint, &frame_cache,
-                                &keypoint_values);
+                                &keypoint_values, prefetch ? &*prefetch : nullptr);
   });
+  prefetch.reset();
   summary.features = features.summary;
   ReturnFreedMemory();
 

@@ -238,6 +238,10 @@ TEST(PipelineTest, WithoutVioTrajectoryOwnVioGivesThePoses) {
   EXPECT_EQ(summary.images.decodes, summary.num_frames_in);
   EXPECT_EQ(summary.images.reuses, summary.num_frames_selected);
   EXPECT_EQ(summary.images.not_kept, 0u);
+  // Two threads: the features of frames the VIO had read were extracted
+  // beside it (feature_prefetch.h), the rest after it.
+  EXPECT_GT(summary.features.num_extracted_before, 0u);
+  EXPECT_LE(summary.features.num_extracted_before, summary.features.num_extracted);
   // Resumed: the features are stored, so the colours take the registered
   // frames from the cache, still without a second decode.
   EXPECT_EQ(again.images.decodes, again.num_frames_in);

@@ -8,9 +8,9 @@
 #include "viosfm/util/progress.h"
 
 namespace viosfm {
-namespace {
 
-std::vector<uint8_t> SampleValues(const GreyImage& pixels, const FeatureKeypoints& keypoints) {
+std::vector<uint8_t> SampleKeypointGreyValues(const GreyImage& pixels,
+                                              const FeatureKeypoints& keypoints) {
   std::vector<uint8_t> values;
   values.reserve(keypoints.size());
   for (const FeatureKeypoint& keypoint : keypoints) {
@@ -23,11 +23,12 @@ std::vector<uint8_t> SampleValues(const GreyImage& pixels, const FeatureKeypoint
   return values;
 }
 
-}  // namespace
-
 void KeypointGreyValues::Sample(image_t image_id, const GreyImage& pixels,
                                 const FeatureKeypoints& keypoints) {
-  std::vector<uint8_t> values = SampleValues(pixels, keypoints);
+  Set(image_id, SampleKeypointGreyValues(pixels, keypoints));
+}
+
+void KeypointGreyValues::Set(image_t image_id, std::vector<uint8_t> values) {
   std::lock_guard<std::mutex> lock(mutex_);
   values_[image_id] = std::move(values);
 }

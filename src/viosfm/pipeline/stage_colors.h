@@ -18,12 +18,18 @@
 
 namespace viosfm {
 
-// Each keypoint's grey value, by image: the pixel nearest the keypoint
-// (viosfm's convention: pixel (x, y) has its centre at (x, y)).
+// Each keypoint's grey value: the pixel nearest the keypoint (viosfm's
+// convention: pixel (x, y) has its centre at (x, y)).
+std::vector<uint8_t> SampleKeypointGreyValues(const GreyImage& pixels,
+                                              const FeatureKeypoints& keypoints);
+
+// SampleKeypointGreyValues by image.
 class KeypointGreyValues {
  public:
   // Thread-safe.
   void Sample(image_t image_id, const GreyImage& pixels, const FeatureKeypoints& keypoints);
+  // Values sampled before the image had its id (thread-safe).
+  void Set(image_t image_id, std::vector<uint8_t> values);
   // The values of `image_id`, or null if it was not sampled.
   const std::vector<uint8_t>* Find(image_t image_id) const;
 

@@ -7,7 +7,7 @@ namespace viosfm {
 FeaturesStageOutput ExtractFeaturesStage(const SelectedFrames& frames,
                                          const PipelineOptions& options, const RunFolder& folder,
                                          const RunFingerprint& fingerprint, FrameCache* frame_cache,
-                                         KeypointGreyValues* values) {
+                                         KeypointGreyValues* values, FeaturePrefetch* prefetch) {
   // What the database's content is made from, before the database changes.
   folder.WriteRecords(fingerprint, options.ToKeyValues());
   FeaturesStageOutput output{ColmapDatabase::Open(folder.path() / "database.db"), {}};
@@ -17,6 +17,15 @@ FeaturesStageOutput ExtractFeaturesStage(const SelectedFrames& frames,
                                  const FeatureKeypoints& keypoints) {
     values->Sample(image_id, pixels, keypoints);
   };
+  if (prefetch != nullptr) {
+    access.take_extracted = [prefetch, values](image_t image_id, const SequenceImage& image,
+                                               ImageFeatures* features) {
+      std::vector<uint8_t> grey_values;
+      if (!prefetch->Take(image.path, features, &grey_values)) return false;
+      values->Set(image_id, std::move(grey_values));
+      return true;
+    };
+  }
   output.summary = ExtractFeatures(frames.sequence, options.EffectiveSiftOptions(),
                                    &output.database, options.show_progress, access);
   VIOSFM_LOG(INFO) << "run: features " << output.summary.ToString();

@@ -6,6 +6,7 @@
 
 #include "viosfm/features/feature_extraction.h"
 #include "viosfm/io/colmap_database.h"
+#include "viosfm/pipeline/feature_prefetch.h"
 #include "viosfm/pipeline/pipeline_options.h"
 #include "viosfm/pipeline/run_folder.h"
 #include "viosfm/pipeline/stage_colors.h"
@@ -20,10 +21,12 @@ struct FeaturesStageOutput {
 
 // Writes fingerprint.json and options.json, opens the database and
 // extracts the features it lacks, taking the images from `frame_cache` and
-// sampling each keypoint's grey value into `values` (stage_colors.h).
+// sampling each keypoint's grey value into `values` (stage_colors.h);
+// features extracted beside the VIO are taken from `prefetch` when given.
 FeaturesStageOutput ExtractFeaturesStage(const SelectedFrames& frames,
                                          const PipelineOptions& options, const RunFolder& folder,
                                          const RunFingerprint& fingerprint, FrameCache* frame_cache,
-                                         KeypointGreyValues* values);
+                                         KeypointGreyValues* values,
+                                         FeaturePrefetch* prefetch = nullptr);
 
 }  // namespace viosfm

@@ -1,0 +1,88 @@
+#include "viosfm/pipeline/feature_prefetch.h"
+
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <exception>
+#include <utility>
+
+#include "viosfm/pipeline/stage_colors.h"
+#include "viosfm/util/logging.h"
+
+namespace viosfm {
+namespace {
+
+constexpr int kNiceness = 10;
+
+}  // namespace
+
+FeaturePrefetch::FeaturePrefetch(std::vector<std::filesystem::path> paths,
+                                 const SiftOptions& options, const Camera& camera,
+                                 FrameCache* frames, size_t max_bytes)
+    : paths_(std::move(paths)),
+      options_(options),
+      camera_(camera),
+      frames_(frames),
+      max_bytes_(max_bytes) {
+  VIOSFM_CHECK(frames_ != nullptr);
+  thread_ = std::thread([this] { Follow(); });
+}
+
+FeaturePrefetch::~FeaturePrefetch() {
+  Finish();
+}
+
+void FeaturePrefetch::Finish() {
+  stop_ = true;
+  frames_->StopWaiting();
+  if (thread_.joinable()) thread_.join();
+}
+
+void FeaturePrefetch::Follow() {
+  // Below the VIO's priority: the VIO is what the run waits for, this
+  // thread only fills the core it leaves idle (Linux: per thread).
+  setpriority(PRIO_PROCESS, static_cast<id_t>(gettid()), kNiceness);
+  for (const std::filesystem::path& path : paths_) {
+    if (stop_) return;
+    Extracted extracted;
+    try {
+      const std::shared_ptr<const GreyImage> pixels = frames_->TakeAfterRead(path);
+      if (pixels == nullptr) return;  // the VIO did not read it
+      if (static_cast<uint64_t>(pixels->width) != camera_.width ||
+          static_cast<uint64_t>(pixels->height) != camera_.height) {
+        return;  // the features stage reads it again and reports the size
+      }
+      extracted.features = ExtractSift(*pixels, options_);
+      extracted.grey_values = SampleKeypointGreyValues(*pixels, extracted.features.keypoints);
+    } catch (const std::exception& error) {
+      // The features stage reads the image again and reports what is wrong.
+      VIOSFM_LOG(INFO) << "run: features beside the VIO stop at " << path.string() << ": "
+                       << error.what();
+      return;
+    }
+    extracted.bytes = extracted.features.keypoints.size() * sizeof(FeatureKeypoint) +
+                      static_cast<size_t>(extracted.features.descriptors.size()) +
+                      extracted.grey_values.size();
+    std::lock_guard<std::mutex> lock(mutex_);
+    held_bytes_ += extracted.bytes;
+    peak_bytes_ = std::max(peak_bytes_.load(), held_bytes_);
+    extracted_.emplace(path, std::move(extracted));
+    ++num_extracted_;
+    if (held_bytes_ >= max_bytes_) return;  // the rest stays in the frame cache
+  }
+}
+
+bool FeaturePrefetch::Take(const std::filesystem::path& path, ImageFeatures* features,
+                           std::vector<uint8_t>* grey_values) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const auto it = extracted_.find(path);
+  if (it == extracted_.end()) return false;
+  *features = std::move(it->second.features);
+  *grey_values = std::move(it->second.grey_values);
+  held_bytes_ -= it->second.bytes;
+  extracted_.erase(it);
+  return true;
+}
+
+}  // namespace viosfm
