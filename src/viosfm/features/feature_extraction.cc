@@ -145,30 +145,26 @@ FeatureExtractionSummary ExtractFeatures(const Sequence& sequence, const SiftOpt
         if (t >= tasks.size()) break;
         const SequenceImage& image = sequence.images[tasks[t].sequence_index];
         Result result{tasks[t].image_id, {}};
-        if (access.take_extracted &&
-            access.take_extracted(result.image_id, image, &result.features)) {
-          result.extracted_before = true;
-          std::unique_lock<std::mutex> lock(mutex);
-          space_ready.wait(lock, [&] { return results.size() < max_queued || stop; });
-          results.push_back(std::move(result));
-          results_ready.notify_one();
-          continue;
-        }
-        const std::shared_ptr<const GreyImage> decoded =
-            access.frames != nullptr ? access.frames->Take(image.path)
-                                     : std::make_shared<const GreyImage>(ReadGreyImage(image.path));
-        const GreyImage& pixels = *decoded;
-        if (static_cast<uint64_t>(pixels.width) != camera.width ||
-            static_cast<uint64_t>(pixels.height) != camera.height) {
-          throw InputError(image.path.string(), 0,
-                           "image of " + std::to_string(pixels.width) + " x " +
-                               std::to_string(pixels.height) + " pixels, expected the camera's " +
-                               std::to_string(camera.width) + " x " +
-                               std::to_string(camera.height));
-        }
-        result.features = ExtractSift(pixels, options);
-        if (access.on_extracted) {
-          access.on_extracted(result.image_id, pixels, result.features.keypoints);
+        result.extracted_before = access.take_extracted &&
+                                  access.take_extracted(result.image_id, image, &result.features);
+        if (!result.extracted_before) {
+          const std::shared_ptr<const GreyImage> decoded =
+              access.frames != nullptr
+                  ? access.frames->Take(image.path)
+                  : std::make_shared<const GreyImage>(ReadGreyImage(image.path));
+          const GreyImage& pixels = *decoded;
+          if (static_cast<uint64_t>(pixels.width) != camera.width ||
+              static_cast<uint64_t>(pixels.height) != camera.height) {
+            throw InputError(image.path.string(), 0,
+                             "image of " + std::to_string(pixels.width) + " x " +
+                                 std::to_string(pixels.height) + " pixels, expected the camera's " +
+                                 std::to_string(camera.width) + " x " +
+                                 std::to_string(camera.height));
+          }
+          result.features = ExtractSift(pixels, options);
+          if (access.on_extracted) {
+            access.on_extracted(result.image_id, pixels, result.features.keypoints);
+          }
         }
         std::unique_lock<std::mutex> lock(mutex);
         space_ready.wait(lock, [&] { return results.size() < max_queued || stop; });

@@ -104,6 +104,45 @@ TEST(FeatureExtraction, WritesEveryImageAndResumes) {
   EXPECT_EQ(again.num_skipped, 4u);
 }
 
+// Features given by FeatureImageAccess::take_extracted are written as
+// given, without a decode; the other images are extracted as usual.
+TEST(FeatureExtraction, TakesFeaturesExtractedBefore) {
+  const Sequence& sequence = Rendered();
+  ColmapDatabase database =
+      ColmapDatabase::Open(testing::MakeScratchFolder("extraction_before") / "db.db");
+  SiftOptions options;
+  options.max_num_features = 500;
+  const ImageFeatures second = ExtractSift(ReadGreyImage(sequence.images[1].path), options);
+  FeatureImageAccess access;
+  int num_decoded = 0;
+  access.on_extracted = [&](image_t, const GreyImage&, const FeatureKeypoints&) {
+    ++num_decoded;  // one worker thread: no race
+  };
+  access.take_extracted = [&](image_t, const SequenceImage& image, ImageFeatures* features) {
+    if (image.path != sequence.images[1].path) return false;
+    *features = second;
+    features->keypoints.resize(7);  // recognisably not what extraction gives
+    features->descriptors.conservativeResize(7, Eigen::NoChange);
+    return true;
+  };
+  options.num_threads = 1;
+  const FeatureExtractionSummary summary =
+      ExtractFeatures(sequence, options, &database, false, access);
+  EXPECT_EQ(summary.num_extracted, 4u);
+  EXPECT_EQ(summary.num_extracted_before, 1u);
+  EXPECT_EQ(num_decoded, 3);
+  EXPECT_THAT(summary.ToString(), ::testing::HasSubstr("4 extracted (1 beside the VIO)"));
+  const image_t id =
+      database.ReadImageWithName(sequence.images[1].path.filename().string())->image_id;
+  const FeatureKeypoints keypoints = database.ReadKeypoints(id);
+  ASSERT_EQ(keypoints.size(), 7u);
+  EXPECT_EQ(keypoints[6].x, second.keypoints[6].x);
+  EXPECT_EQ(database.ReadDescriptors(id), second.descriptors.topRows(7));
+  const image_t other =
+      database.ReadImageWithName(sequence.images[2].path.filename().string())->image_id;
+  EXPECT_GT(database.ReadKeypoints(other).size(), 100u);
+}
+
 TEST(FeatureExtraction, RejectsMismatchedInput) {
   const Sequence& sequence = Rendered();
   const fs::path folder = testing::MakeScratchFolder("extraction_bad");
