@@ -114,6 +114,12 @@ void RegisterFeatures(CLI::App& app) {
       ->add_option("--peak-threshold", args->sift.peak_threshold,
                    "Minimum DoG response (intensities in [0, 1])")
       ->capture_default_str();
+  command
+      ->add_option("--first-octave", args->sift.first_octave,
+                   "First octave of the scale space: -1 (image doubled, COLMAP's) or 0 (the image "
+                   "itself: about half the time, coarser keypoints)")
+      ->check(CLI::IsMember({-1, 0}))
+      ->capture_default_str();
   command->add_option("--camera-yaml", args->bag.camera_yaml,
                       "Image folder or bag: Kalibr/EuRoC camera sensor.yaml");
   AddBagOptions(command, &args->bag, /*add_camera_yaml=*/false);

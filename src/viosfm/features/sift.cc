@@ -7,6 +7,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/features2d.hpp>
 
+#include "viosfm/features/dog_detector.h"
 #include "viosfm/sensor/camera_models.h"
 #include "viosfm/util/errors.h"
 
@@ -33,6 +34,7 @@ std::string SiftOptions::Validate() const {
   if (!(peak_threshold >= 0.0)) return "peak_threshold must be >= 0";
   if (!(edge_threshold > 0.0)) return "edge_threshold must be > 0";
   if (num_octave_layers < 1) return "num_octave_layers must be >= 1";
+  if (first_octave != -1 && first_octave != 0) return "first_octave must be -1 or 0";
   if (num_threads < 1) return "num_threads must be >= 1";
   return "";
 }
@@ -87,7 +89,23 @@ ImageFeatures ExtractSift(const GreyImage& image, const SiftOptions& options) {
   const cv::Mat mat(image.height, image.width, CV_8UC1, const_cast<uint8_t*>(image.pixels.data()));
   std::vector<cv::KeyPoint> cv_keypoints;
   cv::Mat cv_descriptors;
-  sift->detectAndCompute(mat, cv::noArray(), cv_keypoints, cv_descriptors);
+  // cv::SIFT's own detector starts from the image doubled and reports
+  // positions kOpenCvSiftPositionBias too large; DetectDogKeypoints starts from the
+  // image itself, and cv::SIFT then describes its keypoints on a pyramid
+  // that starts there too (the keypoints' packed octaves are all >= 0).
+  double position_bias = kOpenCvSiftPositionBias;
+  if (options.first_octave == 0) {
+    DogDetectorOptions detector;
+    detector.num_layers = options.num_octave_layers;
+    detector.peak_threshold = options.peak_threshold;
+    detector.edge_threshold = options.edge_threshold;
+    detector.max_num_extrema = options.max_num_features;
+    cv_keypoints = DetectDogKeypoints(mat, detector);
+    if (!cv_keypoints.empty()) sift->compute(mat, cv_keypoints, cv_descriptors);
+    position_bias = 0.0;
+  } else {
+    sift->detectAndCompute(mat, cv::noArray(), cv_keypoints, cv_descriptors);
+  }
   VIOSFM_CHECK(cv_descriptors.rows == static_cast<int>(cv_keypoints.size()))
       << cv_keypoints.size() << " keypoints but " << cv_descriptors.rows << " descriptors";
 
@@ -110,8 +128,8 @@ ImageFeatures ExtractSift(const GreyImage& image, const SiftOptions& options) {
     const float scale = 0.5f * k.size;  // KeyPoint::size is the diameter 2 sigma
     const float orientation = k.angle * static_cast<float>(std::numbers::pi / 180.0);
     features.keypoints.push_back(FeatureKeypoint::FromScaleOrientation(
-        static_cast<float>(k.pt.x - kOpenCvSiftPositionBias),
-        static_cast<float>(k.pt.y - kOpenCvSiftPositionBias), scale, orientation));
+        static_cast<float>(k.pt.x - position_bias), static_cast<float>(k.pt.y - position_bias),
+        scale, orientation));
     const float* row = cv_descriptors.ptr<float>(order[i]);
     std::copy(row, row + num_cols, raw.row(static_cast<Eigen::Index>(i)).data());
   }

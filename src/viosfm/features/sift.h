@@ -54,6 +54,13 @@ struct SiftOptions {
   // DoG levels per octave. Default 3 (COLMAP's octave_resolution, OpenCV's
   // nOctaveLayers).
   int num_octave_layers = 3;
+  // The scale space's first octave: -1 starts from the image doubled in
+  // size (Lowe's, VLFeat's, COLMAP's and cv::SIFT's choice, which finds
+  // keypoints of sigma 0.8 to 1.6 pixels), 0 from the image itself (no
+  // keypoint below sigma 1.6; about a quarter of the pyramid's pixels).
+  // cv::SIFT's detector always doubles, so 0 detects with viosfm's own
+  // (features/dog_detector.h) and lets cv::SIFT describe. Default -1.
+  int first_octave = -1;
   // Worker threads of the batch extraction (feature_extraction.h), each
   // extracting one image at a time. Default 2.
   int num_threads = 2;
@@ -73,6 +80,9 @@ struct SiftOptions {
           self.edge_threshold);
     visit({"num_octave_layers", "DoG levels per octave", kShapesStoredData},
           self.num_octave_layers);
+    visit({"first_octave", "first octave of the scale space: -1 (image doubled) or 0",
+           kShapesStoredData},
+          self.first_octave);
     visit({"num_threads", "worker threads of the extraction", kRunOnly}, self.num_threads);
   }
 };

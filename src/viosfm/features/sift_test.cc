@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iostream>
+#include <limits>
 #include <numbers>
 #include <random>
 
@@ -158,61 +159,131 @@ GreyImage Shifted(const GreyImage& image, int dx, int dy) {
   return shifted;
 }
 
-TEST(Sift, KeypointsMoveWithAnIntegerShift) {
-  constexpr int kDx = 16;
-  constexpr int kDy = 8;
-  const ImageFeatures shifted = ExtractSift(Shifted(RoomImage(), kDx, kDy), SiftOptions{});
+SiftOptions WithFirstOctave(int first_octave) {
+  SiftOptions options;
+  options.first_octave = first_octave;
+  return options;
+}
+
+// The geometric tests below hold for both first octaves: -1 (the image
+// doubled, cv::SIFT's own) and 0 (cv::SIFT given the image halved, its
+// keypoints mapped back).
+class SiftGeometry : public ::testing::TestWithParam<int> {
+ protected:
+  SiftOptions Options() const { return WithFirstOctave(GetParam()); }
+  const ImageFeatures& Features() const {
+    static const ImageFeatures doubled = ExtractSift(RoomImage(), WithFirstOctave(-1));
+    static const ImageFeatures itself = ExtractSift(RoomImage(), WithFirstOctave(0));
+    return GetParam() == -1 ? doubled : itself;
+  }
+};
+
+INSTANTIATE_TEST_SUITE_P(FirstOctave, SiftGeometry, ::testing::Values(-1, 0),
+                         [](const ::testing::TestParamInfo<int>& info) {
+                           return info.param == -1 ? std::string("Doubled") : std::string("Itself");
+                         });
+
+// Keypoints of the image shifted by (dx, dy) pixels, against the keypoints
+// of the image moved by (dx, dy): the median distance, and the fraction of
+// the interior keypoints found within a pixel.
+std::pair<double, double> ShiftErrors(const ImageFeatures& features, const SiftOptions& options,
+                                      int dx, int dy) {
+  const ImageFeatures shifted = ExtractSift(Shifted(RoomImage(), dx, dy), options);
   std::vector<double> errors;
   int interior = 0;
-  for (const FeatureKeypoint& keypoint : RoomFeatures().keypoints) {
+  for (const FeatureKeypoint& keypoint : features.keypoints) {
     // Away from the borders the shifted image holds the same content.
     if (keypoint.x < 40 || keypoint.x > 752 - 60 || keypoint.y < 40 || keypoint.y > 480 - 50) {
       continue;
     }
     ++interior;
     const auto [index, distance] =
-        Nearest(shifted.keypoints, Eigen::Vector2d(keypoint.x + kDx, keypoint.y + kDy));
+        Nearest(shifted.keypoints, Eigen::Vector2d(keypoint.x + dx, keypoint.y + dy));
     if (distance < 1.0) errors.push_back(distance);
   }
-  ASSERT_GT(interior, 300);
-  EXPECT_GE(errors.size(), 0.9 * interior);
-  EXPECT_LT(Median(errors), 1e-3);
+  EXPECT_GT(interior, 300);
+  return {Median(errors), static_cast<double>(errors.size()) / interior};
+}
+
+TEST_P(SiftGeometry, KeypointsMoveWithAnEvenShift) {
+  const auto [median, found] = ShiftErrors(Features(), Options(), 16, 8);
+  EXPECT_GE(found, 0.9);
+  EXPECT_LT(median, 1e-3);
+}
+
+// With the first octave at 0 an odd shift changes which pixels are averaged
+// together: the keypoints still follow, to a few hundredths of a pixel. A
+// wrong phase in mapping the halved image back would show as 0.5 pixel.
+TEST_P(SiftGeometry, KeypointsMoveWithAnOddShift) {
+  const auto [median, found] = ShiftErrors(Features(), Options(), 17, 9);
+  std::cout << "odd shift: median error " << median << " px, " << 100.0 * found << " % found\n";
+  EXPECT_GE(found, 0.8);
+  EXPECT_LT(median, 0.06);
 }
 
 // Rotating the image by 90 degrees clockwise (on screen) maps the pixel
 // centre (x, y) to (H - 1 - y, x) (H the height; pixel centres at integer
 // coordinates, viosfm's convention) and adds
 // pi / 2 to the orientation (measured from +x towards +y, y down).
-TEST(Sift, RotationMovesPositionsAndOrientations) {
+TEST_P(SiftGeometry, RotationMovesPositionsAndOrientations) {
   const GreyImage& image = RoomImage();
   GreyImage rotated(image.height, image.width);
   for (int y = 0; y < image.height; ++y) {
     for (int x = 0; x < image.width; ++x) rotated.at(image.height - 1 - y, x) = image.at(x, y);
   }
-  const ImageFeatures rotated_features = ExtractSift(rotated, SiftOptions{});
+  const ImageFeatures rotated_features = ExtractSift(rotated, Options());
   std::vector<double> position_errors;
   std::vector<double> angle_errors;
   std::vector<double> scale_ratios;
-  for (const FeatureKeypoint& keypoint : RoomFeatures().keypoints) {
+  std::vector<double> descriptor_distances;
+  for (size_t i = 0; i < Features().keypoints.size(); ++i) {
+    const FeatureKeypoint& keypoint = Features().keypoints[i];
     const Eigen::Vector2d expected(image.height - 1 - keypoint.y, keypoint.x);
     const auto [index, distance] = Nearest(rotated_features.keypoints, expected);
     if (distance > 0.5) continue;
     const FeatureKeypoint& match = rotated_features.keypoints[index];
     position_errors.push_back(distance);
+    descriptor_distances.push_back((Features().descriptors.row(i).cast<double>() -
+                                    rotated_features.descriptors.row(index).cast<double>())
+                                       .norm());
     const double difference = match.Orientation() - keypoint.Orientation() - std::numbers::pi / 2;
     angle_errors.push_back(std::abs(std::remainder(difference, 2.0 * std::numbers::pi)));
     scale_ratios.push_back(match.Scale() / keypoint.Scale());
   }
-  ASSERT_GE(position_errors.size(), 0.5 * RoomFeatures().keypoints.size());
+  ASSERT_GE(position_errors.size(), 0.5 * Features().keypoints.size());
   EXPECT_LT(Median(position_errors), 0.05);
   EXPECT_LT(Median(angle_errors), 0.02);
   EXPECT_NEAR(Median(scale_ratios), 1.0, 0.01);
+  // The descriptor turns with the orientation: the rotated keypoint's
+  // descriptor is (almost) the same vector, of norm 512.
+  std::cout << "rotation: median descriptor distance " << Median(descriptor_distances) << "\n";
+  EXPECT_LT(Median(descriptor_distances), 60.0);
+}
+
+// Without the doubled octave no keypoint is finer than the initial blur.
+TEST(Sift, FirstOctaveZeroHasNoKeypointBelowSigma16) {
+  const ImageFeatures features = ExtractSift(RoomImage(), WithFirstOctave(0));
+  EXPECT_GE(features.keypoints.size(), 500u);
+  float smallest = std::numeric_limits<float>::infinity();
+  for (const FeatureKeypoint& keypoint : features.keypoints) {
+    smallest = std::min(smallest, keypoint.Scale());
+  }
+  EXPECT_GE(smallest, 1.6f * 0.99f);
+  float smallest_doubled = std::numeric_limits<float>::infinity();
+  for (const FeatureKeypoint& keypoint : RoomFeatures().keypoints) {
+    smallest_doubled = std::min(smallest_doubled, keypoint.Scale());
+  }
+  EXPECT_LT(smallest_doubled, 1.6f);
+  SiftOptions options;
+  options.first_octave = 1;
+  EXPECT_NE(options.Validate().find("first_octave"), std::string::npos);
 }
 
 // Bright Gaussian blobs drawn at the projections of known 3D points (pixel
 // positions as Project() returns them): SIFT finds them at those positions,
-// and UndistortKeypoints gives back the points' normalised coordinates.
-TEST(Sift, ProjectedPointsUndistortToTheirNormalisedCoordinates) {
+// and UndistortKeypoints gives back the points' normalised coordinates. The
+// same on the image cropped to an odd width and height.
+TEST_P(SiftGeometry, ProjectedPointsUndistortToTheirNormalisedCoordinates) {
   const Camera camera = SimulationOptions::DefaultCamera();
   std::vector<Eigen::Vector3d> points;
   std::vector<Eigen::Vector2d> pixels;
@@ -227,58 +298,73 @@ TEST(Sift, ProjectedPointsUndistortToTheirNormalisedCoordinates) {
     }
   }
   constexpr double kSigma = 2.5;  // pixels
-  GreyImage image(static_cast<int>(camera.width), static_cast<int>(camera.height), 20);
-  for (int y = 0; y < image.height; ++y) {
-    for (int x = 0; x < image.width; ++x) {
-      double value = 20.0;
-      for (const Eigen::Vector2d& pixel : pixels) {
-        const double d2 = (Eigen::Vector2d(x, y) - pixel).squaredNorm();
-        if (d2 < 100.0) value += 200.0 * std::exp(-d2 / (2.0 * kSigma * kSigma));
+  for (const int crop : {0, 1}) {
+    GreyImage image(static_cast<int>(camera.width) - crop, static_cast<int>(camera.height) - crop,
+                    20);
+    for (int y = 0; y < image.height; ++y) {
+      for (int x = 0; x < image.width; ++x) {
+        double value = 20.0;
+        for (const Eigen::Vector2d& pixel : pixels) {
+          const double d2 = (Eigen::Vector2d(x, y) - pixel).squaredNorm();
+          if (d2 < 100.0) value += 200.0 * std::exp(-d2 / (2.0 * kSigma * kSigma));
+        }
+        image.at(x, y) = static_cast<uint8_t>(std::min(255.0, std::round(value)));
       }
-      image.at(x, y) = static_cast<uint8_t>(std::min(255.0, std::round(value)));
     }
+    const ImageFeatures features = ExtractSift(image, Options());
+    const std::vector<Eigen::Vector2d> normalized = UndistortKeypoints(camera, features.keypoints);
+    ASSERT_EQ(normalized.size(), features.keypoints.size());
+    const double focal = MeanFocalLength(camera);
+    std::vector<double> pixel_errors;
+    std::vector<double> normalized_errors;
+    std::vector<double> scales;
+    for (size_t i = 0; i < points.size(); ++i) {
+      const auto [index, distance] = Nearest(features.keypoints, pixels[i]);
+      ASSERT_LT(distance, 0.2) << "blob " << i << " at " << pixels[i].transpose() << ", crop "
+                               << crop;
+      pixel_errors.push_back(distance);
+      scales.push_back(features.keypoints[index].Scale());
+      const Eigen::Vector2d expected = points[i].hnormalized();
+      normalized_errors.push_back((normalized[index] - expected).norm() * focal);
+    }
+    // Sub-pixel localisation of a sampled blob: a few hundredths of a pixel.
+    // A half-pixel convention error would show as ~0.7 pixel.
+    EXPECT_LT(Median(pixel_errors), 0.05) << "crop " << crop;
+    EXPECT_LT(Median(normalized_errors), 0.06) << "crop " << crop;
+    // The normalised Laplacian of a Gaussian blob of sigma s peaks at scale
+    // s. The DoG of layers sigma and k sigma (k = 2^(1/3)) approximates it
+    // at about sqrt(k) sigma but is reported at sigma, so the blob's
+    // keypoint is reported at s / sqrt(k) = 2.23 pixels.
+    const double expected_scale = kSigma / std::pow(2.0, 1.0 / 6.0);
+    EXPECT_NEAR(Median(scales), expected_scale, 0.05 * expected_scale) << "crop " << crop;
+    std::cout << image.width << " x " << image.height << ": blob localisation median "
+              << Median(pixel_errors) << " px, scale " << Median(scales) << " px\n";
   }
-  const ImageFeatures features = ExtractSift(image, SiftOptions{});
-  const std::vector<Eigen::Vector2d> normalized = UndistortKeypoints(camera, features.keypoints);
-  ASSERT_EQ(normalized.size(), features.keypoints.size());
-  const double focal = MeanFocalLength(camera);
-  std::vector<double> pixel_errors;
-  std::vector<double> normalized_errors;
-  for (size_t i = 0; i < points.size(); ++i) {
-    const auto [index, distance] = Nearest(features.keypoints, pixels[i]);
-    ASSERT_LT(distance, 0.2) << "blob " << i << " at " << pixels[i].transpose();
-    pixel_errors.push_back(distance);
-    const Eigen::Vector2d expected = points[i].hnormalized();
-    normalized_errors.push_back((normalized[index] - expected).norm() * focal);
-  }
-  // Sub-pixel localisation of a sampled blob: a few hundredths of a pixel.
-  // A half-pixel convention error would show as ~0.7 pixel.
-  EXPECT_LT(Median(pixel_errors), 0.05);
-  EXPECT_LT(Median(normalized_errors), 0.06);
-  std::cout << "blob localisation: median " << Median(pixel_errors) << " px\n";
 }
 
 TEST(Sift, RealEurocFrames) {
   VIOSFM_REQUIRE_DATASET(root, "euroc_v101_static_micro");
   const Sequence sequence = ReadEurocDataset(root);
   ASSERT_GE(sequence.images.size(), 5u);
-  size_t total = 0;
-  double seconds = 0.0;
   constexpr int kFrames = 5;
-  for (int i = 0; i < kFrames; ++i) {
-    const size_t index = i * (sequence.images.size() / kFrames);
-    const GreyImage image = ReadGreyImage(sequence.images[index].path);
-    ASSERT_EQ(image.width, 752);
-    ASSERT_EQ(image.height, 480);
-    Timer timer;
-    const ImageFeatures features = ExtractSift(image, SiftOptions{});
-    seconds += timer.ElapsedSeconds();
-    EXPECT_GE(features.keypoints.size(), 500u) << sequence.images[index].path;
-    total += features.keypoints.size();
+  for (const int first_octave : {-1, 0}) {
+    size_t total = 0;
+    double seconds = 0.0;
+    for (int i = 0; i < kFrames; ++i) {
+      const size_t index = i * (sequence.images.size() / kFrames);
+      const GreyImage image = ReadGreyImage(sequence.images[index].path);
+      ASSERT_EQ(image.width, 752);
+      ASSERT_EQ(image.height, 480);
+      Timer timer;
+      const ImageFeatures features = ExtractSift(image, WithFirstOctave(first_octave));
+      seconds += timer.ElapsedSeconds();
+      EXPECT_GE(features.keypoints.size(), 500u) << sequence.images[index].path;
+      total += features.keypoints.size();
+    }
+    std::cout << "EuRoC V1_01 752x480, first octave " << first_octave << ": "
+              << static_cast<double>(total) / kFrames << " features per frame, "
+              << 1e3 * seconds / kFrames << " ms per frame (one image at a time)\n";
   }
-  std::cout << "EuRoC V1_01 752x480: " << static_cast<double>(total) / kFrames
-            << " features per frame, " << 1e3 * seconds / kFrames
-            << " ms per frame (one image at a time)\n";
 }
 
 }  // namespace
