@@ -1,10 +1,10 @@
 #include "viosfm/matching/descriptor_matcher.h"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
-#include "viosfm/geometry/epipolar.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/parallel.h"
 #include "viosfm/util/progress.h"
@@ -283,17 +283,19 @@ FeatureMatches MatchDescriptorsGuided(const FloatDescriptors& descriptors1,
       const Eigen::Vector3d line = fundamental * point1.homogeneous();
       const double norm = line.head<2>().norm();
       if (!(norm > 0.0) || !line.allFinite()) continue;
+      const double max_line_value = max_distance * norm;
       BestTwo& row = rows[i];
       const auto row_index = static_cast<int32_t>(i);
-      grid.ForEachNearLine(
-          line.x() / norm, line.y() / norm, line.z() / norm, search_half_width, [&](int32_t j) {
-            if (!(EpipolarLineDistance(fundamental, point1, points2[j]) <= max_distance)) {
-              return;
-            }
-            const float dot = descriptors1.row(i).dot(descriptors2.row(j));
-            row.Add(dot, j);
-            if (matching.cross_check) thread_columns[j].Add(dot, row_index);
-          });
+      grid.ForEachNearLine(line.x() / norm, line.y() / norm, line.z() / norm, search_half_width,
+                           [&](int32_t j) {
+                             // EpipolarLineDistance(fundamental, point1, points2[j]) <=
+                             // max_distance, with the line and its norm computed once per row.
+                             if (!(std::abs(line.dot(points2[j].homogeneous())) <= max_line_value))
+                               return;
+                             const float dot = descriptors1.row(i).dot(descriptors2.row(j));
+                             row.Add(dot, j);
+                             if (matching.cross_check) thread_columns[j].Add(dot, row_index);
+                           });
     }
   });
   return CollectMatches(rows, columns, matching);
