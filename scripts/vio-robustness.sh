@@ -7,6 +7,10 @@
 # the scale), and the VIO's CPU time; then what the VIO said about the time
 # offset and the IMU noise figures.
 #
+# The VIO is given the rolling-shutter readout of the cases that have one
+# (`--rolling-shutter-readout`, as a user gives their camera's), unless
+# VIO_KNOWS_READOUT=0, which runs it as a global-shutter VIO.
+#
 # The ATE pairs every VIO pose with the ground truth at the frame's true
 # exposure time: with a camera time offset the estimate's stamps (image
 # stamps) are shifted back by the simulated offset (`viosfm eval --offset`).
@@ -27,6 +31,7 @@ WORK=${1:-/tmp/vio_robustness}
 DURATION=${DURATION:-30}
 RATE=${RATE:-20}
 SEED=${SEED:-0}
+VIO_KNOWS_READOUT=${VIO_KNOWS_READOUT:-1}
 CASES=${CASES:-"baseline motion_blur auto_exposure rolling_shutter wrong_imu_noise time_offset white_walls all"}
 
 # The simulate options of each case.
@@ -59,11 +64,17 @@ for name in $CASES; do
     "$SIMULATOR" simulate --scenario room --duration "$DURATION" --rate "$RATE" --seed "$SEED" \
       $options --out "$SEQ" > "$WORK/simulate_${name}.log" 2>&1
   fi
+  vio_options=""
+  readout=$(echo "$options" | sed -n 's/.*--rolling-shutter-readout \([0-9.]*\).*/\1/p')
+  if [ -n "$readout" ] && [ "$VIO_KNOWS_READOUT" = 1 ]; then
+    vio_options="--rolling-shutter-readout $readout"
+  fi
   OUT="$WORK/${TAG}_${name}"
   rm -rf "$OUT"
   status=0
+  # shellcheck disable=SC2086
   /usr/bin/time -f "%U %S %e" -o "$WORK/${TAG}_${name}_time.txt" \
-    "$VIOSFM" vio "$SEQ" --out "$OUT" > "$WORK/${TAG}_${name}.log" 2>&1 || status=$?
+    "$VIOSFM" vio "$SEQ" --out "$OUT" $vio_options > "$WORK/${TAG}_${name}.log" 2>&1 || status=$?
   if [ "$status" -ne 0 ] || [ ! -f "$OUT/vio_summary.txt" ]; then
     echo "| $name | \`$options\` | vio failed (exit $status, see $WORK/${TAG}_${name}.log) | | | | | |"
     continue
@@ -90,7 +101,7 @@ for name in $CASES; do
                  printf "%.4f m", rmse; if (mode == "sim3" && scale != "") printf ", %.4f", scale }' || echo "-"
   }
   cpu=$(echo "$user $sys" | awk '{ printf "%.1f s", $1 + $2 }')
-  echo "| $name | \`${options:-(none)}\` | $frames | $(value num_resets) | $first | $(ate se3) | $(ate sim3) | $cpu |"
+  echo "| $name | \`${options:-(none)}\`${vio_options:+ (vio: \`$vio_options\`)} | $frames | $(value num_resets) | $first | $(ate se3) | $(ate sim3) | $cpu |"
   NOTES+="$name: time_offset_ns $(value time_offset_ns) ($(value time_offset_message)); imu noise: $(value imu_noise_message)"$'\n'
 done
 echo

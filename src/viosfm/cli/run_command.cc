@@ -121,6 +121,7 @@ constexpr std::pair<const char*, const char*> kOptionFlags[] = {
     {"--bridge-max-matches", "mapper.bridge_max_matches"},
     {"--prior-loss-scale", "mapper.ba.prior_loss_scale"},
     {"--verification-batch", "verification.batch_size"},
+    {"--rolling-shutter-readout", "own_vio.rolling_shutter_readout_s"},
     {"--threads", "num_threads"},
     {"--seed", "seed"},
 };

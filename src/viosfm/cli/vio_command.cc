@@ -78,6 +78,11 @@ void RegisterVio(CLI::App& app) {
       ->add_option("--iterations", args->options.window.max_num_iterations,
                    "Solver iterations per frame")
       ->capture_default_str();
+  command
+      ->add_option("--rolling-shutter-readout", args->options.rolling_shutter_readout_s,
+                   "s, the camera's rolling-shutter readout time, first row to last (0: global "
+                   "shutter); observations are moved to the frame's stamp")
+      ->capture_default_str();
   AddBagOptions(command, &args->bag, /*add_camera_yaml=*/true);
   command->callback([args] { RunVioCommand(*args); });
 }

@@ -98,7 +98,9 @@ int PaintWallsWhite(Scenario* scenario, const WhiteWallOptions& options, uint64_
   std::map<int, Eigen::Vector2d> extent_of_texture;  // metres (u, v)
   for (const TexturedQuad& quad : quads) {
     if (!is_wall(quad)) continue;
-    Eigen::Vector2d& extent = extent_of_texture[quad.texture_id];
+    // (operator[] would leave a new Eigen vector uninitialised.)
+    Eigen::Vector2d& extent =
+        extent_of_texture.try_emplace(quad.texture_id, Eigen::Vector2d::Zero()).first->second;
     extent = extent.cwiseMax(Eigen::Vector2d(quad.texture_offset.x() + quad.axis_u.norm(),
                                              quad.texture_offset.y() + quad.axis_v.norm()));
   }

@@ -62,6 +62,10 @@ struct VioOptions {
   InitialStateSigmas restart_sigmas{1e-3, 1e-3, 0.05, 0.5, 0.01, 0.2};
   // Feed the tracker a gyro rotation prior between frames (default true).
   bool gyro_rotation_prior = true;
+  // s, the camera's rolling-shutter readout time (first row to last; the
+  // stamp is the middle row's exposure); each observation is moved to the
+  // stamp's time (rolling_shutter.h). Default 0: a global shutter.
+  double rolling_shutter_readout_s = 0.0;
   // Process only the first max_frames images (0: all). Default 0.
   int max_frames = 0;
   // Progress bar over the frames (default true; drawn on a terminal only).
@@ -325,6 +329,9 @@ struct VioOptions {
     VisitSigmas("restart_sigmas", self.restart_sigmas, visit);
     visit({"gyro_rotation_prior", "feed the tracker a gyro rotation prior", kShapesStoredData},
           self.gyro_rotation_prior);
+    visit({"rolling_shutter_readout_s",
+           "s, rolling-shutter readout time of the camera (0: global shutter)", kShapesStoredData},
+          self.rolling_shutter_readout_s);
     visit({"max_frames", "process only the first max_frames images (0: all)", kShapesStoredData},
           self.max_frames);
     visit({"show_progress", "progress bar over the frames", kRunOnly}, self.show_progress);
