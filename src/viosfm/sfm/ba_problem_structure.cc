@@ -23,6 +23,11 @@ double BaProblemStructure::FactorizationPerObservation() const {
   return factorization_block_flops / static_cast<double>(num_observations);
 }
 
+double BaProblemStructure::FactorizationPerImage() const {
+  if (num_free_images == 0) return 0.0;
+  return factorization_block_flops / static_cast<double>(num_free_images);
+}
+
 namespace {
 
 // sum_j c_j^2 over the columns of the Cholesky factor of the symmetric

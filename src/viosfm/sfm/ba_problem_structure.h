@@ -40,6 +40,10 @@ struct BaProblemStructure {
   // factorization_block_flops / observations: the factorisation's work
   // against the rest of an iteration's. 0 without observations.
   double FactorizationPerObservation() const;
+  // factorization_block_flops / free images: the factorisation's work per
+  // camera, which does not change with the features per image (the pattern
+  // of the reduced camera matrix is the co-visibility's). 0 without images.
+  double FactorizationPerImage() const;
 };
 
 // The structure of adjusting `free_images` (registered images of

@@ -553,9 +553,10 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
           ComputeBaProblemStructure(reconstruction, free_images, /*with_factorization=*/true);
       batch_ba_options.linear_solver = solver_chooser.Next(structure, /*final=*/true);
       VIOSFM_LOG(INFO) << "final bundle adjustment: " << structure.num_free_images
-                       << " images, factorisation work per observation "
-                       << structure.FactorizationPerObservation() << ": "
-                       << OptionText(batch_ba_options.linear_solver);
+                       << " images, factorisation work per image "
+                       << structure.FactorizationPerImage() << " (per observation "
+                       << structure.FactorizationPerObservation()
+                       << "): " << OptionText(batch_ba_options.linear_solver);
     } else {
       batch_ba_options.linear_solver = solver_chooser.Next(free_images.size(), global);
     }

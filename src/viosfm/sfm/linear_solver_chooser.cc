@@ -22,7 +22,7 @@ BaLinearSolver LinearSolverChooser::Next(const BaProblemStructure& structure, bo
   if (final && structure.factorization_block_flops > 0.0 &&
       options_.linear_solver == BaLinearSolver::kAuto &&
       structure.num_free_images > static_cast<size_t>(options_.max_images_for_sparse_schur)) {
-    return structure.FactorizationPerObservation() <= kMaxFactorizationForFinalSparse
+    return structure.FactorizationPerImage() <= kMaxFactorizationPerImageForFinalSparse
                ? BaLinearSolver::kSparseSchur
                : BaLinearSolver::kIterativeSchur;
   }

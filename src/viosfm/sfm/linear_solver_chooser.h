@@ -39,21 +39,26 @@ namespace viosfm {
 //
 // The final adjustment of a run (every image free, starting from the
 // batches' adjusted poses) follows another rule, from the factorisation's
-// work per observation F = BaProblemStructure::FactorizationPerObservation
-// (a symbolic factorisation under AMD; it tells a walk seen once, whose
-// factor hardly fills in, from revisits, whose factor fills in):
+// work per free image F = BaProblemStructure::FactorizationPerImage (a
+// symbolic factorisation under AMD; it tells a walk seen once, whose
+// factor hardly fills in, from revisits, whose factor fills in, and it
+// does not change with the features per image):
 //
 //   n <= max_images_for_sparse_schur       SPARSE_SCHUR
-//   F <= kMaxFactorizationForFinalSparse   SPARSE_SCHUR
+//   F <= kMaxFactorizationPerImageForFinalSparse   SPARSE_SCHUR
 //   otherwise                              ITERATIVE_SCHUR
 //
 // Where the factor stays small the graph is a long chain of cameras, and
 // there the conjugate gradients need many steps at every iteration. Measured
 // on the final adjustment of 100 s simulated walks at 10 Hz (980 images,
 // 2 threads, both solvers from the same batches; docs/benchmarks.md,
-// "Real time"): two_floors F = 10: SPARSE_SCHUR 75 s, ITERATIVE_SCHUR 371 s;
-// corridor F = 147: 78 s and 157 s; room F = 326: 168 s and 28 s. The mean
-// track length (14.4, 12.2, 17.6) would take ITERATIVE_SCHUR for all three.
+// "Real time"), at 1000 features per image: two_floors F = 8.1e3:
+// SPARSE_SCHUR 75 s, ITERATIVE_SCHUR 371 s; corridor F = 1.11e5: 78 s and
+// 157 s; room F = 2.92e5: 168 s and 28 s. The mean track length (14.4,
+// 12.2, 17.6) would take ITERATIVE_SCHUR for all three. The rule used to
+// divide the work by the observations instead of the images; the room
+// at 2000 features then fell under it (166 per observation against 327 at
+// 1000, the same factorisation) and took SPARSE_SCHUR for 385 s.
 //
 // A forced solver (options.linear_solver != kAuto) is always taken. Two scenes
 // fixed the thresholds; a scene between them may get the slower solver, never
@@ -65,9 +70,10 @@ class LinearSolverChooser {
   static constexpr double kMinTrackLengthForIterative = 9.0;
   // The largest X = E^2 / (n obs) at which SPARSE_SCHUR is taken.
   static constexpr double kMaxFillPerObservation = 20.0;
-  // The largest F at which the final adjustment takes SPARSE_SCHUR: between
-  // the corridor's 147 and the room's 326 (above).
-  static constexpr double kMaxFactorizationForFinalSparse = 200.0;
+  // The largest F (block operations per free image) at which the final
+  // adjustment takes SPARSE_SCHUR: between the corridor's 1.11e5 and the
+  // room's 2.92e5 (above).
+  static constexpr double kMaxFactorizationPerImageForFinalSparse = 1.8e5;
 
   explicit LinearSolverChooser(const BundleAdjustmentOptions& options);
 

@@ -182,6 +182,7 @@ void BM_Structure(benchmark::State& state) {
         ComputeBaProblemStructure(reconstruction, free_images, /*with_factorization=*/true);
     state.counters["n"] = static_cast<double>(structure.num_free_images);
     state.counters["F"] = structure.FactorizationPerObservation();
+    state.counters["F_image"] = structure.FactorizationPerImage();
     state.counters["L"] = static_cast<double>(structure.num_observations) /
                           static_cast<double>(std::max<size_t>(1, structure.num_points));
     state.counters["X"] = structure.FillPerObservation();

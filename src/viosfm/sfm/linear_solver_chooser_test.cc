@@ -74,20 +74,33 @@ TEST(LinearSolverChooserTest, RoomTakesIterativeSchurCorridorSparseSchur) {
 }
 
 // The final adjustments of 100 s walks at 10 Hz (linear_solver_chooser.h):
-// long tracks everywhere, but only the room's factor fills in.
+// long tracks everywhere, but only the room's factor fills in; and the
+// room at 500 and 2000 features per image, whose factorisation is the same
+// (its work per observation is not), and the real handheld recording.
 TEST(LinearSolverChooserTest, FinalAdjustmentByFactorizationWork) {
   const LinearSolverChooser chooser(AutoOptions());
+  // The work per observation as the runs logged it.
   const auto with_work = [](BaProblemStructure structure, double per_observation) {
     structure.factorization_block_flops =
         per_observation * static_cast<double>(structure.num_observations);
     return structure;
   };
-  const BaProblemStructure two_floors = with_work(Structure(978, 774297, 14.4, 71000), 10.1);
-  const BaProblemStructure corridor = with_work(Structure(979, 732541, 12.2, 129000), 146.8);
-  const BaProblemStructure room = with_work(Structure(979, 875136, 17.6, 235000), 326.3);
+  const BaProblemStructure two_floors = with_work(Structure(979, 774296, 14.4, 71000), 10.2157);
+  const BaProblemStructure corridor = with_work(Structure(980, 732499, 12.1, 129000), 148.832);
+  const BaProblemStructure room = with_work(Structure(980, 873360, 17.5, 235000), 327.373);
+  const BaProblemStructure room_500 = with_work(Structure(980, 432799, 16.8, 235000), 654.335);
+  const BaProblemStructure room_2000 = with_work(Structure(980, 1732185, 17.3, 235000), 165.915);
+  const BaProblemStructure handheld = with_work(Structure(299, 68930, 9.9, 20000), 43.1076);
+  EXPECT_NEAR(room.FactorizationPerImage(), 2.92e5, 0.01e5);
+  EXPECT_NEAR(room_2000.FactorizationPerImage(), room.FactorizationPerImage(),
+              0.01 * room.FactorizationPerImage());
+  EXPECT_NEAR(corridor.FactorizationPerImage(), 1.11e5, 0.01e5);
   EXPECT_EQ(chooser.Next(two_floors, true), BaLinearSolver::kSparseSchur);
   EXPECT_EQ(chooser.Next(corridor, true), BaLinearSolver::kSparseSchur);
-  EXPECT_EQ(chooser.Next(room, true), BaLinearSolver::kIterativeSchur);
+  EXPECT_EQ(chooser.Next(handheld, true), BaLinearSolver::kSparseSchur);
+  for (const BaProblemStructure& scene : {room, room_500, room_2000}) {
+    EXPECT_EQ(chooser.Next(scene, true), BaLinearSolver::kIterativeSchur);
+  }
   // Not the final one, or without the factorisation's work: the track length.
   for (const BaProblemStructure& scene : {two_floors, corridor, room}) {
     EXPECT_EQ(chooser.Next(scene, false), BaLinearSolver::kIterativeSchur);
@@ -95,11 +108,15 @@ TEST(LinearSolverChooserTest, FinalAdjustmentByFactorizationWork) {
     unknown.factorization_block_flops = 0.0;
     EXPECT_EQ(chooser.Next(unknown, true), BaLinearSolver::kIterativeSchur);
   }
-  // At the threshold SPARSE_SCHUR; small problems and forced solvers as ever.
-  EXPECT_EQ(
-      chooser.Next(with_work(room, LinearSolverChooser::kMaxFactorizationForFinalSparse), true),
-      BaLinearSolver::kSparseSchur);
-  EXPECT_EQ(chooser.Next(with_work(Structure(100, 90000, 14.0, 4950), 500.0), true),
+  // At the threshold SPARSE_SCHUR, just above it ITERATIVE_SCHUR; small
+  // problems and forced solvers as ever.
+  BaProblemStructure at = room;
+  at.factorization_block_flops = LinearSolverChooser::kMaxFactorizationPerImageForFinalSparse *
+                                 static_cast<double>(at.num_free_images);
+  EXPECT_EQ(chooser.Next(at, true), BaLinearSolver::kSparseSchur);
+  at.factorization_block_flops *= 1.001;
+  EXPECT_EQ(chooser.Next(at, true), BaLinearSolver::kIterativeSchur);
+  EXPECT_EQ(chooser.Next(with_work(Structure(100, 90000, 14.0, 4950), 5e5), true),
             BaLinearSolver::kSparseSchur);
   BundleAdjustmentOptions forced = AutoOptions();
   forced.linear_solver = BaLinearSolver::kIterativeSchur;
