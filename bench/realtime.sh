@@ -13,7 +13,9 @@
 # with its defaults (or with EXTRA RUN ARGS, e.g. `-- --n1 10 --n2 5
 # --max-features 1000`), once per thread count, each into a fresh folder,
 # under /usr/bin/time. It writes DIR/realtime.md: per run the wall clock of
-# every stage (summary.json "stages") and in total, the ratio of the total
+# every stage (summary.json "stages"; in brackets the CPU seconds the
+# process used meanwhile, every thread) and in total, the CPU of the whole
+# run and how many cores it kept busy on average, the ratio of the total
 # to the recording's duration (1.0 is real time), the registered frames,
 # the Sim(3) and SE(3) ATE, the image decodes and the peak memory.
 #
@@ -53,9 +55,10 @@ table="$out/realtime.md"
   echo "$(date -u +%Y-%m-%d), $(nproc) cores; ${duration} s at ${rate} Hz per scenario;" \
        "run arguments: ${extra[*]:-(defaults)}"
   echo
-  echo "| scenario | threads | vio s | features s | verification s | mapper s | other s |" \
-       "total s | x real time | registered | ATE Sim(3) mm | ATE SE(3) mm | decodes | peak MiB |"
-  echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+  echo "| scenario | threads | vio s (CPU) | features s (CPU) | verification s (CPU) |" \
+       "mapper s (CPU) | other s | total s | CPU s | cores busy | x real time | registered |" \
+       "ATE Sim(3) mm | ATE SE(3) mm | decodes | peak MiB |"
+  echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
 } > "$table"
 
 for scenario in $scenarios; do
@@ -81,16 +84,20 @@ summary = json.load(open(sys.argv[1]))
 time_text = open(sys.argv[2]).read()
 scenario, threads, duration = sys.argv[3], sys.argv[4], float(sys.argv[5])
 stages = {s["name"]: s["seconds"] for s in summary["stages"]}
+cpu = {s["name"]: s.get("cpu_seconds", float("nan")) for s in summary["stages"]}
 main = ["vio", "features", "verification", "mapper"]
 other = sum(v for k, v in stages.items() if k not in main)
 total = summary["total_seconds"]
+total_cpu = sum(cpu.values())
+def stage(name):
+    return "%.1f (%.1f)" % (stages.get(name, 0), cpu.get(name, 0))
 peak = int(re.search(r"Maximum resident set size \(kbytes\): (\d+)", time_text).group(1)) / 1024
 ev = summary.get("eval", {}).get("metric", {})
 def mm(key):
     return "%.2f" % (1000 * ev[key]) if key in ev else "n/a"
-print("| %s | %s | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.2f | %d of %d | %s | %s | %d | %.0f |" % (
-    scenario, threads, stages.get("vio", 0), stages.get("features", 0),
-    stages.get("verification", 0), stages.get("mapper", 0), other, total, total / duration,
+print("| %s | %s | %s | %s | %s | %s | %.1f | %.1f | %.1f | %.2f | %.2f | %d of %d | %s | %s | %d | %.0f |" % (
+    scenario, threads, stage("vio"), stage("features"), stage("verification"), stage("mapper"),
+    other, total, total_cpu, total_cpu / total, total / duration,
     summary["frames"]["registered"], summary["frames"]["selected"],
     mm("ate_sim3_rmse_m"), mm("ate_se3_rmse_m"), summary.get("images", {}).get("decoded", 0), peak))
 EOF

@@ -71,8 +71,8 @@ void ReturnFreedMemory() {
 #endif
 }
 
-// Runs the stages in order, recording each one's wall-clock time and
-// logging a heading for it.
+// Runs the stages in order, recording each one's wall-clock and CPU time
+// and logging a heading for it.
 class StageClock {
  public:
   explicit StageClock(std::vector<PipelineStageTime>* stages) : stages_(stages) {}
@@ -84,21 +84,22 @@ class StageClock {
     VIOSFM_LOG(INFO) << "run [" << index_ << "/" << kNumStages << "] " << name;
     Timer timer;
     timer.Start();
+    const double cpu_start = ProcessCpuSeconds();
     if constexpr (std::is_void_v<decltype(stage())>) {
       stage();
-      End(name, timer.ElapsedSeconds());
+      End(name, timer.ElapsedSeconds(), ProcessCpuSeconds() - cpu_start);
     } else {
       auto result = stage();
-      End(name, timer.ElapsedSeconds());
+      End(name, timer.ElapsedSeconds(), ProcessCpuSeconds() - cpu_start);
       return result;
     }
   }
 
  private:
-  void End(const std::string& name, double seconds) {
-    stages_->push_back({name, seconds});
+  void End(const std::string& name, double seconds, double cpu_seconds) {
+    stages_->push_back({name, seconds, cpu_seconds});
     VIOSFM_LOG(INFO) << "run [" << index_ << "/" << kNumStages << "] " << name << ": " << std::fixed
-                     << std::setprecision(2) << seconds << " s";
+                     << std::setprecision(2) << seconds << " s (" << cpu_seconds << " s of CPU)";
   }
 
   std::vector<PipelineStageTime>* stages_;

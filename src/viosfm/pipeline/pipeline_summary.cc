@@ -77,7 +77,9 @@ std::string PipelineSummary::ToString() const {
   for (size_t i = 0; i < stages.size(); ++i) {
     out << (i > 0 ? ", " : "") << stages[i].name << " " << stages[i].seconds;
   }
-  out << "), peak memory " << peak_memory_mb << " MB\n";
+  double cpu_seconds = 0.0;
+  for (const PipelineStageTime& stage : stages) cpu_seconds += stage.cpu_seconds;
+  out << "), CPU " << cpu_seconds << " s, peak memory " << peak_memory_mb << " MB\n";
   out << "output: " << output_folder.string()
       << " (model/, model_txt/, points.ply, trajectory_body.tum, summary.json)";
   return out.str();
@@ -143,7 +145,8 @@ std::string PipelineSummaryToJson(const PipelineSummary& s) {
   json["batches"] = batches;
   ordered_json stages = ordered_json::array();
   for (const PipelineStageTime& stage : s.stages) {
-    stages.push_back({{"name", stage.name}, {"seconds", stage.seconds}});
+    stages.push_back(
+        {{"name", stage.name}, {"seconds", stage.seconds}, {"cpu_seconds", stage.cpu_seconds}});
   }
   json["stages"] = stages;
   json["images"] = {{"decoded", s.images.decodes},

@@ -24,7 +24,11 @@ std::string ViosfmVersion();
 
 struct PipelineStageTime {
   std::string name;
-  double seconds = 0.0;
+  double seconds = 0.0;  // wall clock
+  // CPU time of the whole process during the stage (user + system, every
+  // thread): seconds of CPU over seconds of wall clock is how many cores
+  // it kept busy.
+  double cpu_seconds = 0.0;
 };
 
 // Accuracy against the ground truth (metres): the Sim(3)-aligned ATE

@@ -62,6 +62,18 @@ TEST(PipelineTest, RegistersEverySelectedFrame) {
   ASSERT_EQ(s.stages.size(), 10u);
   EXPECT_EQ(s.stages.front().name, "read_dataset");
   EXPECT_EQ(s.stages.back().name, "write_outputs");
+  // Each stage's CPU time is the process's, so it cannot exceed what its
+  // threads could use in its wall clock (the run's worker threads, plus
+  // the feature prefetch thread beside the VIO); the feature extraction
+  // (SIFT on every selected frame, in the VIO's stage or its own) cannot
+  // take none.
+  const int threads = SmallOptions(f, f.out).num_threads;
+  for (const PipelineStageTime& stage : s.stages) {
+    EXPECT_GE(stage.cpu_seconds, 0.0) << stage.name;
+    EXPECT_LE(stage.cpu_seconds, (threads + 1) * stage.seconds + 0.05) << stage.name;
+  }
+  ASSERT_EQ(s.stages[3].name, "features");
+  EXPECT_GT(s.stages[1].cpu_seconds + s.stages[3].cpu_seconds, 0.0);
 }
 
 TEST(PipelineTest, TrajectoryMoreAccurateThanTheVio) {

@@ -1,5 +1,6 @@
 #include "viosfm/util/timer.h"
 
+#include <ctime>
 #include <iomanip>
 
 #include "viosfm/util/logging.h"
@@ -28,6 +29,12 @@ double Timer::ElapsedSeconds() const {
   double seconds = accumulated_seconds_;
   if (running_) seconds += std::chrono::duration<double>(Clock::now() - start_).count();
   return seconds;
+}
+
+double ProcessCpuSeconds() {
+  timespec spec{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &spec);
+  return static_cast<double>(spec.tv_sec) + 1e-9 * static_cast<double>(spec.tv_nsec);
 }
 
 ScopedTimer::~ScopedTimer() {

@@ -1,4 +1,5 @@
-// Wall-clock timer for stage timings (seconds, steady clock).
+// Wall-clock timer for stage timings (seconds, steady clock), and the
+// process's CPU time.
 #pragma once
 
 #include <chrono>
@@ -33,5 +34,8 @@ class ScopedTimer {
   std::string name_;
   Timer timer_;
 };
+
+// CPU time the process has used so far (user + system, every thread), s.
+double ProcessCpuSeconds();
 
 }  // namespace viosfm

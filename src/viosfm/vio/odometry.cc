@@ -412,16 +412,6 @@ VioFrameResult VisualInertialOdometry::ProcessFrame(const FrameFeatures& feature
   return result;
 }
 
-namespace {
-
-double ProcessCpuSeconds() {
-  timespec spec{};
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &spec);
-  return static_cast<double>(spec.tv_sec) + 1e-9 * static_cast<double>(spec.tv_nsec);
-}
-
-}  // namespace
-
 VioResult RunVio(const Sequence& sequence, const VioOptions& options, FrameCache* frames) {
   if (const std::string error = options.Validate(); !error.empty()) {
     throw InputError("invalid VIO options: " + error);
