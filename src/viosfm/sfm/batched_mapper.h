@@ -84,10 +84,14 @@ struct BatchedMapperOptions {
   int ba_window_max_held_views = 0;
   // Levenberg-Marquardt iterations of each per-batch bundle adjustment, >= 1,
   // or 0 for ba.max_num_iterations; the final global bundle adjustment always
-  // runs ba.max_num_iterations. Default 10. Every per-batch adjustment starts
+  // runs ba.max_num_iterations. Default 3. Every per-batch adjustment starts
   // from a refined reconstruction plus one batch placed by the VIO, so a few
-  // iterations take it most of the way, and the final one converges.
-  int batch_ba_max_num_iterations = 10;
+  // iterations take it most of the way, and the final one converges: on the
+  // simulated 100 s room, corridor and two_floors, 3 instead of 10 took the
+  // per-batch adjustments from 39, 45 and 54 s to 15, 13 and 14 s, the final
+  // one needed 1 to 3 more iterations, and the ATE stayed within 1 % (room)
+  // or fell by 1 and 3 % (docs/benchmarks.md "The mapper's levers").
+  int batch_ba_max_num_iterations = 3;
   // Bridging priors (beyond the paper). The paper's relative-pose terms join
   // consecutive frames only. Across a stretch of frames whose images barely
   // match, the slack each of those terms allows adds up like a random walk,
