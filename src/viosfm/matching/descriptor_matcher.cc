@@ -209,16 +209,24 @@ class PointGrid {
     const double u_min = along_x ? min_.x() : min_.y();
     const double v_min = along_x ? min_.y() : min_.x();
     const double v_pad = half_width / std::abs(v_coef);
+    // The line's v at the columns' edges, in cells from v_min: with v(u) =
+    // -(u_coef u + c) / v_coef, edge k (u = u_min + k cell) is at
+    // v_first + k v_step cells; the right edge of a column is the left edge
+    // of the next. (Rounding moves the band by far less than the pixel of
+    // slack the caller's half width has.)
+    const double pad_cells = v_pad / cell_;
+    const double v_first = (-(u_coef * u_min + c) / v_coef - v_min) / cell_;
+    const double v_step = -u_coef / v_coef;
+    double v1 = v_first;
     for (int64_t cu = 0; cu < nu; ++cu) {
-      const double u0 = u_min + static_cast<double>(cu) * cell_;
-      const double u1 = u0 + cell_;
-      const double v0 = -(u_coef * u0 + c) / v_coef;
-      const double v1 = -(u_coef * u1 + c) / v_coef;
-      const double low = (std::min(v0, v1) - v_pad - v_min) / cell_;
-      const double high = (std::max(v0, v1) + v_pad - v_min) / cell_;
-      if (high < 0.0 || low >= static_cast<double>(nv)) continue;
-      const int64_t cv0 = std::max<int64_t>(0, static_cast<int64_t>(std::floor(low)));
-      const int64_t cv1 = std::min<int64_t>(nv - 1, static_cast<int64_t>(std::floor(high)));
+      const double v0 = v1;
+      v1 = v_first + static_cast<double>(cu + 1) * v_step;
+      const double low = std::min(v0, v1) - pad_cells;
+      const double high = std::max(v0, v1) + pad_cells;
+      if (!(high >= 0.0) || low >= static_cast<double>(nv)) continue;
+      // high >= 0, and low is clamped to 0: truncation is the floor here.
+      const int64_t cv0 = low > 0.0 ? static_cast<int64_t>(low) : 0;
+      const int64_t cv1 = std::min<int64_t>(nv - 1, static_cast<int64_t>(high));
       for (int64_t cv = cv0; cv <= cv1; ++cv) {
         const int64_t cell = along_x ? CellIndex(cu, cv) : CellIndex(cv, cu);
         for (int64_t k = start_[cell]; k < start_[cell + 1]; ++k) visit(indices_[k]);
