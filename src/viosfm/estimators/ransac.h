@@ -10,6 +10,11 @@
 //   // Squared residual of every correspondence under the model.
 //   static void Residuals(const std::vector<X_t>& x, const std::vector<Y_t>& y,
 //                         const M_t& model, std::vector<double>* squared_residuals);
+// and optionally
+//   // Squared residual of one correspondence (the same as Residuals gives).
+//   static double SquaredResidual(const X_t& x, const Y_t& y, const M_t& model);
+// with which a model's scoring stops as soon as its cost exceeds the best
+// model's (every term is >= 0, so it cannot win): the same report, sooner.
 // The local estimator (default: the same) has the same interface and is called
 // with all current inliers.
 //
@@ -22,6 +27,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <concepts>
 #include <cstdint>
 #include <limits>
 #include <numeric>
@@ -99,19 +105,34 @@ class Ransac {
     bool BetterThan(const Support& other) const { return cost < other.cost; }
   };
 
+  // The model's support. With Estimator::SquaredResidual, the scoring stops
+  // once the cost exceeds bail_cost (the best model's): the support returned
+  // then has that partial cost, above bail_cost, and a partial inlier count;
+  // a model that could beat bail_cost is always scored whole.
   Support Evaluate(const std::vector<X_t>& x, const std::vector<Y_t>& y, const M_t& model,
-                   std::vector<double>* residuals) const {
-    Estimator::Residuals(x, y, model, residuals);
+                   std::vector<double>* residuals,
+                   double bail_cost = std::numeric_limits<double>::infinity()) const {
     const double max_squared = options_.max_error * options_.max_error;
     Support support;
     support.cost = 0.0;
-    for (const double residual : *residuals) {
+    const auto add = [&](double residual) {
       if (residual <= max_squared) {
         ++support.num_inliers;
         support.cost += residual;
       } else {
         support.cost += max_squared;
       }
+    };
+    if constexpr (requires(const X_t& a, const Y_t& b, const M_t& m) {
+                    { Estimator::SquaredResidual(a, b, m) } -> std::convertible_to<double>;
+                  }) {
+      for (size_t i = 0; i < x.size(); ++i) {
+        add(Estimator::SquaredResidual(x[i], y[i], model));
+        if (support.cost > bail_cost) break;
+      }
+    } else {
+      Estimator::Residuals(x, y, model, residuals);
+      for (const double residual : *residuals) add(residual);
     }
     return support;
   }
@@ -159,7 +180,7 @@ typename Ransac<Estimator, LocalEstimator>::Report Ransac<Estimator, LocalEstima
       if (inlier_x.size() < static_cast<size_t>(LocalEstimator::kMinNumSamples)) return;
       bool improved = false;
       for (const M_t& model : LocalEstimator::Estimate(inlier_x, inlier_y)) {
-        const Support support = Evaluate(x, y, model, &residuals);
+        const Support support = Evaluate(x, y, model, &residuals, best_support.cost);
         if (support.BetterThan(best_support)) {
           best_support = support;
           best_model = model;
@@ -195,7 +216,9 @@ typename Ransac<Estimator, LocalEstimator>::Report Ransac<Estimator, LocalEstima
     }
     bool improved = false;
     for (const M_t& model : Estimator::Estimate(sample_x, sample_y)) {
-      const Support support = Evaluate(x, y, model, &residuals);
+      const Support support =
+          Evaluate(x, y, model, &residuals,
+                   have_model ? best_support.cost : std::numeric_limits<double>::infinity());
       if (!have_model || support.BetterThan(best_support)) {
         have_model = true;
         best_support = support;

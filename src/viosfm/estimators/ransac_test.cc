@@ -36,6 +36,14 @@ struct LineEstimator {
   }
 };
 
+// The same, with the per-correspondence residual: scoring stops early.
+struct LineEstimatorStoppingEarly : LineEstimator {
+  static double SquaredResidual(const X_t& x, const Y_t& y, const M_t& model) {
+    const double residual = y - (model[0] * x + model[1]);
+    return residual * residual;
+  }
+};
+
 struct LineData {
   std::vector<double> x;
   std::vector<double> y;
@@ -100,6 +108,40 @@ TEST(Ransac, SameSeedSameResult) {
   bool all_same = true;
   for (const auto& model : models) all_same = all_same && model == models[0];
   EXPECT_FALSE(all_same);
+}
+
+// Stopping a model's scoring once its cost exceeds the best one's changes
+// nothing but the time: the same model, inliers and trials, with and
+// without local optimisation and with a prior model, over many data sets
+// (including ones where the best model keeps changing: half outliers).
+TEST(Ransac, StoppingTheScoringEarlyGivesTheSameReport) {
+  int models_replaced = 0;
+  for (uint64_t seed = 0; seed < 40; ++seed) {
+    const LineData data = MakeLineData(seed, 150, seed % 2 == 0 ? 0.5 : 0.2, 0.05);
+    for (const bool local_optimization : {true, false}) {
+      RansacOptions options;
+      options.max_error = 0.2;
+      options.seed = seed;
+      options.min_num_trials = 20;
+      options.local_optimization = local_optimization;
+      const std::vector<Eigen::Vector2d> initial = {Eigen::Vector2d(1.9, 1.3)};
+      for (const bool with_initial : {false, true}) {
+        const auto whole = Ransac<LineEstimator>(options).Estimate(
+            data.x, data.y, with_initial ? initial : std::vector<Eigen::Vector2d>{});
+        const auto early = Ransac<LineEstimatorStoppingEarly>(options).Estimate(
+            data.x, data.y, with_initial ? initial : std::vector<Eigen::Vector2d>{});
+        ASSERT_EQ(whole.success, early.success) << seed;
+        EXPECT_EQ(whole.model, early.model) << seed;
+        EXPECT_EQ(whole.inlier_mask, early.inlier_mask) << seed;
+        EXPECT_EQ(whole.num_inliers, early.num_inliers) << seed;
+        EXPECT_EQ(whole.num_trials, early.num_trials) << seed;
+        models_replaced += whole.num_trials > options.min_num_trials;
+      }
+    }
+  }
+  // Some runs needed more than the minimum of trials (the adaptive count
+  // followed the best model's support), so the comparison saw it change.
+  EXPECT_GT(models_replaced, 0);
 }
 
 TEST(Ransac, AdaptiveTrialCount) {

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "viosfm/estimators/ransac.h"
+#include "viosfm/geometry/epipolar.h"
 #include "viosfm/geometry/rigid3.h"
 #include "viosfm/scene/features.h"
 #include "viosfm/scene/two_view_geometry.h"
@@ -31,6 +32,9 @@ struct EssentialMatrixFivePointEstimator {
   static std::vector<M_t> Estimate(const std::vector<X_t>& x, const std::vector<Y_t>& y);
   static void Residuals(const std::vector<X_t>& x, const std::vector<Y_t>& y, const M_t& model,
                         std::vector<double>* squared_residuals);
+  static double SquaredResidual(const X_t& x, const Y_t& y, const M_t& model) {
+    return SampsonError(model, x, y);
+  }
 };
 
 // Local optimisation for the essential matrix: the least-squares five-point
@@ -44,6 +48,9 @@ struct EssentialMatrixLocalEstimator {
   static std::vector<M_t> Estimate(const std::vector<X_t>& x, const std::vector<Y_t>& y);
   static void Residuals(const std::vector<X_t>& x, const std::vector<Y_t>& y, const M_t& model,
                         std::vector<double>* squared_residuals);
+  static double SquaredResidual(const X_t& x, const Y_t& y, const M_t& model) {
+    return SampsonError(model, x, y);
+  }
 };
 
 struct FundamentalMatrixSevenPointEstimator {
@@ -54,6 +61,9 @@ struct FundamentalMatrixSevenPointEstimator {
   static std::vector<M_t> Estimate(const std::vector<X_t>& x, const std::vector<Y_t>& y);
   static void Residuals(const std::vector<X_t>& x, const std::vector<Y_t>& y, const M_t& model,
                         std::vector<double>* squared_residuals);
+  static double SquaredResidual(const X_t& x, const Y_t& y, const M_t& model) {
+    return SampsonError(model, x, y);
+  }
 };
 
 struct FundamentalMatrixEightPointEstimator {
@@ -64,6 +74,9 @@ struct FundamentalMatrixEightPointEstimator {
   static std::vector<M_t> Estimate(const std::vector<X_t>& x, const std::vector<Y_t>& y);
   static void Residuals(const std::vector<X_t>& x, const std::vector<Y_t>& y, const M_t& model,
                         std::vector<double>* squared_residuals);
+  static double SquaredResidual(const X_t& x, const Y_t& y, const M_t& model) {
+    return SampsonError(model, x, y);
+  }
 };
 
 struct TwoViewGeometryOptions {
