@@ -89,8 +89,9 @@ struct BatchedMapperOptions {
   // iterations take it most of the way, and the final one converges: on the
   // simulated 100 s room, corridor and two_floors, 3 instead of 10 took the
   // per-batch adjustments from 39, 45 and 54 s to 15, 13 and 14 s, the final
-  // one needed 1 to 3 more iterations, and the ATE stayed within 1 % (room)
-  // or fell by 1 and 3 % (docs/benchmarks.md "The mapper's levers").
+  // one needed 1 to 3 more iterations, and the ATE stayed within 1 % (room),
+  // within the run-to-run spread (corridor) or fell by 3 % (two_floors;
+  // docs/benchmarks.md "The mapper's levers").
   int batch_ba_max_num_iterations = 3;
   // Bridging priors (beyond the paper). The paper's relative-pose terms join
   // consecutive frames only. Across a stretch of frames whose images barely
