@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 
+#include "viosfm/matching/descriptor_dot.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/parallel.h"
 #include "viosfm/util/progress.h"
@@ -160,6 +161,21 @@ FeatureMatches MatchDescriptors(const FeatureDescriptors& descriptors1,
 
 namespace {
 
+// 1 / the L2 norm of each uint8 row (exact: the sum of squares is an
+// integer), 0 for a row of zeros (which then scores 0 against everything,
+// as its normalised float row does).
+std::vector<double> InverseRowNorms(const FeatureDescriptors& descriptors) {
+  std::vector<double> inverse(descriptors.rows(), 0.0);
+  for (Eigen::Index i = 0; i < descriptors.rows(); ++i) {
+    int64_t sum = 0;
+    for (Eigen::Index d = 0; d < descriptors.cols(); ++d) {
+      sum += static_cast<int64_t>(descriptors(i, d)) * descriptors(i, d);
+    }
+    if (sum > 0) inverse[i] = 1.0 / std::sqrt(static_cast<double>(sum));
+  }
+  return inverse;
+}
+
 // Points of image 2 bucketed in square cells over their bounding box.
 class PointGrid {
  public:
@@ -255,8 +271,8 @@ class PointGrid {
 
 }  // namespace
 
-FeatureMatches MatchDescriptorsGuided(const FloatDescriptors& descriptors1,
-                                      const FloatDescriptors& descriptors2,
+FeatureMatches MatchDescriptorsGuided(const FeatureDescriptors& descriptors1,
+                                      const FeatureDescriptors& descriptors2,
                                       const std::vector<Eigen::Vector2d>& points1,
                                       const std::vector<Eigen::Vector2d>& points2,
                                       const Eigen::Matrix3d& fundamental,
@@ -274,6 +290,9 @@ FeatureMatches MatchDescriptorsGuided(const FloatDescriptors& descriptors1,
   // drops a point the exact test below accepts.
   const double search_half_width = max_distance + 1.0;
   const PointGrid grid(points2, cell_size);
+  const std::vector<double> inverse_norms1 = InverseRowNorms(descriptors1);
+  const std::vector<double> inverse_norms2 = InverseRowNorms(descriptors2);
+  const int dims = static_cast<int>(descriptors1.cols());
 
   const int64_t num_rows = descriptors1.rows();
   const int64_t num_columns = descriptors2.rows();
@@ -285,6 +304,8 @@ FeatureMatches MatchDescriptorsGuided(const FloatDescriptors& descriptors1,
       num_threads, std::vector<BestTwo>(matching.cross_check ? num_columns : 0));
   ParallelFor(num_tasks, num_threads, [&](int64_t task, int thread) {
     std::vector<BestTwo>& thread_columns = columns[thread];
+    std::vector<int32_t> candidates;
+    std::vector<int32_t> dots;
     const int64_t end = std::min(num_rows, (task + 1) * kRowsPerTask);
     for (int64_t i = task * kRowsPerTask; i < end; ++i) {
       const Eigen::Vector2d& point1 = points1[i];
@@ -292,18 +313,29 @@ FeatureMatches MatchDescriptorsGuided(const FloatDescriptors& descriptors1,
       const double norm = line.head<2>().norm();
       if (!(norm > 0.0) || !line.allFinite()) continue;
       const double max_line_value = max_distance * norm;
-      BestTwo& row = rows[i];
-      const auto row_index = static_cast<int32_t>(i);
+      // EpipolarLineDistance(fundamental, point1, points2[j]) <= max_distance,
+      // with the line and its norm computed once per row.
+      candidates.clear();
       grid.ForEachNearLine(line.x() / norm, line.y() / norm, line.z() / norm, search_half_width,
                            [&](int32_t j) {
-                             // EpipolarLineDistance(fundamental, point1, points2[j]) <=
-                             // max_distance, with the line and its norm computed once per row.
-                             if (!(std::abs(line.dot(points2[j].homogeneous())) <= max_line_value))
-                               return;
-                             const float dot = descriptors1.row(i).dot(descriptors2.row(j));
-                             row.Add(dot, j);
-                             if (matching.cross_check) thread_columns[j].Add(dot, row_index);
+                             if (std::abs(line.dot(points2[j].homogeneous())) <= max_line_value) {
+                               candidates.push_back(j);
+                             }
                            });
+      if (candidates.empty() || inverse_norms1[i] == 0.0) continue;
+      dots.resize(candidates.size());
+      DescriptorDotProducts(descriptors1.row(i).data(), descriptors2.data(), descriptors2.cols(),
+                            dims, candidates.data(), static_cast<int>(candidates.size()),
+                            dots.data());
+      BestTwo& row = rows[i];
+      const auto row_index = static_cast<int32_t>(i);
+      for (size_t k = 0; k < candidates.size(); ++k) {
+        const int32_t j = candidates[k];
+        const auto score = static_cast<float>(static_cast<double>(dots[k]) * inverse_norms1[i] *
+                                              inverse_norms2[j]);
+        row.Add(score, j);
+        if (matching.cross_check) thread_columns[j].Add(score, row_index);
+      }
     }
   });
   return CollectMatches(rows, columns, matching);

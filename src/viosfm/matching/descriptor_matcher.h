@@ -90,8 +90,12 @@ struct GuidedMatchingOptions {
 // in the coordinates of points1/points2 (e.g. undistorted pixels). Points of
 // image 2 are bucketed in a grid and only the cells the band crosses are
 // visited, so the cost grows with the band's area, not with the image's.
-FeatureMatches MatchDescriptorsGuided(const FloatDescriptors& descriptors1,
-                                      const FloatDescriptors& descriptors2,
+// The descriptors are the stored uint8 rows: a candidate's score is the exact
+// integer dot product (descriptor_dot.h) times the two rows' inverse norms,
+// the cosine MatchDescriptors computes in float (equal up to float rounding,
+// so only a near tie can come out differently).
+FeatureMatches MatchDescriptorsGuided(const FeatureDescriptors& descriptors1,
+                                      const FeatureDescriptors& descriptors2,
                                       const std::vector<Eigen::Vector2d>& points1,
                                       const std::vector<Eigen::Vector2d>& points2,
                                       const Eigen::Matrix3d& fundamental,

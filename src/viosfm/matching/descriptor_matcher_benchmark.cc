@@ -1,7 +1,8 @@
 // Descriptor matching of one pair at 2000 x 2000 SIFT-like descriptors:
 // brute force on one thread and on all threads, epipolar-guided (752x480
-// image, bands of 20 and 4 px, one thread), and normalising one image's
-// descriptors. (These timings used to be printed by a test.)
+// image, bands of 20 and 4 px, one thread), normalising one image's
+// descriptors, and the guided matcher's dot-product kernel. (These timings
+// used to be printed by a test.)
 #include <benchmark/benchmark.h>
 
 #include <Eigen/Geometry>
@@ -11,6 +12,7 @@
 #include <vector>
 
 #include "viosfm/geometry/epipolar.h"
+#include "viosfm/matching/descriptor_dot.h"
 #include "viosfm/matching/descriptor_matcher.h"
 
 namespace viosfm {
@@ -22,6 +24,7 @@ constexpr int kNum = 2000;
 // Two images of kNum descriptors: 1500 noisy copies of image 1's first 1500
 // at their projected positions, the rest unrelated.
 struct Pair {
+  FeatureDescriptors raw1, raw2;
   FloatDescriptors d1, d2;
   std::vector<Eigen::Vector2d> points1, points2;
   Eigen::Matrix3d F;
@@ -70,6 +73,8 @@ const Pair& MakePair() {
     }
     p.d1 = NormalizeDescriptors(raw1);
     p.d2 = NormalizeDescriptors(raw2);
+    p.raw1 = raw1;
+    p.raw2 = raw2;
     return p;
   }();
   return pair;
@@ -94,10 +99,36 @@ void BM_MatchDescriptorsGuided(benchmark::State& state) {
   options.max_epipolar_distance_px = static_cast<double>(state.range(0));
   for (auto _ : state) {
     benchmark::DoNotOptimize(
-        MatchDescriptorsGuided(pair.d1, pair.d2, pair.points1, pair.points2, pair.F, options));
+        MatchDescriptorsGuided(pair.raw1, pair.raw2, pair.points1, pair.points2, pair.F, options));
   }
 }
 BENCHMARK(BM_MatchDescriptorsGuided)->Arg(20)->Arg(4)->Unit(benchmark::kMillisecond);
+
+// The guided matcher's kernel: one query row against 200 rows of image 2
+// (about the candidates of a 20 px band), exact uint8 dot products.
+// Argument: 1 the kernel the CPU gets (AVX2 where it has it), 0 the
+// portable one.
+void BM_DescriptorDotProducts(benchmark::State& state) {
+  const Pair& pair = MakePair();
+  std::vector<int32_t> indices;
+  for (int32_t j = 0; j < 200; ++j) indices.push_back((j * 37) % kNum);
+  std::vector<int32_t> dots(indices.size());
+  const bool dispatched = state.range(0) != 0;
+  int64_t row = 0;
+  for (auto _ : state) {
+    const uint8_t* query = pair.raw1.row(row++ % kNum).data();
+    if (dispatched) {
+      DescriptorDotProducts(query, pair.raw2.data(), kDim, kDim, indices.data(),
+                            static_cast<int>(indices.size()), dots.data());
+    } else {
+      DescriptorDotProductsPortable(query, pair.raw2.data(), kDim, kDim, indices.data(),
+                                    static_cast<int>(indices.size()), dots.data());
+    }
+    benchmark::DoNotOptimize(dots.data());
+  }
+  state.SetLabel(dispatched && DescriptorDotProductsUseAvx2() ? "avx2" : "portable");
+}
+BENCHMARK(BM_DescriptorDotProducts)->Arg(1)->Arg(0)->Unit(benchmark::kMicrosecond);
 
 void BM_NormalizeDescriptors(benchmark::State& state) {
   FeatureDescriptors raw(kNum, kDim);

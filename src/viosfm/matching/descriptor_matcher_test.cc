@@ -311,7 +311,8 @@ TEST(MatchImagePairs, EqualsMatchingEachPair) {
 // "repeated texture": distractors in image 2 that copy descriptors of image
 // 1 but sit at unrelated positions.
 struct GuidedScene {
-  FloatDescriptors d1, d2;
+  FeatureDescriptors raw1, raw2;  // as stored (what guided matching takes)
+  FloatDescriptors d1, d2;        // normalised (brute force)
   std::vector<Eigen::Vector2d> points1, points2;
   Eigen::Matrix3d F;
   std::map<point2D_t, point2D_t> truth;
@@ -361,6 +362,8 @@ GuidedScene MakeGuidedScene(int num_points, int num_repeated, int num_distractor
   }
   scene.d1 = NormalizeDescriptors(raw1);
   scene.d2 = NormalizeDescriptors(raw2);
+  scene.raw1 = std::move(raw1);
+  scene.raw2 = std::move(raw2);
   return scene;
 }
 
@@ -378,8 +381,8 @@ TEST(MatchDescriptorsGuided, EqualsBruteForceRestrictedToTheBand) {
           options.cell_size_px = cell;
           options.matching.cross_check = cross_check;
           options.matching.num_threads = 2;
-          const FeatureMatches guided = MatchDescriptorsGuided(scene.d1, scene.d2, scene.points1,
-                                                               scene.points2, scene.F, options);
+          const FeatureMatches guided = MatchDescriptorsGuided(
+              scene.raw1, scene.raw2, scene.points1, scene.points2, scene.F, options);
           const FeatureMatches reference =
               BruteForceInBand(scene.d1, scene.d2, scene.points1, scene.points2, scene.F, options);
           EXPECT_EQ(AsPairs(guided), AsPairs(reference))
@@ -400,9 +403,9 @@ TEST(MatchDescriptorsGuided, RejectsRepeatedTextureOffTheEpipolarLine) {
   const Score unguided = Evaluate(MatchDescriptors(scene.d1, scene.d2, plain), scene.truth);
   GuidedMatchingOptions options;
   options.max_epipolar_distance_px = 4.0;
-  const Score guided = Evaluate(
-      MatchDescriptorsGuided(scene.d1, scene.d2, scene.points1, scene.points2, scene.F, options),
-      scene.truth);
+  const Score guided = Evaluate(MatchDescriptorsGuided(scene.raw1, scene.raw2, scene.points1,
+                                                       scene.points2, scene.F, options),
+                                scene.truth);
   std::cout << "unguided recall " << unguided.recall << " precision " << unguided.precision
             << "; guided recall " << guided.recall << " precision " << guided.precision << "\n";
   EXPECT_LT(unguided.recall, 0.8);  // the 200 repeated descriptors are lost

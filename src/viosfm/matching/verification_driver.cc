@@ -42,11 +42,28 @@ struct ImageInfo {
   VioOdometer odometer;                    // of that pose
 };
 
+// Both frames have a VIO pose in the same segment: the VIO's relative pose
+// between them means something.
+bool HasVioPrior(const ImageInfo& info1, const ImageInfo& info2) {
+  return info1.world_from_body && info2.world_from_body &&
+         info1.odometer.segment == info2.odometer.segment;
+}
+
 // Features of one image as the per-pair steps use them.
 struct ImageData {
-  std::vector<Eigen::Vector2d> points_normalized;       // undistorted x/z, y/z
-  std::vector<Eigen::Vector2d> points_px;               // undistorted pixels (guided matching)
-  std::shared_ptr<const FloatDescriptors> descriptors;  // null if not needed
+  std::vector<Eigen::Vector2d> points_normalized;  // undistorted x/z, y/z
+  std::vector<Eigen::Vector2d> points_px;          // undistorted pixels (guided matching)
+  std::shared_ptr<const FeatureDescriptors> stored_descriptors;  // as stored; null if not needed
+  std::shared_ptr<const FloatDescriptors>
+      descriptors;  // normalised (brute force); null if not needed
+};
+
+// What a batch needs of an image: nothing beyond its keypoints (stored
+// pairs only), its stored descriptors (guided matching), or also the
+// normalised ones (brute-force matching).
+struct ImageNeeds {
+  bool stored_descriptors = false;
+  bool normalised_descriptors = false;
 };
 
 // The result of one pair's worker.
@@ -278,15 +295,23 @@ VerificationResult RunVerification(const Sequence& sequence,
 
     // Load the batch's features (kept from the previous batch where needed again).
     step_timer.Start();
-    std::unordered_map<image_t, bool> needed;  // image -> descriptors needed
+    std::unordered_map<image_t, ImageNeeds> needed;
     for (size_t i = begin; i < end; ++i) {
-      needed[pairs[i].image_id1] |= !stored[i];
-      needed[pairs[i].image_id2] |= !stored[i];
+      ImageNeeds& needs1 = needed[pairs[i].image_id1];
+      ImageNeeds& needs2 = needed[pairs[i].image_id2];
+      if (stored[i]) continue;
+      const bool guided =
+          options.guided_matching && HasVioPrior(images[index_by_id.at(pairs[i].image_id1)],
+                                                 images[index_by_id.at(pairs[i].image_id2)]);
+      for (ImageNeeds* needs : {&needs1, &needs2}) {
+        needs->stored_descriptors = true;
+        needs->normalised_descriptors |= !guided;
+      }
     }
     for (auto it = cache.begin(); it != cache.end();) {
       it = needed.count(it->first) ? std::next(it) : cache.erase(it);
     }
-    for (const auto& [image_id, need_descriptors] : needed) {
+    for (const auto& [image_id, needs] : needed) {
       ImageData& data = cache[image_id];
       const Camera& camera = cameras.at(images[index_by_id.at(image_id)].camera_id);
       if (data.points_normalized.empty()) {
@@ -299,9 +324,13 @@ VerificationResult RunVerification(const Sequence& sequence,
           }
         }
       }
-      if (need_descriptors && !data.descriptors) {
+      if (needs.stored_descriptors && !data.stored_descriptors) {
+        data.stored_descriptors =
+            std::make_shared<const FeatureDescriptors>(database->ReadDescriptors(image_id));
+      }
+      if (needs.normalised_descriptors && !data.descriptors) {
         data.descriptors = std::make_shared<const FloatDescriptors>(
-            NormalizeDescriptors(database->ReadDescriptors(image_id)));
+            NormalizeDescriptors(*data.stored_descriptors));
       }
     }
     std::vector<PairWork> work(end - begin);
@@ -316,8 +345,7 @@ VerificationResult RunVerification(const Sequence& sequence,
       decision.source = options.pairs.mode == PairMode::kTemporalRetrieval
                             ? (temporal_pairs.count(pairs[i]) ? "temporal" : "retrieval")
                             : PairModeName(options.pairs.mode);
-      decision.has_vio_prior = info1.world_from_body && info2.world_from_body &&
-                               info1.odometer.segment == info2.odometer.segment;
+      decision.has_vio_prior = HasVioPrior(info1, info2);
       if (stored[i] && options.reverify_stored_matches) {
         work[i - begin].reverified = true;
         work[i - begin].matches = database->ReadMatches(info1.image_id, info2.image_id);
@@ -354,8 +382,8 @@ VerificationResult RunVerification(const Sequence& sequence,
           const Eigen::Matrix3d fundamental = FundamentalFromRelativePose(
               cam2_from_cam1, CalibrationMatrix(camera1), CalibrationMatrix(camera2));
           pair_work.matches =
-              MatchDescriptorsGuided(*data1.descriptors, *data2.descriptors, data1.points_px,
-                                     data2.points_px, fundamental, guided);
+              MatchDescriptorsGuided(*data1.stored_descriptors, *data2.stored_descriptors,
+                                     data1.points_px, data2.points_px, fundamental, guided);
         } else {
           pair_work.matches = MatchDescriptors(*data1.descriptors, *data2.descriptors, matching);
         }
