@@ -176,7 +176,11 @@ std::vector<double> InverseRowNorms(const FeatureDescriptors& descriptors) {
   return inverse;
 }
 
-// Points of image 2 bucketed in square cells over their bounding box.
+// Points of image 2 bucketed in square cells over their bounding box, in two
+// layouts: column by column (the cells of one column are consecutive) and
+// row by row. A walk along x visits, per column, a range of consecutive
+// cells of the first layout, so their points are one contiguous run of
+// memory; a walk along y does the same in the second.
 class PointGrid {
  public:
   PointGrid(const std::vector<Eigen::Vector2d>& points, double cell_size) : cell_(cell_size) {
@@ -195,29 +199,20 @@ class PointGrid {
     }
     nx_ = static_cast<int64_t>(std::floor((max.x() - min_.x()) / cell_)) + 1;
     ny_ = static_cast<int64_t>(std::floor((max.y() - min_.y()) / cell_)) + 1;
-    start_.assign(nx_ * ny_ + 1, 0);
-    std::vector<int64_t> cell_of(points.size(), -1);
-    for (size_t j = 0; j < points.size(); ++j) {
-      if (!points[j].allFinite()) continue;
-      cell_of[j] = CellIndex(CellX(points[j].x()), CellY(points[j].y()));
-      ++start_[cell_of[j] + 1];
-    }
-    for (size_t c = 1; c < start_.size(); ++c) start_[c] += start_[c - 1];
-    indices_.resize(start_.back());
-    std::vector<int64_t> fill(start_.begin(), start_.end() - 1);
-    for (size_t j = 0; j < points.size(); ++j) {
-      if (cell_of[j] >= 0) indices_[fill[cell_of[j]]++] = static_cast<int32_t>(j);
-    }
+    Fill(points, /*by_column=*/true, &by_column_);
+    Fill(points, /*by_column=*/false, &by_row_);
   }
 
-  // Calls visit(j) for every point in the cells the band |a x + b y + c| <=
-  // half_width crosses (a^2 + b^2 = 1); a superset of the points in the band.
+  // Calls visit(j, point j) for every point in the cells the band |a x + b y
+  // + c| <= half_width crosses (a^2 + b^2 = 1); a superset of the points in
+  // the band.
   template <typename Visit>
   void ForEachNearLine(double a, double b, double c, double half_width, Visit&& visit) const {
     if (nx_ == 0) return;
     // Walk along the axis the line is closer to, so the band covers few cells
     // per step: y as a function of x when |b| >= |a|, else x of y.
     const bool along_x = std::abs(b) >= std::abs(a);
+    const Layout& layout = along_x ? by_column_ : by_row_;
     const double u_coef = along_x ? a : b;  // line: u_coef * u + v_coef * v + c = 0
     const double v_coef = along_x ? b : a;
     const int64_t nu = along_x ? nx_ : ny_;
@@ -243,14 +238,44 @@ class PointGrid {
       // high >= 0, and low is clamped to 0: truncation is the floor here.
       const int64_t cv0 = low > 0.0 ? static_cast<int64_t>(low) : 0;
       const int64_t cv1 = std::min<int64_t>(nv - 1, static_cast<int64_t>(high));
-      for (int64_t cv = cv0; cv <= cv1; ++cv) {
-        const int64_t cell = along_x ? CellIndex(cu, cv) : CellIndex(cv, cu);
-        for (int64_t k = start_[cell]; k < start_[cell + 1]; ++k) visit(indices_[k]);
+      // Cells (cu, cv0..cv1) are consecutive in this layout.
+      const int64_t end = layout.start[cu * nv + cv1 + 1];
+      for (int64_t k = layout.start[cu * nv + cv0]; k < end; ++k) {
+        visit(layout.index[k], layout.points[k]);
       }
     }
   }
 
  private:
+  struct Layout {
+    std::vector<int64_t> start;           // CSR offsets, one per cell + 1
+    std::vector<int32_t> index;           // point indices, ascending within a cell
+    std::vector<Eigen::Vector2d> points;  // the points, in the same order
+  };
+
+  // Cell (cx, cy) is number cx * ny + cy by column, cy * nx + cx by row.
+  void Fill(const std::vector<Eigen::Vector2d>& points, bool by_column, Layout* layout) const {
+    layout->start.assign(nx_ * ny_ + 1, 0);
+    std::vector<int64_t> cell_of(points.size(), -1);
+    for (size_t j = 0; j < points.size(); ++j) {
+      if (!points[j].allFinite()) continue;
+      const int64_t cx = CellX(points[j].x());
+      const int64_t cy = CellY(points[j].y());
+      cell_of[j] = by_column ? cx * ny_ + cy : cy * nx_ + cx;
+      ++layout->start[cell_of[j] + 1];
+    }
+    for (size_t c = 1; c < layout->start.size(); ++c) layout->start[c] += layout->start[c - 1];
+    layout->index.resize(layout->start.back());
+    layout->points.resize(layout->start.back());
+    std::vector<int64_t> fill(layout->start.begin(), layout->start.end() - 1);
+    for (size_t j = 0; j < points.size(); ++j) {
+      if (cell_of[j] < 0) continue;
+      const int64_t k = fill[cell_of[j]]++;
+      layout->index[k] = static_cast<int32_t>(j);
+      layout->points[k] = points[j];
+    }
+  }
+
   int64_t CellX(double x) const {
     return std::clamp<int64_t>(static_cast<int64_t>(std::floor((x - min_.x()) / cell_)), 0,
                                nx_ - 1);
@@ -259,14 +284,13 @@ class PointGrid {
     return std::clamp<int64_t>(static_cast<int64_t>(std::floor((y - min_.y()) / cell_)), 0,
                                ny_ - 1);
   }
-  int64_t CellIndex(int64_t cx, int64_t cy) const { return cy * nx_ + cx; }
 
   double cell_;
   Eigen::Vector2d min_;
   int64_t nx_ = 0;
   int64_t ny_ = 0;
-  std::vector<int64_t> start_;    // CSR offsets, one per cell + 1
-  std::vector<int32_t> indices_;  // point indices, ascending within a cell
+  Layout by_column_;
+  Layout by_row_;
 };
 
 }  // namespace
@@ -317,8 +341,8 @@ FeatureMatches MatchDescriptorsGuided(const FeatureDescriptors& descriptors1,
       // with the line and its norm computed once per row.
       candidates.clear();
       grid.ForEachNearLine(line.x() / norm, line.y() / norm, line.z() / norm, search_half_width,
-                           [&](int32_t j) {
-                             if (std::abs(line.dot(points2[j].homogeneous())) <= max_line_value) {
+                           [&](int32_t j, const Eigen::Vector2d& point2) {
+                             if (std::abs(line.dot(point2.homogeneous())) <= max_line_value) {
                                candidates.push_back(j);
                              }
                            });
