@@ -3,8 +3,10 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <Eigen/SVD>
+#include <array>
 #include <cmath>
 #include <complex>
+#include <cstdint>
 
 #include "viosfm/geometry/lie.h"
 #include "viosfm/util/errors.h"
@@ -29,31 +31,39 @@ constexpr int kOne = 19;
 
 using Polynomial = Eigen::Matrix<double, kNumMonomials, 1>;
 
-struct MonomialTable {
-  // index[a][b][c] of x^a y^b z^c, -1 if the degree exceeds 3.
-  int index[4][4][4];
-  MonomialTable() {
+// product[i][j]: the index of monomial i times monomial j, -1 if its degree
+// exceeds 3.
+struct MonomialProductTable {
+  int8_t product[kNumMonomials][kNumMonomials];
+  MonomialProductTable() {
+    int index[4][4][4];
     for (auto& plane : index)
       for (auto& row : plane)
         for (int& value : row) value = -1;
     for (int i = 0; i < kNumMonomials; ++i) {
       index[kExponents[i][0]][kExponents[i][1]][kExponents[i][2]] = i;
     }
+    for (int i = 0; i < kNumMonomials; ++i) {
+      for (int j = 0; j < kNumMonomials; ++j) {
+        const int a = kExponents[i][0] + kExponents[j][0];
+        const int b = kExponents[i][1] + kExponents[j][1];
+        const int c = kExponents[i][2] + kExponents[j][2];
+        product[i][j] = static_cast<int8_t>(a + b + c <= 3 ? index[a][b][c] : -1);
+      }
+    }
   }
 };
 
 Polynomial Multiply(const Polynomial& p, const Polynomial& q) {
-  static const MonomialTable table;
+  static const MonomialProductTable table;
   Polynomial result = Polynomial::Zero();
   for (int i = 0; i < kNumMonomials; ++i) {
     if (p[i] == 0.0) continue;
     for (int j = 0; j < kNumMonomials; ++j) {
       if (q[j] == 0.0) continue;
-      const int a = kExponents[i][0] + kExponents[j][0];
-      const int b = kExponents[i][1] + kExponents[j][1];
-      const int c = kExponents[i][2] + kExponents[j][2];
-      VIOSFM_CHECK(a + b + c <= 3) << "product of degree " << a + b + c;
-      result[table.index[a][b][c]] += p[i] * q[j];
+      const int k = table.product[i][j];
+      VIOSFM_CHECK(k >= 0) << "product of degree > 3";
+      result[k] += p[i] * q[j];
     }
   }
   return result;
@@ -239,37 +249,76 @@ Rigid3d RelativePoseFromEssential(const Eigen::Matrix3d& essential,
 
 namespace {
 
-// Signed Sampson errors r_i = x2^T E x1 / sqrt(|E x1|_12^2 + |E^T x2|_12^2).
-Eigen::VectorXd SampsonResiduals(const Rigid3d& cam2_from_cam1,
-                                 const std::vector<Eigen::Vector2d>& points1,
-                                 const std::vector<Eigen::Vector2d>& points2) {
-  const Eigen::Matrix3d essential =
-      Hat(cam2_from_cam1.translation) * cam2_from_cam1.rotation.toRotationMatrix();
-  Eigen::VectorXd residuals(points1.size());
+// Orthonormal basis of the plane tangent to t (|t| = 1).
+std::pair<Eigen::Vector3d, Eigen::Vector3d> TangentBasis(const Eigen::Vector3d& t) {
+  const Eigen::Vector3d axis =
+      std::abs(t.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+  const Eigen::Vector3d tangent1 = t.cross(axis).normalized();
+  const Eigen::Vector3d tangent2 = t.cross(tangent1).normalized();
+  return {tangent1, tangent2};
+}
+
+}  // namespace
+
+Rigid3d RelativePosePlus(const Rigid3d& pose, const Eigen::Matrix<double, 5, 1>& delta) {
+  const Eigen::Vector3d& t = pose.translation;
+  const auto [tangent1, tangent2] = TangentBasis(t);
+  const Eigen::Vector3d moved = t + delta[3] * tangent1 + delta[4] * tangent2;
+  return Rigid3d((So3Exp(delta.head<3>()) * pose.rotation).normalized(), moved.normalized());
+}
+
+void RelativePoseSampsonResiduals(const Rigid3d& cam2_from_cam1,
+                                  const std::vector<Eigen::Vector2d>& points1,
+                                  const std::vector<Eigen::Vector2d>& points2,
+                                  Eigen::VectorXd* residuals,
+                                  Eigen::Matrix<double, Eigen::Dynamic, 5>* jacobian) {
+  VIOSFM_CHECK_EQ(points1.size(), points2.size());
+  const Eigen::Matrix3d rotation = cam2_from_cam1.rotation.toRotationMatrix();
+  const Eigen::Matrix3d essential = Hat(cam2_from_cam1.translation) * rotation;
+  // dE/d delta_k at delta = 0: the rotation increment turns R into
+  // Exp(delta) R, so dE/d delta_k = [t]x [e_k]x R (k < 3); the tangent step
+  // moves t along the tangent basis (normalising changes nothing to first
+  // order), so dE/d delta_{3,4} = [tangent]x R.
+  std::array<Eigen::Matrix3d, 5> d_essential;
+  if (jacobian != nullptr) {
+    for (int k = 0; k < 3; ++k) {
+      d_essential[k] = Hat(cam2_from_cam1.translation) * Hat(Eigen::Vector3d::Unit(k)) * rotation;
+    }
+    const auto [tangent1, tangent2] = TangentBasis(cam2_from_cam1.translation);
+    d_essential[3] = Hat(tangent1) * rotation;
+    d_essential[4] = Hat(tangent2) * rotation;
+    jacobian->resize(static_cast<Eigen::Index>(points1.size()), 5);
+  }
+  residuals->resize(static_cast<Eigen::Index>(points1.size()));
   for (size_t i = 0; i < points1.size(); ++i) {
     const Eigen::Vector3d x1 = points1[i].homogeneous();
     const Eigen::Vector3d x2 = points2[i].homogeneous();
     const Eigen::Vector3d line2 = essential * x1;
     const Eigen::Vector3d line1 = essential.transpose() * x2;
+    const double numerator = x2.dot(line2);
     const double denominator = line2.head<2>().squaredNorm() + line1.head<2>().squaredNorm();
-    residuals[i] = denominator > 0.0 ? x2.dot(line2) / std::sqrt(denominator) : 0.0;
+    if (!(denominator > 0.0)) {
+      (*residuals)[i] = 0.0;
+      if (jacobian != nullptr) jacobian->row(static_cast<Eigen::Index>(i)).setZero();
+      continue;
+    }
+    const double inverse_sqrt = 1.0 / std::sqrt(denominator);
+    (*residuals)[i] = numerator * inverse_sqrt;
+    if (jacobian == nullptr) continue;
+    // r = n / sqrt(d): dr = dn / sqrt(d) - n dd / (2 d^(3/2)), with
+    // dn = x2^T dE x1 and dd = 2 (l2_12 . (dE x1)_12 + l1_12 . (dE^T x2)_12).
+    for (int k = 0; k < 5; ++k) {
+      const Eigen::Vector3d d_line2 = d_essential[k] * x1;
+      const Eigen::Vector3d d_line1 = d_essential[k].transpose() * x2;
+      const double d_numerator = x2.dot(d_line2);
+      const double d_denominator =
+          2.0 * (line2.head<2>().dot(d_line2.head<2>()) + line1.head<2>().dot(d_line1.head<2>()));
+      (*jacobian)(static_cast<Eigen::Index>(i), k) =
+          d_numerator * inverse_sqrt -
+          0.5 * numerator * d_denominator * inverse_sqrt * inverse_sqrt * inverse_sqrt;
+    }
   }
-  return residuals;
 }
-
-// The pose moved by delta = (rotation increment (3), tangent step of t (2)).
-Rigid3d Perturb(const Rigid3d& pose, const Eigen::Matrix<double, 5, 1>& delta) {
-  const Eigen::Vector3d& t = pose.translation;
-  // Orthonormal basis of the plane tangent to t.
-  Eigen::Vector3d axis =
-      std::abs(t.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
-  const Eigen::Vector3d tangent1 = t.cross(axis).normalized();
-  const Eigen::Vector3d tangent2 = t.cross(tangent1).normalized();
-  const Eigen::Vector3d moved = t + delta[3] * tangent1 + delta[4] * tangent2;
-  return Rigid3d((So3Exp(delta.head<3>()) * pose.rotation).normalized(), moved.normalized());
-}
-
-}  // namespace
 
 Rigid3d RefineRelativePose(const Rigid3d& cam2_from_cam1,
                            const std::vector<Eigen::Vector2d>& points1,
@@ -277,19 +326,13 @@ Rigid3d RefineRelativePose(const Rigid3d& cam2_from_cam1,
   VIOSFM_CHECK_EQ(points1.size(), points2.size());
   if (points1.size() < 5) return cam2_from_cam1;
   Rigid3d pose(cam2_from_cam1.rotation.normalized(), cam2_from_cam1.translation.normalized());
-  Eigen::VectorXd residuals = SampsonResiduals(pose, points1, points2);
-  double cost = residuals.squaredNorm();
+  Eigen::VectorXd residuals;
+  Eigen::Matrix<double, Eigen::Dynamic, 5> jacobian;
   double lambda = 1e-4;
-  constexpr double kStep = 1e-7;  // central differences
-  Eigen::MatrixXd jacobian(points1.size(), 5);
+  Eigen::VectorXd candidate_residuals;
   for (int iteration = 0; iteration < max_iterations; ++iteration) {
-    for (int k = 0; k < 5; ++k) {
-      Eigen::Matrix<double, 5, 1> delta = Eigen::Matrix<double, 5, 1>::Zero();
-      delta[k] = kStep;
-      jacobian.col(k) = (SampsonResiduals(Perturb(pose, delta), points1, points2) -
-                         SampsonResiduals(Perturb(pose, -delta), points1, points2)) /
-                        (2.0 * kStep);
-    }
+    RelativePoseSampsonResiduals(pose, points1, points2, &residuals, &jacobian);
+    const double cost = residuals.squaredNorm();
     const Eigen::Matrix<double, 5, 5> normal = jacobian.transpose() * jacobian;
     const Eigen::Matrix<double, 5, 1> gradient = jacobian.transpose() * residuals;
     bool improved = false;
@@ -298,14 +341,12 @@ Rigid3d RefineRelativePose(const Rigid3d& cam2_from_cam1,
       damped.diagonal() *= 1.0 + lambda;
       const Eigen::Matrix<double, 5, 1> step = damped.ldlt().solve(-gradient);
       if (!step.allFinite()) break;
-      const Rigid3d candidate = Perturb(pose, step);
-      const Eigen::VectorXd candidate_residuals = SampsonResiduals(candidate, points1, points2);
+      const Rigid3d candidate = RelativePosePlus(pose, step);
+      RelativePoseSampsonResiduals(candidate, points1, points2, &candidate_residuals, nullptr);
       const double candidate_cost = candidate_residuals.squaredNorm();
       if (candidate_cost < cost) {
         const double relative_decrease = (cost - candidate_cost) / std::max(cost, 1e-300);
         pose = candidate;
-        residuals = candidate_residuals;
-        cost = candidate_cost;
         lambda = std::max(lambda * 0.1, 1e-12);
         improved = true;
         if (relative_decrease < 1e-10) return pose;

@@ -54,6 +54,22 @@ Rigid3d RelativePoseFromEssential(const Eigen::Matrix3d& essential,
 
 inline constexpr double kMaxCheiralityDepth = 1000.0;  // baselines
 
+// The 5 local parameters of a relative pose with |t| = 1 (RefineRelativePose
+// steps in them): delta = (rotation increment (3), step tangent to t (2));
+// the result is (Exp(delta_0..2) R, normalise(t + delta_3 u1 + delta_4 u2))
+// with (u1, u2) an orthonormal basis of the plane tangent to t.
+Rigid3d RelativePosePlus(const Rigid3d& pose, const Eigen::Matrix<double, 5, 1>& delta);
+
+// Signed Sampson errors r_i = x2^T E x1 / sqrt(|(E x1)_12|^2 + |(E^T x2)_12|^2)
+// of the correspondences (normalised coordinates) under E = [t]x R of
+// cam2_from_cam1 (|t| = 1), and, if `jacobian` is not null, their
+// derivatives with respect to RelativePosePlus's delta at 0 (analytic).
+void RelativePoseSampsonResiduals(const Rigid3d& cam2_from_cam1,
+                                  const std::vector<Eigen::Vector2d>& points1,
+                                  const std::vector<Eigen::Vector2d>& points2,
+                                  Eigen::VectorXd* residuals,
+                                  Eigen::Matrix<double, Eigen::Dynamic, 5>* jacobian);
+
 // Refines cam2_from_cam1 (|t| = 1 kept) by Levenberg-Marquardt on the Sampson
 // errors of the correspondences, over the 5 degrees of freedom of the
 // essential matrix (rotation increment and a 2D step tangent to t). Runs at

@@ -123,6 +123,40 @@ TEST(RefineRelativePose, ConvergesFromAPerturbedPose) {
   EXPECT_LT(RotationErrorDeg(fixed.rotation, view.cam2_from_cam1.rotation), 1e-9);
 }
 
+TEST(RelativePoseSampsonResiduals, JacobianMatchesCentralDifferences) {
+  Random random(12);
+  const auto view = MakeRandomTwoView(random, 30);
+  std::vector<Eigen::Vector2d> noisy2;
+  for (const Eigen::Vector2d& x : view.points2) {
+    noisy2.push_back(x + Eigen::Vector2d(random.Normal(), random.Normal()) * 2.0 / 460);
+  }
+  // Away from the truth, so that the residuals are not all zero.
+  const Rigid3d pose(
+      So3Exp(testing::RandomUnitVector(random) * 0.05) * view.cam2_from_cam1.rotation,
+      (view.cam2_from_cam1.translation + 0.1 * testing::RandomUnitVector(random)).normalized());
+  Eigen::VectorXd residuals;
+  Eigen::Matrix<double, Eigen::Dynamic, 5> jacobian;
+  RelativePoseSampsonResiduals(pose, view.points1, noisy2, &residuals, &jacobian);
+  Eigen::VectorXd without_jacobian;
+  RelativePoseSampsonResiduals(pose, view.points1, noisy2, &without_jacobian, nullptr);
+  EXPECT_EQ(residuals, without_jacobian);
+  ASSERT_EQ(jacobian.rows(), 30);
+  const double step = 1e-6;
+  for (int k = 0; k < 5; ++k) {
+    Eigen::Matrix<double, 5, 1> delta = Eigen::Matrix<double, 5, 1>::Zero();
+    delta[k] = step;
+    Eigen::VectorXd plus, minus;
+    RelativePoseSampsonResiduals(RelativePosePlus(pose, delta), view.points1, noisy2, &plus,
+                                 nullptr);
+    RelativePoseSampsonResiduals(RelativePosePlus(pose, -delta), view.points1, noisy2, &minus,
+                                 nullptr);
+    const Eigen::VectorXd numeric = (plus - minus) / (2.0 * step);
+    EXPECT_LT((jacobian.col(k) - numeric).norm(), 1e-6 * std::max(1.0, numeric.norm()))
+        << "parameter " << k;
+    EXPECT_GT(numeric.norm(), 1e-3) << "parameter " << k;  // a derivative worth checking
+  }
+}
+
 TEST(TriangulateDepths, RecoversDepthsAndRejectsParallelRays) {
   const Rigid3d cam2_from_cam1(Eigen::Quaterniond::Identity(), Eigen::Vector3d(-1, 0, 0));
   const Eigen::Vector3d point(0.3, -0.2, 5.0);
