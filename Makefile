@@ -3,7 +3,7 @@ BUILD_DIR ?= build
 JOBS ?= $(shell nproc)
 CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Release
 
-.PHONY: deps configure build test demo bench fuzz test-sanitize check-integrity clean
+.PHONY: deps configure build test demo bench fuzz test-sanitize test-tsan check-integrity clean
 
 deps:
 	./scripts/install-deps.sh
@@ -37,6 +37,11 @@ fuzz: deps
 # Not part of `make test`.
 test-sanitize: deps
 	JOBS=$(JOBS) ./scripts/test-sanitize.sh build-sanitize
+
+# Builds and runs the tests that start threads with ThreadSanitizer
+# (build-tsan/); see docs/robustness.md. Not part of `make test`.
+test-tsan: deps
+	JOBS=$(JOBS) ./scripts/test-tsan.sh build-tsan
 
 # Runs of `viosfm run` on a small simulated sequence: identical re-runs, a
 # second dataset into the same folder, SIGKILL and re-run, thread counts,
