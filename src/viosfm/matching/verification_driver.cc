@@ -53,9 +53,10 @@ bool HasVioPrior(const ImageInfo& info1, const ImageInfo& info2) {
 struct ImageData {
   std::vector<Eigen::Vector2d> points_normalized;  // undistorted x/z, y/z
   std::vector<Eigen::Vector2d> points_px;          // undistorted pixels (guided matching)
-  std::shared_ptr<const FeatureDescriptors> stored_descriptors;  // as stored; null if not needed
-  std::shared_ptr<const FloatDescriptors>
-      descriptors;  // normalised (brute force); null if not needed
+  // The descriptors as stored (guided matching), and normalised to float
+  // (brute-force matching); null where the batch does not need them.
+  std::shared_ptr<const FeatureDescriptors> stored_descriptors;
+  std::shared_ptr<const FloatDescriptors> descriptors;
 };
 
 // What a batch needs of an image: nothing beyond its keypoints (stored
