@@ -137,7 +137,11 @@ std::string PipelineSummaryToJson(const PipelineSummary& s) {
                        {"registered_total", batch.num_registered_total},
                        {"points_total", batch.num_points_total},
                        {"mean_reprojection_error_px", batch.mean_reprojection_error_px},
+                       {"seconds_registration", batch.seconds_registration},
+                       {"seconds_triangulation", batch.seconds_triangulation},
                        {"seconds_ba", batch.seconds_ba},
+                       {"seconds_filtering", batch.seconds_filtering},
+                       {"seconds_total", batch.seconds_total},
                        {"ba_observations", batch.num_ba_observations},
                        {"ba_iterations", batch.num_ba_iterations},
                        {"ba_solver", BaLinearSolverName(batch.ba_linear_solver)}});

@@ -7,6 +7,7 @@
 #include "viosfm/geometry/triangulation.h"
 #include "viosfm/sensor/camera_models.h"
 #include "viosfm/util/errors.h"
+#include "viosfm/util/parallel.h"
 
 namespace viosfm {
 namespace {
@@ -29,50 +30,82 @@ double ReprojectionErrorPx(const Camera& camera, const Rigid3d& cam_from_world,
   return (*projected - pixel).norm();
 }
 
-double MeanReprojectionError(const Reconstruction& reconstruction) {
+namespace {
+
+// Each point's sum and count of finite reprojection errors over its
+// observations in registered images, and whether one was not finite (the
+// point behind a camera), computed on up to num_threads threads.
+struct PointErrors {
   double sum = 0.0;
   size_t count = 0;
-  for (const auto& [point3D_id, point3D] : reconstruction.Points3D()) {
-    for (const TrackElement& element : point3D.track) {
-      const Image& image = reconstruction.GetImage(element.image_id);
-      if (!image.registered) continue;
-      const double error = ObservationError(reconstruction, image, element, point3D);
-      if (!std::isfinite(error)) continue;
-      sum += error;
-      ++count;
-    }
+  bool behind = false;
+};
+
+std::vector<PointErrors> ComputePointErrors(const Reconstruction& reconstruction,
+                                            const std::vector<point3D_t>& point3D_ids,
+                                            int num_threads) {
+  std::vector<PointErrors> errors(point3D_ids.size());
+  ParallelForChunks(
+      static_cast<int64_t>(point3D_ids.size()), num_threads, 1024, [&](int64_t begin, int64_t end) {
+        for (int64_t k = begin; k < end; ++k) {
+          if (!reconstruction.ExistsPoint3D(point3D_ids[k])) continue;
+          const Point3D& point3D = reconstruction.GetPoint3D(point3D_ids[k]);
+          PointErrors& point = errors[k];
+          for (const TrackElement& element : point3D.track) {
+            const Image& image = reconstruction.GetImage(element.image_id);
+            if (!image.registered) continue;
+            const double error = ObservationError(reconstruction, image, element, point3D);
+            if (!std::isfinite(error)) {
+              point.behind = true;
+              continue;
+            }
+            point.sum += error;
+            ++point.count;
+          }
+        }
+      });
+  return errors;
+}
+
+}  // namespace
+
+double MeanReprojectionError(const Reconstruction& reconstruction, int num_threads) {
+  // Per point, then over the points in order: the same sum for any number
+  // of threads.
+  double sum = 0.0;
+  size_t count = 0;
+  for (const PointErrors& point :
+       ComputePointErrors(reconstruction, reconstruction.Point3DIds(), num_threads)) {
+    sum += point.sum;
+    count += point.count;
   }
   return count == 0 ? 0.0 : sum / static_cast<double>(count);
 }
 
-double UpdateReprojectionErrors(Reconstruction* reconstruction) {
+double UpdateReprojectionErrors(Reconstruction* reconstruction, int num_threads) {
   VIOSFM_CHECK(reconstruction != nullptr);
+  return UpdateReprojectionErrors(reconstruction, reconstruction->Point3DIds(), num_threads);
+}
+
+double UpdateReprojectionErrors(Reconstruction* reconstruction,
+                                const std::vector<point3D_t>& point3D_ids, int num_threads) {
+  VIOSFM_CHECK(reconstruction != nullptr);
+  const std::vector<PointErrors> errors =
+      ComputePointErrors(*reconstruction, point3D_ids, num_threads);
   double sum = 0.0;
   size_t count = 0;
-  for (const point3D_t point3D_id : reconstruction->Point3DIds()) {
-    Point3D& point3D = reconstruction->GetPoint3D(point3D_id);
-    double point_sum = 0.0;
-    size_t point_count = 0;
-    bool behind = false;
-    for (const TrackElement& element : point3D.track) {
-      const Image& image = reconstruction->GetImage(element.image_id);
-      if (!image.registered) continue;
-      const double error = ObservationError(*reconstruction, image, element, point3D);
-      if (!std::isfinite(error)) {
-        behind = true;
-        continue;
-      }
-      point_sum += error;
-      ++point_count;
-    }
-    sum += point_sum;
-    count += point_count;
-    if (behind) {
+  for (size_t k = 0; k < point3D_ids.size(); ++k) {
+    if (!reconstruction->ExistsPoint3D(point3D_ids[k])) continue;
+    const PointErrors& point = errors[k];
+    sum += point.sum;
+    count += point.count;
+    Point3D& point3D = reconstruction->GetPoint3D(point3D_ids[k]);
+    if (point.behind) {
       point3D.error = kInfinity;
-    } else if (point_count == 0) {
+    } else if (point.count == 0) {
       point3D.error = -1.0;
     } else {
-      point3D.error = point_sum / static_cast<double>(point_count);
+      point3D.error = point.sum / static_cast<double>(point.count);
     }
   }
   return count == 0 ? 0.0 : sum / static_cast<double>(count);

@@ -491,6 +491,31 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
     return false;
   };
   std::vector<size_t> pending;  // frames not registered yet, in time order
+  // The points triangulated or extended since the last filtering, and
+  // whether a triangulation of every track may have changed any point.
+  std::vector<point3D_t> changed_since_filter;
+  bool all_changed_since_filter = true;
+  const auto note_changes = [&](const TriangulationStatistics& triangulation) {
+    changed_since_filter.insert(changed_since_filter.end(), triangulation.changed_point_ids.begin(),
+                                triangulation.changed_point_ids.end());
+  };
+  // The points a filtering after a windowed adjustment must check: those
+  // the window's images observe (the adjustment moved them or their
+  // cameras) and those triangulated or extended since the last filtering.
+  // The others are as the last filtering left them, so checking them again
+  // would change nothing.
+  const auto points_to_filter = [&](size_t window_begin) {
+    std::vector<point3D_t> point_ids;
+    for (size_t r = window_begin; r < registered.size(); ++r) {
+      for (const Point2D& point2D : reconstruction.GetImage(registered[r]).points2D) {
+        if (point2D.HasPoint3D()) point_ids.push_back(point2D.point3D_id);
+      }
+    }
+    point_ids.insert(point_ids.end(), changed_since_filter.begin(), changed_since_filter.end());
+    std::sort(point_ids.begin(), point_ids.end());
+    point_ids.erase(std::unique(point_ids.begin(), point_ids.end()), point_ids.end());
+    return point_ids;
+  };
   // Tries the pending frames again (the VIO chain, or PnP against the points
   // triangulated since), triangulating after each round, until none is added.
   const auto retry_pending = [&]() {
@@ -517,7 +542,8 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
                             track_indices.end());
         std::vector<Track> subset;
         for (const size_t t : track_indices) subset.push_back(tracks[t]);
-        TriangulateReconstruction(&reconstruction, subset, registered, options.triangulation);
+        note_changes(
+            TriangulateReconstruction(&reconstruction, subset, registered, options.triangulation));
       }
     }
     return added;
@@ -587,9 +613,11 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
     // 2. Registration: each frame by its VIO pose relative to the latest
     // registered frame of its VIO segment, checked against the images.
     newly_registered.clear();
+    timer.Start();
     for (size_t i = begin; i < end; ++i) {
       if (!try_register(i)) pending.push_back(i);
     }
+    stats.seconds_registration = timer.ElapsedSeconds();
 
     // 3. Triangulation of the tracks seen by the batch, then the frames
     // that the new points (or a newly registered frame of their VIO segment)
@@ -598,6 +626,7 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
     const TriangulationStatistics triangulation = TriangulateReconstruction(
         &reconstruction, TracksOfImages(tracks, tracks_of_image, begin, end), registered,
         options.triangulation);
+    note_changes(triangulation);
     retry_pending();
     stats.seconds_triangulation = timer.ElapsedSeconds();
 
@@ -621,10 +650,18 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
 
     // 5. Filtering and re-triangulation of the tracks left without a point.
     timer.Start();
-    FilterPoints(&reconstruction, options.filter);
+    if (window_begin == 0 || all_changed_since_filter) {
+      FilterPoints(&reconstruction, options.filter, options.num_threads);
+    } else {
+      FilterPoints(&reconstruction, options.filter, points_to_filter(window_begin),
+                   options.num_threads);
+    }
+    changed_since_filter.clear();
+    all_changed_since_filter = false;
     if (options.retriangulate) {
       if (window_begin == 0) {
         TriangulateReconstruction(&reconstruction, tracks, registered, options.triangulation);
+        all_changed_since_filter = true;
       } else {
         std::vector<size_t> window_tracks;
         for (size_t r = window_begin; r < registered.size(); ++r) {
@@ -636,14 +673,15 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
                             window_tracks.end());
         std::vector<Track> subset;
         for (const size_t t : window_tracks) subset.push_back(tracks[t]);
-        TriangulateReconstruction(&reconstruction, subset, registered, options.triangulation);
+        note_changes(
+            TriangulateReconstruction(&reconstruction, subset, registered, options.triangulation));
       }
     }
     // 6. After the final bundle adjustment, the frames that only the final
     // model allows to register, and another global adjustment.
     if (last && retry_pending() > 0 && (options.ba_after_each_batch || options.final_global_ba)) {
       summary.final_ba = adjust(0, true);
-      FilterPoints(&reconstruction, options.filter);
+      FilterPoints(&reconstruction, options.filter, options.num_threads);
       if (options.retriangulate) {
         TriangulateReconstruction(&reconstruction, tracks, registered, options.triangulation);
       }
@@ -652,7 +690,7 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
 
     stats.num_registered_total = static_cast<int>(registered.size());
     stats.num_points_total = static_cast<int>(reconstruction.NumPoints3D());
-    stats.mean_reprojection_error_px = MeanReprojectionError(reconstruction);
+    stats.mean_reprojection_error_px = MeanReprojectionError(reconstruction, options.num_threads);
     stats.seconds_total = batch_timer.ElapsedSeconds();
     VIOSFM_LOG(INFO) << std::fixed << std::setprecision(3) << "batch " << b + 1 << "/"
                      << num_batches << ": images " << stats.num_registered_total << " (+"
@@ -726,7 +764,7 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
   summary.num_points = static_cast<int>(reconstruction.NumPoints3D());
   summary.num_observations = static_cast<int>(reconstruction.ComputeNumObservations());
   summary.mean_track_length = reconstruction.ComputeMeanTrackLength();
-  summary.mean_reprojection_error_px = MeanReprojectionError(reconstruction);
+  summary.mean_reprojection_error_px = MeanReprojectionError(reconstruction, options.num_threads);
   summary.seconds_total = total_timer.ElapsedSeconds();
   VIOSFM_LOG(INFO) << summary.ToString();
   if (summary_out != nullptr) *summary_out = std::move(summary);

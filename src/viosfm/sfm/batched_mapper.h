@@ -179,7 +179,8 @@ struct MapperBatchStatistics {
   // Mean over all observations after the batch (BA, filtering and
   // re-triangulation), px.
   double mean_reprojection_error_px = 0.0;
-  double seconds_triangulation = 0.0;
+  double seconds_registration = 0.0;   // the batch's frames, VIO prediction and PnP check
+  double seconds_triangulation = 0.0;  // its tracks, and the pending frames retried
   double seconds_ba = 0.0;
   double seconds_filtering = 0.0;
   int num_ba_free_images = 0;   // images whose pose the batch's BA refined

@@ -7,6 +7,7 @@
 #include "viosfm/scene/reprojection.h"
 #include "viosfm/sfm/triangulator.h"
 #include "viosfm/util/errors.h"
+#include "viosfm/util/parallel.h"
 
 namespace viosfm {
 namespace {
@@ -35,23 +36,40 @@ std::string PointFilterStatistics::Summary() const {
 size_t FilterObservationsWithLargeReprojectionError(Reconstruction* reconstruction,
                                                     double max_reprojection_error_px) {
   VIOSFM_CHECK(reconstruction != nullptr);
+  return FilterObservationsWithLargeReprojectionError(reconstruction, max_reprojection_error_px,
+                                                      reconstruction->Point3DIds());
+}
+
+size_t FilterObservationsWithLargeReprojectionError(Reconstruction* reconstruction,
+                                                    double max_reprojection_error_px,
+                                                    const std::vector<point3D_t>& point3D_ids,
+                                                    int num_threads) {
+  VIOSFM_CHECK(reconstruction != nullptr);
+  // Which observations to delete, point by point on up to num_threads
+  // threads (reading only), then deleted in order.
+  std::vector<std::vector<TrackElement>> bad(point3D_ids.size());
+  const Reconstruction& model = *reconstruction;
+  ParallelForChunks(
+      static_cast<int64_t>(point3D_ids.size()), num_threads, 1024, [&](int64_t begin, int64_t end) {
+        for (int64_t k = begin; k < end; ++k) {
+          if (!model.ExistsPoint3D(point3D_ids[k])) continue;
+          const Point3D& point3D = model.GetPoint3D(point3D_ids[k]);
+          for (const TrackElement& element : point3D.track) {
+            const Image& image = model.GetImage(element.image_id);
+            if (!image.registered) continue;
+            const double error =
+                ReprojectionErrorPx(model.GetCamera(image.camera_id), image.cam_from_world,
+                                    point3D.xyz, image.points2D.at(element.point2D_idx).xy);
+            if (!(error <= max_reprojection_error_px)) bad[k].push_back(element);
+          }
+        }
+      });
   size_t num_removed = 0;
-  std::vector<TrackElement> bad;
-  for (const point3D_t point3D_id : reconstruction->Point3DIds()) {
-    const Point3D& point3D = reconstruction->GetPoint3D(point3D_id);
-    bad.clear();
-    for (const TrackElement& element : point3D.track) {
-      const Image& image = reconstruction->GetImage(element.image_id);
-      if (!image.registered) continue;
-      const double error =
-          ReprojectionErrorPx(reconstruction->GetCamera(image.camera_id), image.cam_from_world,
-                              point3D.xyz, image.points2D.at(element.point2D_idx).xy);
-      if (!(error <= max_reprojection_error_px)) bad.push_back(element);
-    }
+  for (size_t k = 0; k < point3D_ids.size(); ++k) {
     // Deleting may delete the point (fewer than two observations left); its
     // remaining keypoints are then free and need no deletion.
-    for (const TrackElement& element : bad) {
-      if (!reconstruction->ExistsPoint3D(point3D_id)) break;
+    for (const TrackElement& element : bad[k]) {
+      if (!reconstruction->ExistsPoint3D(point3D_ids[k])) break;
       reconstruction->DeleteObservation(element.image_id, element.point2D_idx);
       ++num_removed;
     }
@@ -62,28 +80,53 @@ size_t FilterObservationsWithLargeReprojectionError(Reconstruction* reconstructi
 size_t FilterPointsWithSmallTriangulationAngle(Reconstruction* reconstruction,
                                                double min_triangulation_angle_deg) {
   VIOSFM_CHECK(reconstruction != nullptr);
+  return FilterPointsWithSmallTriangulationAngle(reconstruction, min_triangulation_angle_deg,
+                                                 reconstruction->Point3DIds());
+}
+
+size_t FilterPointsWithSmallTriangulationAngle(Reconstruction* reconstruction,
+                                               double min_triangulation_angle_deg,
+                                               const std::vector<point3D_t>& point3D_ids,
+                                               int num_threads) {
+  VIOSFM_CHECK(reconstruction != nullptr);
   const double min_angle_rad = min_triangulation_angle_deg * kDegToRad;
+  // Which points to delete, on up to num_threads threads, then deleted in order.
+  std::vector<char> small(point3D_ids.size(), 0);
+  const Reconstruction& model = *reconstruction;
+  ParallelForChunks(static_cast<int64_t>(point3D_ids.size()), num_threads, 1024,
+                    [&](int64_t begin, int64_t end) {
+                      std::vector<Eigen::Vector3d> centers;
+                      for (int64_t k = begin; k < end; ++k) {
+                        if (!model.ExistsPoint3D(point3D_ids[k])) continue;
+                        const Point3D& point3D = model.GetPoint3D(point3D_ids[k]);
+                        centers.clear();
+                        for (const TrackElement& element : point3D.track) {
+                          const Image& image = model.GetImage(element.image_id);
+                          if (image.registered) centers.push_back(image.ProjectionCenter());
+                        }
+                        small[k] = MaxTriangulationAngle(centers, point3D.xyz) < min_angle_rad;
+                      }
+                    });
   size_t num_removed = 0;
-  std::vector<Eigen::Vector3d> centers;
-  for (const point3D_t point3D_id : reconstruction->Point3DIds()) {
-    const Point3D& point3D = reconstruction->GetPoint3D(point3D_id);
-    centers.clear();
-    for (const TrackElement& element : point3D.track) {
-      const Image& image = reconstruction->GetImage(element.image_id);
-      if (image.registered) centers.push_back(image.ProjectionCenter());
-    }
-    if (MaxTriangulationAngle(centers, point3D.xyz) < min_angle_rad) {
-      reconstruction->DeletePoint3D(point3D_id);
-      ++num_removed;
-    }
+  for (size_t k = 0; k < point3D_ids.size(); ++k) {
+    if (!small[k] || !reconstruction->ExistsPoint3D(point3D_ids[k])) continue;
+    reconstruction->DeletePoint3D(point3D_ids[k]);
+    ++num_removed;
   }
   return num_removed;
 }
 
 size_t FilterPointsWithFewObservations(Reconstruction* reconstruction) {
   VIOSFM_CHECK(reconstruction != nullptr);
+  return FilterPointsWithFewObservations(reconstruction, reconstruction->Point3DIds());
+}
+
+size_t FilterPointsWithFewObservations(Reconstruction* reconstruction,
+                                       const std::vector<point3D_t>& point3D_ids) {
+  VIOSFM_CHECK(reconstruction != nullptr);
   size_t num_removed = 0;
-  for (const point3D_t point3D_id : reconstruction->Point3DIds()) {
+  for (const point3D_t point3D_id : point3D_ids) {
+    if (!reconstruction->ExistsPoint3D(point3D_id)) continue;
     if (reconstruction->GetPoint3D(point3D_id).track.size() < 2) {
       reconstruction->DeletePoint3D(point3D_id);
       ++num_removed;
@@ -93,22 +136,30 @@ size_t FilterPointsWithFewObservations(Reconstruction* reconstruction) {
 }
 
 PointFilterStatistics FilterPoints(Reconstruction* reconstruction,
-                                   const PointFilterOptions& options) {
+                                   const PointFilterOptions& options, int num_threads) {
+  VIOSFM_CHECK(reconstruction != nullptr);
+  return FilterPoints(reconstruction, options, reconstruction->Point3DIds(), num_threads);
+}
+
+PointFilterStatistics FilterPoints(Reconstruction* reconstruction,
+                                   const PointFilterOptions& options,
+                                   const std::vector<point3D_t>& point3D_ids, int num_threads) {
   VIOSFM_CHECK(reconstruction != nullptr);
   VIOSFM_CHECK(options.Check()) << options.Validate();
   PointFilterStatistics stats;
   stats.num_points_before = reconstruction->NumPoints3D();
   stats.num_observations_removed = FilterObservationsWithLargeReprojectionError(
-      reconstruction, options.max_reprojection_error_px);
+      reconstruction, options.max_reprojection_error_px, point3D_ids, num_threads);
   // Points DeleteObservation removed, plus any that had fewer than two
   // observations to begin with.
   stats.num_points_removed_few_observations =
       stats.num_points_before - reconstruction->NumPoints3D();
-  stats.num_points_removed_few_observations += FilterPointsWithFewObservations(reconstruction);
-  stats.num_points_removed_small_angle =
-      FilterPointsWithSmallTriangulationAngle(reconstruction, options.min_triangulation_angle_deg);
+  stats.num_points_removed_few_observations +=
+      FilterPointsWithFewObservations(reconstruction, point3D_ids);
+  stats.num_points_removed_small_angle = FilterPointsWithSmallTriangulationAngle(
+      reconstruction, options.min_triangulation_angle_deg, point3D_ids, num_threads);
 
-  UpdateReprojectionErrors(reconstruction);
+  UpdateReprojectionErrors(reconstruction, point3D_ids, num_threads);
   stats.num_points_after = reconstruction->NumPoints3D();
   return stats;
 }

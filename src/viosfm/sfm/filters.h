@@ -8,6 +8,7 @@
 
 #include <cstddef>
 #include <string>
+#include <vector>
 
 #include "viosfm/scene/reconstruction.h"
 #include "viosfm/util/option_fields.h"
@@ -54,18 +55,39 @@ struct PointFilterStatistics {
 // is deleted with them (Reconstruction::DeleteObservation).
 size_t FilterObservationsWithLargeReprojectionError(Reconstruction* reconstruction,
                                                     double max_reprojection_error_px);
+// The same over the points `point3D_ids` only (ids that no longer exist are
+// skipped), checked on up to num_threads threads (the same result for any
+// number); the functions below have such a form too.
+size_t FilterObservationsWithLargeReprojectionError(Reconstruction* reconstruction,
+                                                    double max_reprojection_error_px,
+                                                    const std::vector<point3D_t>& point3D_ids,
+                                                    int num_threads = 1);
 
 // Deletes points whose largest triangulation angle is below the threshold.
 // Returns the number of points deleted.
 size_t FilterPointsWithSmallTriangulationAngle(Reconstruction* reconstruction,
                                                double min_triangulation_angle_deg);
+size_t FilterPointsWithSmallTriangulationAngle(Reconstruction* reconstruction,
+                                               double min_triangulation_angle_deg,
+                                               const std::vector<point3D_t>& point3D_ids,
+                                               int num_threads = 1);
 
 // Deletes points with fewer than two observations. Returns the number deleted.
 size_t FilterPointsWithFewObservations(Reconstruction* reconstruction);
+size_t FilterPointsWithFewObservations(Reconstruction* reconstruction,
+                                       const std::vector<point3D_t>& point3D_ids);
 
 // All three, in that order, and sets each remaining point's `error` to the
-// mean reprojection error of its registered observations. CHECKs options.
+// mean reprojection error of its registered observations (on up to
+// num_threads threads, the same result for any number). CHECKs options.
 PointFilterStatistics FilterPoints(Reconstruction* reconstruction,
-                                   const PointFilterOptions& options = {});
+                                   const PointFilterOptions& options = {}, int num_threads = 1);
+// All three over the points `point3D_ids` only. Filtering is per point: on
+// a reconstruction already filtered, checking only the points whose
+// position, track or observing poses changed since gives the same result as
+// checking all of them.
+PointFilterStatistics FilterPoints(Reconstruction* reconstruction,
+                                   const PointFilterOptions& options,
+                                   const std::vector<point3D_t>& point3D_ids, int num_threads = 1);
 
 }  // namespace viosfm

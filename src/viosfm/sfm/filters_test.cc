@@ -5,6 +5,7 @@
 
 #include <set>
 
+#include "viosfm/scene/reprojection.h"
 #include "viosfm/sfm/synthetic_test_scene.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/random.h"
@@ -32,11 +33,23 @@ point3D_t AddExactPoint(Reconstruction* reconstruction, const Eigen::Vector3d& x
   return reconstruction->AddPoint3D(point3D);
 }
 
-TEST(FiltersTest, RemovesInjectedBadObservationsAndOnlyThose) {
+// 200 points seen by 10 images, 15 observations 5 to 20 px off on distinct
+// points, one 3 px off (kept), a far point (removed by its angle) and a
+// three-view point with two bad observations (removed).
+struct InjectedScene {
+  Reconstruction reconstruction;
+  std::set<std::pair<image_t, point2D_t>> injected;
+  point3D_t far_id = 0;
+  point3D_t weak_id = 0;
+};
+
+InjectedScene MakeInjectedScene() {
   constexpr int kNumPoints = 200;
   constexpr int kNumImages = 10;
   SyntheticScene scene = MakeSyntheticScene(kNumImages, kNumPoints + 2, 11);
-  Reconstruction reconstruction = MakeSyntheticReconstruction(scene, kNumImages);
+  InjectedScene out;
+  out.reconstruction = MakeSyntheticReconstruction(scene, kNumImages);
+  Reconstruction& reconstruction = out.reconstruction;
   for (int j = 0; j < kNumPoints; ++j) {
     Point3D point3D;
     point3D.xyz = scene.points[j];
@@ -46,17 +59,17 @@ TEST(FiltersTest, RemovesInjectedBadObservationsAndOnlyThose) {
     reconstruction.AddPoint3D(point3D);
   }
   // Far point (2 km, baseline 0.22 m: ~0.006 degrees): removed by the angle.
-  const point3D_t far_id =
+  out.far_id =
       AddExactPoint(&reconstruction, Eigen::Vector3d(10.0, 5.0, 2000.0), {1, 2}, kNumPoints);
   // A three-view point with two bad observations: removing them leaves one.
-  const point3D_t weak_id =
+  out.weak_id =
       AddExactPoint(&reconstruction, Eigen::Vector3d(0.2, 0.1, 6.0), {3, 6, 9}, kNumPoints + 1);
   reconstruction.GetImage(6).points2D[kNumPoints + 1].xy += Eigen::Vector2d(8.0, 0.0);
   reconstruction.GetImage(9).points2D[kNumPoints + 1].xy += Eigen::Vector2d(0.0, -6.0);
 
   // 15 bad observations (5 to 20 px off) on distinct points.
   Random random(12);
-  std::set<std::pair<image_t, point2D_t>> injected;
+  std::set<std::pair<image_t, point2D_t>>& injected = out.injected;
   // Keypoint kNumPoints - 1 gets a small offset below, not a bad one.
   std::set<point2D_t> used_points = {kNumPoints - 1};
   while (injected.size() < 15) {
@@ -71,6 +84,18 @@ TEST(FiltersTest, RemovesInjectedBadObservationsAndOnlyThose) {
   }
   // A good observation with 3 px of error stays (threshold 4 px).
   reconstruction.GetImage(5).points2D[kNumPoints - 1].xy += Eigen::Vector2d(3.0, 0.0);
+
+  return out;
+}
+
+TEST(FiltersTest, RemovesInjectedBadObservationsAndOnlyThose) {
+  constexpr int kNumPoints = 200;
+  constexpr int kNumImages = 10;
+  InjectedScene scene = MakeInjectedScene();
+  Reconstruction& reconstruction = scene.reconstruction;
+  const std::set<std::pair<image_t, point2D_t>>& injected = scene.injected;
+  const point3D_t far_id = scene.far_id;
+  const point3D_t weak_id = scene.weak_id;
 
   const PointFilterStatistics stats = FilterPoints(&reconstruction);
   EXPECT_EQ(stats.num_points_before, 202u);
@@ -97,6 +122,64 @@ TEST(FiltersTest, RemovesInjectedBadObservationsAndOnlyThose) {
     const bool has_offset = point3D.track.front().point2D_idx == kNumPoints - 1;
     EXPECT_NEAR(point3D.error, has_offset ? 0.3 : 0.0, 1e-6);
   }
+}
+
+// Every point's track (image, keypoint) and error, in id order.
+std::vector<std::pair<std::vector<std::pair<image_t, point2D_t>>, double>> PointsOf(
+    const Reconstruction& reconstruction) {
+  std::vector<std::pair<std::vector<std::pair<image_t, point2D_t>>, double>> points;
+  for (const point3D_t point3D_id : reconstruction.Point3DIds()) {
+    const Point3D& point3D = reconstruction.GetPoint3D(point3D_id);
+    std::vector<std::pair<image_t, point2D_t>> track;
+    for (const TrackElement& element : point3D.track) {
+      track.emplace_back(element.image_id, element.point2D_idx);
+    }
+    points.emplace_back(track, point3D.error);
+  }
+  return points;
+}
+
+TEST(FiltersTest, ThreadsGiveTheSameResult) {
+  InjectedScene one = MakeInjectedScene();
+  InjectedScene three = MakeInjectedScene();
+  const PointFilterStatistics stats_one = FilterPoints(&one.reconstruction, {}, 1);
+  const PointFilterStatistics stats_three = FilterPoints(&three.reconstruction, {}, 3);
+  EXPECT_EQ(stats_one.Summary(), stats_three.Summary());
+  EXPECT_EQ(stats_one.num_observations_removed, 17u);
+  EXPECT_EQ(one.reconstruction.Point3DIds(), three.reconstruction.Point3DIds());
+  EXPECT_EQ(PointsOf(one.reconstruction), PointsOf(three.reconstruction));
+  EXPECT_EQ(MeanReprojectionError(one.reconstruction, 1),
+            MeanReprojectionError(three.reconstruction, 3));
+}
+
+TEST(FiltersTest, FiltersOnlyTheGivenPointsAndTheRestLater) {
+  InjectedScene whole = MakeInjectedScene();
+  FilterPoints(&whole.reconstruction);
+  InjectedScene parts = MakeInjectedScene();
+  const std::vector<point3D_t> ids = parts.reconstruction.Point3DIds();
+  const std::vector<point3D_t> first(ids.begin(), ids.begin() + ids.size() / 2);
+  const std::vector<point3D_t> second(ids.begin() + ids.size() / 2, ids.end());
+  const size_t observations_before = parts.reconstruction.ComputeNumObservations();
+
+  // The first half: only its injected observations go.
+  size_t injected_in_first = 0;
+  for (const point3D_t point3D_id : first) {
+    for (const TrackElement& element : parts.reconstruction.GetPoint3D(point3D_id).track) {
+      injected_in_first += parts.injected.count({element.image_id, element.point2D_idx});
+    }
+  }
+  ASSERT_GT(injected_in_first, 0u);
+  const PointFilterStatistics stats = FilterPoints(&parts.reconstruction, {}, first, 2);
+  EXPECT_EQ(stats.num_observations_removed, injected_in_first);
+  EXPECT_EQ(parts.reconstruction.ComputeNumObservations(), observations_before - injected_in_first);
+  EXPECT_TRUE(parts.reconstruction.ExistsPoint3D(parts.far_id));  // in the second half
+
+  // Then the second half, and an id that no longer exists: as if filtered whole.
+  std::vector<point3D_t> rest = second;
+  rest.push_back(parts.weak_id);
+  FilterPoints(&parts.reconstruction, {}, rest, 2);
+  EXPECT_FALSE(parts.reconstruction.ExistsPoint3D(parts.far_id));
+  EXPECT_EQ(PointsOf(parts.reconstruction), PointsOf(whole.reconstruction));
 }
 
 TEST(FiltersTest, IgnoresObservationsInUnregisteredImages) {

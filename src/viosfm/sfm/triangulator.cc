@@ -254,7 +254,7 @@ TriangulationStatistics TriangulateReconstruction(Reconstruction* reconstruction
       point3D.xyz = triangulation->point_in_world;
       point3D.error = triangulation->mean_error_px;
       for (size_t i : triangulation->inlier_views) point3D.track.push_back(candidates[i]);
-      reconstruction->AddPoint3D(std::move(point3D));
+      stats.changed_point_ids.push_back(reconstruction->AddPoint3D(std::move(point3D)));
       ++stats.num_points_added;
       stats.num_new_point_observations += triangulation->inlier_views.size();
       stats.num_rejected_observations += candidates.size() - triangulation->inlier_views.size();
@@ -290,6 +290,7 @@ TriangulationStatistics TriangulateReconstruction(Reconstruction* reconstruction
       }
     }
     if (num_added > 0) {
+      stats.changed_point_ids.push_back(point3D_id);
       ++stats.num_points_extended;
       stats.num_extension_observations += num_added;
     }

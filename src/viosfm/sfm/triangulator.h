@@ -97,6 +97,8 @@ struct TriangulationStatistics {
   // Observations not attached: outliers of new points and candidates for
   // extension that failed the depth or reprojection check.
   size_t num_rejected_observations = 0;
+  // The points added or extended, in the order they were.
+  std::vector<point3D_t> changed_point_ids;
 
   std::string Summary() const;
 };

@@ -197,6 +197,7 @@ TEST(TriangulatorTest, TriangulateReconstructionAddsPointsThenExtendsThem) {
   EXPECT_EQ(first.num_new_point_observations, 200u * 8);
   EXPECT_EQ(first.num_rejected_observations, 0u);
   ASSERT_EQ(reconstruction.NumPoints3D(), 200u);
+  EXPECT_EQ(first.changed_point_ids, reconstruction.Point3DIds());  // the points added
   for (const point3D_t point3D_id : reconstruction.Point3DIds()) {
     const Point3D& point3D = reconstruction.GetPoint3D(point3D_id);
     ASSERT_EQ(point3D.track.size(), 8u);
@@ -209,6 +210,7 @@ TEST(TriangulatorTest, TriangulateReconstructionAddsPointsThenExtendsThem) {
   const TriangulationStatistics again =
       TriangulateReconstruction(&reconstruction, tracks, reconstruction.RegImageIds());
   EXPECT_EQ(again.num_points_added + again.num_extension_observations, 0u);
+  EXPECT_TRUE(again.changed_point_ids.empty());
 
   // Register images 9 and 10: every point gains their two observations.
   reconstruction.GetImage(9).registered = true;
@@ -219,6 +221,7 @@ TEST(TriangulatorTest, TriangulateReconstructionAddsPointsThenExtendsThem) {
   EXPECT_EQ(second.num_points_added, 0u);
   EXPECT_EQ(second.num_points_extended, 200u);
   EXPECT_EQ(second.num_extension_observations, 400u);
+  EXPECT_EQ(second.changed_point_ids, reconstruction.Point3DIds());  // the points extended
   EXPECT_EQ(reconstruction.NumPoints3D(), 200u);
   for (const point3D_t point3D_id : reconstruction.Point3DIds()) {
     EXPECT_EQ(reconstruction.GetPoint3D(point3D_id).track.size(), 10u);
