@@ -34,13 +34,6 @@ std::string PointFilterStatistics::Summary() const {
 }
 
 size_t FilterObservationsWithLargeReprojectionError(Reconstruction* reconstruction,
-                                                    double max_reprojection_error_px) {
-  VIOSFM_CHECK(reconstruction != nullptr);
-  return FilterObservationsWithLargeReprojectionError(reconstruction, max_reprojection_error_px,
-                                                      reconstruction->Point3DIds());
-}
-
-size_t FilterObservationsWithLargeReprojectionError(Reconstruction* reconstruction,
                                                     double max_reprojection_error_px,
                                                     const std::vector<point3D_t>& point3D_ids,
                                                     int num_threads) {
@@ -78,13 +71,6 @@ size_t FilterObservationsWithLargeReprojectionError(Reconstruction* reconstructi
 }
 
 size_t FilterPointsWithSmallTriangulationAngle(Reconstruction* reconstruction,
-                                               double min_triangulation_angle_deg) {
-  VIOSFM_CHECK(reconstruction != nullptr);
-  return FilterPointsWithSmallTriangulationAngle(reconstruction, min_triangulation_angle_deg,
-                                                 reconstruction->Point3DIds());
-}
-
-size_t FilterPointsWithSmallTriangulationAngle(Reconstruction* reconstruction,
                                                double min_triangulation_angle_deg,
                                                const std::vector<point3D_t>& point3D_ids,
                                                int num_threads) {
@@ -114,11 +100,6 @@ size_t FilterPointsWithSmallTriangulationAngle(Reconstruction* reconstruction,
     ++num_removed;
   }
   return num_removed;
-}
-
-size_t FilterPointsWithFewObservations(Reconstruction* reconstruction) {
-  VIOSFM_CHECK(reconstruction != nullptr);
-  return FilterPointsWithFewObservations(reconstruction, reconstruction->Point3DIds());
 }
 
 size_t FilterPointsWithFewObservations(Reconstruction* reconstruction,

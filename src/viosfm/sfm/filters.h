@@ -50,14 +50,14 @@ struct PointFilterStatistics {
   std::string Summary() const;
 };
 
+// Each of the three filters below looks at the points `point3D_ids` only
+// (ids that no longer exist are skipped; Reconstruction::Point3DIds() for
+// all), checked on up to num_threads threads with the same result for any
+// number.
+
 // Deletes observations with a reprojection error above the threshold.
 // Returns the number deleted; a point left with fewer than two observations
 // is deleted with them (Reconstruction::DeleteObservation).
-size_t FilterObservationsWithLargeReprojectionError(Reconstruction* reconstruction,
-                                                    double max_reprojection_error_px);
-// The same over the points `point3D_ids` only (ids that no longer exist are
-// skipped), checked on up to num_threads threads (the same result for any
-// number); the functions below have such a form too.
 size_t FilterObservationsWithLargeReprojectionError(Reconstruction* reconstruction,
                                                     double max_reprojection_error_px,
                                                     const std::vector<point3D_t>& point3D_ids,
@@ -66,14 +66,11 @@ size_t FilterObservationsWithLargeReprojectionError(Reconstruction* reconstructi
 // Deletes points whose largest triangulation angle is below the threshold.
 // Returns the number of points deleted.
 size_t FilterPointsWithSmallTriangulationAngle(Reconstruction* reconstruction,
-                                               double min_triangulation_angle_deg);
-size_t FilterPointsWithSmallTriangulationAngle(Reconstruction* reconstruction,
                                                double min_triangulation_angle_deg,
                                                const std::vector<point3D_t>& point3D_ids,
                                                int num_threads = 1);
 
 // Deletes points with fewer than two observations. Returns the number deleted.
-size_t FilterPointsWithFewObservations(Reconstruction* reconstruction);
 size_t FilterPointsWithFewObservations(Reconstruction* reconstruction,
                                        const std::vector<point3D_t>& point3D_ids);
 

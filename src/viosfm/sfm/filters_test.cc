@@ -193,7 +193,9 @@ TEST(FiltersTest, IgnoresObservationsInUnregisteredImages) {
   }
   reconstruction.GetImage(4).points2D[0].xy += Eigen::Vector2d(50.0, 0.0);
   reconstruction.GetImage(1).points2D[1].xy += Eigen::Vector2d(50.0, 0.0);
-  EXPECT_EQ(FilterObservationsWithLargeReprojectionError(&reconstruction, 4.0), 1u);
+  EXPECT_EQ(FilterObservationsWithLargeReprojectionError(&reconstruction, 4.0,
+                                                         reconstruction.Point3DIds()),
+            1u);
   EXPECT_TRUE(reconstruction.GetImage(4).points2D[0].HasPoint3D());
   EXPECT_FALSE(reconstruction.GetImage(1).points2D[1].HasPoint3D());
 }
