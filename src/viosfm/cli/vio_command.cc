@@ -4,12 +4,14 @@
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "viosfm/cli/bag_options.h"
 #include "viosfm/cli/commands.h"
 #include "viosfm/io/dataset.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/logging.h"
+#include "viosfm/util/option_fields.h"
 #include "viosfm/vio/odometry.h"
 
 namespace viosfm::cli {
@@ -23,10 +25,18 @@ struct VioArguments {
   CalibrationFiles calibration;
   VioOptions options;
   BagArguments bag;
+  std::vector<std::string> set_options;
 };
 
 void RunVioCommand(VioArguments args) {
   const fs::path root = args.dataset;
+  for (const std::string& assignment : args.set_options) {
+    const size_t equals = assignment.find('=');
+    if (equals == std::string::npos) {
+      throw InputError("--set " + assignment + ": expected KEY=VALUE");
+    }
+    SetOptionFromText(args.options, assignment.substr(0, equals), assignment.substr(equals + 1));
+  }
   if (const std::string error = args.options.Validate(); !error.empty()) {
     throw InputError("invalid vio options: " + error);
   }
@@ -84,6 +94,10 @@ void RegisterVio(CLI::App& app) {
                    "shutter); observations are moved to the frame's stamp")
       ->capture_default_str();
   AddBagOptions(command, &args->bag, /*add_camera_yaml=*/true);
+  command->add_option("--set", args->set_options,
+                      "KEY=VALUE: set any VIO option by its key, as `viosfm run --list-options` "
+                      "lists it without the leading 'own_vio.' (repeatable; applied after the "
+                      "other flags)");
   command->callback([args] { RunVioCommand(*args); });
 }
 

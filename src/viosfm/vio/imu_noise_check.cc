@@ -109,6 +109,24 @@ ImuNoiseCheck CheckImuNoise(const ImuNoise& given, const std::vector<ImuSample>&
     Bound("accelerometer_noise_density", why, kMinAccelDensity, kMaxAccelDensity,
           &used.accel_noise_density, &check.changes);
   }
+  if (options.scale_random_walks) {
+    // A calibration's figures for one sensor come from one source (an Allan
+    // variance, a data sheet, a factor applied to both): a white-noise
+    // density found wrong by a factor makes the same factor likely for the
+    // random walk, which a few seconds at rest cannot measure.
+    const auto scale_walk = [&](const std::string& name, double given_density, double used_density,
+                                double* walk) {
+      if (used_density == given_density || !(given_density > 0.0)) return;
+      const double scaled = *walk * (used_density / given_density);
+      check.changes.push_back(name + " " + Number(*walk) + " -> " + Number(scaled) +
+                              " (scaled as its white-noise density)");
+      *walk = scaled;
+    };
+    scale_walk("gyroscope_random_walk", given.gyro_noise_density, used.gyro_noise_density,
+               &used.gyro_random_walk);
+    scale_walk("accelerometer_random_walk", given.accel_noise_density, used.accel_noise_density,
+               &used.accel_random_walk);
+  }
   const std::string why = "outside the range of MEMS IMUs";
   Bound("gyroscope_random_walk", why, kMinGyroWalk, kMaxGyroWalk, &used.gyro_random_walk,
         &check.changes);

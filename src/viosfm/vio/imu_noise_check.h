@@ -23,7 +23,15 @@
 //    gyros 5e-5 to 1e-2 rad/s/sqrt(Hz), accelerometers 5e-4 to 5e-2
 //    m/s^2/sqrt(Hz), inflated by up to ten as configurations do) is clamped
 //    into it;
-//  - random walks cannot be measured in a few seconds; only values outside
+//  - random walks cannot be measured in a few seconds. A sensor's random
+//    walk is scaled by the factor its white-noise density was changed by
+//    (scale_random_walks): a calibration's two figures of one sensor come
+//    from one source, so one found wrong by a factor makes the same error
+//    likely in the other. On a simulated room whose calibration states the
+//    accelerometer's figures 30 times too large (and blur, white walls, auto
+//    exposure, a rolling shutter and a time offset besides), the
+//    accelerometer bias, left free by the inflated walk, wandered ten times
+//    its true range and the scale came out 13 % long. Then values outside
 //    [1e-7, 1e-2] rad/s^2/sqrt(Hz) (gyro) and [1e-6, 1e-1] m/s^3/sqrt(Hz)
 //    (accelerometer) are clamped.
 // Every change is logged with the file's and the used value.
@@ -45,6 +53,10 @@ struct ImuNoiseCheckOptions {
   // half a second scatters by about 5 %, and quantisation adds to it) and 4.
   double min_ratio = 0.5;
   double max_ratio = 4.0;
+  // Scale each random walk by the factor its sensor's white-noise density
+  // was changed by (default true); false leaves the walks as the file
+  // states them (within the MEMS range).
+  bool scale_random_walks = true;
   // s, shortest static interval to measure on. Default 0.5.
   double min_static_s = 0.5;
 

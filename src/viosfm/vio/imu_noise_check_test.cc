@@ -69,6 +69,8 @@ bool Mentions(const std::vector<std::string>& changes, const std::string& name) 
 // The true densities: EuRoC's ADIS16448 figures (the sensor/imu.h defaults).
 constexpr double kGyroDensity = 1.6968e-4;  // rad/s/sqrt(Hz)
 constexpr double kAccelDensity = 2.0e-3;    // m/s^2/sqrt(Hz)
+constexpr double kGyroWalk = 1.9393e-5;     // rad/s^2/sqrt(Hz)
+constexpr double kAccelWalk = 3.0e-3;       // m/s^3/sqrt(Hz)
 
 TEST(ImuNoiseCheck, OptionsValidate) {
   EXPECT_EQ(ImuNoiseCheckOptions().Validate(), "");
@@ -138,9 +140,13 @@ TEST(ImuNoiseCheck, BoundsTheFileFiguresByTheMeasuredNoise) {
   EXPECT_EQ(kept.used.gyro_random_walk, plausible.gyro_random_walk);
   EXPECT_EQ(kept.used.accel_random_walk, plausible.accel_random_walk);
 
+  // Each sensor's two figures wrong by one factor, as when a file's source
+  // scaled both.
   ImuNoise wrong = plausible;
   wrong.gyro_noise_density = kGyroDensity / 13.0;
+  wrong.gyro_random_walk = kGyroWalk / 13.0;
   wrong.accel_noise_density = 30.0 * kAccelDensity;
+  wrong.accel_random_walk = 30.0 * kAccelWalk;
   const ImuNoiseCheck bounded = CheckImuNoise(wrong, imu.samples, &interval, options);
   std::cout << bounded.message << "\n";
   ASSERT_TRUE(bounded.measured);
@@ -153,9 +159,26 @@ TEST(ImuNoiseCheck, BoundsTheFileFiguresByTheMeasuredNoise) {
   EXPECT_NEAR(bounded.used.accel_noise_density / (4.0 * kAccelDensity), 1.0, 0.1);
   EXPECT_EQ(bounded.given.gyro_noise_density, wrong.gyro_noise_density);
   EXPECT_EQ(bounded.given.accel_noise_density, wrong.accel_noise_density);
-  EXPECT_EQ(bounded.changes.size(), 2u) << bounded.message;
+  // The random walks follow their densities: 0.5 and 4 times the true
+  // walks, within the densities' 10 %.
+  EXPECT_DOUBLE_EQ(
+      bounded.used.gyro_random_walk,
+      wrong.gyro_random_walk * bounded.used.gyro_noise_density / wrong.gyro_noise_density);
+  EXPECT_NEAR(bounded.used.gyro_random_walk / (0.5 * kGyroWalk), 1.0, 0.1);
+  EXPECT_NEAR(bounded.used.accel_random_walk / (4.0 * kAccelWalk), 1.0, 0.1);
+  EXPECT_EQ(bounded.changes.size(), 4u) << bounded.message;
   EXPECT_TRUE(Mentions(bounded.changes, "gyroscope_noise_density"));
   EXPECT_TRUE(Mentions(bounded.changes, "accelerometer_noise_density"));
+  EXPECT_TRUE(Mentions(bounded.changes, "gyroscope_random_walk"));
+  EXPECT_TRUE(Mentions(bounded.changes, "accelerometer_random_walk"));
+  // Unless told to leave them.
+  ImuNoiseCheckOptions walks_as_given;
+  walks_as_given.scale_random_walks = false;
+  const ImuNoiseCheck unscaled = CheckImuNoise(wrong, imu.samples, &interval, walks_as_given);
+  EXPECT_EQ(unscaled.used.accel_noise_density, bounded.used.accel_noise_density);
+  EXPECT_EQ(unscaled.used.gyro_random_walk, wrong.gyro_random_walk);
+  EXPECT_EQ(unscaled.used.accel_random_walk, wrong.accel_random_walk);
+  EXPECT_EQ(unscaled.changes.size(), 2u) << unscaled.message;
 
   // Other ratios move the bounds with them.
   ImuNoiseCheckOptions wide;
@@ -169,8 +192,8 @@ TEST(ImuNoiseCheck, BoundsTheFileFiguresByTheMeasuredNoise) {
 
 // Without a usable static interval (none, not static, or shorter than
 // min_static_s) the densities are clamped into the MEMS ranges of the
-// header (gyro 5e-5 to 1e-2, accel 5e-4 to 5e-2), and random walks into
-// theirs (gyro 1e-7 to 1e-2, accel 1e-6 to 1e-1).
+// header (gyro 5e-5 to 1e-2, accel 5e-4 to 5e-2), and random walks, scaled
+// with them, into theirs (gyro 1e-7 to 1e-2, accel 1e-6 to 1e-1).
 TEST(ImuNoiseCheck, WithoutRestClampsIntoTheMemsRanges) {
   const StaticImu imu = MakeStaticImu(kGyroDensity, kAccelDensity, 200.0, 2.0, 1.0, 6);
   ImuNoise wrong;
@@ -191,7 +214,7 @@ TEST(ImuNoiseCheck, WithoutRestClampsIntoTheMemsRanges) {
     EXPECT_DOUBLE_EQ(check.used.accel_noise_density, 5e-2);
     EXPECT_DOUBLE_EQ(check.used.gyro_random_walk, 1e-7);
     EXPECT_DOUBLE_EQ(check.used.accel_random_walk, 1e-1);
-    EXPECT_EQ(check.changes.size(), 4u) << check.message;
+    EXPECT_EQ(check.changes.size(), 6u) << check.message;  // 2 clamped, 2 scaled and clamped
   }
   // The other ends of the ranges.
   ImuNoise high;

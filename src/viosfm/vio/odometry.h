@@ -303,6 +303,9 @@ struct VioOptions {
     visit({"time_offset.min_tracks_per_pair", "fewest corners tracked in both frames of a pair",
            kShapesStoredData},
           self.time_offset.min_tracks_per_pair);
+    visit({"time_offset.max_frame_gap", "frames are paired with each of the next this many",
+           kShapesStoredData},
+          self.time_offset.max_frame_gap);
     visit({"time_offset.min_total_rotation_deg", "deg, gyro rotation needed before estimating",
            kShapesStoredData},
           self.time_offset.min_total_rotation_deg);
@@ -320,6 +323,9 @@ struct VioOptions {
     visit({"imu_noise.max_ratio", "largest ratio of a file's noise density to the measured one",
            kShapesStoredData},
           self.imu_noise.max_ratio);
+    visit({"imu_noise.scale_random_walks",
+           "scale each random walk as its white-noise density was changed", kShapesStoredData},
+          self.imu_noise.scale_random_walks);
     visit(
         {"imu_noise.min_static_s", "s, shortest static interval to measure on", kShapesStoredData},
         self.imu_noise.min_static_s);

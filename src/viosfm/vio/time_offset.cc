@@ -41,7 +41,8 @@ std::optional<Eigen::Quaterniond> GyroRotation(const std::vector<ImuSample>& imu
   return rotation.normalized();
 }
 
-// The corners of two consecutive frames: a in the first, b in the second.
+// The corners tracked in both frames of a pair: rays1 in the first, points2
+// in the second.
 struct FramePair {
   timestamp_ns_t t1 = 0;
   timestamp_ns_t t2 = 0;
@@ -49,23 +50,27 @@ struct FramePair {
   std::vector<Eigen::Vector2d> points2;
 };
 
-std::vector<FramePair> MakePairs(const std::vector<FrameFeatures>& frames, int min_tracks) {
+// Pairs of frames 1 to max_gap apart with at least min_tracks common corners.
+std::vector<FramePair> MakePairs(const std::vector<FrameFeatures>& frames, int min_tracks,
+                                 int max_gap) {
   std::vector<FramePair> pairs;
   for (size_t k = 0; k + 1 < frames.size(); ++k) {
     std::unordered_map<uint64_t, Eigen::Vector2d> first;
     for (const FeatureObservation& observation : frames[k].observations) {
       first.emplace(observation.track_id, observation.normalized);
     }
-    FramePair pair;
-    pair.t1 = frames[k].timestamp_ns;
-    pair.t2 = frames[k + 1].timestamp_ns;
-    for (const FeatureObservation& observation : frames[k + 1].observations) {
-      const auto it = first.find(observation.track_id);
-      if (it == first.end()) continue;
-      pair.rays1.push_back(it->second.homogeneous());
-      pair.points2.push_back(observation.normalized);
+    for (size_t j = k + 1; j < frames.size() && j <= k + static_cast<size_t>(max_gap); ++j) {
+      FramePair pair;
+      pair.t1 = frames[k].timestamp_ns;
+      pair.t2 = frames[j].timestamp_ns;
+      for (const FeatureObservation& observation : frames[j].observations) {
+        const auto it = first.find(observation.track_id);
+        if (it == first.end()) continue;
+        pair.rays1.push_back(it->second.homogeneous());
+        pair.points2.push_back(observation.normalized);
+      }
+      if (static_cast<int>(pair.rays1.size()) >= min_tracks) pairs.push_back(std::move(pair));
     }
-    if (static_cast<int>(pair.rays1.size()) >= min_tracks) pairs.push_back(std::move(pair));
   }
   return pairs;
 }
@@ -137,6 +142,7 @@ std::string TimeOffsetOptions::Validate() const {
     return "fine_step_s must be in (0, coarse_step_s]";
   }
   if (min_tracks_per_pair < 5) return "min_tracks_per_pair must be >= 5";
+  if (max_frame_gap < 1) return "max_frame_gap must be >= 1";
   if (!(min_total_rotation_deg >= 0)) return "min_total_rotation_deg must be >= 0";
   if (!(max_wait_s > 0)) return "max_wait_s must be > 0";
   if (!(min_cost_reduction >= 0) || !(min_cost_reduction < 1)) {
@@ -165,7 +171,8 @@ TimeOffsetEstimate EstimateTimeOffset(const std::vector<FrameFeatures>& frames,
   TimeOffsetEstimate estimate;
   estimate.offset_ns = calibration_offset_ns;
   estimate.calibration_offset_ns = calibration_offset_ns;
-  const std::vector<FramePair> pairs = MakePairs(frames, options.min_tracks_per_pair);
+  const std::vector<FramePair> pairs =
+      MakePairs(frames, options.min_tracks_per_pair, options.max_frame_gap);
   estimate.num_pairs = static_cast<int>(pairs.size());
   estimate.total_rotation_deg = GyroRotationSumDeg(frames, imu, calibration_offset_ns);
   const Eigen::Quaterniond& rotation = body_from_cam.rotation;

@@ -124,10 +124,12 @@ double Ms(timestamp_ns_t ns) {
 }
 
 // ms. Without pixel noise the estimate is exact (0.0 ms error); with the
-// scenes' 0.5 px it scatters: -1.4 to +1.9 ms over six seeds at a true
-// offset of 0 (+-2.5 ms at 1 px), the epipolar cost being flat in the
-// offset because the free translation absorbs part of a rotation error.
-constexpr double kOffsetToleranceMs = 2.5;
+// scenes' 0.5 px it scatters, the epipolar cost being flat in the offset
+// because the free translation absorbs part of a rotation error: pairing
+// consecutive frames only, -1.4 to +1.9 ms over six seeds at a true offset
+// of 0 (+-2.5 ms at 1 px); pairing frames up to 3 apart (the default),
+// -0.6 to +0.6 ms in the cases below.
+constexpr double kOffsetToleranceMs = 1.5;
 
 TEST(TimeOffset, OptionsValidate) {
   EXPECT_EQ(TimeOffsetOptions().Validate(), "");
@@ -202,7 +204,9 @@ TEST(TimeOffset, RecoversAKnownOffset) {
       // calibration's offset is kept; otherwise the estimate replaces it.
       EXPECT_EQ(estimate.estimated, offset_ms != 0.0) << estimate.message;
       EXPECT_EQ(estimate.calibration_offset_ns, 0);
-      EXPECT_EQ(estimate.num_pairs, static_cast<int>(scene.frames.size()) - 1);
+      // Frames 1 to 3 apart (the scene's corners live 5 frames).
+      const int n = static_cast<int>(scene.frames.size());
+      EXPECT_EQ(estimate.num_pairs, (n - 1) + (n - 2) + (n - 3));
       EXPECT_GT(estimate.total_rotation_deg, 90.0);
       EXPECT_NEAR(Ms(estimate.offset_ns), offset_ms, kOffsetToleranceMs) << estimate.message;
       if (offset_ms != 0.0) {
