@@ -2,7 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <map>
 #include <numeric>
 
 #include "viosfm/io/image_io.h"
@@ -110,6 +112,44 @@ double GradientEnergy(const GreyImage& image) {
     }
   }
   return sum / count;
+}
+
+// Each white texture is sized by the walls it covers. The extent of a
+// texture's first wall was once read from an uninitialised map entry (white
+// walls with another robustness option crashed or sized textures from
+// garbage): freed map nodes of the same size, left holding huge extents,
+// are reused by the allocator for PaintWallsWhite's map, so that reading
+// before writing shows.
+TEST(WhiteWalls, SizesEachTextureByTheWallsItCovers) {
+  ScenarioOptions scenario_options;
+  scenario_options.texels_per_metre = 64.0;
+  scenario_options.seed = 2;
+  Scenario white = MakeScenario(scenario_options);
+  {
+    std::map<int, Eigen::Vector2d> garbage;
+    for (int i = 0; i < 64; ++i) garbage.emplace(i, Eigen::Vector2d(1e4, 1e4));
+  }
+  WhiteWallOptions options;
+  options.enabled = true;
+  ASSERT_EQ(PaintWallsWhite(&white, options, 5), 5);
+  std::map<int, Eigen::Vector2d> extent_of_texture;  // metres, from the repainted quads
+  for (const TexturedQuad& quad : white.scene.quads()) {
+    if (quad.texels_per_metre != options.texels_per_metre) continue;
+    const Eigen::Vector2d extent(quad.texture_offset.x() + quad.axis_u.norm(),
+                                 quad.texture_offset.y() + quad.axis_v.norm());
+    auto [it, added] = extent_of_texture.try_emplace(quad.texture_id, extent);
+    if (!added) it->second = it->second.cwiseMax(extent);
+  }
+  ASSERT_FALSE(extent_of_texture.empty());
+  for (const auto& [texture_id, extent] : extent_of_texture) {
+    const Texture& texture = white.scene.texture(texture_id);
+    // Large enough for every wall on it, and at most the next power of two.
+    const Eigen::Vector2d texels = extent * options.texels_per_metre;
+    EXPECT_GE(texture.width(), texels.x()) << "texture " << texture_id;
+    EXPECT_GE(texture.height(), texels.y()) << "texture " << texture_id;
+    EXPECT_LE(texture.width(), std::max(8.0, 2.0 * texels.x())) << "texture " << texture_id;
+    EXPECT_LE(texture.height(), std::max(8.0, 2.0 * texels.y())) << "texture " << texture_id;
+  }
 }
 
 TEST(WhiteWalls, RepaintsTheRoomsWallsAndCeilingWithLowGradientEnergy) {
