@@ -90,8 +90,9 @@ void RegisterVio(CLI::App& app) {
       ->capture_default_str();
   command
       ->add_option("--rolling-shutter-readout", args->options.rolling_shutter_readout_s,
-                   "s, the camera's rolling-shutter readout time, first row to last (0: global "
-                   "shutter); observations are moved to the frame's stamp")
+                   "s, the camera's rolling-shutter readout time, first row to last; "
+                   "observations are moved to the frame's stamp (0: not given, estimated with the "
+                   "time offset; a global shutter when the images show none)")
       ->capture_default_str();
   AddBagOptions(command, &args->bag, /*add_camera_yaml=*/true);
   command->add_option("--set", args->set_options,

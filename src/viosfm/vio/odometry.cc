@@ -436,16 +436,22 @@ VioResult RunVio(const Sequence& sequence, const VioOptions& options, FrameCache
   // The previous frame's observations as tracked, for the rolling-shutter
   // correction's image velocities.
   std::optional<FrameFeatures> previous_tracked;
+  // The readout the observations are corrected with: the one given, or the
+  // one estimated with the time offset (the startup frames then stay as
+  // tracked until the estimate, and are corrected after it).
+  double readout_s = options.rolling_shutter_readout_s;
+  const bool estimate_readout =
+      options.time_offset.estimate && options.time_offset.estimate_readout && readout_s == 0.0;
   const auto read_and_track = [&](size_t k, const std::optional<Eigen::Quaterniond>& prior) {
     const SequenceImage& image = sequence.images[k];
     FrameFeatures features =
         frames != nullptr
             ? tracker.Track(image.timestamp_ns, *frames->Read(image.path, /*keep=*/true), prior)
             : tracker.Track(image.timestamp_ns, ReadGreyImage(image.path), prior);
-    if (options.rolling_shutter_readout_s > 0.0) {
+    if (readout_s > 0.0) {
       FrameFeatures tracked = features;
-      CorrectRollingShutter(previous_tracked ? &*previous_tracked : nullptr,
-                            options.rolling_shutter_readout_s, static_cast<int>(rig.camera.height),
+      CorrectRollingShutter(previous_tracked ? &*previous_tracked : nullptr, readout_s,
+                            static_cast<int>(rig.camera.height),
                             CamAngularRate(rig, sequence.imu, image.timestamp_ns), &features);
       previous_tracked = std::move(tracked);
     }
@@ -484,10 +490,23 @@ VioResult RunVio(const Sequence& sequence, const VioOptions& options, FrameCache
     }
     time_offset =
         EstimateTimeOffset(startup, sequence.imu, rig.body_from_cam, rig.cam_time_offset_ns,
-                           MeanFocalLength(rig.camera), options.time_offset);
+                           MeanFocalLength(rig.camera), options.time_offset,
+                           estimate_readout ? static_cast<int>(rig.camera.height) : 0);
     VIOSFM_LOG(INFO) << "vio: " << time_offset.message;
     rig.cam_time_offset_ns = time_offset.offset_ns;
+    if (time_offset.readout_estimated) {
+      // The startup frames, tracked uncorrected, corrected now (at the
+      // estimated offset), and the frames after them as they come.
+      readout_s = time_offset.readout_s;
+      if (!startup.empty()) previous_tracked = startup.back();
+      for (size_t i = startup.size(); i-- > 0;) {
+        CorrectRollingShutter(
+            i > 0 ? &startup[i - 1] : nullptr, readout_s, static_cast<int>(rig.camera.height),
+            CamAngularRate(rig, sequence.imu, startup[i].timestamp_ns), &startup[i]);
+      }
+    }
   }
+  time_offset.readout_s = readout_s;
   VisualInertialOdometry vio(rig, sequence.imu, sequence.images.front().timestamp_ns,
                              sequence.images[num_frames - 1].timestamp_ns, options);
   // Frames the IMU does not reach (after the time offset) cannot be
@@ -593,6 +612,10 @@ std::string FormatVioSummary(const VioSummary& summary) {
   out << "time_offset_ns: " << summary.time_offset.offset_ns << "\n";
   out << "time_offset_estimated: " << (summary.time_offset.estimated ? "true" : "false") << "\n";
   out << "time_offset_message: \"" << summary.time_offset.message << "\"\n";
+  out << "rolling_shutter_readout_s: " << summary.time_offset.readout_s
+      << "  # 0: a global shutter\n";
+  out << "rolling_shutter_readout_estimated: "
+      << (summary.time_offset.readout_estimated ? "true" : "false") << "\n";
   const ImuNoise& used = summary.imu_noise.used;
   out << "imu_noise_used: [" << used.gyro_noise_density << ", " << used.gyro_random_walk << ", "
       << used.accel_noise_density << ", " << used.accel_random_walk

@@ -64,7 +64,9 @@ struct VioOptions {
   bool gyro_rotation_prior = true;
   // s, the camera's rolling-shutter readout time (first row to last; the
   // stamp is the middle row's exposure); each observation is moved to the
-  // stamp's time (rolling_shutter.h). Default 0: a global shutter.
+  // stamp's time (rolling_shutter.h). Default 0: not given; the readout is
+  // then estimated with the time offset (time_offset.estimate_readout), and
+  // a global shutter assumed when the images do not show one.
   double rolling_shutter_readout_s = 0.0;
   // Process only the first max_frames images (0: all). Default 0.
   int max_frames = 0;
@@ -303,6 +305,16 @@ struct VioOptions {
     visit({"time_offset.min_tracks_per_pair", "fewest corners tracked in both frames of a pair",
            kShapesStoredData},
           self.time_offset.min_tracks_per_pair);
+    visit({"time_offset.estimate_readout",
+           "estimate a rolling shutter's readout with the offset (when none is given)",
+           kShapesStoredData},
+          self.time_offset.estimate_readout);
+    visit({"time_offset.max_readout_s", "s, longest rolling-shutter readout considered",
+           kShapesStoredData},
+          self.time_offset.max_readout_s);
+    visit({"time_offset.readout_coarse_step_s", "s, step of the readout's coarse grid",
+           kShapesStoredData},
+          self.time_offset.readout_coarse_step_s);
     visit({"time_offset.max_frame_gap", "frames are paired with each of the next this many",
            kShapesStoredData},
           self.time_offset.max_frame_gap);
@@ -336,7 +348,8 @@ struct VioOptions {
     visit({"gyro_rotation_prior", "feed the tracker a gyro rotation prior", kShapesStoredData},
           self.gyro_rotation_prior);
     visit({"rolling_shutter_readout_s",
-           "s, rolling-shutter readout time of the camera (0: global shutter)", kShapesStoredData},
+           "s, rolling-shutter readout time of the camera (0: not given, estimated)",
+           kShapesStoredData},
           self.rolling_shutter_readout_s);
     visit({"max_frames", "process only the first max_frames images (0: all)", kShapesStoredData},
           self.max_frames);

@@ -11,6 +11,7 @@
 #include "viosfm/geometry/lie.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/vio/imu_preintegration.h"
+#include "viosfm/vio/rolling_shutter.h"
 
 namespace viosfm {
 namespace {
@@ -42,12 +43,14 @@ std::optional<Eigen::Quaterniond> GyroRotation(const std::vector<ImuSample>& imu
 }
 
 // The corners tracked in both frames of a pair: rays1 in the first, points2
-// in the second.
+// in the second, with the image rows they were seen on.
 struct FramePair {
   timestamp_ns_t t1 = 0;
   timestamp_ns_t t2 = 0;
   std::vector<Eigen::Vector3d> rays1;  // normalised (x, y, 1)
   std::vector<Eigen::Vector2d> points2;
+  std::vector<double> rows1;  // pixel rows, for a rolling shutter's row times
+  std::vector<double> rows2;
 };
 
 // Pairs of frames 1 to max_gap apart with at least min_tracks common corners.
@@ -55,9 +58,9 @@ std::vector<FramePair> MakePairs(const std::vector<FrameFeatures>& frames, int m
                                  int max_gap) {
   std::vector<FramePair> pairs;
   for (size_t k = 0; k + 1 < frames.size(); ++k) {
-    std::unordered_map<uint64_t, Eigen::Vector2d> first;
+    std::unordered_map<uint64_t, const FeatureObservation*> first;
     for (const FeatureObservation& observation : frames[k].observations) {
-      first.emplace(observation.track_id, observation.normalized);
+      first.emplace(observation.track_id, &observation);
     }
     for (size_t j = k + 1; j < frames.size() && j <= k + static_cast<size_t>(max_gap); ++j) {
       FramePair pair;
@@ -66,8 +69,10 @@ std::vector<FramePair> MakePairs(const std::vector<FrameFeatures>& frames, int m
       for (const FeatureObservation& observation : frames[j].observations) {
         const auto it = first.find(observation.track_id);
         if (it == first.end()) continue;
-        pair.rays1.push_back(it->second.homogeneous());
+        pair.rays1.push_back(it->second->normalized.homogeneous());
+        pair.rows1.push_back(it->second->pixel.y());
         pair.points2.push_back(observation.normalized);
+        pair.rows2.push_back(observation.pixel.y());
       }
       if (static_cast<int>(pair.rays1.size()) >= min_tracks) pairs.push_back(std::move(pair));
     }
@@ -75,34 +80,95 @@ std::vector<FramePair> MakePairs(const std::vector<FrameFeatures>& frames, int m
   return pairs;
 }
 
-// Mean over the pairs of the median distance (normalised) between the
-// gyro-rotated corners of the first frame and the tracked ones of the
-// second; pairs without IMU coverage are skipped (nullopt if all are).
+// The gyro's orientation (no bias) through a stretch of IMU samples, by
+// midpoint integration from the first: body0_from_body at each sample, and
+// between samples at the interval's mean rate.
+class GyroOrientation {
+ public:
+  GyroOrientation(const std::vector<ImuSample>& imu, timestamp_ns_t from, timestamp_ns_t to) {
+    const auto by_time = [](const ImuSample& sample, timestamp_ns_t t) {
+      return sample.timestamp_ns < t;
+    };
+    auto it = std::lower_bound(imu.begin(), imu.end(), from, by_time);
+    if (it != imu.begin()) --it;
+    Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
+    for (; it != imu.end(); ++it) {
+      if (!stamps_.empty()) {
+        const Eigen::Vector3d rate = 0.5 * (rates_.back() + it->gyro);
+        rates_.back() = rate;
+        orientation = (orientation * So3Exp(rate * NsToSeconds(it->timestamp_ns - stamps_.back())))
+                          .normalized();
+      }
+      stamps_.push_back(it->timestamp_ns);
+      orientations_.push_back(orientation);
+      rates_.push_back(it->gyro);  // replaced by the interval's mean at the next sample
+      if (it->timestamp_ns > to) break;
+    }
+  }
+
+  // body0_from_body at t; nullopt outside the samples.
+  std::optional<Eigen::Quaterniond> At(timestamp_ns_t t) const {
+    if (stamps_.size() < 2 || t < stamps_.front() || t > stamps_.back()) return std::nullopt;
+    const size_t k =
+        std::min<size_t>(std::upper_bound(stamps_.begin(), stamps_.end(), t) - stamps_.begin() - 1,
+                         stamps_.size() - 2);
+    return orientations_[k] * So3Exp(rates_[k] * NsToSeconds(t - stamps_[k]));
+  }
+
+ private:
+  std::vector<timestamp_ns_t> stamps_;
+  std::vector<Eigen::Quaterniond> orientations_;
+  std::vector<Eigen::Vector3d> rates_;  // mean rate over [stamps_[k], stamps_[k + 1]]
+};
+
+// Mean over the pairs of the median epipolar residual (normalised) of the
+// corners under the gyro's rotation between their observation times: the
+// stamps shifted by offset_ns, plus each row's time for a rolling shutter
+// of readout_s (0: a global shutter); pairs without IMU coverage are skipped
+// (nullopt if all are).
 std::optional<double> RotationFlowCost(const std::vector<FramePair>& pairs,
-                                       const std::vector<ImuSample>& imu,
+                                       const GyroOrientation& gyro,
                                        const Eigen::Quaterniond& body_from_cam,
-                                       timestamp_ns_t offset_ns) {
+                                       timestamp_ns_t offset_ns, double readout_s, int height) {
   double sum = 0.0;
   int count = 0;
   std::vector<double> errors;
+  std::vector<Eigen::Vector3d> rows;
+  // cam2_from_cam1 for a rotation body1_from_body2.
+  const auto cam2_from_cam1 = [&](const Eigen::Quaterniond& body1_from_body2) {
+    return (body_from_cam.conjugate() * body1_from_body2 * body_from_cam)
+        .conjugate()
+        .toRotationMatrix();
+  };
   for (const FramePair& pair : pairs) {
-    const std::optional<Eigen::Quaterniond> body1_from_body2 =
-        GyroRotation(imu, pair.t1 + offset_ns, pair.t2 + offset_ns);
-    if (!body1_from_body2) continue;
-    // cam2_from_cam1 = (cam_from_body * body1_from_body2 * body_from_cam)^-1.
-    const Eigen::Matrix3d cam2_from_cam1 =
-        (body_from_cam.conjugate() * *body1_from_body2 * body_from_cam)
-            .conjugate()
-            .toRotationMatrix();
+    const std::optional<Eigen::Quaterniond> q1 = gyro.At(pair.t1 + offset_ns);
+    const std::optional<Eigen::Quaterniond> q2 = gyro.At(pair.t2 + offset_ns);
+    if (!q1 || !q2) continue;
     // Epipolar residuals with the rotation fixed: for the unit translation
     // t, x2^T [t]x R x1 = t . ((R x1) x x2) = t . a. t is the eigenvector of
     // the smallest eigenvalue of sum a a^T (least squares), refitted on the
     // better 70 % of the corners; the pair's cost is the median |t . a|.
-    std::vector<Eigen::Vector3d> rows;
+    rows.clear();
     rows.reserve(pair.rays1.size());
-    for (size_t i = 0; i < pair.rays1.size(); ++i) {
-      const Eigen::Vector3d rotated = cam2_from_cam1 * pair.rays1[i];
-      rows.push_back(rotated.cross(pair.points2[i].homogeneous()));
+    if (readout_s == 0.0) {
+      const Eigen::Matrix3d rotation = cam2_from_cam1(q1->conjugate() * *q2);
+      for (size_t i = 0; i < pair.rays1.size(); ++i) {
+        rows.push_back((rotation * pair.rays1[i]).cross(pair.points2[i].homogeneous()));
+      }
+    } else {
+      bool covered = true;
+      for (size_t i = 0; i < pair.rays1.size() && covered; ++i) {
+        const std::optional<Eigen::Quaterniond> a = gyro.At(
+            pair.t1 + offset_ns + SecondsToNs(RowTimeOffset(pair.rows1[i], height, readout_s)));
+        const std::optional<Eigen::Quaterniond> b = gyro.At(
+            pair.t2 + offset_ns + SecondsToNs(RowTimeOffset(pair.rows2[i], height, readout_s)));
+        covered = a && b;
+        if (covered) {
+          rows.push_back((cam2_from_cam1(a->conjugate() * *b) * pair.rays1[i])
+                             .cross(pair.points2[i].homogeneous()));
+        }
+      }
+      if (!covered) continue;
     }
     const auto fit = [](const std::vector<Eigen::Vector3d>& a, const std::vector<size_t>& use) {
       Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
@@ -131,6 +197,52 @@ std::optional<double> RotationFlowCost(const std::vector<FramePair>& pairs,
   return sum / count;
 }
 
+// The minimum of `cost` over [low, high]: a coarse grid, a fine grid around
+// its best point, and a parabola through the fine grid's best point and its
+// neighbours. `at_edge` when the coarse minimum is within a step of an end.
+struct LineMinimum {
+  double x = 0.0;
+  double cost = 0.0;
+  bool found = false;
+  bool at_edge = false;
+};
+
+template <class Cost>
+LineMinimum MinimizeOnLine(const Cost& cost, double low, double high, double coarse_step,
+                           double fine_step) {
+  LineMinimum minimum;
+  const int num_coarse = static_cast<int>(std::floor((high - low) / coarse_step + 1e-9));
+  for (int i = 0; i <= num_coarse; ++i) {
+    const double x = low + i * coarse_step;
+    const std::optional<double> c = cost(x);
+    if (c && (!minimum.found || *c < minimum.cost)) minimum = {x, *c, true, false};
+  }
+  if (!minimum.found) return minimum;
+  minimum.at_edge = minimum.x - coarse_step < low - 1e-12 || minimum.x + coarse_step > high + 1e-12;
+  std::vector<std::pair<double, double>> fine;
+  const int num_fine = static_cast<int>(std::floor(coarse_step / fine_step + 1e-9));
+  for (int i = -num_fine; i <= num_fine; ++i) {
+    const double x = minimum.x + i * fine_step;
+    if (x < low - 1e-12 || x > high + 1e-12) continue;
+    const std::optional<double> c = cost(x);
+    if (c) fine.emplace_back(x, *c);
+  }
+  auto best = std::min_element(fine.begin(), fine.end(),
+                               [](const auto& a, const auto& b) { return a.second < b.second; });
+  if (best == fine.end()) return minimum;
+  double x = best->first;
+  if (best != fine.begin() && best + 1 != fine.end()) {
+    const double y0 = (best - 1)->second;
+    const double y1 = best->second;
+    const double y2 = (best + 1)->second;
+    const double denominator = y0 - 2.0 * y1 + y2;
+    if (denominator > 0) x += 0.5 * (y0 - y2) / denominator * fine_step;  // |shift| <= half a step
+  }
+  if (best->second < minimum.cost) minimum.cost = best->second;
+  minimum.x = x;
+  return minimum;
+}
+
 }  // namespace
 
 std::string TimeOffsetOptions::Validate() const {
@@ -143,6 +255,10 @@ std::string TimeOffsetOptions::Validate() const {
   }
   if (min_tracks_per_pair < 5) return "min_tracks_per_pair must be >= 5";
   if (max_frame_gap < 1) return "max_frame_gap must be >= 1";
+  if (!(max_readout_s > 0) || max_readout_s > 0.2) return "max_readout_s must be in (0, 0.2]";
+  if (!(readout_coarse_step_s >= fine_step_s) || readout_coarse_step_s > max_readout_s) {
+    return "readout_coarse_step_s must be in [fine_step_s, max_readout_s]";
+  }
   if (!(min_total_rotation_deg >= 0)) return "min_total_rotation_deg must be >= 0";
   if (!(max_wait_s > 0)) return "max_wait_s must be > 0";
   if (!(min_cost_reduction >= 0) || !(min_cost_reduction < 1)) {
@@ -166,7 +282,7 @@ TimeOffsetEstimate EstimateTimeOffset(const std::vector<FrameFeatures>& frames,
                                       const std::vector<ImuSample>& imu,
                                       const Rigid3d& body_from_cam,
                                       timestamp_ns_t calibration_offset_ns, double focal_length_px,
-                                      const TimeOffsetOptions& options) {
+                                      const TimeOffsetOptions& options, int image_height) {
   VIOSFM_CHECK(options.Check()) << options.Validate();
   TimeOffsetEstimate estimate;
   estimate.offset_ns = calibration_offset_ns;
@@ -175,13 +291,18 @@ TimeOffsetEstimate EstimateTimeOffset(const std::vector<FrameFeatures>& frames,
       MakePairs(frames, options.min_tracks_per_pair, options.max_frame_gap);
   estimate.num_pairs = static_cast<int>(pairs.size());
   estimate.total_rotation_deg = GyroRotationSumDeg(frames, imu, calibration_offset_ns);
+  const timestamp_ns_t range_ns = SecondsToNs(options.max_offset_s);
+  const timestamp_ns_t margin_ns = range_ns + SecondsToNs(options.max_readout_s) + 1'000'000;
+  const GyroOrientation gyro(
+      imu, frames.empty() ? 0 : frames.front().timestamp_ns + calibration_offset_ns - margin_ns,
+      frames.empty() ? 0 : frames.back().timestamp_ns + calibration_offset_ns + margin_ns);
   const Eigen::Quaterniond& rotation = body_from_cam.rotation;
-  const auto cost = [&](timestamp_ns_t offset) {
-    return RotationFlowCost(pairs, imu, rotation, offset);
+  const auto cost = [&](timestamp_ns_t offset, double readout_s) {
+    return RotationFlowCost(pairs, gyro, rotation, offset, readout_s, image_height);
   };
   std::ostringstream message;
   message << std::fixed << std::setprecision(1);
-  const std::optional<double> calibration_cost = cost(calibration_offset_ns);
+  const std::optional<double> calibration_cost = cost(calibration_offset_ns, 0.0);
   if (!calibration_cost || pairs.size() < 5) {
     message << "too few tracked frame pairs with IMU (" << pairs.size()
             << "); the calibration's offset is kept";
@@ -198,59 +319,83 @@ TimeOffsetEstimate EstimateTimeOffset(const std::vector<FrameFeatures>& frames,
     return estimate;
   }
 
-  // Coarse grid, then a fine grid around its best point.
-  const timestamp_ns_t range_ns = SecondsToNs(options.max_offset_s);
-  const timestamp_ns_t coarse_ns = std::max<timestamp_ns_t>(1, SecondsToNs(options.coarse_step_s));
-  const timestamp_ns_t fine_ns = std::max<timestamp_ns_t>(1, SecondsToNs(options.fine_step_s));
-  timestamp_ns_t best = calibration_offset_ns;
-  double best_cost = *calibration_cost;
-  for (timestamp_ns_t d = -range_ns; d <= range_ns; d += coarse_ns) {
-    const std::optional<double> c = cost(calibration_offset_ns + d);
-    if (c && *c < best_cost) {
-      best_cost = *c;
-      best = calibration_offset_ns + d;
+  // The offset (ms on the line) as a global shutter, then, when asked, the
+  // readout at that offset and the offset again at that readout.
+  const auto offset_cost = [&](double readout_s) {
+    return [&cost, calibration_offset_ns, readout_s](double offset_ms) {
+      return cost(calibration_offset_ns + SecondsToNs(offset_ms * 1e-3), readout_s);
+    };
+  };
+  const double range_ms = options.max_offset_s * 1e3;
+  const double coarse_ms = options.coarse_step_s * 1e3;
+  const double fine_ms = options.fine_step_s * 1e3;
+  LineMinimum offset = MinimizeOnLine(offset_cost(0.0), -range_ms, range_ms, coarse_ms, fine_ms);
+  double best_cost = offset.found ? offset.cost : *calibration_cost;
+  double readout_s = 0.0;
+  std::ostringstream readout_message;
+  readout_message << std::fixed;
+  if (options.estimate_readout && image_height > 0 && offset.found && !offset.at_edge) {
+    // Two rounds of: the readout at the offset, then the offset at that
+    // readout within three coarse steps of where it was.
+    const double global_cost = offset.cost;
+    const double max_readout_ms = options.max_readout_s * 1e3;
+    const double readout_step_ms = options.readout_coarse_step_s * 1e3;
+    LineMinimum at = offset;
+    LineMinimum readout;
+    bool kept = false;
+    for (int round = 0; round < 2; ++round) {
+      const timestamp_ns_t at_ns = calibration_offset_ns + SecondsToNs(at.x * 1e-3);
+      readout = MinimizeOnLine([&](double readout_ms) { return cost(at_ns, readout_ms * 1e-3); },
+                               0.0, max_readout_ms, readout_step_ms, fine_ms);
+      kept = readout.found && readout.x + readout_step_ms <= max_readout_ms &&
+             readout.cost < (1.0 - options.min_cost_reduction) * global_cost;
+      if (!kept) break;
+      const LineMinimum again =
+          MinimizeOnLine(offset_cost(readout.x * 1e-3), at.x - 3.0 * coarse_ms,
+                         at.x + 3.0 * coarse_ms, coarse_ms, fine_ms);
+      at.cost = readout.cost;
+      if (again.found && again.cost <= readout.cost) {
+        at.x = again.x;
+        at.cost = again.cost;
+      }
+    }
+    if (kept) {
+      offset = at;
+      best_cost = offset.cost;
+      readout_s = readout.x * 1e-3;
+      estimate.readout_estimated = true;
+      estimate.readout_s = readout_s;
+      readout_message << std::setprecision(1) << "; rolling-shutter readout " << readout_s * 1e3
+                      << " ms (residual " << std::setprecision(2) << best_cost * focal_length_px
+                      << " px against " << global_cost * focal_length_px
+                      << " px as a global shutter)";
+    } else if (readout.found) {
+      readout_message << std::setprecision(2) << "; a global shutter explains the images as well "
+                      << "(" << global_cost * focal_length_px << " px; with a readout of "
+                      << std::setprecision(1) << readout.x << " ms " << std::setprecision(2)
+                      << readout.cost * focal_length_px << " px)";
     }
   }
-  const bool at_edge = std::abs(best - calibration_offset_ns) + coarse_ns > range_ns;
-  std::vector<std::pair<timestamp_ns_t, double>> fine;
-  for (timestamp_ns_t d = -coarse_ns; d <= coarse_ns; d += fine_ns) {
-    const std::optional<double> c = cost(best + d);
-    if (c) fine.emplace_back(best + d, *c);
-  }
-  auto min_it = std::min_element(fine.begin(), fine.end(),
-                                 [](const auto& a, const auto& b) { return a.second < b.second; });
-  timestamp_ns_t refined = min_it->first;
-  double refined_cost = min_it->second;
-  if (min_it != fine.begin() && min_it + 1 != fine.end()) {
-    // Parabola through the best point and its neighbours.
-    const double y0 = (min_it - 1)->second;
-    const double y1 = min_it->second;
-    const double y2 = (min_it + 1)->second;
-    const double denominator = y0 - 2.0 * y1 + y2;
-    if (denominator > 0) {
-      const double shift = 0.5 * (y0 - y2) / denominator;  // in fine steps, |shift| <= 0.5
-      refined += static_cast<timestamp_ns_t>(std::llround(shift * static_cast<double>(fine_ns)));
-    }
-  }
-  if (refined_cost < best_cost) best_cost = refined_cost;
-
-  const double reduction = 1.0 - best_cost / *calibration_cost;
+  const timestamp_ns_t refined = calibration_offset_ns + SecondsToNs(offset.x * 1e-3);
+  // The offset against the calibration's, both with the readout chosen.
+  const double reference_cost =
+      readout_s > 0.0 ? cost(calibration_offset_ns, readout_s).value_or(*calibration_cost)
+                      : *calibration_cost;
+  const double reduction = 1.0 - best_cost / reference_cost;
   message << std::setprecision(1) << "camera-IMU time offset " << NsToSeconds(refined) * 1e3
           << " ms (calibration " << NsToSeconds(calibration_offset_ns) * 1e3
           << " ms): median epipolar residual with the gyro's "
           << "rotation " << std::setprecision(2) << best_cost * focal_length_px << " px against "
-          << *calibration_cost * focal_length_px << " px at the calibration's offset, "
-          << pairs.size() << " frame pairs, " << std::setprecision(0) << estimate.total_rotation_deg
-          << " deg of rotation";
-  if (at_edge) {
+          << reference_cost * focal_length_px << " px at the calibration's offset, " << pairs.size()
+          << " frame pairs, " << std::setprecision(0) << estimate.total_rotation_deg
+          << " deg of rotation" << readout_message.str();
+  if (offset.at_edge) {
     message << "; not trusted: the minimum is at the edge of the +-" << options.max_offset_s * 1e3
             << " ms search range";
   } else if (reduction < options.min_cost_reduction) {
     estimate.offset_ns = calibration_offset_ns;
     estimate.estimated = false;
     message << "; the calibration's offset is as good (kept)";
-    estimate.message = message.str();
-    return estimate;
   } else {
     estimate.estimated = true;
     estimate.offset_ns = refined;

@@ -62,6 +62,19 @@ struct TimeOffsetOptions {
   // deg, the gyro rotation summed over the pairs needed before the estimate
   // is made (the driver waits for it) and trusted. Default 90.
   double min_total_rotation_deg = 90.0;
+  // Estimate a rolling shutter's readout time with the offset (default
+  // true; used when the frames are given uncorrected and with the image
+  // height): each corner's observation time is its frame's stamp plus its
+  // row's time (rolling_shutter.h), the cost the same. The readout
+  // minimising the cost at the offset found as a global shutter, then the
+  // offset again at that readout; kept when it lowers the cost by
+  // min_cost_reduction and lies inside (0, max_readout_s).
+  bool estimate_readout = true;
+  // s, the longest readout considered (default 0.05: 720p sensors read out
+  // in 10 to 35 ms) and the step of its coarse grid (default 0.002); the
+  // fine grid is fine_step_s.
+  double max_readout_s = 0.05;
+  double readout_coarse_step_s = 0.002;
   // s, the longest stretch of frames collected while waiting for that
   // rotation; after it, the estimate is made with what there is. Default 10.
   double max_wait_s = 10.0;
@@ -84,6 +97,10 @@ struct TimeOffsetEstimate {
   // focal_length_px) at the estimate and at the calibration's offset.
   double cost_px = 0.0;
   double calibration_cost_px = 0.0;
+  // The rolling-shutter readout (s) and whether it was estimated (false:
+  // a global shutter explains the images as well, or not asked).
+  bool readout_estimated = false;
+  double readout_s = 0.0;
   int num_pairs = 0;
   double total_rotation_deg = 0.0;
   std::string message;  // one line: the estimate or why it was not trusted
@@ -98,11 +115,13 @@ double GyroRotationSumDeg(const std::vector<FrameFeatures>& frames,
 // frames: consecutive tracked frames stamped on the camera clock, in order;
 // imu: samples in strictly increasing stamp order; calibration_offset_ns:
 // the offset the calibration gives (t_imu = t_cam + offset);
-// focal_length_px only scales the reported costs.
+// focal_length_px only scales the reported costs. With image_height > 0
+// and options.estimate_readout, the frames' observations must be as tracked
+// (not corrected for a rolling shutter) and the readout is estimated too.
 TimeOffsetEstimate EstimateTimeOffset(const std::vector<FrameFeatures>& frames,
                                       const std::vector<ImuSample>& imu,
                                       const Rigid3d& body_from_cam,
                                       timestamp_ns_t calibration_offset_ns, double focal_length_px,
-                                      const TimeOffsetOptions& options = {});
+                                      const TimeOffsetOptions& options = {}, int image_height = 0);
 
 }  // namespace viosfm

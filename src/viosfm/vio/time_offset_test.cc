@@ -10,6 +10,7 @@
 #include "viosfm/sim/trajectory.h"
 #include "viosfm/util/random.h"
 #include "viosfm/util/timestamp.h"
+#include "viosfm/vio/rolling_shutter.h"
 
 namespace viosfm {
 namespace {
@@ -39,6 +40,9 @@ struct OffsetSceneOptions {
   int num_frames = 120;
   int landmarks_per_frame = 40;
   double pixel_noise_px = 0.5;
+  // s, a rolling shutter's readout (0: global): each corner is seen at its
+  // row's time (rolling_shutter.h's convention).
+  double readout_s = 0.0;
   bool imu_noise = true;
   uint64_t seed = 0;
 };
@@ -83,9 +87,21 @@ OffsetScene MakeOffsetScene(const OffsetSceneOptions& options) {
     const int first = std::max(0, k - 2) * options.landmarks_per_frame;
     const int last = std::min(options.num_frames, k + 3) * options.landmarks_per_frame;
     for (int i = first; i < last; ++i) {
-      const Eigen::Vector3d in_cam = cam_from_world[k] * landmarks[i];
+      Eigen::Vector3d in_cam = cam_from_world[k] * landmarks[i];
       if (in_cam.z() < 0.1) continue;
       Eigen::Vector2d pixel(fx * in_cam.x() / in_cam.z() + cx, fy * in_cam.y() / in_cam.z() + cy);
+      // With a rolling shutter, the pose at the row's time; the row moves
+      // with it (a few fixed-point steps converge far below a pixel).
+      for (int step = 0; step < 4 && options.readout_s > 0.0; ++step) {
+        const timestamp_ns_t t =
+            scene.true_stamps[k] +
+            SecondsToNs(RowTimeOffset(pixel.y(), camera.height, options.readout_s));
+        in_cam = (scene.trajectory.WorldFromBody(t) * scene.body_from_cam).Inverse() * landmarks[i];
+        if (in_cam.z() < 0.1) break;
+        pixel =
+            Eigen::Vector2d(fx * in_cam.x() / in_cam.z() + cx, fy * in_cam.y() / in_cam.z() + cy);
+      }
+      if (in_cam.z() < 0.1) continue;
       if (pixel.x() < 0 || pixel.y() < 0 || pixel.x() > width - 1 || pixel.y() > height - 1) {
         continue;
       }
@@ -241,6 +257,45 @@ TEST(TimeOffset, SearchesAroundTheCalibration) {
   EXPECT_FALSE(edge.estimated) << edge.message;
   EXPECT_EQ(edge.offset_ns, calibration_ns);
   EXPECT_NE(edge.message.find("edge"), std::string::npos) << edge.message;
+}
+
+// A rolling shutter (corners seen at their rows' times): asked with the
+// image height, the estimator finds the readout and the offset; the same
+// scene seen by a global shutter gets no readout.
+TEST(TimeOffset, EstimatesARollingShuttersReadout) {
+  const int height = static_cast<int>(SimulationOptions::DefaultCamera().height);
+  for (const uint64_t seed : {0, 1}) {
+    OffsetSceneOptions options;
+    options.true_offset_ns = SecondsToNs(-0.02);
+    options.readout_s = 0.03;
+    options.seed = seed;
+    const OffsetScene rolling = MakeOffsetScene(options);
+    const TimeOffsetEstimate estimate =
+        EstimateTimeOffset(rolling.frames, rolling.imu, rolling.body_from_cam, 0,
+                           rolling.focal_length_px, TimeOffsetOptions(), height);
+    std::cout << "readout 30 ms, offset -20 ms, seed " << seed << ": " << estimate.message << "\n";
+    EXPECT_TRUE(estimate.readout_estimated) << estimate.message;
+    EXPECT_NEAR(estimate.readout_s * 1e3, 30.0, 3.0) << estimate.message;
+    EXPECT_TRUE(estimate.estimated) << estimate.message;
+    EXPECT_NEAR(Ms(estimate.offset_ns), -20.0, kOffsetToleranceMs) << estimate.message;
+    // As a global shutter (no height given), the offset absorbs part of the
+    // readout's effect and the residual stays higher.
+    const TimeOffsetEstimate global = EstimateTimeOffset(
+        rolling.frames, rolling.imu, rolling.body_from_cam, 0, rolling.focal_length_px);
+    EXPECT_FALSE(global.readout_estimated);
+    EXPECT_EQ(global.readout_s, 0.0);
+    EXPECT_LT(estimate.cost_px, 0.9 * global.cost_px) << global.message;
+
+    options.readout_s = 0.0;
+    const OffsetScene global_shutter = MakeOffsetScene(options);
+    const TimeOffsetEstimate none =
+        EstimateTimeOffset(global_shutter.frames, global_shutter.imu, global_shutter.body_from_cam,
+                           0, global_shutter.focal_length_px, TimeOffsetOptions(), height);
+    std::cout << "global shutter, seed " << seed << ": " << none.message << "\n";
+    EXPECT_FALSE(none.readout_estimated) << none.message;
+    EXPECT_EQ(none.readout_s, 0.0);
+    EXPECT_NEAR(Ms(none.offset_ns), -20.0, kOffsetToleranceMs) << none.message;
+  }
 }
 
 // Too little rotation (the first frames of the walk, 10 degrees): the
