@@ -50,4 +50,13 @@ foreach(command vio run features)
   expect_exit(2 "^error: ${WORK}/mirrored.yaml:2: 'T_cam_imu': .*determinant is -1"
               ${command} "${WORK}/dataset" ${extra} --calibration "${WORK}/mirrored.yaml")
 endforeach()
+# vio --set: an unknown key and a bad value are input errors naming them.
+expect_exit(2 "^error: unknown option 'time_offset.no_such_key'" vio "${WORK}/dataset"
+            --out "${WORK}/out_set" --set time_offset.no_such_key=1)
+expect_exit(2 "^error: option time_offset.max_frame_gap: 'three'" vio "${WORK}/dataset"
+            --out "${WORK}/out_set" --set time_offset.max_frame_gap=three)
+expect_exit(2 "^error: --set time_offset.max_frame_gap: expected KEY=VALUE" vio
+            "${WORK}/dataset" --out "${WORK}/out_set" --set time_offset.max_frame_gap)
+expect_exit(2 "^error: invalid vio options: .*max_frame_gap must be >= 1" vio "${WORK}/dataset"
+            --out "${WORK}/out_set" --set time_offset.max_frame_gap=0)
 file(REMOVE_RECURSE "${WORK}")
