@@ -67,6 +67,7 @@ std::string BundleAdjustmentOptions::Validate() const {
   if (!(prior_rotation_sigma_rad > 0.0)) return "prior_rotation_sigma_rad must be > 0";
   if (!(prior_translation_sigma_m > 0.0)) return "prior_translation_sigma_m must be > 0";
   if (!(prior_loss_scale >= 0.0)) return "prior_loss_scale must be >= 0";
+  if (!(image_noise_px > 0.0)) return "image_noise_px must be > 0";
   if (max_num_iterations < 0) return "max_num_iterations must be >= 0";
   if (num_threads < 1) return "num_threads must be >= 1";
   if (max_images_for_sparse_schur < 0) return "max_images_for_sparse_schur must be >= 0";
@@ -203,6 +204,12 @@ BundleAdjustmentSummary BundleAdjust(Reconstruction* reconstruction,
         }
         if (options.prior_loss_scale > 0.0) {
           prior_loss = new ceres::TukeyLoss(options.prior_loss_scale);
+        }
+        if (options.image_noise_px != 1.0) {
+          // The whitened prior against reprojection errors in units of
+          // image_noise_px; the loss still acts in the prior's own sigmas.
+          prior_loss = new ceres::ScaledLoss(prior_loss, options.image_noise_px * options.image_noise_px,
+                                             ceres::TAKE_OWNERSHIP);
         }
       } else {
         const double weight =

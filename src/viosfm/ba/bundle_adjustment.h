@@ -103,6 +103,13 @@ struct BundleAdjustmentOptions {
   // Cauchy loss of scale 5, and by 3.3 mm with this one - which is what
   // removing that prior does (the scale loses one of its constraints).
   double prior_loss_scale = 10.0;
+  // px, the standard deviation of a keypoint's position that the
+  // reprojection errors (in pixels, unweighted) stand for when they are
+  // combined with the covariance-weighted priors (kCovariance): each prior's
+  // cost is multiplied by its square, so that a prior whitened by the VIO's
+  // covariance and a reprojection error whitened by the image noise weigh
+  // as their uncertainties say. Default 1.
+  double image_noise_px = 1.0;
 
   // Solver.
   int max_num_iterations = 50;  // Levenberg-Marquardt iterations (default 50)
@@ -150,6 +157,9 @@ struct BundleAdjustmentOptions {
     visit({"prior_loss_scale", "Tukey loss on the whitened priors, in standard deviations; 0: none",
            kRunOnly},
           self.prior_loss_scale);
+    visit({"image_noise_px", "px, keypoint noise the priors are weighed against (covariance)",
+           kRunOnly},
+          self.image_noise_px);
     visit({"max_num_iterations", "Levenberg-Marquardt iterations", kRunOnly},
           self.max_num_iterations);
     visit({"num_threads", "Jacobian and linear solver threads", kRunOnly}, self.num_threads);
