@@ -30,6 +30,8 @@ void AddVioUncertaintyOptions(CLI::App* command, VioUncertaintyArguments* argume
   add("--vio-yaw-per-sqrt-rad", &m.yaw_per_sqrt_rad, "Yaw random walk, rad per sqrt(rad turned)");
   add("--vio-tilt-per-sqrt-s", &m.tilt_per_sqrt_s, "Roll and pitch random walk, rad per sqrt(s)");
   add("--vio-scale-sigma", &m.scale_sigma, "Relative scale error of displacements");
+  add("--vio-relative-scale-sigma", &m.relative_scale_sigma,
+      "Relative scale error varying between pairs of frames of a segment (the priors')");
   add("--vio-position-noise", &m.position_noise_m, "White position noise per frame, m (> 0)");
   add("--vio-rotation-noise", &m.rotation_noise_rad, "White rotation noise per frame, rad (> 0)");
   add("--vio-correlated-position-noise", &m.correlated_position_noise_m,

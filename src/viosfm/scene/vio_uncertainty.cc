@@ -25,7 +25,7 @@ VioUncertaintyModel VioUncertaintyModel::Scaled(double factor) const {
   for (double* rate :
        {&scaled.position_per_sqrt_m, &scaled.position_per_sqrt_s, &scaled.yaw_per_sqrt_m,
         &scaled.yaw_per_sqrt_s, &scaled.yaw_per_sqrt_rad, &scaled.tilt_per_sqrt_s,
-        &scaled.scale_sigma, &scaled.position_noise_m, &scaled.rotation_noise_rad,
+        &scaled.scale_sigma, &scaled.relative_scale_sigma, &scaled.position_noise_m, &scaled.rotation_noise_rad,
         &scaled.correlated_position_noise_m, &scaled.correlated_rotation_noise_rad}) {
     *rate *= factor;
   }
@@ -41,10 +41,17 @@ VioUncertaintyModel VioUncertaintyModel::Exact() {
   model.yaw_per_sqrt_rad = 0.0;
   model.tilt_per_sqrt_s = 0.0;
   model.scale_sigma = 0.0;
+  model.relative_scale_sigma = 0.0;
   model.position_noise_m = 1e-4;
   model.rotation_noise_rad = 1e-4;
   model.correlated_position_noise_m = 0.0;
   model.correlated_rotation_noise_rad = 0.0;
+  return model;
+}
+
+VioUncertaintyModel VioUncertaintyModel::WithinSegment() const {
+  VioUncertaintyModel model = *this;
+  model.scale_sigma = relative_scale_sigma;
   return model;
 }
 
@@ -57,6 +64,7 @@ std::string VioUncertaintyModel::Validate() const {
       {"yaw_per_sqrt_rad", yaw_per_sqrt_rad},
       {"tilt_per_sqrt_s", tilt_per_sqrt_s},
       {"scale_sigma", scale_sigma},
+      {"relative_scale_sigma", relative_scale_sigma},
       {"correlated_position_noise_m", correlated_position_noise_m},
       {"correlated_rotation_noise_rad", correlated_rotation_noise_rad},
   };

@@ -114,7 +114,34 @@ TEST(VioUncertainty, ScaledAndValidate) {
   bad.yaw_per_sqrt_m = -1;
   EXPECT_NE(bad.Validate().find("yaw_per_sqrt_m"), std::string::npos);
   EXPECT_TRUE(VioUncertaintyModel::Exact().Check());
-  EXPECT_EQ(model.ToKeyValues().size(), 12u);
+  EXPECT_EQ(model.ToKeyValues().size(), 13u);
+  bad = model;
+  bad.relative_scale_sigma = -0.01;
+  EXPECT_NE(bad.Validate().find("relative_scale_sigma"), std::string::npos);
+}
+
+// The model within one segment (the relative-pose priors') differs from the
+// whole one by the scale alone: along the displacement, the variance
+// relative_scale_sigma^2 |d|^2 instead of scale_sigma^2 |d|^2; across it and
+// in the rotation, nothing.
+TEST(VioUncertainty, WithinSegmentKeepsOnlyTheScalesVariation) {
+  const VioUncertaintyModel model;
+  const VioUncertaintyModel within = model.WithinSegment();
+  EXPECT_DOUBLE_EQ(within.scale_sigma, model.relative_scale_sigma);
+  EXPECT_DOUBLE_EQ(within.relative_scale_sigma, model.relative_scale_sigma);
+  EXPECT_DOUBLE_EQ(within.yaw_per_sqrt_m, model.yaw_per_sqrt_m);
+  // 5 m along world x with world_from_cam the identity: the displacement is
+  // the camera's x, translation row 3.
+  const VioSample a = Frame(0, Eigen::Vector3d::Zero(), 0, 0);
+  const VioSample b = Frame(7, Eigen::Vector3d(5, 0, 0), 0, 5);
+  const Eigen::Matrix<double, 6, 6> whole = RelativePoseCovariance(model, a, b);
+  const Eigen::Matrix<double, 6, 6> part = RelativePoseCovariance(within, a, b);
+  Eigen::Matrix<double, 6, 6> expected = whole;
+  expected(3, 3) -= (model.scale_sigma * model.scale_sigma -
+                     model.relative_scale_sigma * model.relative_scale_sigma) *
+                    25.0;
+  EXPECT_LT((part - expected).norm(), 1e-15);
+  EXPECT_LT(part(3, 3), 0.5 * whole(3, 3));
 }
 
 TEST(VioUncertainty, SegmentsAndOdometers) {

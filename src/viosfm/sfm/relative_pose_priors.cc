@@ -58,12 +58,15 @@ RelativePosePriors MakeRelativePosePriors(const BatchedMapperInput& input,
     return it == num_matches.end() ? 0 : it->second;
   };
   const bool covariance = options.weighting == PriorWeighting::kCovariance;
+  // Both frames of a prior are of one segment, whose constant scale error
+  // is the model's scale: the priors carry only its variation.
+  const VioUncertaintyModel within_segment = options.vio_uncertainty.WithinSegment();
   RelativePosePriors result;
   const auto add = [&](size_t i, size_t j, int matches, bool bridging) {
     RelativePosePrior prior = MakePrior(input.images[i], input.images[j], matches);
     if (covariance) {
       prior.sqrt_information = SqrtInformationFromCovariance(
-          RelativePoseCovariance(options.vio_uncertainty, VioSampleOfImage(input.images[i]),
+          RelativePoseCovariance(within_segment, VioSampleOfImage(input.images[i]),
                                  VioSampleOfImage(input.images[j])));
     }
     prior.rotation_only = bridging && !covariance;
