@@ -18,7 +18,9 @@
 //   Log(R_E) = R2^T (n_rot2 - n_rot1 + w_rot)
 //   t_E      = R2^T (n_pos2 - n_pos1 + w_pos + [d]x n_rot1 + s d)
 // with n_* the frames' own noise (world frame), w_* the drift accumulated
-// between the frames and s the relative scale error. The drift between the
+// between the frames and s the relative scale error (scale_sigma; for the
+// relative-pose priors, which share a segment's constant scale error, only
+// its variation, relative_scale_sigma: WithinSegment). The drift between the
 // frames, after dt seconds, D metres and A radians travelled:
 //   tilt (x, y):  var = tilt_walk^2 dt
 //   yaw (z):      var V = yaw_per_sqrt_s^2 dt + yaw_per_sqrt_m^2 D + yaw_per_sqrt_rad^2 A
@@ -121,7 +123,7 @@ struct VioUncertaintyModel {
     visit({"scale_sigma", "relative error of displacements", kShapesStoredData}, self.scale_sigma);
     visit({"relative_scale_sigma",
            "relative scale error varying between pairs of frames of a segment (priors)",
-           kShapesStoredData},
+           kRunOnly},
           self.relative_scale_sigma);
     visit({"position_noise_m", "m, white noise per frame and axis", kShapesStoredData},
           self.position_noise_m);
