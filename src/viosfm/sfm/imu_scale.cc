@@ -327,6 +327,15 @@ ImuScaleResult EstimateImuScale(const Trajectory& world_from_body,
              << difference / sigma << " sigma)";
         spacing_note = note.str();
         solution = spaced;
+      } else {
+        // Agreeing within the noise: said beside the estimate all the same,
+        // so that a consecutive frames' figure far from 1 is read with it.
+        std::ostringstream note;
+        note << std::fixed << std::setprecision(5) << " (frames at least " << std::setprecision(2)
+             << options.spacing_check_interval_s << " s apart: " << std::setprecision(5)
+             << spaced.scale << " +- " << spaced.scale_sigma * spaced.scale << ", within "
+             << std::setprecision(1) << difference / sigma << " sigma)";
+        spacing_note = note.str();
       }
     }
   }

@@ -101,6 +101,8 @@ TEST(ImuScale, RecoversTheScaleOfA10HzTrajectory) {
   // more precise estimate stands.
   EXPECT_FALSE(result.spacing_disagrees);
   EXPECT_NEAR(result.spaced_scale, 1.02, 3.0 * result.spaced_scale_sigma * 1.02);
+  EXPECT_NE(result.message.find("frames at least 1.00 s apart: 1.0"), std::string::npos)
+      << result.message;
 }
 
 TEST(ImuScale, RecoversTheScaleOfKeyframesWithIrregularGaps) {
