@@ -208,8 +208,8 @@ BundleAdjustmentSummary BundleAdjust(Reconstruction* reconstruction,
         if (options.image_noise_px != 1.0) {
           // The whitened prior against reprojection errors in units of
           // image_noise_px; the loss still acts in the prior's own sigmas.
-          prior_loss = new ceres::ScaledLoss(prior_loss, options.image_noise_px * options.image_noise_px,
-                                             ceres::TAKE_OWNERSHIP);
+          prior_loss = new ceres::ScaledLoss(
+              prior_loss, options.image_noise_px * options.image_noise_px, ceres::TAKE_OWNERSHIP);
         }
       } else {
         const double weight =

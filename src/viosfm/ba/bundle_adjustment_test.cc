@@ -365,8 +365,8 @@ TEST(BundleAdjust, ImageNoiseWeighsTheReprojectionErrorsAgainstThePriors) {
   const Reconstruction scaled_information = run(1.0, 0.5);
   double largest_difference = 0.0;
   for (const image_t image_id : scene.image_ids) {
-    largest_difference = std::max(largest_difference,
-                                  CenterError(scaled_noise, scaled_information, image_id));
+    largest_difference =
+        std::max(largest_difference, CenterError(scaled_noise, scaled_information, image_id));
   }
   EXPECT_LT(largest_difference, 1e-7);
 

@@ -25,8 +25,9 @@ VioUncertaintyModel VioUncertaintyModel::Scaled(double factor) const {
   for (double* rate :
        {&scaled.position_per_sqrt_m, &scaled.position_per_sqrt_s, &scaled.yaw_per_sqrt_m,
         &scaled.yaw_per_sqrt_s, &scaled.yaw_per_sqrt_rad, &scaled.tilt_per_sqrt_s,
-        &scaled.scale_sigma, &scaled.relative_scale_sigma, &scaled.position_noise_m, &scaled.rotation_noise_rad,
-        &scaled.correlated_position_noise_m, &scaled.correlated_rotation_noise_rad}) {
+        &scaled.scale_sigma, &scaled.relative_scale_sigma, &scaled.position_noise_m,
+        &scaled.rotation_noise_rad, &scaled.correlated_position_noise_m,
+        &scaled.correlated_rotation_noise_rad}) {
     *rate *= factor;
   }
   return scaled;

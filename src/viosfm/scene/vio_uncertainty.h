@@ -86,8 +86,8 @@ struct VioUncertaintyModel {
   // 0.0001 held them so rigidly that the room lost 46 %; 0.005 gives the
   // corridor 20 mm and the room what it had (docs/benchmarks.md).
   double relative_scale_sigma = 0.005;
-  double position_noise_m = 0.002;     // m, white noise per frame and axis. Default 0.002
-  double rotation_noise_rad = 0.001;   // rad, white noise per frame and axis. Default 0.001
+  double position_noise_m = 0.002;    // m, white noise per frame and axis. Default 0.002
+  double rotation_noise_rad = 0.001;  // rad, white noise per frame and axis. Default 0.001
   // Slowly varying frame noise (first-order Gauss-Markov) with correlation
   // time noise_correlation_s. Defaults 0.002 m, 0.001 rad, 1 s.
   double correlated_position_noise_m = 0.002;
@@ -122,8 +122,7 @@ struct VioUncertaintyModel {
           self.tilt_per_sqrt_s);
     visit({"scale_sigma", "relative error of displacements", kShapesStoredData}, self.scale_sigma);
     visit({"relative_scale_sigma",
-           "relative scale error varying between pairs of frames of a segment (priors)",
-           kRunOnly},
+           "relative scale error varying between pairs of frames of a segment (priors)", kRunOnly},
           self.relative_scale_sigma);
     visit({"position_noise_m", "m, white noise per frame and axis", kShapesStoredData},
           self.position_noise_m);

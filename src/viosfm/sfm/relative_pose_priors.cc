@@ -65,9 +65,8 @@ RelativePosePriors MakeRelativePosePriors(const BatchedMapperInput& input,
   const auto add = [&](size_t i, size_t j, int matches, bool bridging) {
     RelativePosePrior prior = MakePrior(input.images[i], input.images[j], matches);
     if (covariance) {
-      prior.sqrt_information = SqrtInformationFromCovariance(
-          RelativePoseCovariance(within_segment, VioSampleOfImage(input.images[i]),
-                                 VioSampleOfImage(input.images[j])));
+      prior.sqrt_information = SqrtInformationFromCovariance(RelativePoseCovariance(
+          within_segment, VioSampleOfImage(input.images[i]), VioSampleOfImage(input.images[j])));
     }
     prior.rotation_only = bridging && !covariance;
     result.priors.push_back(std::move(prior));
