@@ -22,8 +22,6 @@ namespace {
 namespace fs = std::filesystem;
 using ordered_json = nlohmann::ordered_json;
 
-constexpr const char* kAbsent = "(absent)";
-
 // "1234 bytes, fnv1a64 ..." of an input file, or "missing" (its reader
 // then says what is wrong with it).
 std::string FileValue(const fs::path& path) {
@@ -212,12 +210,12 @@ std::vector<FingerprintDifference> CompareFingerprints(const RunFingerprint& sto
   for (const auto& [key, value] : current.entries) {
     const std::string* previous = stored.Find(key);
     if (previous == nullptr || *previous != value) {
-      differences.push_back({key, previous ? *previous : kAbsent, value});
+      differences.push_back({key, previous ? *previous : kFingerprintAbsent, value});
     }
   }
   if (complete) {
     for (const auto& [key, value] : stored.entries) {
-      if (current.Find(key) == nullptr) differences.push_back({key, value, kAbsent});
+      if (current.Find(key) == nullptr) differences.push_back({key, value, kFingerprintAbsent});
     }
   }
   return differences;

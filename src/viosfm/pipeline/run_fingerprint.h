@@ -92,10 +92,12 @@ void AddVioPosesToFingerprint(const Trajectory& world_from_body, const std::vect
 std::string RunFingerprintToJson(const RunFingerprint& fingerprint);
 RunFingerprint ReadRunFingerprint(const std::filesystem::path& path);
 
+// The value of a key one of two compared fingerprints lacks.
+inline constexpr const char* kFingerprintAbsent = "(absent)";
 struct FingerprintDifference {
   std::string key;
-  std::string stored;   // "(absent)" if the stored fingerprint lacks the key
-  std::string current;  // "(absent)" if the current one lacks it
+  std::string stored;   // kFingerprintAbsent if the stored fingerprint lacks the key
+  std::string current;  // kFingerprintAbsent if the current one lacks it
 };
 // The keys whose values differ. With `complete` false, `current` is a
 // fingerprint still being built: keys only the stored one has are skipped.

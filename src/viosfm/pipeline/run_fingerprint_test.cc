@@ -223,6 +223,16 @@ TEST(RunFingerprint, CheckStoredRunDataNamesWhatChanged) {
       << message;
   EXPECT_EQ(message.find("imu0"), std::string::npos) << message;  // unchanged
   EXPECT_NE(message.find("--overwrite"), std::string::npos) << message;
+
+  // A fingerprint of another version of viosfm: a key one side lacks.
+  RunFingerprint newer = stored;
+  newer.Set("mapper.new_option", "1");
+  const std::string newer_message =
+      testing::InputErrorMessage([&] { CheckStoredRunData(out, newer, true); });
+  EXPECT_NE(newer_message.find("mapper.new_option is '1' and was not recorded then"),
+            std::string::npos)
+      << newer_message;
+  EXPECT_NE(newer_message.find("another version"), std::string::npos) << newer_message;
 }
 
 TEST(RunFingerprint, OverwriteRemovesTheRunsOutputsOnly) {

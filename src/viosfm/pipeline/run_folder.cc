@@ -63,9 +63,22 @@ void CheckStoredRunData(const fs::path& output_folder, const RunFingerprint& cur
   if (differences.empty()) return;
   std::string message = "the features and matches stored in " + database.string() +
                         " were made from other inputs or options than this run's: ";
+  bool other_version = false;
   for (size_t i = 0; i < differences.size() && i < kMaxDifferencesNamed; ++i) {
     const FingerprintDifference& d = differences[i];
-    message += (i > 0 ? "; " : "") + d.key + " was '" + d.stored + "', is now '" + d.current + "'";
+    message += i > 0 ? "; " : "";
+    if (d.stored == kFingerprintAbsent) {
+      message += d.key + " is '" + d.current + "' and was not recorded then";
+      other_version = true;
+    } else if (d.current == kFingerprintAbsent) {
+      message += d.key + " was '" + d.stored + "' and is not recorded now";
+      other_version = true;
+    } else {
+      message += d.key + " was '" + d.stored + "', is now '" + d.current + "'";
+    }
+  }
+  if (other_version) {
+    message += " (a viosfm of another version made them: its fingerprint names other keys)";
   }
   if (differences.size() > kMaxDifferencesNamed) {
     message += " (and " + std::to_string(differences.size() - kMaxDifferencesNamed) + " more)";
