@@ -34,7 +34,9 @@
 # memory of each run (/usr/bin/time), and then, on the first scenario, the
 # batch-size sweep (the paper's Fig. 6) and, in full mode, the sequence-length
 # sweep. `viosfm bench-report` turns the folder into tables and plots
-# (docs/benchmarks-suite.md and docs/images/bench_*.svg by default).
+# (docs/benchmarks-suite.md and docs/images/bench_*.svg by default after a
+# full run with COLMAP; OUT/report/ after --quick, --no-colmap, --sweeps-only
+# or --lane; --docs FILE chooses).
 #
 # Full mode: 63 s at 10 Hz (631 images, 610 after the static start is
 # trimmed) a scenario, N1 10, N2 5, at most 1000 features, batch 50; the
@@ -86,7 +88,7 @@ force=0
 lengths_arg=unset
 length_window_arg=unset
 vio_profile=gentle
-docs=$here/docs/benchmarks-suite.md
+docs=""
 while [ $# -gt 0 ]; do
   case "$1" in
     --quick) quick=1 ;;
@@ -149,6 +151,16 @@ fi
 threads=$((jobs == 2 ? 1 : 2))
 mkdir -p "$out"
 out=$(cd "$out" && pwd)
+# The published page (docs/benchmarks-suite.md) is rewritten only by a full
+# run with COLMAP; any other run writes its page into the results folder, so
+# that a partial run cannot replace the published COLMAP rows.
+if [ -z "$docs" ]; then
+  if [ "$with_colmap" = 1 ] && [ "$quick" = 0 ] && [ "$with_runs" = 1 ] && [ -z "$lane_only" ]; then
+    docs=$here/docs/benchmarks-suite.md
+  else
+    docs=$out/report/benchmarks-suite.md
+  fi
+fi
 # The viosfm version of the runs (meta.txt and each viosfm run's version.txt,
 # so that a folder filled by several invocations says which made what).
 version=${BENCH_VERSION:-$(git -C "$here" describe --always --dirty 2>/dev/null || echo unknown)}
