@@ -9,7 +9,8 @@
 #
 # Usage: scripts/colmap-vs-vio-real.sh WORK_DIR VIO_TRAJECTORY_CAM_TUM [RUN_MODEL_DIR]
 #   VIO_TRAJECTORY_CAM_TUM: `viosfm vio`'s trajectory_cam.tum (or a run's
-#   vio_cam.tum); RUN_MODEL_DIR: a `viosfm run` output's model folder.
+#   vio/trajectory_cam.tum); RUN_MODEL_DIR: a `viosfm run` output's model_txt
+#   (or model) folder.
 # Environment: DATA (default ../shared/data/realsense_room_30s beside the
 #   checkout), STEP (3), OVERLAP (sequential matching overlap, 10), THREADS
 #   (COLMAP's threads, 1), VIOSFM (binary, default build/src/viosfm/cli/viosfm).
@@ -29,6 +30,12 @@ if [ ! -d "$DATA/mav0" ]; then
   exit 0
 fi
 command -v colmap > /dev/null || { echo "colmap not found: apt-get install colmap" >&2; exit 1; }
+# The references are checked before COLMAP's minutes of work.
+[ -f "$vio_cam" ] || { echo "$vio_cam: file does not exist (VIO_TRAJECTORY_CAM_TUM)" >&2; exit 2; }
+if [ -n "$run_model" ] && [ ! -d "$run_model" ]; then
+  echo "$run_model: folder does not exist (RUN_MODEL_DIR)" >&2
+  exit 2
+fi
 export QT_QPA_PLATFORM=offscreen
 
 # The frames: every STEP-th image of cam0, linked under its stamp's name.
@@ -65,7 +72,8 @@ for model in "$work"/sparse/*/; do
   rm -rf "$work/model_tmp" && mkdir -p "$work/model_tmp"
   colmap model_converter --input_path "$model" --output_path "$work/model_tmp" \
     --output_type TXT > /dev/null 2>&1
-  count=$(awk '!/^#/ && NF > 0 { n++ } END { print int(n / 2) }' "$work/model_tmp/images.txt")
+  # Two lines an image, the second empty for an image without points.
+  count=$(awk '!/^#/ { n++ } END { print int((n + 1) / 2) }' "$work/model_tmp/images.txt")
   echo "model $(basename "$model"): $count images"
   if [ "$count" -gt "$best_count" ]; then
     best_count=$count
@@ -73,7 +81,8 @@ for model in "$work"/sparse/*/; do
     rm -rf "$work/model_txt" && mv "$work/model_tmp" "$work/model_txt"
   fi
 done
-[ -n "$best" ] || { echo "COLMAP produced no model" >&2; exit 1; }
+rm -rf "$work/model_tmp"
+[ -n "$best" ] || { echo "COLMAP produced no model (see $work/colmap.log)" >&2; exit 1; }
 echo "largest model: $best_count images"
 
 compare() {  # label reference
