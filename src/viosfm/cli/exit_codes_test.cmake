@@ -59,4 +59,14 @@ expect_exit(2 "^error: --set time_offset.max_frame_gap: expected KEY=VALUE" vio
             "${WORK}/dataset" --out "${WORK}/out_set" --set time_offset.max_frame_gap)
 expect_exit(2 "^error: invalid vio options: .*max_frame_gap must be >= 1" vio "${WORK}/dataset"
             --out "${WORK}/out_set" --set time_offset.max_frame_gap=0)
+# run --realtime: its settings, overridden by a flag given with it (whatever
+# the flags' order) and by --set; the run's first log line says which apply.
+execute_process(COMMAND "${VIOSFM}" --log-level info run "${WORK}/dataset" --max-features 2000
+                        --out "${WORK}/out_realtime" --realtime
+                        --set mapper.ba_window_batches=3
+                RESULT_VARIABLE result ERROR_VARIABLE stderr OUTPUT_VARIABLE stdout)
+set(pattern "N1 10, N2 5, [0-9.]+ Hz, batch size 50, BA window 3, max 2000 features, guided matching,")
+if(NOT "${stderr}${stdout}" MATCHES "${pattern}")
+  message(FATAL_ERROR "run --realtime: the log '${stderr}${stdout}' does not match '${pattern}'")
+endif()
 file(REMOVE_RECURSE "${WORK}")

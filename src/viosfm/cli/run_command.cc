@@ -93,8 +93,12 @@ void RunRun(RunArguments args) {
                    << options.verification.pairs.num_temporal_neighbors << ", N2 "
                    << options.verification.pairs.num_retrieval_neighbors << ", "
                    << options.frame_selection.target_rate_hz << " Hz, batch size "
-                   << options.mapper.batch_size << ", max " << options.sift.max_num_features
-                   << " features, "
+                   << options.mapper.batch_size
+                   << (options.mapper.ba_window_batches > 0
+                           ? ", BA window " + std::to_string(options.mapper.ba_window_batches)
+                           : std::string())
+                   << ", max " << options.sift.max_num_features << " features, "
+                   << (options.verification.guided_matching ? "guided matching, " : "")
                    << (options.verification.use_vio_prior ? "VIO prior" : "RANSAC only") << ", "
                    << (options.mapper.ba.use_relative_pose_priors
                            ? std::string("RPC, ") +
@@ -172,6 +176,14 @@ void RegisterRun(CLI::App& app) {
       ->required();
   command->add_option("--out", args->out, "Output folder (created if missing)")->required();
   AddCalibrationOptions(command, &args->options.calibration);
+  // Defined before the flags that set one option each: CLI11 runs the
+  // callbacks in the order of definition, so those flags (and --set) override
+  // the settings it applies.
+  command->add_flag_callback(
+      "--realtime", [args] { ApplyRealtimeSettings(&args->options); },
+      "Settings that reconstruct a recording in about its own duration on 2 cores: N1 10, N2 "
+      "5, 1000 features, --guided-matching, --ba-window 4 with 5 held views a point (the "
+      "paper's settings are more accurate and far slower; flags given with it override it)");
   AddOptionFlags(command, &args->options);
   command->add_option("--vio-trajectory", args->vio_trajectory,
                       "VIO trajectory (TUM by default), world_from_body unless --vio-frame cam; "

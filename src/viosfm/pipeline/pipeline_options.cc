@@ -113,4 +113,13 @@ std::vector<std::pair<std::string, std::string>> PipelineOptions::StoredDataKeyV
   return StoredDataOptions(WithEffectiveStageOptions());
 }
 
+void ApplyRealtimeSettings(PipelineOptions* options) {
+  options->verification.pairs.num_temporal_neighbors = 10;
+  options->verification.pairs.num_retrieval_neighbors = 5;
+  options->sift.max_num_features = 1000;
+  options->verification.guided_matching = true;
+  options->mapper.ba_window_batches = 4;
+  options->mapper.ba_window_max_held_views = 5;
+}
+
 }  // namespace viosfm

@@ -120,5 +120,32 @@ TEST(PipelineOptions, DescriptionsCoverEveryKeyWithAHelp) {
   for (const auto& [key, value] : bag.ToKeyValues()) EXPECT_EQ(keys.count(key), 1u) << key;
 }
 
+// The real-time settings change exactly their six options, every other one
+// keeps the paper's default, and the result is valid.
+TEST(PipelineOptions, RealtimeSettingsChangeOnlyTheirOptions) {
+  PipelineOptions options;
+  options.dataset = "d";
+  options.output_folder = "o";
+  PipelineOptions realtime = options;
+  ApplyRealtimeSettings(&realtime);
+  EXPECT_EQ(realtime.Validate(), "");
+  const auto before = options.ToKeyValues();
+  const auto after = realtime.ToKeyValues();
+  ASSERT_EQ(before.size(), after.size());
+  std::map<std::string, std::string> changed;
+  for (size_t i = 0; i < before.size(); ++i) {
+    ASSERT_EQ(before[i].first, after[i].first);
+    if (before[i].second != after[i].second) changed[after[i].first] = after[i].second;
+  }
+  const std::map<std::string, std::string> expected = {
+      {"verification.pairs.num_temporal_neighbors", "10"},
+      {"verification.pairs.num_retrieval_neighbors", "5"},
+      {"sift.max_num_features", "1000"},
+      {"verification.guided_matching", "true"},
+      {"mapper.ba_window_batches", "4"},
+      {"mapper.ba_window_max_held_views", "5"}};
+  EXPECT_EQ(changed, expected);
+}
+
 }  // namespace
 }  // namespace viosfm
