@@ -10,8 +10,8 @@
 # For every scenario it simulates DURATION seconds at RATE Hz (752x480, IMU
 # at 200 Hz, ground truth; default 100 s at 10 Hz, 1000 images), then runs
 # `viosfm run` on it from the images and the IMU alone (viosfm's own VIO)
-# with its defaults (or with EXTRA RUN ARGS, e.g. `-- --n1 10 --n2 5
-# --max-features 1000`), once per thread count, each into a fresh folder,
+# with its defaults (or with EXTRA RUN ARGS, e.g. `-- --realtime`, the
+# settings meant for it), once per thread count, each into a fresh folder,
 # under /usr/bin/time. It writes DIR/realtime.md: per run the wall clock of
 # every stage (summary.json "stages"; in brackets the CPU seconds the
 # process used meanwhile, every thread) and in total, the CPU of the whole

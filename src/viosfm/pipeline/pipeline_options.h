@@ -212,9 +212,10 @@ struct PipelineOptions {
 // batches whose points keep their 5 latest older views
 // (mapper.ba_window_batches, mapper.ba_window_max_held_views). Measured on
 // simulated 100 s walks at 10 Hz with viosfm's own VIO (docs/benchmarks.md,
-// "Real time"): 0.92 to 1.01 times the recording's duration on the 2-core
-// machine of 2026-11-27, against about 45 times with the paper's settings;
-// the room's Sim(3) ATE 0.76 mm against 0.42 mm.
+// "Real time"): 0.87 to 1.03 times the recording's duration on the 2-core
+// machine of 2026-11-27, where the paper's settings take over an hour (their
+// brute-force matching of 40 000 pairs); the room's Sim(3) ATE 0.76 mm
+// against their 0.42 mm.
 void ApplyRealtimeSettings(PipelineOptions* options);
 
 }  // namespace viosfm
