@@ -114,6 +114,28 @@ TEST(PipelineTest, TrajectoryMoreAccurateThanTheVio) {
   EXPECT_NEAR(s.evaluation->ate_median_m, median, 1e-6);
 }
 
+// `viosfm run --realtime`'s settings together (guided matching, the
+// bundle-adjustment window with held views; batches of 5 here, so that the
+// window of 4 batches leaves earlier images out) register every selected
+// frame, and as accurately as the small settings' run, against the
+// simulator's truth.
+TEST(PipelineTest, RealtimeSettingsRegisterEveryFrameAsAccurately) {
+  const Fixture& f = SharedFixture();
+  PipelineOptions options = SmallOptions(f, f.folder / "out_realtime");
+  ApplyRealtimeSettings(&options);
+  options.mapper.batch_size = 5;
+  const PipelineSummary s = RunPipeline(options);
+  std::cerr << s.ToString() << "\n";
+  EXPECT_EQ(s.num_frames_selected, f.summary.num_frames_selected);
+  EXPECT_EQ(s.num_frames_registered, s.num_frames_selected);
+  EXPECT_EQ(s.mapper.num_vio_only, 0);
+  ASSERT_TRUE(s.evaluation.has_value());
+  ASSERT_TRUE(f.summary.evaluation.has_value());
+  EXPECT_EQ(s.evaluation->num_poses, s.num_frames_registered);
+  EXPECT_LT(s.evaluation->ate_rmse_m, 0.9 * s.evaluation->vio_ate_rmse_m);
+  EXPECT_LT(s.evaluation->ate_rmse_m, 1.25 * f.summary.evaluation->ate_rmse_m);
+}
+
 TEST(PipelineTest, OutputsReadBack) {
   const Fixture& f = SharedFixture();
   const PipelineSummary& s = f.summary;
