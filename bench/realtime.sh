@@ -5,7 +5,7 @@
 # Usage:
 #   bench/realtime.sh [--out DIR] [--scenarios "room two_floors corridor"]
 #                     [--duration S] [--rate HZ] [--threads "2 1"]
-#                     [--build DIR] [-- EXTRA RUN ARGS...]
+#                     [--repeat N] [--build DIR] [-- EXTRA RUN ARGS...]
 #
 # For every scenario it simulates DURATION seconds at RATE Hz (752x480, IMU
 # at 200 Hz, ground truth; default 100 s at 10 Hz, 1000 images), then runs
@@ -19,6 +19,10 @@
 # to the recording's duration (1.0 is real time), the registered frames,
 # the Sim(3) and SE(3) ATE, the image decodes and the peak memory.
 #
+# With --repeat N every scenario and thread count runs N times in a row
+# (folders run_tT_rK), each run a row of its own, and a second table gives
+# the median, smallest and largest total of each.
+#
 # The figures are measured, never asserted: a shared machine is noisy, so
 # repeat a row before trusting a small difference.
 set -euo pipefail
@@ -28,6 +32,7 @@ scenarios="room two_floors corridor"
 duration=100
 rate=10
 threads="2 1"
+repeat=1
 build=build
 extra=()
 while [[ $# -gt 0 ]]; do
@@ -37,6 +42,7 @@ while [[ $# -gt 0 ]]; do
     --duration) duration=$2; shift 2 ;;
     --rate) rate=$2; shift 2 ;;
     --threads) threads=$2; shift 2 ;;
+    --repeat) repeat=$2; shift 2 ;;
     --build) build=$2; shift 2 ;;
     --) shift; extra=("$@"); break ;;
     *) echo "bench/realtime.sh: unknown argument '$1' (see the top of the script)" >&2; exit 2 ;;
@@ -69,15 +75,22 @@ for scenario in $scenarios; do
       --out "$sequence" > "$out/$scenario/simulate.log" 2>&1
   fi
   for t in $threads; do
-    run="$out/$scenario/run_t$t"
+  for r in $(seq 1 "$repeat"); do
+    name=run_t$t
+    label=$scenario
+    if [[ $repeat -gt 1 ]]; then
+      name=run_t${t}_r$r
+      label="$scenario, run $r"
+    fi
+    run="$out/$scenario/$name"
     rm -rf "$run"
-    /usr/bin/time -v -o "$out/$scenario/time_t$t.txt" \
+    /usr/bin/time -v -o "$out/$scenario/time_${name#run_}.txt" \
       "$viosfm" run "$sequence" --out "$run" --threads "$t" --no-progress "${extra[@]}" \
-      > "$out/$scenario/run_t$t.log" 2>&1 || {
-        echo "bench/realtime.sh: $scenario with $t thread(s) failed: see $out/$scenario/run_t$t.log" >&2
+      > "$out/$scenario/$name.log" 2>&1 || {
+        echo "bench/realtime.sh: $scenario with $t thread(s) failed: see $out/$scenario/$name.log" >&2
         continue
       }
-    python3 - "$run/summary.json" "$out/$scenario/time_t$t.txt" "$scenario" "$t" "$duration" \
+    python3 - "$run/summary.json" "$out/$scenario/time_${name#run_}.txt" "$label" "$t" "$duration" \
       >> "$table" <<'EOF'
 import json, re, sys
 summary = json.load(open(sys.argv[1]))
@@ -102,6 +115,27 @@ print("| %s | %s | %s | %s | %s | %s | %.1f | %.1f | %.1f | %.2f | %.2f | %d of 
     mm("ate_sim3_rmse_m"), mm("ate_se3_rmse_m"), summary.get("images", {}).get("decoded", 0), peak))
 EOF
   done
+  done
 done
+if [[ $repeat -gt 1 ]]; then
+  python3 - "$out" "$duration" "$repeat" "$threads" $scenarios >> "$table" <<'EOF'
+import json, os, statistics, sys
+out, duration, repeat, threads = sys.argv[1], float(sys.argv[2]), int(sys.argv[3]), sys.argv[4]
+print()
+print("| scenario | threads | runs | median total s | x real time | smallest s | largest s |")
+print("|---|---|---|---|---|---|---|")
+for scenario in sys.argv[5:]:
+    for t in threads.split():
+        totals = []
+        for r in range(1, repeat + 1):
+            path = os.path.join(out, scenario, "run_t%s_r%d" % (t, r), "summary.json")
+            if os.path.exists(path):
+                totals.append(json.load(open(path))["total_seconds"])
+        if totals:
+            median = statistics.median(totals)
+            print("| %s | %s | %d | %.1f | %.2f | %.1f | %.1f |" % (
+                scenario, t, len(totals), median, median / duration, min(totals), max(totals)))
+EOF
+fi
 echo "bench/realtime.sh: $table"
 cat "$table"
