@@ -212,8 +212,9 @@ struct PipelineOptions {
 // batches whose points keep their 5 latest older views
 // (mapper.ba_window_batches, mapper.ba_window_max_held_views). Measured on
 // simulated 100 s walks at 10 Hz with viosfm's own VIO (docs/benchmarks.md,
-// "Real time"): 0.87 to 1.03 times the recording's duration on the 2-core
-// machine of 2026-11-27; the paper's settings took 4519 s on the room
+// "Real time"): 0.88 to 0.93 times the recording's duration (medians of
+// three runs; single runs 0.85 to 1.03) on the 2-core machine of
+// 2026-11-27; the paper's settings took 4519 s on the room
 // (2026-11-25, beside other jobs; 4052 s of it brute-force matching of
 // 40 561 pairs), for a Sim(3) ATE of 0.42 mm against 0.76 mm.
 void ApplyRealtimeSettings(PipelineOptions* options);
