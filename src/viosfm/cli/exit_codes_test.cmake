@@ -59,6 +59,14 @@ expect_exit(2 "^error: --set time_offset.max_frame_gap: expected KEY=VALUE" vio
             "${WORK}/dataset" --out "${WORK}/out_set" --set time_offset.max_frame_gap)
 expect_exit(2 "^error: invalid vio options: .*max_frame_gap must be >= 1" vio "${WORK}/dataset"
             --out "${WORK}/out_set" --set time_offset.max_frame_gap=0)
+# run on a dataset that is not there: the error, and no output folder left.
+expect_exit(2 "^error: ${WORK}/absent: dataset folder not found" run "${WORK}/absent"
+            --out "${WORK}/out_absent")
+expect_exit(2 "^error: ${WORK}/absent.bag: bag file not found" run "${WORK}/absent.bag"
+            --out "${WORK}/out_absent")
+if(EXISTS "${WORK}/out_absent")
+  message(FATAL_ERROR "run on an absent dataset left ${WORK}/out_absent behind")
+endif()
 # run --realtime: its settings, overridden by a flag given with it (whatever
 # the flags' order) and by --set; the run's first log line says which apply.
 execute_process(COMMAND "${VIOSFM}" --log-level info run "${WORK}/dataset" --max-features 2000

@@ -12,14 +12,21 @@ bool IsEurocDatasetFolder(const fs::path& folder) {
          (folder.filename() == "mav0" && fs::is_directory(folder / "cam0"));
 }
 
+void CheckDatasetExists(const fs::path& path) {
+  if (HasRosbagExtension(path)) {
+    if (!fs::is_regular_file(path)) throw InputError(path.string(), 0, "bag file not found");
+  } else if (!fs::is_directory(path)) {
+    throw InputError(path.string(), 0, "dataset folder not found");
+  }
+}
+
 Sequence ReadDataset(const fs::path& path, const DatasetReadOptions& options) {
+  CheckDatasetExists(path);
   Sequence sequence;
   if (HasRosbagExtension(path)) {
     RosbagDatasetOptions rosbag = options.rosbag;
     rosbag.require_imu = rosbag.require_imu || options.require_imu;
     sequence = ReadRosbagDataset(path, rosbag);
-  } else if (!fs::is_directory(path)) {
-    throw InputError(path.string(), 0, "dataset folder not found");
   } else if (IsEurocDatasetFolder(path)) {
     EurocReadOptions euroc;
     euroc.require_imu = options.require_imu;

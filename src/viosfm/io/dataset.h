@@ -31,6 +31,11 @@ struct DatasetReadOptions {
 // Whether `folder` is a EuRoC dataset: it holds mav0/, or is mav0/ with cam0/.
 bool IsEurocDatasetFolder(const std::filesystem::path& folder);
 
+// Throws InputError naming `path` when no dataset can be there: a bag
+// (".bag") that is not a file, or anything else that is not a folder. A run
+// checks it before it creates its output folder.
+void CheckDatasetExists(const std::filesystem::path& path);
+
 // The dataset at `path` (see the top of this file). Throws InputError
 // naming the path when it does not exist, is a folder that is neither EuRoC
 // nor readable as an image folder with `options.image_folder`, has no

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "viosfm/io/dataset.h"
 #include "viosfm/pipeline/feature_prefetch.h"
 #include "viosfm/pipeline/run_fingerprint.h"
 #include "viosfm/pipeline/run_folder.h"
@@ -123,6 +124,8 @@ PipelineSummary RunPipeline(const PipelineOptions& options) {
                                    ? std::string("the VIO")
                                    : options.vio_trajectory.string();
 
+  // A dataset path that names nothing leaves no output folder behind.
+  CheckDatasetExists(options.dataset);
   // Locked while this run writes into it; an earlier run's outputs removed
   // (--overwrite), or its stored data checked against this run's inputs
   // before anything changes.
