@@ -105,6 +105,7 @@ std::string PipelineSummaryToJson(const PipelineSummary& s) {
                        {"spaced_scale", s.metric_scale.imu.spaced_scale},
                        {"spaced_scale_sigma", s.metric_scale.imu.spaced_scale_sigma},
                        {"spacing_disagrees", s.metric_scale.imu.spacing_disagrees},
+                       {"spaced_used", s.metric_scale.imu.spaced_used},
                        {"applied_scale", s.metric_scale.applied_scale},
                        {"applied_scale_sigma", s.metric_scale.applied_scale_sigma},
                        {"message", s.metric_scale.message}};

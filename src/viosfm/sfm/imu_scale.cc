@@ -306,8 +306,10 @@ ImuScaleResult EstimateImuScale(const Trajectory& world_from_body,
     return result;
   }
   // The spacing check: over pairs too short for the motion, the frames'
-  // jitter shrinks the scale (ImuScaleOptions::spacing_check_interval_s);
-  // when the spaced frames' scale disagrees, theirs is the estimate.
+  // jitter shrinks the scale (ImuScaleOptions::spacing_check_interval_s).
+  // The spaced frames' scale, not shrunk, is the estimate whenever it is
+  // precise enough to be used, and whenever it disagrees with the
+  // consecutive frames'; otherwise the consecutive frames' stands.
   std::string spacing_note;
   if (spaced_frames.size() >= 4 && spaced_frames.size() < frames.size()) {
     const ScaleSolution spaced = SolveScale(poses, spaced_frames, imu, noise, options);
@@ -317,26 +319,27 @@ ImuScaleResult EstimateImuScale(const Trajectory& world_from_body,
       const double difference = std::abs(spaced.scale - solution.scale);
       const double sigma =
           std::hypot(spaced.scale_sigma * spaced.scale, solution.scale_sigma * solution.scale);
-      if (difference > options.max_spacing_disagreement * sigma) {
-        result.spacing_disagrees = true;
-        std::ostringstream note;
-        note << std::fixed << std::setprecision(5) << " (consecutive frames give " << solution.scale
-             << " +- " << solution.scale_sigma * solution.scale
-             << ", shrunk by the frames' jitter: frames at least " << std::setprecision(2)
-             << options.spacing_check_interval_s << " s apart disagree by " << std::setprecision(1)
-             << difference / sigma << " sigma)";
-        spacing_note = note.str();
+      result.spacing_disagrees = difference > options.max_spacing_disagreement * sigma;
+      std::ostringstream note;
+      note << std::fixed << std::setprecision(5);
+      if (result.spacing_disagrees || spaced.scale_sigma <= options.max_scale_sigma) {
+        result.spaced_used = true;
+        note << " (frames at least " << std::setprecision(2) << options.spacing_check_interval_s
+             << " s apart, which the frames' jitter does not shrink; consecutive frames give "
+             << std::setprecision(5) << solution.scale << " +- "
+             << solution.scale_sigma * solution.scale << ", " << std::setprecision(1)
+             << difference / sigma << " sigma apart"
+             << (result.spacing_disagrees ? ": shrunk" : "") << ")";
         solution = spaced;
       } else {
         // Agreeing within the noise: said beside the estimate all the same,
         // so that a consecutive frames' figure far from 1 is read with it.
-        std::ostringstream note;
-        note << std::fixed << std::setprecision(5) << " (frames at least " << std::setprecision(2)
+        note << " (frames at least " << std::setprecision(2)
              << options.spacing_check_interval_s << " s apart: " << std::setprecision(5)
              << spaced.scale << " +- " << spaced.scale_sigma * spaced.scale << ", within "
              << std::setprecision(1) << difference / sigma << " sigma)";
-        spacing_note = note.str();
       }
+      spacing_note = note.str();
     }
   }
   result.scale = solution.scale;
