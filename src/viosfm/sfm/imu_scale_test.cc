@@ -86,10 +86,23 @@ Trajectory Reconstruction(const std::vector<double>& stamps_s, double true_scale
   return trajectory;
 }
 
-TEST(ImuScale, RecoversTheScaleOfA10HzTrajectory) {
-  const Data data = MakeImu(62.0, 1);
+// Frames at 10 Hz from 1 to 61 s.
+std::vector<double> TenHzStamps() {
   std::vector<double> stamps;
   for (int k = 0; k <= 600; ++k) stamps.push_back(1.0 + 0.1 * k);
+  return stamps;
+}
+
+// The fit over consecutive frames alone (no spacing check).
+ImuScaleResult EstimateFromConsecutiveFrames(const Trajectory& reconstruction, const Data& data) {
+  ImuScaleOptions unchecked;
+  unchecked.spacing_check_interval_s = 0.0;
+  return EstimateImuScale(reconstruction, data.imu, data.noise, unchecked);
+}
+
+TEST(ImuScale, RecoversTheScaleOfA10HzTrajectory) {
+  const Data data = MakeImu(62.0, 1);
+  const std::vector<double> stamps = TenHzStamps();
   const ImuScaleResult result =
       EstimateImuScale(Reconstruction(stamps, 1.02, 2), data.imu, data.noise);
   ASSERT_TRUE(result.usable) << result.message;
@@ -115,13 +128,9 @@ TEST(ImuScale, RecoversTheScaleOfA10HzTrajectory) {
 // from the truth.
 TEST(ImuScale, SpacedFramesGiveTheScaleWhenPreciseEnough) {
   const Data data = MakeImu(62.0, 1);
-  std::vector<double> stamps;
-  for (int k = 0; k <= 600; ++k) stamps.push_back(1.0 + 0.1 * k);
+  const std::vector<double> stamps = TenHzStamps();
   const Trajectory reconstruction = Reconstruction(stamps, 1.02, 2, 0.0015);
-  ImuScaleOptions unchecked;
-  unchecked.spacing_check_interval_s = 0.0;
-  const ImuScaleResult consecutive =
-      EstimateImuScale(reconstruction, data.imu, data.noise, unchecked);
+  const ImuScaleResult consecutive = EstimateFromConsecutiveFrames(reconstruction, data);
   const ImuScaleResult result = EstimateImuScale(reconstruction, data.imu, data.noise);
   EXPECT_LT(consecutive.scale / 1.02, 0.9975) << consecutive.message;
   EXPECT_FALSE(result.spacing_disagrees) << result.message;
@@ -152,12 +161,9 @@ TEST(ImuScale, RecoversTheScaleOfKeyframesWithIrregularGaps) {
 TEST(ImuScale, JitterOverShortPairsDoesNotShrinkTheScale) {
   amplitude = 0.15;
   const Data data = MakeImu(62.0, 8);
-  std::vector<double> stamps;
-  for (int k = 0; k <= 600; ++k) stamps.push_back(1.0 + 0.1 * k);
+  const std::vector<double> stamps = TenHzStamps();
   const Trajectory reconstruction = Reconstruction(stamps, 1.0, 9, 0.002);
-  ImuScaleOptions unchecked;
-  unchecked.spacing_check_interval_s = 0.0;
-  const ImuScaleResult shrunk = EstimateImuScale(reconstruction, data.imu, data.noise, unchecked);
+  const ImuScaleResult shrunk = EstimateFromConsecutiveFrames(reconstruction, data);
   const ImuScaleResult result = EstimateImuScale(reconstruction, data.imu, data.noise);
   amplitude = 1.0;
   EXPECT_FALSE(shrunk.spacing_disagrees);
