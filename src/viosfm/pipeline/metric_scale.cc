@@ -1,13 +1,32 @@
 #include "viosfm/pipeline/metric_scale.h"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
+#include <numbers>
 #include <sstream>
 
 #include "viosfm/util/errors.h"
 
 namespace viosfm {
+
+double LevelWithGravity(const Eigen::Vector3d& gravity_in_world, Reconstruction* reconstruction) {
+  VIOSFM_CHECK(reconstruction != nullptr);
+  VIOSFM_CHECK(gravity_in_world.norm() > 0.0) << "no gravity direction";
+  // level_from_world: gravity to -z.
+  const Eigen::Quaterniond level_from_world =
+      Eigen::Quaterniond::FromTwoVectors(gravity_in_world.normalized(), -Eigen::Vector3d::UnitZ());
+  for (const image_t image_id : reconstruction->ImageIds()) {
+    Rigid3d& cam_from_world = reconstruction->GetImage(image_id).cam_from_world;
+    cam_from_world.rotation = (cam_from_world.rotation * level_from_world.conjugate()).normalized();
+  }
+  for (const point3D_t point3D_id : reconstruction->Point3DIds()) {
+    Eigen::Vector3d& xyz = reconstruction->GetPoint3D(point3D_id).xyz;
+    xyz = level_from_world * xyz;
+  }
+  return Eigen::AngleAxisd(level_from_world).angle() * 180.0 / std::numbers::pi;
+}
 
 MetricScaleSummary ApplyImuMetricScale(const Sequence& sequence, const SensorRig& rig,
                                        double vio_scale_sigma, const ImuScaleOptions& options,
@@ -51,6 +70,9 @@ MetricScaleSummary ApplyImuMetricScale(const Sequence& sequence, const SensorRig
     }
     message << std::fixed << std::setprecision(5) << "; applied " << s
             << " (fused with the VIO's scale, +- " << vio_scale_sigma << ")";
+    summary.levelling_deg = LevelWithGravity(summary.imu.gravity_in_world, reconstruction);
+    message << std::setprecision(3) << "; levelled with the IMU's gravity (turned by "
+            << summary.levelling_deg << " deg)";
   }
   summary.message = message.str();
   return summary;

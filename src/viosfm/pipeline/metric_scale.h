@@ -8,6 +8,15 @@
 // (1, with the VIO uncertainty model's scale_sigma) by inverse variance and
 // the reconstruction (points and camera positions, about the world origin)
 // is scaled by the result.
+//
+// The same fit gives the direction of gravity in the reconstruction's world
+// frame, from every registered frame's IMU; the world frame itself is the
+// VIO's, levelled by the VIO's gravity at the frames that fixed it (the
+// first batch's), to within that VIO's tilt error there (0.3 degrees with
+// the simulator's gentle VIO, whose frames' tilt is noisy). When the fit is
+// usable, the reconstruction is turned about the world origin so that the
+// fitted gravity points along -z: a level model (docs/benchmarks.md, "A
+// level model").
 #pragma once
 
 #include <string>
@@ -25,11 +34,21 @@ struct MetricScaleSummary {
   // Relative standard deviation of the model's scale after that: the fused
   // one when the IMU's was usable, else the VIO's.
   double applied_scale_sigma = 0.0;
+  // Degrees the reconstruction was turned to level it with the IMU's
+  // gravity (0 when not).
+  double levelling_deg = 0.0;
   std::string message;
 };
 
-// Estimates and, when usable, applies the IMU's metric scale to the
-// registered images of `reconstruction` (cam_from_world) from the
+// Turns `reconstruction` about the world origin by the smallest rotation
+// that takes `gravity_in_world` (any length > 0) to -z: points, and every
+// image's cam_from_world, so that every image sees every point where it
+// did. Returns the angle turned, degrees.
+double LevelWithGravity(const Eigen::Vector3d& gravity_in_world, Reconstruction* reconstruction);
+
+// Estimates and, when usable, applies the IMU's metric scale and levels the
+// reconstruction with its gravity (LevelWithGravity): the registered
+// images of `reconstruction` (cam_from_world) from the
 // sequence's IMU. `rig` gives body_from_cam, the camera-IMU time offset and
 // the IMU noise figures (the sequence's own, or as viosfm's own VIO
 // estimated and checked them). vio_scale_sigma: the VIO's relative scale

@@ -108,6 +108,7 @@ std::string PipelineSummaryToJson(const PipelineSummary& s) {
                        {"spaced_used", s.metric_scale.imu.spaced_used},
                        {"applied_scale", s.metric_scale.applied_scale},
                        {"applied_scale_sigma", s.metric_scale.applied_scale_sigma},
+                       {"levelling_deg", s.metric_scale.levelling_deg},
                        {"message", s.metric_scale.message}};
   json["vio"] = {{"segments", s.num_vio_segments},
                  {"segments_joined", s.mapper.num_vio_segments_joined},
