@@ -328,16 +328,16 @@ ImuScaleResult EstimateImuScale(const Trajectory& world_from_body,
              << " s apart, which the frames' jitter does not shrink; consecutive frames give "
              << std::setprecision(5) << solution.scale << " +- "
              << solution.scale_sigma * solution.scale << ", " << std::setprecision(1)
-             << difference / sigma << " sigma apart"
-             << (result.spacing_disagrees ? ": shrunk" : "") << ")";
+             << difference / sigma << " sigma apart" << (result.spacing_disagrees ? ": shrunk" : "")
+             << ")";
         solution = spaced;
       } else {
         // Agreeing within the noise: said beside the estimate all the same,
         // so that a consecutive frames' figure far from 1 is read with it.
-        note << " (frames at least " << std::setprecision(2)
-             << options.spacing_check_interval_s << " s apart: " << std::setprecision(5)
-             << spaced.scale << " +- " << spaced.scale_sigma * spaced.scale << ", within "
-             << std::setprecision(1) << difference / sigma << " sigma)";
+        note << " (frames at least " << std::setprecision(2) << options.spacing_check_interval_s
+             << " s apart: " << std::setprecision(5) << spaced.scale << " +- "
+             << spaced.scale_sigma * spaced.scale << ", within " << std::setprecision(1)
+             << difference / sigma << " sigma)";
       }
       spacing_note = note.str();
     }
