@@ -9,7 +9,6 @@
 
 #include "viosfm/scene/reprojection.h"
 #include "viosfm/sensor/camera_models.h"
-#include "viosfm/sfm/tracks.h"
 #include "viosfm/util/random.h"
 
 namespace viosfm {
@@ -43,15 +42,13 @@ TEST(MetricScale, LevelWithGravityTurnsTheWorldSoThatGravityPointsDown) {
     reconstruction.AddImage(std::move(image));
   }
   const Eigen::Vector3d xyz(random.Uniform(-0.5, 0.5), random.Uniform(-0.5, 0.5), 1.0);
-  Track track;
+  Point3D point;
+  point.xyz = xyz;
   for (image_t id = 1; id <= 3; ++id) {
     Image& image = reconstruction.GetImage(id);
     image.points2D[0].xy = *Project(reconstruction.GetCamera(1), image.cam_from_world * xyz);
-    track.elements.push_back({id, 0});
+    point.track.push_back({id, 0});
   }
-  Point3D point;
-  point.xyz = xyz;
-  point.track = track.elements;
   reconstruction.AddPoint3D(point);
   const double error_before = MeanReprojectionError(reconstruction);
 
