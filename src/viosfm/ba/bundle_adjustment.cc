@@ -186,7 +186,23 @@ BundleAdjustmentSummary BundleAdjust(Reconstruction* reconstruction,
       if (constant.count(prior.image_id1) > 0 && constant.count(prior.image_id2) > 0) continue;
       Eigen::Matrix<double, 6, 6> sqrt_information;
       ceres::LossFunction* prior_loss = nullptr;
-      if (options.prior_weighting == PriorWeighting::kCovariance && prior.sqrt_information) {
+      // The loss of a whitened prior (covariance-weighted or the gyro's).
+      const auto whitened_loss = [&options]() -> ceres::LossFunction* {
+        ceres::LossFunction* loss = nullptr;
+        if (options.prior_loss_scale > 0.0) loss = new ceres::TukeyLoss(options.prior_loss_scale);
+        if (options.image_noise_px != 1.0) {
+          // The whitened prior against reprojection errors in units of
+          // image_noise_px; the loss still acts in the prior's own sigmas.
+          loss = new ceres::ScaledLoss(loss, options.image_noise_px * options.image_noise_px,
+                                       ceres::TAKE_OWNERSHIP);
+        }
+        return loss;
+      };
+      if (prior.from_gyro) {
+        VIOSFM_CHECK(prior.sqrt_information.has_value());
+        sqrt_information = *prior.sqrt_information;
+        prior_loss = whitened_loss();
+      } else if (options.prior_weighting == PriorWeighting::kCovariance && prior.sqrt_information) {
         // The connectivity factor exp(-beta c) scales the information.
         const double factor =
             std::sqrt(prior.weight_scale *
@@ -202,15 +218,7 @@ BundleAdjustmentSummary BundleAdjust(Reconstruction* reconstruction,
               rotation_covariance.llt().matrixL().solve(Eigen::Matrix3d::Identity());
           sqrt_information.topLeftCorner<3, 3>() = factor * rotation_sqrt;
         }
-        if (options.prior_loss_scale > 0.0) {
-          prior_loss = new ceres::TukeyLoss(options.prior_loss_scale);
-        }
-        if (options.image_noise_px != 1.0) {
-          // The whitened prior against reprojection errors in units of
-          // image_noise_px; the loss still acts in the prior's own sigmas.
-          prior_loss = new ceres::ScaledLoss(
-              prior_loss, options.image_noise_px * options.image_noise_px, ceres::TAKE_OWNERSHIP);
-        }
+        prior_loss = whitened_loss();
       } else {
         const double weight =
             prior.weight_scale *

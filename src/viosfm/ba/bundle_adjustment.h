@@ -197,6 +197,10 @@ struct RelativePosePrior {
   double weight_scale = 1.0;
   // Only the rotation residual counts (the translation rows get weight 0).
   bool rotation_only = false;
+  // A relative rotation from the gyro (sfm/gyro_priors.h), not from the
+  // VIO: whitened by its sqrt_information as given (rotation rows only),
+  // whatever the weighting, without the connectivity factor.
+  bool from_gyro = false;
   // The square-root information of the VIO's relative pose (S with S^T S =
   // covariance^-1 of the residual [Log R_E; t_E], scene/vio_uncertainty.h),
   // used with PriorWeighting::kCovariance; unset: weighted as kPaper.

@@ -131,7 +131,9 @@ std::string PipelineSummaryToJson(const PipelineSummary& s) {
   json["mean_track_length"] = s.mean_track_length;
   json["mean_reprojection_error_px"] = s.mean_reprojection_error_px;
   json["relative_pose_priors"] = {{"consecutive", s.mapper.num_consecutive_priors},
-                                  {"bridging", s.mapper.num_bridging_priors}};
+                                  {"bridging", s.mapper.num_bridging_priors},
+                                  {"gyro", s.mapper.num_gyro_priors},
+                                  {"gyro_message", s.mapper.gyro_message}};
   ordered_json batches = ordered_json::array();
   for (const MapperBatchStatistics& batch : s.mapper.batches) {
     batches.push_back({{"index", batch.batch_index},

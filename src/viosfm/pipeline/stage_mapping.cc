@@ -36,6 +36,10 @@ BatchedMapperInput LoadMapperInputStage(const SelectedFrames& frames, const VioP
   for (const auto& [camera_id, unused] : camera_ids) {
     input.cameras.push_back(database->ReadCamera(camera_id));
   }
+  // For the gyro's priors in the final adjustment: the IMU and the rig the
+  // VIO used (its clock offset and noise, when it estimated them).
+  input.imu = frames.sequence.imu;
+  input.rig = vio.own_vio_rig.value_or(frames.sequence.rig);
   size_t num_inlier_matches = 0;
   for (const PairDecision& decision : verification.decisions) {
     if (!decision.accepted) continue;

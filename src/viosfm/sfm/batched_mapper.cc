@@ -196,7 +196,7 @@ std::string BatchedMapperSummary::ToString() const {
       << " without a VIO pose; VIO segments " << num_vio_segments_joined << " of "
       << num_vio_segments << " joined, " << num_vio_breaks << " VIO jump(s) found\n"
       << "  relative-pose priors: " << num_consecutive_priors << " consecutive, "
-      << num_bridging_priors << " bridging\n"
+      << num_bridging_priors << " bridging, " << num_gyro_priors << " from the gyro\n"
       << "  " << tracks.Summary();
   if (!final_ba.termination.empty()) out << "\n  final " << final_ba.ToString();
   return out.str();
@@ -586,9 +586,30 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
     } else {
       batch_ba_options.linear_solver = solver_chooser.Next(free_images.size(), global);
     }
-    ba_summary =
-        AdjustImages(&reconstruction, free_images, held_neighbour, gauge_image, active_priors(),
-                     batch_ba_options, global ? 0 : options.ba_window_max_held_views);
+    std::vector<RelativePosePrior> priors = active_priors();
+    if (global && options.gyro.enabled && !input.imu.empty()) {
+      // The gyro's relative rotations between consecutive registered frames,
+      // with the biases the current rotations give (gyro_priors.h).
+      std::vector<GyroFrame> frames;
+      for (const image_t image_id : registered) {
+        frames.push_back({image_id, input.images[index_of_image.at(image_id)].timestamp_ns,
+                          reconstruction.GetImage(image_id).cam_from_world,
+                          CountSupportingObservations(reconstruction, image_id,
+                                                      registration.support_max_error_px) >=
+                              registration.min_supporting_observations});
+      }
+      std::sort(frames.begin(), frames.end(), [](const GyroFrame& a, const GyroFrame& b) {
+        return a.timestamp_ns < b.timestamp_ns;
+      });
+      GyroPriors gyro = MakeGyroPriors(frames, input.imu, input.rig, options.gyro);
+      summary.num_gyro_priors = static_cast<int>(gyro.priors.size());
+      summary.gyro_message = gyro.message;
+      VIOSFM_LOG(INFO) << "final bundle adjustment: " << gyro.message;
+      priors.insert(priors.end(), std::make_move_iterator(gyro.priors.begin()),
+                    std::make_move_iterator(gyro.priors.end()));
+    }
+    ba_summary = AdjustImages(&reconstruction, free_images, held_neighbour, gauge_image, priors,
+                              batch_ba_options, global ? 0 : options.ba_window_max_held_views);
     solver_chooser.Record(ba_summary, free_images.size());
     if (!ba_summary.usable && ba_summary.termination != "nothing to adjust") {
       VIOSFM_LOG(WARNING) << "bundle adjustment: " << ba_summary.ToString();

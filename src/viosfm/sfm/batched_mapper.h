@@ -43,6 +43,7 @@
 #include "viosfm/sensor/camera.h"
 #include "viosfm/sfm/filters.h"
 #include "viosfm/sfm/frame_registration.h"
+#include "viosfm/sfm/gyro_priors.h"
 #include "viosfm/sfm/mapper_input.h"
 #include "viosfm/sfm/relative_pose_priors.h"
 #include "viosfm/sfm/tracks.h"
@@ -68,6 +69,9 @@ struct BatchedMapperOptions {
   bool ba_after_each_batch = true;
   // Final global bundle adjustment after the last batch. Default true.
   bool final_global_ba = true;
+  // The gyro's relative rotations in the final global bundle adjustment,
+  // when the input has an IMU (BatchedMapperInput::imu).
+  GyroPriorOptions gyro;
   // Local window of the per-batch bundle adjustment, in batches, >= 0. 0 (the
   // paper, default): every registered image but the first is refined after
   // every batch, so the cost of the run grows quadratically with the number
@@ -158,6 +162,7 @@ struct BatchedMapperOptions {
     VisitOptionGroup({"ba", "", kRunOnly}, self.ba, visit);
     VisitOptionGroup({"filter", "", kRunOnly}, self.filter, visit);
     VisitOptionGroup({"registration", "", kRunOnly}, self.registration, visit);
+    VisitOptionGroup({"gyro", "", kRunOnly}, self.gyro, visit);
     visit({"retriangulate", "re-triangulate tracks without a point after each filtering", kRunOnly},
           self.retriangulate);
     visit({"ba_after_each_batch", "bundle adjustment after each batch", kRunOnly},
@@ -217,6 +222,8 @@ struct BatchedMapperSummary {
   double mean_reprojection_error_px = 0.0;
   int num_consecutive_priors = 0;
   int num_bridging_priors = 0;  // BatchedMapperOptions::bridge_spans
+  int num_gyro_priors = 0;      // in the final adjustment (BatchedMapperOptions::gyro)
+  std::string gyro_message;     // MakeGyroPriors' line, empty without them
   // Per input frame, in input order, and the counts: posed frames are either
   // supported by the images or placed by the VIO only.
   std::vector<MapperFrameStatus> frames;

@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "viosfm/geometry/lie.h"
+#include "viosfm/sfm/gyro_priors.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/vio/imu_preintegration.h"
 
@@ -81,29 +82,15 @@ ScaleSolution SolveScale(const std::vector<StampedPose>& poses, const std::vecto
   };
   const auto position = [&](size_t f) { return poses[frames[f]].world_from_frame.translation; };
 
-  // 1. Gyro bias per window: dR_dbg bg = Log(dR^T R_i^T R_j).
-  std::vector<Eigen::Vector3d> gyro_bias(num_windows, Eigen::Vector3d::Zero());
+  // 1. Gyro bias per window from the rotations (gyro_priors.h).
   {
-    std::vector<Eigen::Matrix3d> normal(num_windows, Eigen::Matrix3d::Zero());
-    std::vector<Eigen::Vector3d> rhs(num_windows, Eigen::Vector3d::Zero());
+    std::vector<GyroPair> gyro_pairs;
     for (const Pair& pair : pairs) {
-      const Eigen::Matrix3d measured = rotation(pair.i).transpose() * rotation(pair.j);
-      const Eigen::Vector3d error = QuaternionLog(Eigen::Quaterniond(
-          pair.preintegration->delta_R().toRotationMatrix().transpose() * measured));
-      const Eigen::Matrix3d jacobian = pair.preintegration->dR_dbg();
-      const double dt = pair.preintegration->delta_t_s();
-      // Rotation noise of the preintegration and of the two frames.
-      const double sigma2 = pair.preintegration->covariance().topLeftCorner<3, 3>().trace() / 3.0 +
-                            2.0 * options.rotation_sigma_rad * options.rotation_sigma_rad + 1e-12 +
-                            std::pow(noise.gyro_random_walk, 2) * dt * dt * dt / 3.0;
-      normal[pair.window] += jacobian.transpose() * jacobian / sigma2;
-      rhs[pair.window] += jacobian.transpose() * error / sigma2;
+      gyro_pairs.push_back(
+          {pair.preintegration.get(), rotation(pair.i), rotation(pair.j), pair.window});
     }
-    for (int w = 0; w < num_windows; ++w) {
-      const Eigen::LDLT<Eigen::Matrix3d> ldlt(normal[w]);
-      if (ldlt.info() == Eigen::Success && normal[w].trace() > 0.0)
-        gyro_bias[w] = ldlt.solve(rhs[w]);
-    }
+    const std::vector<Eigen::Vector3d> gyro_bias =
+        EstimateGyroBiases(gyro_pairs, num_windows, options.rotation_sigma_rad, noise);
     for (Pair& pair : pairs) {
       pair.preintegration->Repropagate(gyro_bias[pair.window], Eigen::Vector3d::Zero());
     }

@@ -10,6 +10,8 @@
 #include "viosfm/scene/features.h"
 #include "viosfm/scene/vio_uncertainty.h"
 #include "viosfm/sensor/camera.h"
+#include "viosfm/sensor/imu.h"
+#include "viosfm/sensor/sensor_rig.h"
 #include "viosfm/sfm/tracks.h"
 #include "viosfm/util/timestamp.h"
 #include "viosfm/util/types.h"
@@ -41,6 +43,11 @@ struct BatchedMapperInput {
   // Inlier matches of every accepted pair (point2D_idx index the images'
   // keypoints).
   std::vector<ImagePairMatches> verified_pairs;
+  // The IMU's samples (increasing time) and the rig (camera-IMU rotation,
+  // clock offset, IMU noise), for the gyro's priors in the final bundle
+  // adjustment; empty: none.
+  std::vector<ImuSample> imu;
+  SensorRig rig;
 };
 
 }  // namespace viosfm
