@@ -138,6 +138,15 @@ Scene MakeScene(const SceneOptions& options = SceneOptions()) {
   return scene;
 }
 
+// Every image of the scene but `free_image` (held constant).
+std::vector<image_t> AllImagesBut(const Scene& scene, image_t free_image) {
+  std::vector<image_t> held;
+  for (const image_t image_id : scene.image_ids) {
+    if (image_id != free_image) held.push_back(image_id);
+  }
+  return held;
+}
+
 double CenterError(const Reconstruction& estimate, const Reconstruction& truth, image_t image_id) {
   return (estimate.GetImage(image_id).ProjectionCenter() -
           truth.GetImage(image_id).ProjectionCenter())
@@ -393,10 +402,7 @@ TEST(BundleAdjust, ImageNoiseWeighsTheReprojectionErrorsAgainstThePriors) {
 TEST(BundleAdjust, RotationOnlyPriorIgnoresTranslation) {
   const Scene scene = MakeScene();
   const image_t free_image = scene.image_ids[kNumCameras / 2];
-  std::vector<image_t> held;
-  for (const image_t image_id : scene.image_ids) {
-    if (image_id != free_image) held.push_back(image_id);
-  }
+  const std::vector<image_t> held = AllImagesBut(scene, free_image);
   const image_t neighbour = scene.image_ids[kNumCameras / 2 - 1];
   RelativePosePrior prior;
   prior.image_id1 = neighbour;
@@ -434,10 +440,7 @@ TEST(BundleAdjust, RotationOnlyPriorIgnoresTranslation) {
 TEST(BundleAdjust, GyroPriorIsWhitenedAsGiven) {
   const Scene scene = MakeScene();
   const image_t free_image = scene.image_ids[kNumCameras / 2];
-  std::vector<image_t> held;
-  for (const image_t image_id : scene.image_ids) {
-    if (image_id != free_image) held.push_back(image_id);
-  }
+  const std::vector<image_t> held = AllImagesBut(scene, free_image);
   const image_t neighbour = scene.image_ids[kNumCameras / 2 - 1];
   const Eigen::Quaterniond turn(Eigen::AngleAxisd(0.005, Eigen::Vector3d::UnitY()));
   RelativePosePrior prior;
