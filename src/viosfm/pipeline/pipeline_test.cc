@@ -58,6 +58,9 @@ TEST(PipelineTest, RegistersEverySelectedFrame) {
     EXPECT_LT(Eigen::AngleAxisd(rotation_error).angle(), 1.0 * M_PI / 180.0) << stamp;
   }
 
+  // The dataset's IMU reached the mapper: the final adjustment held every
+  // pair of consecutive registered frames (0.1 s apart) to the gyro.
+  EXPECT_EQ(s.mapper.num_gyro_priors, s.mapper.num_registered - 1) << s.mapper.gyro_message;
   EXPECT_GT(s.verification.num_accepted, s.num_frames_selected);
   EXPECT_GT(s.num_points, 500u);
   EXPECT_GT(s.mean_track_length, 2.0);
