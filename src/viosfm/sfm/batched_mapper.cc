@@ -178,6 +178,7 @@ std::string BatchedMapperOptions::Validate() const {
   if (std::string error = registration.Validate(); !error.empty()) {
     return "registration." + error;
   }
+  if (std::string error = gyro.Validate(); !error.empty()) return "gyro." + error;
   if (num_threads < 1) return "num_threads must be >= 1";
   return "";
 }

@@ -613,6 +613,12 @@ TEST(BatchedMapperTest, BridgingPriors) {
   options.ba.use_relative_pose_priors = true;
   options.bridge_spans = {1};
   EXPECT_THAT(options.Validate(), HasSubstr("bridge_spans"));
+  // A bad gyro option is named before any work, not found by a CHECK at
+  // the final adjustment.
+  options.bridge_spans = {10};
+  ASSERT_EQ(options.Validate(), "");
+  options.gyro.bias_window_s = 0.0;
+  EXPECT_EQ(options.Validate(), "gyro.bias_window_s must be > 0");
 }
 
 void ExpectInputError(const BatchedMapperInput& input, const BatchedMapperOptions& options,
