@@ -205,8 +205,11 @@ PipelineSummary RunPipeline(const PipelineOptions& options) {
   });
 
   const TrajectoryEvaluation evaluation =
-      clock.Run([&] { return EvaluateStage(sequence, frames, vio, input, reconstruction); });
+      clock.Run([&] { return EvaluateStage(sequence, frames, vio, input, reconstruction,
+                                        options.max_vio_time_difference_ns);
+  });
   summary.evaluation = evaluation.summary;
+  summary.all_frames = evaluation.all_frames.counts;
 
   clock.Run([&] {
     WriteOutputsStage(options.output_folder, verification, reconstruction, frames, evaluation);

@@ -31,6 +31,7 @@ ordered_json StatsJson(const PipelineEvaluation& e) {
   json["num_poses"] = e.num_poses;
   json["metric"] = MetricJson(e.metric);
   json["vio_metric"] = MetricJson(e.vio_metric);
+  if (e.all_frames_metric) json["all_frames_metric"] = MetricJson(*e.all_frames_metric);
   return json;
 }
 
@@ -47,6 +48,7 @@ std::string PipelineSummary::ToString() const {
       << num_frames_without_vio_pose << " without a VIO pose), " << num_frames_registered
       << " registered (pose supported by the images), " << num_frames_vio_only
       << " placed by the VIO only, " << num_frames_unposed << " without a pose\n";
+  out << "every image: " << all_frames.ToString() << "\n";
   out << "VIO: " << num_vio_segments << " segment(s), " << mapper.num_vio_segments_joined
       << " joined; " << mapper.num_reposed << " frame(s) re-posed from the images, "
       << mapper.num_registered_without_vio << " registered from the images without a VIO pose, "
@@ -64,6 +66,10 @@ std::string PipelineSummary::ToString() const {
         << evaluation->vio_ate_rmse_m << " m, median " << evaluation->vio_ate_median_m << " m\n";
     out << "metric: " << FormatMetricAccuracy(evaluation->metric) << "\n";
     out << "input VIO: " << FormatMetricAccuracy(evaluation->vio_metric) << "\n";
+    if (evaluation->all_frames_metric) {
+      out << "every image: " << FormatMetricAccuracy(*evaluation->all_frames_metric) << " ("
+          << evaluation->all_frames_metric->num_poses << " poses)\n";
+    }
     out << std::fixed << std::setprecision(3);
   } else {
     out << "ATE: no ground truth\n";
@@ -81,7 +87,8 @@ std::string PipelineSummary::ToString() const {
   for (const PipelineStageTime& stage : stages) cpu_seconds += stage.cpu_seconds;
   out << "), CPU " << cpu_seconds << " s, peak memory " << peak_memory_mb << " MB\n";
   out << "output: " << output_folder.string()
-      << " (model/, model_txt/, points.ply, trajectory_body.tum, summary.json)";
+      << " (model/, model_txt/, points.ply, trajectory_body.tum, "
+         "trajectory_body_all_frames.tum, summary.json)";
   return out.str();
 }
 
@@ -98,6 +105,14 @@ std::string PipelineSummaryToJson(const PipelineSummary& s) {
                     {"unposed", s.num_frames_unposed},
                     {"reposed_from_images", s.mapper.num_reposed},
                     {"registered_without_vio", s.mapper.num_registered_without_vio}};
+  json["all_frames"] = {{"images", s.all_frames.num_images},
+                        {"from_model", s.all_frames.num_from_model},
+                        {"between_model_frames", s.all_frames.num_between},
+                        {"beyond_model_frames", s.all_frames.num_beyond},
+                        {"unposed", s.all_frames.num_unposed()},
+                        {"without_vio_pose", s.all_frames.num_without_vio_pose},
+                        {"without_model_frame", s.all_frames.num_without_model_frame},
+                        {"file", "trajectory_body_all_frames.tum"}};
   json["imu_scale"] = {{"estimated", s.metric_scale.estimated},
                        {"usable", s.metric_scale.imu.usable},
                        {"imu_scale", s.metric_scale.imu.scale},

@@ -13,6 +13,7 @@
 #include "viosfm/features/feature_extraction.h"
 #include "viosfm/io/frame_cache.h"
 #include "viosfm/matching/verification_driver.h"
+#include "viosfm/pipeline/all_frame_poses.h"
 #include "viosfm/pipeline/frame_selection.h"
 #include "viosfm/pipeline/metric_scale.h"
 #include "viosfm/sfm/batched_mapper.h"
@@ -44,6 +45,9 @@ struct PipelineEvaluation {
   size_t num_poses = 0;       // associated poses
   MetricAccuracy metric;      // the estimate
   MetricAccuracy vio_metric;  // the input VIO on the same frames (one alignment over all segments)
+  // Every image of the recording posed (all_frame_poses.h), against the
+  // ground truth at the images' stamps.
+  std::optional<MetricAccuracy> all_frames_metric;
 };
 
 struct PipelineSummary {
@@ -64,6 +68,9 @@ struct PipelineSummary {
   int num_vio_segments = 0;  // in the VIO input
   std::string vio_segment_rule;
   FrameSelection frame_selection;
+  // Every image of the recording: how it was posed (all_frame_poses.h;
+  // trajectory_body_all_frames.tum).
+  AllFramePoseCounts all_frames;
   FeatureExtractionSummary features;
   MetricScaleSummary metric_scale;
   VerificationSummary verification;

@@ -139,6 +139,67 @@ TEST(PipelineTest, RealtimeSettingsRegisterEveryFrameAsAccurately) {
   EXPECT_LT(s.evaluation->ate_rmse_m, 1.25 * f.summary.evaluation->ate_rmse_m);
 }
 
+// Downsampled to 5 Hz, the model holds every other frame; every image of
+// the recording still gets a pose (trajectory_body_all_frames.tum): the
+// trimmed static start from the first model frame, the frames left out
+// from the model frames around them. The VIO here drifts smoothly (its
+// world turns by 2 mrad/s and slides by 1.1 cm/s, no noise), so against the
+// simulator's truth, in the alignment of the model's own frames, the frames
+// between model frames are placed as well as the model's frames are (the
+// blend takes the drift out), and those of the static start as well as the
+// drift since the first model frame allows.
+TEST(PipelineTest, EveryImageIsPosedWhenTheModelHoldsEveryOtherFrame) {
+  const Fixture& f = SharedFixture();
+  PipelineOptions options = SmallOptions(f, f.folder / "out_half_rate");
+  options.frame_selection.target_rate_hz = 5.0;
+  Trajectory vio;
+  for (const auto& [stamp, world_from_body] : f.truth) {
+    const double t = 1e-9 * static_cast<double>(stamp - f.first_stamp_ns);
+    const Rigid3d drift(Eigen::Quaterniond(Eigen::AngleAxisd(0.002 * t, Eigen::Vector3d::UnitZ())),
+                        Eigen::Vector3d(0.01 * t, -0.005 * t, 0.002 * t));
+    vio.poses.push_back({stamp, drift * world_from_body});
+  }
+  options.vio_trajectory = f.folder / "vio_smooth_drift.tum";
+  WriteTumTrajectory(options.vio_trajectory, vio);
+  const PipelineSummary s = RunPipeline(options);
+  std::cerr << s.ToString() << "\n";
+  EXPECT_LT(s.num_frames_selected, f.summary.num_frames_selected / 2 + 2);
+  const AllFramePoseCounts& counts = s.all_frames;
+  EXPECT_EQ(counts.num_images, s.num_frames_in);
+  EXPECT_EQ(counts.num_from_model, s.num_frames_registered + s.num_frames_vio_only);
+  EXPECT_EQ(counts.num_unposed(), 0u);
+  EXPECT_GE(counts.num_between, counts.num_from_model - 2);
+  EXPECT_GE(counts.num_beyond, s.frame_selection.kept.front());
+
+  const Trajectory all = ReadTumTrajectory(options.output_folder / "trajectory_body_all_frames.tum");
+  ASSERT_EQ(all.size(), s.num_frames_in);
+  const Reconstruction model = ReadColmapModelBinary(options.output_folder / "model");
+  const std::map<timestamp_ns_t, Rigid3d> model_poses = BodyPosesOfModel(model);
+  Sim3d truth_from_estimate;
+  const std::vector<double> model_errors =
+      AlignedPositionErrors(model_poses, f.truth, &truth_from_estimate);
+  ASSERT_FALSE(model_errors.empty());
+  const double max_model_error_m = *std::max_element(model_errors.begin(), model_errors.end());
+  double max_between_error_m = 0.0;
+  const timestamp_ns_t first_model_stamp = model_poses.begin()->first;
+  for (const StampedPose& pose : all.poses) {
+    const double error_m = (truth_from_estimate * pose.world_from_frame.translation -
+                            f.truth.at(pose.timestamp_ns).translation)
+                               .norm();
+    if (pose.timestamp_ns < first_model_stamp) {
+      // 1.1 cm/s of slide and 2 mrad/s of turn at up to 5 m from the axis.
+      const double gap_s = 1e-9 * static_cast<double>(first_model_stamp - pose.timestamp_ns);
+      EXPECT_LT(error_m, max_model_error_m + gap_s * (0.0115 + 0.002 * 5.0)) << pose.timestamp_ns;
+    } else if (model_poses.count(pose.timestamp_ns) == 0) {
+      max_between_error_m = std::max(max_between_error_m, error_m);
+    }
+  }
+  EXPECT_LT(max_between_error_m, max_model_error_m + 0.001);
+  ASSERT_TRUE(s.evaluation.has_value());
+  ASSERT_TRUE(s.evaluation->all_frames_metric.has_value());
+  EXPECT_EQ(s.evaluation->all_frames_metric->num_poses, s.num_frames_in);
+}
+
 TEST(PipelineTest, OutputsReadBack) {
   const Fixture& f = SharedFixture();
   const PipelineSummary& s = f.summary;

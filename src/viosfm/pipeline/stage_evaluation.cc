@@ -13,8 +13,10 @@ constexpr timestamp_ns_t kMaxGroundTruthGapNs = 50'000'000;
 
 TrajectoryEvaluation EvaluateStage(const Sequence& sequence, const SelectedFrames& frames,
                                    const VioPoses& vio, const BatchedMapperInput& input,
-                                   const Reconstruction& reconstruction) {
+                                   const Reconstruction& reconstruction,
+                                   timestamp_ns_t max_vio_time_difference_ns) {
   TrajectoryEvaluation result;
+  std::vector<ModelFramePose> model_frames;
   Trajectory vio_registered;  // the input VIO at the posed frames that have a VIO pose
   const Rigid3d cam_from_body = frames.sequence.rig.body_from_cam.Inverse();
   for (size_t i = 0; i < input.images.size(); ++i) {
@@ -26,11 +28,19 @@ TrajectoryEvaluation EvaluateStage(const Sequence& sequence, const SelectedFrame
     const Rigid3d world_from_cam = image.cam_from_world.Inverse();
     result.estimated_cam.poses.push_back({stamp, world_from_cam});
     result.estimated_body.poses.push_back({stamp, world_from_cam * cam_from_body});
+    model_frames.push_back({stamp, world_from_cam * cam_from_body, frames.vio_index[i]});
     if (const std::optional<size_t> pose_index = frames.vio_index[i]) {
       vio_registered.poses.push_back(
           {stamp, vio.world_from_body.poses[*pose_index].world_from_frame});
     }
   }
+  std::vector<timestamp_ns_t> image_stamps;
+  for (const SequenceImage& image : sequence.images) image_stamps.push_back(image.timestamp_ns);
+  result.all_frames = PoseAllFrames(image_stamps, model_frames, vio.world_from_body, vio.segments,
+                                    max_vio_time_difference_ns);
+  VIOSFM_LOG(INFO) << "run: every image posed: " << result.all_frames.counts.ToString();
+  std::optional<MetricAccuracy> all_frames_metric;
+
   std::optional<EvaluationResult>& evaluation = result.estimate;
   std::optional<EvaluationResult>& evaluation_vio = result.vio;
   std::optional<MetricAccuracy> metric;
@@ -57,6 +67,17 @@ TrajectoryEvaluation EvaluateStage(const Sequence& sequence, const SelectedFrame
                                         eval_options);
         vio_metric =
             EvaluateMetricAccuracy(vio_registered, result.ground_truth_at_frames, eval_options);
+        Trajectory ground_truth_at_images;
+        for (const timestamp_ns_t stamp : image_stamps) {
+          if (const std::optional<Rigid3d> pose =
+                  InterpolatePose(ground_truth, stamp, kMaxGroundTruthGapNs)) {
+            ground_truth_at_images.poses.push_back({stamp, *pose});
+          }
+        }
+        if (result.all_frames.world_from_body.size() >= 3) {
+          all_frames_metric = EvaluateMetricAccuracy(result.all_frames.world_from_body,
+                                                     ground_truth_at_images, eval_options);
+        }
       } catch (const InputError& error) {
         // A degenerate alignment (e.g. frames on a line) on valid input.
         VIOSFM_LOG(WARNING) << "run: no evaluation: " << error.what();
@@ -80,6 +101,7 @@ TrajectoryEvaluation EvaluateStage(const Sequence& sequence, const SelectedFrame
     e.vio_ate_rmse_m = evaluation_vio->ate_translation_m.rmse;
     e.vio_ate_median_m = evaluation_vio->ate_translation_m.median;
     e.num_poses = evaluation->pairs.size();
+    e.all_frames_metric = all_frames_metric;
     result.summary = e;
   }
   return result;

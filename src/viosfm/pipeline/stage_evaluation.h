@@ -1,12 +1,15 @@
 // Stage 9 of a `viosfm run` (pipeline.h): the estimated trajectories of the
-// posed frames and, with ground truth, their accuracy: the Sim(3)-aligned
-// ATE (eval/traj_eval.h) and the metric figures (eval/metric_accuracy.h) of
-// the estimate and of the input VIO on the same frames.
+// posed frames and of every image of the recording (all_frame_poses.h) and,
+// with ground truth, their accuracy: the Sim(3)-aligned ATE
+// (eval/traj_eval.h) and the metric figures (eval/metric_accuracy.h) of the
+// estimate and of the input VIO on the same frames, and the metric figures
+// of the every-image trajectory.
 #pragma once
 
 #include <optional>
 
 #include "viosfm/eval/traj_eval.h"
+#include "viosfm/pipeline/all_frame_poses.h"
 #include "viosfm/pipeline/pipeline_summary.h"
 #include "viosfm/pipeline/stage_frames.h"
 #include "viosfm/pipeline/stage_vio.h"
@@ -23,11 +26,17 @@ struct TrajectoryEvaluation {
   std::optional<EvaluationResult> estimate;  // with ground truth on enough frames
   std::optional<EvaluationResult> vio;       // the input VIO on the same frames
   std::optional<PipelineEvaluation> summary;
+  // Every image of the recording (all_frame_poses.h): the model's frames
+  // and, between them, the VIO's relative motion.
+  AllFramePoses all_frames;
 };
 
 // input.images[i] is frames.sequence.images[i] (LoadMapperInputStage).
+// max_vio_time_difference_ns: how far an image's VIO pose may be from it
+// (PipelineOptions).
 TrajectoryEvaluation EvaluateStage(const Sequence& sequence, const SelectedFrames& frames,
                                    const VioPoses& vio, const BatchedMapperInput& input,
-                                   const Reconstruction& reconstruction);
+                                   const Reconstruction& reconstruction,
+                                   timestamp_ns_t max_vio_time_difference_ns);
 
 }  // namespace viosfm

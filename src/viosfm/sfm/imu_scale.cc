@@ -42,6 +42,14 @@ std::string ImuScaleOptions::Validate() const {
 
 namespace {
 
+// The least squares needs this many more equations than unknowns (6 per
+// frame pair against 3 velocities per frame, the biases, gravity and the
+// scale: 6 frames in one bias window).
+constexpr int kMinRedundancy = 6;
+// The a-posteriori variance factor narrows the scale's sigma only over this
+// many degrees of freedom (the factor is then known within 13 %).
+constexpr int kMinDofToNarrow = 30;
+
 // One least squares over the consecutive pairs of `frames` (indices into
 // `poses`, at least 4).
 struct ScaleSolution {
@@ -203,6 +211,15 @@ ScaleSolution SolveScale(const std::vector<StampedPose>& poses, const std::vecto
     // A weak prior on every unknown keeps unobserved ones (a window without
     // pairs) determined: 10 m/s, 1 m/s^2, 1 rad, scale 10.
     for (int k = 0; k < num_unknowns; ++k) triplets.emplace_back(k, k, 1e-8);
+    // Too few equations for the unknowns: the weak priors would decide, and
+    // the residual, nearly zero, would claim a precise scale.
+    if (num_rows - num_unknowns < kMinRedundancy) {
+      result.failure = std::to_string(num_rows) + " equations for " +
+                       std::to_string(num_unknowns) + " unknowns from " +
+                       std::to_string(pairs.size()) + " frame pairs (at least " +
+                       std::to_string(kMinRedundancy) + " more equations than unknowns needed)";
+      return result;
+    }
     normal_matrix = Eigen::SparseMatrix<double>(num_unknowns, num_unknowns);
     normal_matrix.setFromTriplets(triplets.begin(), triplets.end());
     const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(normal_matrix);
@@ -230,9 +247,12 @@ ScaleSolution SolveScale(const std::vector<StampedPose>& poses, const std::vecto
       // Hundreds of equations make the factor itself reliable; a shape
       // whose errors are systematic is caught by max_residual_ratio.
       const double sse = std::max(0.0, whitened_b2 - solution.dot(rhs));
-      const int dof = std::max(1, num_rows - num_unknowns);
+      const int dof = num_rows - num_unknowns;
       result.residual_ratio = std::sqrt(sse / dof);
-      result.scale_sigma *= result.residual_ratio;
+      // Over few degrees of freedom the factor itself is uncertain (about
+      // 1 / sqrt(2 dof) relative): it may widen the sigma, not narrow it.
+      result.scale_sigma *= dof >= kMinDofToNarrow ? result.residual_ratio
+                                                   : std::max(1.0, result.residual_ratio);
     }
   }
   result.scale = scale;

@@ -140,6 +140,29 @@ TEST(ImuScale, SpacedFramesGiveTheScaleWhenPreciseEnough) {
   EXPECT_NEAR(result.scale, 1.02, 3.0 * result.scale_sigma * 1.02) << result.message;
 }
 
+// Four frames of 1.5 s of motion: 18 equations for 18 unknowns (scale,
+// gravity, biases, velocities). The least squares fits them exactly, and
+// its residual, nearly zero, would claim a scale precise to 0.01 % where
+// the truth is far off; the fit refuses instead. The spaced frames' fit of
+// a short walk (4 frames 1 s apart) is refused the same way, and the
+// consecutive frames' stands.
+TEST(ImuScale, TooFewEquationsForTheUnknownsIsNotAScale) {
+  const Data data = MakeImu(6.0, 1);
+  const ImuScaleResult four = EstimateImuScale(
+      Reconstruction({1.0, 1.5, 2.0, 2.5}, 1.02, 2), data.imu, data.noise);
+  EXPECT_FALSE(four.usable);
+  EXPECT_NE(four.message.find("18 equations for 18 unknowns from 3 frame pairs"),
+            std::string::npos)
+      << four.message;
+  std::vector<double> stamps;
+  for (int k = 0; k <= 35; ++k) stamps.push_back(1.0 + 0.1 * k);
+  const ImuScaleResult short_walk =
+      EstimateImuScale(Reconstruction(stamps, 1.02, 2), data.imu, data.noise);
+  EXPECT_FALSE(short_walk.spaced_used) << short_walk.message;
+  EXPECT_EQ(short_walk.num_pairs, 35);
+  EXPECT_NEAR(short_walk.scale, 1.02, 3.0 * short_walk.scale_sigma * 1.02) << short_walk.message;
+}
+
 TEST(ImuScale, RecoversTheScaleOfKeyframesWithIrregularGaps) {
   const Data data = MakeImu(150.0, 3);
   Random random(4);
