@@ -173,6 +173,14 @@ TEST(PipelineTest, EveryImageIsPosedWhenTheModelHoldsEveryOtherFrame) {
 
   const Trajectory all = ReadTumTrajectory(options.output_folder / "trajectory_body_all_frames.tum");
   ASSERT_EQ(all.size(), s.num_frames_in);
+  const Trajectory all_cam =
+      ReadTumTrajectory(options.output_folder / "trajectory_cam_all_frames.tum");
+  ASSERT_EQ(all_cam.size(), s.num_frames_in);
+  const Rigid3d body_from_cam = SimulationOptions::DefaultBodyFromCam();
+  for (size_t i = 0; i < all.size(); ++i) {
+    const Rigid3d expected = all.poses[i].world_from_frame * body_from_cam;
+    EXPECT_LT((all_cam.poses[i].world_from_frame.translation - expected.translation).norm(), 1e-9);
+  }
   const Reconstruction model = ReadColmapModelBinary(options.output_folder / "model");
   const std::map<timestamp_ns_t, Rigid3d> model_poses = BodyPosesOfModel(model);
   Sim3d truth_from_estimate;

@@ -24,6 +24,9 @@ void WriteOutputsStage(const fs::path& out, const VerificationResult& verificati
   WriteTumTrajectory(out / "trajectory_cam.tum", evaluation.estimated_cam);
   WriteTumTrajectory(out / "trajectory_body.tum", evaluation.estimated_body);
   WriteTumTrajectory(out / "trajectory_body_all_frames.tum", evaluation.all_frames.world_from_body);
+  WriteTumTrajectory(out / "trajectory_cam_all_frames.tum",
+                     BodyToCameraTrajectory(evaluation.all_frames.world_from_body,
+                                            frames.sequence.rig.body_from_cam));
   WriteTumTrajectory(out / "vio_body.tum", frames.vio_at_frames);
   if (!evaluation.ground_truth_at_frames.empty()) {
     WriteTumTrajectory(out / "groundtruth_body.tum", evaluation.ground_truth_at_frames);

@@ -1,8 +1,9 @@
 // Stage 10 of a `viosfm run` (pipeline.h): the output files (each written
 // atomically): verification/pairs.csv and verification.json, model/ (COLMAP
 // binary) and model_txt/, points.ply, trajectory_cam.tum,
-// trajectory_body.tum, trajectory_body_all_frames.tum (every image of the
-// recording, all_frame_poses.h), vio_body.tum, and with ground truth
+// trajectory_body.tum, trajectory_body_all_frames.tum and
+// trajectory_cam_all_frames.tum (every image of the recording,
+// all_frame_poses.h), vio_body.tum, and with ground truth
 // groundtruth_body.tum, eval.json and eval_vio.json (removed when this run
 // has none, so nothing stale stays). summary.json is not written here: it
 // is the run's last write (RunFolder::WriteSummary).

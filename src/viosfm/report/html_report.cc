@@ -309,6 +309,15 @@ void SummarySection(const RunData& run, Page* page) {
       {"mean track length", Fixed(Number(s, "mean_track_length"), 2)},
       {"mean reprojection error (px)", Fixed(Number(s, "mean_reprojection_error_px"), 3)},
   };
+  if (Find(s, "all_frames")) {
+    rows.push_back(
+        {"every image of the recording (trajectory_body_all_frames.tum)",
+         Integer(Number(s, "all_frames/images")) + " images: " +
+             Integer(Number(s, "all_frames/from_model")) + " from the model, " +
+             Integer(Number(s, "all_frames/between_model_frames")) + " between model frames, " +
+             Integer(Number(s, "all_frames/beyond_model_frames")) + " beyond them, " +
+             Integer(Number(s, "all_frames/unposed")) + " without a pose"});
+  }
   if (run.ate.Any()) {
     rows.push_back({"ATE RMSE, viosfm (m)", Fixed(run.ate.rmse, 4)});
     rows.push_back({"ATE median, viosfm (m)", Fixed(run.ate.median, 4)});
