@@ -327,7 +327,11 @@ BundleAdjustmentSummary BundleAdjust(Reconstruction* reconstruction,
   summary.mean_reprojection_error_after_px =
       UpdateReprojectionErrors(reconstruction, options.num_threads);
   summary.time_s = timer.ElapsedSeconds();
-  VIOSFM_LOG(DEBUG) << summary.ToString();
+  VIOSFM_LOG(DEBUG) << summary.ToString() << "; Ceres: linear solver "
+                    << ceres_summary.linear_solver_time_in_seconds << " s, Jacobians "
+                    << ceres_summary.jacobian_evaluation_time_in_seconds << " s, residuals "
+                    << ceres_summary.residual_evaluation_time_in_seconds << " s, preprocessing "
+                    << ceres_summary.preprocessor_time_in_seconds << " s";
   return summary;
 }
 
