@@ -40,6 +40,7 @@ struct ImageInfo {
   timestamp_ns_t timestamp_ns = 0;
   std::optional<Rigid3d> world_from_body;  // the VIO pose, if associated
   VioOdometer odometer;                    // of that pose
+  Eigen::Vector3d cam_angular_rate = Eigen::Vector3d::Zero();  // rad/s, for the rolling shutter
 };
 
 // Both frames have a VIO pose in the same segment: the VIO's relative pose
@@ -169,8 +170,11 @@ VerificationResult RunVerification(const Sequence& sequence, const Trajectory& v
 
 VerificationResult RunVerification(const Sequence& sequence,
                                    const std::vector<std::optional<FrameVioPose>>& frame_poses,
-                                   ColmapDatabase* database, const VerificationOptions& options) {
+                                   ColmapDatabase* database, const VerificationOptions& options,
+                                   const FrameRollingShutter& rolling_shutter) {
   VIOSFM_CHECK(database != nullptr);
+  VIOSFM_CHECK(!rolling_shutter.active() ||
+               rolling_shutter.cam_angular_rate.size() == sequence.images.size());
   VIOSFM_CHECK(frame_poses.size() == sequence.images.size())
       << frame_poses.size() << " frame poses for " << sequence.images.size() << " images";
   if (const std::string error = options.Validate(); !error.empty()) {
@@ -204,6 +208,7 @@ VerificationResult RunVerification(const Sequence& sequence,
     info.name = row.name;
     info.camera_id = row.camera_id;
     info.timestamp_ns = sequence.images[it->second].timestamp_ns;
+    if (rolling_shutter.active()) info.cam_angular_rate = rolling_shutter.cam_angular_rate[it->second];
     if (options.use_vio_prior && frame_poses[it->second]) {
       info.world_from_body = frame_poses[it->second]->world_from_body;
       info.odometer = frame_poses[it->second]->odometer;
@@ -316,7 +321,11 @@ VerificationResult RunVerification(const Sequence& sequence,
       ImageData& data = cache[image_id];
       const Camera& camera = cameras.at(images[index_by_id.at(image_id)].camera_id);
       if (data.points_normalized.empty()) {
-        data.points_normalized = UndistortKeypoints(camera, database->ReadKeypoints(image_id));
+        FeatureKeypoints keypoints = database->ReadKeypoints(image_id);
+        CompensateRollingShutterRotation(camera, rolling_shutter.readout_s,
+                                         images[index_by_id.at(image_id)].cam_angular_rate,
+                                         &keypoints);
+        data.points_normalized = UndistortKeypoints(camera, keypoints);
         if (options.guided_matching) {
           const Eigen::Matrix3d K = CalibrationMatrix(camera);
           data.points_px.reserve(data.points_normalized.size());

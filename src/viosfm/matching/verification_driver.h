@@ -47,6 +47,7 @@
 #include "viosfm/estimators/prior_verification.h"
 #include "viosfm/estimators/two_view_geometry.h"
 #include "viosfm/io/colmap_database.h"
+#include "viosfm/scene/rolling_shutter.h"
 #include "viosfm/matching/descriptor_matcher.h"
 #include "viosfm/matching/pair_generator.h"
 #include "viosfm/retrieval/image_retrieval.h"
@@ -242,9 +243,14 @@ struct FrameVioPose {
 // The same with the frames' VIO poses already known: frame_poses[i] is
 // sequence.images[i]'s (none: RANSAC only for its pairs); nothing is
 // associated by time here.
+// With `rolling_shutter` active (its cam_angular_rate per image of
+// `sequence`), each image's keypoints are compensated for the camera's
+// rotation during the readout before they are matched and verified
+// (scene/rolling_shutter.h); the database keeps them as detected.
 VerificationResult RunVerification(const Sequence& sequence,
                                    const std::vector<std::optional<FrameVioPose>>& frame_poses,
-                                   ColmapDatabase* database, const VerificationOptions& options);
+                                   ColmapDatabase* database, const VerificationOptions& options,
+                                   const FrameRollingShutter& rolling_shutter = {});
 
 // The epipolar band (pixels) of a pair whose VIO relative pose
 // cam2_from_cam1 has covariance `covariance` (of [Log R_E; t_E],

@@ -97,6 +97,17 @@ struct PipelineOptions {
   // it. Default: the model's defaults (an external VIO on EuRoC-class data).
   VioUncertaintyModel vio_uncertainty;
 
+  // Rolling-shutter compensation of the keypoints the verification and the
+  // mapper read (scene/rolling_shutter.h), with the dataset's IMU: each
+  // keypoint turned back by the gyro's rotation over its row's readout time.
+  // Default true.
+  bool compensate_rolling_shutter = true;
+  // s, the camera's readout (first row to last) when the VIO is external: a
+  // trajectory file says nothing of it. 0 (default): a global shutter. With
+  // viosfm's own VIO the readout it used is taken (own_vio.
+  // rolling_shutter_readout_s, or its estimate).
+  double rolling_shutter_readout_s = 0.0;
+
   // Static trimming and downsampling (default: trimmed, 10 Hz, the paper).
   FrameSelectionOptions frame_selection;
   // SIFT (default 8192 features, RootSIFT).
@@ -175,6 +186,14 @@ struct PipelineOptions {
     visit({"vio.max_gap_ns", "ns, VIO segments split at longer gaps; 0: one segment",
            kShapesStoredData},
           self.vio_max_gap_ns);
+    visit({"rolling_shutter.compensate",
+           "keypoints turned back by the gyro's rotation over their row's readout",
+           kShapesStoredData},
+          self.compensate_rolling_shutter);
+    visit({"rolling_shutter.readout_s",
+           "s, the camera's readout with an external VIO; 0: global shutter", kShapesStoredData,
+           !own_vio_runs},
+          self.rolling_shutter_readout_s);
     VisitOptionGroup({"frame_selection", "", kShapesStoredData}, self.frame_selection, visit);
     visit(
         {"rosbag.image_topic", "bag: image topic; empty: found by type", kShapesStoredData, is_bag},

@@ -1,5 +1,8 @@
 #include "viosfm/pipeline/stage_frames.h"
 
+#include <algorithm>
+#include <cmath>
+
 #include "viosfm/util/errors.h"
 #include "viosfm/util/logging.h"
 
@@ -49,6 +52,33 @@ SelectedFrames SelectFramesStage(const Sequence& sequence, const VioPoses& vio,
                         << FormatNsAsSeconds(options.max_vio_time_difference_ns, 3)
                         << " s (VIO not initialised, lost or re-initialising): they are "
                            "registered from the images where these allow";
+  }
+  if (vio.rolling_shutter_readout_s > 0.0) {
+    const std::string readout = FormatNsAsSeconds(
+        static_cast<timestamp_ns_t>(std::llround(vio.rolling_shutter_readout_s * 1e9)), 4);
+    if (!options.compensate_rolling_shutter) {
+      VIOSFM_LOG(WARNING) << "run: rolling shutter (readout " << readout << " s, "
+                          << vio.rolling_shutter_source
+                          << ") not compensated (rolling_shutter.compensate=false)";
+    } else if (sequence.imu.empty()) {
+      VIOSFM_LOG(WARNING) << "run: rolling shutter (readout " << readout << " s, "
+                          << vio.rolling_shutter_source
+                          << ") not compensated: the dataset has no IMU";
+    } else {
+      const SensorRig& rig = vio.own_vio_rig ? *vio.own_vio_rig : sequence.rig;
+      frames.rolling_shutter.readout_s = vio.rolling_shutter_readout_s;
+      double max_rate = 0.0;
+      for (const SequenceImage& image : frames.sequence.images) {
+        frames.rolling_shutter.cam_angular_rate.push_back(
+            CamAngularRate(rig, sequence.imu, image.timestamp_ns));
+        max_rate = std::max(max_rate, frames.rolling_shutter.cam_angular_rate.back().norm());
+      }
+      VIOSFM_LOG(INFO) << "run: rolling shutter: readout " << readout << " s ("
+                       << vio.rolling_shutter_source
+                       << "); the keypoints are turned back by the gyro's rotation over their "
+                          "row's time (fastest turn "
+                       << max_rate << " rad/s)";
+    }
   }
   VIOSFM_LOG(INFO) << "run: " << frames.selection.message << "; "
                    << frames.sequence.images.size() - frames.num_without_vio_pose

@@ -4,7 +4,10 @@
 // max_vio_time_difference_ns, with its segment and odometer. A frame without
 // one is kept (counted, logged) and registered from the images where they
 // allow. The later stages take the frames' poses from here; nothing
-// associates the VIO track with the frames again.
+// associates the VIO track with the frames again. With a rolling-shutter
+// readout (VioPoses::rolling_shutter_readout_s) and an IMU, each selected
+// frame's camera angular rate too (scene/rolling_shutter.h), on the clock
+// of the VIO's rig.
 #pragma once
 
 #include <optional>
@@ -14,6 +17,7 @@
 #include "viosfm/pipeline/frame_selection.h"
 #include "viosfm/pipeline/pipeline_options.h"
 #include "viosfm/pipeline/stage_vio.h"
+#include "viosfm/scene/rolling_shutter.h"
 #include "viosfm/scene/sequence.h"
 #include "viosfm/scene/trajectory.h"
 
@@ -28,6 +32,10 @@ struct SelectedFrames {
   // world_from_body at the selected frames with a VIO pose (vio_body.tum).
   Trajectory vio_at_frames;
   size_t num_without_vio_pose = 0;
+  // Each selected frame's camera angular rate, for the rolling-shutter
+  // compensation of its keypoints (inactive: a global shutter, no IMU, or
+  // PipelineOptions::compensate_rolling_shutter false).
+  FrameRollingShutter rolling_shutter;
 };
 
 // The stage. Throws InputError naming the dataset when no frame is left,

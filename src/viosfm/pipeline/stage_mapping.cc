@@ -13,6 +13,7 @@ BatchedMapperInput LoadMapperInputStage(const SelectedFrames& frames, const VioP
                                         ColmapDatabase* database) {
   BatchedMapperInput input;
   std::map<camera_t, bool> camera_ids;
+  std::map<camera_t, Camera> cameras;  // for the rolling-shutter compensation
   for (size_t i = 0; i < frames.sequence.images.size(); ++i) {
     const SequenceImage& image = frames.sequence.images[i];
     const std::string name = DatabaseImageName(image);
@@ -24,6 +25,15 @@ BatchedMapperInput LoadMapperInputStage(const SelectedFrames& frames, const VioP
     mapper_image.name = name;
     mapper_image.timestamp_ns = image.timestamp_ns;
     mapper_image.keypoints = database->ReadKeypoints(row->image_id);
+    if (frames.rolling_shutter.active()) {
+      auto camera = cameras.find(row->camera_id);
+      if (camera == cameras.end()) {
+        camera = cameras.emplace(row->camera_id, database->ReadCamera(row->camera_id)).first;
+      }
+      CompensateRollingShutterRotation(camera->second, frames.rolling_shutter.readout_s,
+                                       frames.rolling_shutter.cam_angular_rate[i],
+                                       &mapper_image.keypoints);
+    }
     if (const std::optional<size_t> pose_index = frames.vio_index[i]) {
       mapper_image.vio_cam_from_world = (vio.world_from_body.poses[*pose_index].world_from_frame *
                                          frames.sequence.rig.body_from_cam)

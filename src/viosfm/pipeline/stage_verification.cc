@@ -14,7 +14,8 @@ VerificationResult VerifyPairsStage(const SelectedFrames& frames, const VioPoses
     }
   }
   VerificationResult result = RunVerification(frames.sequence, frame_poses, database,
-                                              options.EffectiveVerificationOptions());
+                                              options.EffectiveVerificationOptions(),
+                                              frames.rolling_shutter);
   VIOSFM_LOG(INFO) << "run: verification " << FormatVerificationSummary(result.summary);
   return result;
 }

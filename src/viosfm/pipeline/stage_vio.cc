@@ -61,6 +61,11 @@ VioPoses RunOwnVio(const Sequence& sequence, const PipelineOptions& options, Fra
   rig.cam_time_offset_ns = result.summary.time_offset.offset_ns;
   rig.imu_noise = result.summary.imu_noise.used;
   poses.own_vio_rig = rig;
+  poses.rolling_shutter_readout_s = result.summary.time_offset.readout_s;
+  poses.rolling_shutter_source =
+      options.own_vio.rolling_shutter_readout_s > 0.0 ? "given to the own VIO"
+      : result.summary.time_offset.readout_estimated ? "the own VIO's estimate"
+                                                       : "the own VIO found a global shutter";
   poses.segment_rule =
       "the own VIO's segments (a new one after every reset it did not re-localise)";
   VIOSFM_LOG(INFO) << "run: own VIO: " << poses.world_from_body.size() << " of "
@@ -104,6 +109,8 @@ VioPoses LoadVioPoses(const Sequence& sequence, const PipelineOptions& options,
     poses = RunOwnVio(sequence, options, frames);
   } else {
     poses.world_from_body = LoadVioTrajectory(sequence, options);
+    poses.rolling_shutter_readout_s = options.rolling_shutter_readout_s;
+    poses.rolling_shutter_source = "rolling_shutter.readout_s";
     poses.segments = SegmentsFromTimeGaps(poses.world_from_body, options.vio_max_gap_ns);
     poses.segment_rule =
         options.vio_max_gap_ns > 0

@@ -194,39 +194,6 @@ ImuState VisualInertialOdometry::Propagate(const ImuState& state, timestamp_ns_t
   return predicted;
 }
 
-namespace {
-
-// The camera's angular velocity at camera time cam_ns, in the camera frame:
-// the mean gyro rate of the IMU samples within 10 ms of it (the nearest
-// sample if none), bias not removed (a bias of 0.01 rad/s moves a corner by
-// under 0.1 pixel over a readout's half).
-Eigen::Vector3d CamAngularRate(const SensorRig& rig, const std::vector<ImuSample>& imu,
-                               timestamp_ns_t cam_ns) {
-  if (imu.empty()) return Eigen::Vector3d::Zero();
-  constexpr timestamp_ns_t kHalfWindowNs = 10'000'000;
-  const timestamp_ns_t imu_ns = rig.CamToImuTime(cam_ns);
-  const auto by_time = [](const ImuSample& sample, timestamp_ns_t t) {
-    return sample.timestamp_ns < t;
-  };
-  auto it = std::lower_bound(imu.begin(), imu.end(), imu_ns - kHalfWindowNs, by_time);
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  int count = 0;
-  for (; it != imu.end() && it->timestamp_ns <= imu_ns + kHalfWindowNs; ++it) {
-    sum += it->gyro;
-    ++count;
-  }
-  Eigen::Vector3d body_rate;
-  if (count > 0) {
-    body_rate = sum / count;
-  } else {
-    const auto next = std::lower_bound(imu.begin(), imu.end(), imu_ns, by_time);
-    body_rate = next == imu.end() ? imu.back().gyro : next->gyro;
-  }
-  return rig.body_from_cam.rotation.conjugate() * body_rate;
-}
-
-}  // namespace
-
 Eigen::Quaterniond GyroRotationPrior(const SensorRig& rig, const std::vector<ImuSample>& imu,
                                      const Eigen::Vector3d& gyro_bias, timestamp_ns_t from_ns,
                                      timestamp_ns_t to_ns) {

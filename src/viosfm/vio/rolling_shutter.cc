@@ -7,10 +7,6 @@
 
 namespace viosfm {
 
-double RowTimeOffset(double row, int height, double readout_s) {
-  return ((row + 0.5) / height - 0.5) * readout_s;
-}
-
 void CorrectRollingShutter(const FrameFeatures* previous, double readout_s, int height,
                            const Eigen::Vector3d& cam_angular_rate, FrameFeatures* current) {
   if (readout_s == 0.0 || height <= 0) return;
@@ -36,14 +32,9 @@ void CorrectRollingShutter(const FrameFeatures* previous, double readout_s, int 
         continue;
       }
     }
-    // The bearing seen offset_s after the stamp, b(t + dt) = Exp(-w dt) b(t)
-    // for a camera turning at w (its own frame): b(t) = Exp(w dt) b(t + dt).
-    const Eigen::Vector3d rotation_vector = cam_angular_rate * offset_s;
-    const double angle = rotation_vector.norm();
-    const Eigen::Vector3d bearing = observation.normalized.homogeneous();
-    const Eigen::Vector3d at_stamp =
-        angle > 0.0 ? Eigen::AngleAxisd(angle, rotation_vector / angle) * bearing : bearing;
-    if (at_stamp.z() > 0.0) observation.normalized = at_stamp.hnormalized();
+    // A new corner: the gyro's rotation over its row's time offset.
+    observation.normalized =
+        RotateBearingToStamp(observation.normalized, cam_angular_rate, offset_s);
   }
 }
 

@@ -19,12 +19,10 @@
 
 #include <Eigen/Core>
 
+#include "viosfm/scene/rolling_shutter.h"
 #include "viosfm/vio/frame_features.h"
 
 namespace viosfm {
-
-// s, time of row `row` of `height` rows relative to the frame's stamp.
-double RowTimeOffset(double row, int height, double readout_s);
 
 // Corrects `current` in place (see above). `previous` holds the previous
 // frame's observations as the tracker gave them (uncorrected), or is null;
