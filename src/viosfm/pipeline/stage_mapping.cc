@@ -43,6 +43,9 @@ BatchedMapperInput LoadMapperInputStage(const SelectedFrames& frames, const VioP
     camera_ids[row->camera_id] = true;
     input.images.push_back(std::move(mapper_image));
   }
+  if (frames.rolling_shutter.active()) {
+    input.rolling_shutter_readout_s = frames.rolling_shutter.readout_s;
+  }
   for (const auto& [camera_id, unused] : camera_ids) {
     input.cameras.push_back(database->ReadCamera(camera_id));
   }

@@ -11,6 +11,7 @@
 #include <unordered_set>
 
 #include "viosfm/scene/reprojection.h"
+#include "viosfm/scene/rolling_shutter.h"
 #include "viosfm/sensor/camera_models.h"
 #include "viosfm/sfm/linear_solver_chooser.h"
 #include "viosfm/util/errors.h"
@@ -20,6 +21,10 @@
 
 namespace viosfm {
 namespace {
+
+// A registered image's velocity is taken from its registered neighbours at
+// most this far apart in time (ns).
+constexpr timestamp_ns_t kRollingShutterVelocityMaxGapNs = 500'000'000;
 
 const char kInputLabel[] = "batched mapper input";
 
@@ -153,6 +158,65 @@ std::vector<Track> TracksOfImages(const std::vector<Track>& tracks,
   subset.reserve(indices.size());
   for (const size_t index : indices) subset.push_back(tracks[index]);
   return subset;
+}
+
+// The rolling shutter's translation share (scene/rolling_shutter.h left it:
+// it depends on each point's depth, which only the model knows). Each
+// registered image's camera velocity from the model's camera centres around
+// it (its registered neighbours in time, at most max_gap_ns away), and each
+// observation of a point moved by what that motion over its row's time
+// offset changes in the point's projection: to where the camera at the
+// stamp sees it. Returns the median and the largest move (px) and how many
+// observations moved.
+struct RollingShutterMotionSummary {
+  size_t num_observations = 0;
+  double median_px = 0.0;
+  double max_px = 0.0;
+};
+RollingShutterMotionSummary CompensateRollingShutterMotion(
+    Reconstruction* reconstruction, std::vector<std::pair<timestamp_ns_t, image_t>> stamped_images,
+    double readout_s, timestamp_ns_t max_gap_ns) {
+  RollingShutterMotionSummary summary;
+  std::sort(stamped_images.begin(), stamped_images.end());
+  std::vector<double> moves;
+  for (size_t k = 0; k < stamped_images.size(); ++k) {
+    const auto center = [&](size_t j) {
+      return ProjectionCenter(reconstruction->GetImage(stamped_images[j].second).cam_from_world);
+    };
+    const size_t before = k > 0 && stamped_images[k].first - stamped_images[k - 1].first <= max_gap_ns
+                              ? k - 1
+                              : k;
+    const size_t after = k + 1 < stamped_images.size() &&
+                                 stamped_images[k + 1].first - stamped_images[k].first <= max_gap_ns
+                             ? k + 1
+                             : k;
+    if (before == after) continue;
+    Image& image = reconstruction->GetImage(stamped_images[k].second);
+    const Camera& camera = reconstruction->GetCamera(image.camera_id);
+    const double span_s = NsToSeconds(stamped_images[after].first - stamped_images[before].first);
+    const Eigen::Vector3d cam_velocity =
+        image.cam_from_world.rotation * ((center(after) - center(before)) / span_s);
+    for (Point2D& point2D : image.points2D) {
+      if (!point2D.HasPoint3D()) continue;
+      const Eigen::Vector3d in_cam =
+          image.cam_from_world * reconstruction->GetPoint3D(point2D.point3D_id).xyz;
+      const double offset_s =
+          RowTimeOffset(point2D.xy.y(), static_cast<int>(camera.height), readout_s);
+      const std::optional<Eigen::Vector2d> at_stamp = Project(camera, in_cam);
+      const std::optional<Eigen::Vector2d> at_row = Project(camera, in_cam - cam_velocity * offset_s);
+      if (!at_stamp || !at_row) continue;
+      const Eigen::Vector2d move = *at_stamp - *at_row;
+      point2D.xy += move;
+      moves.push_back(move.norm());
+    }
+  }
+  summary.num_observations = moves.size();
+  if (!moves.empty()) {
+    std::nth_element(moves.begin(), moves.begin() + moves.size() / 2, moves.end());
+    summary.median_px = moves[moves.size() / 2];
+    summary.max_px = *std::max_element(moves.begin(), moves.end());
+  }
+  return summary;
 }
 
 }  // namespace
@@ -563,6 +627,9 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
   BundleAdjustmentOptions ba_options = options.ba;
   ba_options.num_threads = options.num_threads;
   LinearSolverChooser solver_chooser(ba_options);
+  // The rolling shutter's translation share is compensated once, before the
+  // first final adjustment (CompensateRollingShutterMotion).
+  bool rolling_shutter_motion_done = false;
   // Bundle adjustment of the last registered images (all when window_begin
   // is 0), the gauge held.
   const auto adjust = [&](size_t window_begin, bool global) {
@@ -586,6 +653,23 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
                        << "): " << OptionText(batch_ba_options.linear_solver);
     } else {
       batch_ba_options.linear_solver = solver_chooser.Next(free_images.size(), global);
+    }
+    if (global && input.rolling_shutter_readout_s > 0.0 && !rolling_shutter_motion_done) {
+      std::vector<std::pair<timestamp_ns_t, image_t>> stamped;
+      for (const image_t image_id : registered) {
+        stamped.emplace_back(input.images[index_of_image.at(image_id)].timestamp_ns, image_id);
+      }
+      const RollingShutterMotionSummary moved = CompensateRollingShutterMotion(
+          &reconstruction, std::move(stamped), input.rolling_shutter_readout_s,
+          kRollingShutterVelocityMaxGapNs);
+      rolling_shutter_motion_done = true;
+      std::ostringstream message;
+      message << std::fixed << std::setprecision(3) << "final bundle adjustment: rolling shutter: "
+              << moved.num_observations
+              << " observations moved by the camera's motion over their row's time (median "
+              << moved.median_px << " px, largest " << moved.max_px << " px)";
+      summary.rolling_shutter_message = message.str();
+      VIOSFM_LOG(INFO) << summary.rolling_shutter_message;
     }
     std::vector<RelativePosePrior> priors = active_priors();
     if (global && options.gyro.enabled && !input.imu.empty()) {

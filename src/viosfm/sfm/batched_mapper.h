@@ -25,7 +25,11 @@
 //     first image with a VIO pose is held (gauge);
 //  5. filtering (large reprojection error, small triangulation angle) and
 //     re-triangulation of the tracks left without a point;
-//  6. after the last batch a final global bundle adjustment, filtering and
+//  6. after the last batch a final global bundle adjustment (with a rolling
+//     shutter, BatchedMapperInput::rolling_shutter_readout_s, each
+//     observation first moved by the camera's motion over its row's time,
+//     the velocity from the model's camera centres and the depth from its
+//     point), filtering and
 //     re-triangulation (it replaces the last batch's own bundle adjustment);
 //     frames that only then can be registered are, followed by another
 //     global bundle adjustment;
@@ -224,6 +228,9 @@ struct BatchedMapperSummary {
   int num_bridging_priors = 0;  // BatchedMapperOptions::bridge_spans
   int num_gyro_priors = 0;      // in the final adjustment (BatchedMapperOptions::gyro)
   std::string gyro_message;     // MakeGyroPriors' line, empty without them
+  // The final adjustment's rolling-shutter motion compensation
+  // (BatchedMapperInput::rolling_shutter_readout_s), empty without it.
+  std::string rolling_shutter_message;
   // Per input frame, in input order, and the counts: posed frames are either
   // supported by the images or placed by the VIO only.
   std::vector<MapperFrameStatus> frames;

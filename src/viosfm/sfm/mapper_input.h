@@ -48,6 +48,11 @@ struct BatchedMapperInput {
   // adjustment; empty: none.
   std::vector<ImuSample> imu;
   SensorRig rig;
+  // s, the camera's rolling-shutter readout when the images' keypoints were
+  // compensated for the camera's rotation during it (scene/rolling_shutter.h);
+  // the final bundle adjustment then compensates them for its motion too
+  // (batched_mapper.h). 0: a global shutter.
+  double rolling_shutter_readout_s = 0.0;
 };
 
 }  // namespace viosfm
