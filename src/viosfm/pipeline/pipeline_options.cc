@@ -34,6 +34,10 @@ std::string PipelineOptions::Validate() const {
   if (output_folder.empty()) return "output_folder: an output folder is required";
   if (max_vio_time_difference_ns <= 0) return "max_vio_time_difference_ns must be positive";
   if (vio_max_gap_ns < 0) return "vio_max_gap_ns must be >= 0";
+  if (!(rolling_shutter_readout_s >= 0.0 && rolling_shutter_readout_s < 1.0)) {
+    return "rolling_shutter.readout_s must be in [0, 1) s";
+  }
+  if (!(min_readout_evidence >= 1.0)) return "rolling_shutter.min_readout_evidence must be >= 1";
   if (const std::string error = vio_uncertainty.Validate(); !error.empty()) {
     return "vio_uncertainty." + error;
   }

@@ -480,6 +480,12 @@ TEST(PipelineOptionsTest, ValidateNamesTheBadField) {
   options.num_threads = 2;
   options.mapper.batch_size = 0;
   EXPECT_NE(options.Validate().find("mapper."), std::string::npos);
+  options.mapper.batch_size = 50;
+  options.rolling_shutter_readout_s = -0.01;
+  EXPECT_NE(options.Validate().find("rolling_shutter.readout_s"), std::string::npos);
+  options.rolling_shutter_readout_s = 0.02;
+  options.min_readout_evidence = 0.5;
+  EXPECT_NE(options.Validate().find("rolling_shutter.min_readout_evidence"), std::string::npos);
   EXPECT_EQ(ParseVioFrame("CAM"), VioFrame::kCam);
   EXPECT_THROW(ParseVioFrame("imu"), InputError);
 }

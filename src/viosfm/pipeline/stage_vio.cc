@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <iomanip>
+#include <sstream>
 
 #include "viosfm/io/trajectory_io.h"
 #include "viosfm/util/errors.h"
@@ -61,11 +63,29 @@ VioPoses RunOwnVio(const Sequence& sequence, const PipelineOptions& options, Fra
   rig.cam_time_offset_ns = result.summary.time_offset.offset_ns;
   rig.imu_noise = result.summary.imu_noise.used;
   poses.own_vio_rig = rig;
-  poses.rolling_shutter_readout_s = result.summary.time_offset.readout_s;
-  poses.rolling_shutter_source =
-      options.own_vio.rolling_shutter_readout_s > 0.0 ? "given to the own VIO"
-      : result.summary.time_offset.readout_estimated ? "the own VIO's estimate"
-                                                       : "the own VIO found a global shutter";
+  const TimeOffsetEstimate& time_offset = result.summary.time_offset;
+  if (options.own_vio.rolling_shutter_readout_s > 0.0) {
+    poses.rolling_shutter_readout_s = options.own_vio.rolling_shutter_readout_s;
+    poses.rolling_shutter_source = "given to the own VIO";
+  } else if (time_offset.readout_estimated && time_offset.rolling_shutter_cost_px > 0.0) {
+    const double evidence =
+        time_offset.global_shutter_cost_px / time_offset.rolling_shutter_cost_px;
+    std::ostringstream source;
+    source << std::fixed << std::setprecision(2)
+           << "the own VIO's estimate; its residual as a global shutter " << evidence
+           << " times the one with the readout";
+    if (evidence >= options.min_readout_evidence) {
+      poses.rolling_shutter_readout_s = time_offset.readout_s;
+      poses.rolling_shutter_source = source.str();
+    } else {
+      VIOSFM_LOG(INFO) << "run: the own VIO estimated a rolling-shutter readout of "
+                       << std::setprecision(1) << std::fixed << time_offset.readout_s * 1e3
+                       << " ms, but the images' evidence for it is weak (" << source.str()
+                       << ", under rolling_shutter.min_readout_evidence "
+                       << std::setprecision(2) << options.min_readout_evidence
+                       << "): the keypoints are taken as from a global shutter";
+    }
+  }
   poses.segment_rule =
       "the own VIO's segments (a new one after every reset it did not re-localise)";
   VIOSFM_LOG(INFO) << "run: own VIO: " << poses.world_from_body.size() << " of "

@@ -338,6 +338,7 @@ TimeOffsetEstimate EstimateTimeOffset(const std::vector<FrameFeatures>& frames,
     // Two rounds of: the readout at the offset, then the offset at that
     // readout within three coarse steps of where it was.
     const double global_cost = offset.cost;
+    estimate.global_shutter_cost_px = global_cost * focal_length_px;
     const double max_readout_ms = options.max_readout_s * 1e3;
     const double readout_step_ms = options.readout_coarse_step_s * 1e3;
     LineMinimum at = offset;
@@ -365,6 +366,7 @@ TimeOffsetEstimate EstimateTimeOffset(const std::vector<FrameFeatures>& frames,
       readout_s = readout.x * 1e-3;
       estimate.readout_estimated = true;
       estimate.readout_s = readout_s;
+      estimate.rolling_shutter_cost_px = best_cost * focal_length_px;
       readout_message << std::setprecision(1) << "; rolling-shutter readout " << readout_s * 1e3
                       << " ms (residual " << std::setprecision(2) << best_cost * focal_length_px
                       << " px against " << global_cost * focal_length_px

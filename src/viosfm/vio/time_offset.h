@@ -101,6 +101,11 @@ struct TimeOffsetEstimate {
   // a global shutter explains the images as well, or not asked).
   bool readout_estimated = false;
   double readout_s = 0.0;
+  // The residuals (px, as cost_px) of the best offset as a global shutter
+  // and with the readout estimated, when a readout was tried (0 otherwise):
+  // their ratio is the images' evidence for it.
+  double global_shutter_cost_px = 0.0;
+  double rolling_shutter_cost_px = 0.0;
   int num_pairs = 0;
   double total_rotation_deg = 0.0;
   std::string message;  // one line: the estimate or why it was not trusted
