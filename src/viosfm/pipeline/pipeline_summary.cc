@@ -125,6 +125,9 @@ std::string PipelineSummaryToJson(const PipelineSummary& s) {
                        {"applied_scale_sigma", s.metric_scale.applied_scale_sigma},
                        {"levelling_deg", s.metric_scale.levelling_deg},
                        {"message", s.metric_scale.message}};
+  json["rolling_shutter"] = {{"readout_s", s.rolling_shutter_readout_s},
+                             {"source", s.rolling_shutter_source},
+                             {"motion_message", s.mapper.rolling_shutter_message}};
   json["vio"] = {{"segments", s.num_vio_segments},
                  {"segments_joined", s.mapper.num_vio_segments_joined},
                  {"segment_rule", s.vio_segment_rule},

@@ -68,6 +68,10 @@ struct PipelineSummary {
   int num_vio_segments = 0;  // in the VIO input
   std::string vio_segment_rule;
   FrameSelection frame_selection;
+  // The rolling-shutter readout the keypoints were compensated for (s; 0:
+  // none), and where it came from or why it was not used.
+  double rolling_shutter_readout_s = 0.0;
+  std::string rolling_shutter_source;
   // Every image of the recording: how it was posed (all_frame_poses.h;
   // trajectory_body_all_frames.tum).
   AllFramePoseCounts all_frames;

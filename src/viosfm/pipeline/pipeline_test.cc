@@ -235,6 +235,8 @@ TEST(PipelineTest, RollingShutterCompensationBringsTheModelToTheTruth) {
     options.compensate_rolling_shutter = compensate;
     const PipelineSummary s = RunPipeline(options);
     std::cerr << s.ToString() << "\n";
+    EXPECT_EQ(s.rolling_shutter_readout_s, compensate ? 0.02 : 0.0);
+    EXPECT_EQ(s.mapper.rolling_shutter_message.empty(), !compensate);
     Sim3d unused;
     const std::vector<double> errors = AlignedPositionErrors(
         BodyPosesOfModel(ReadColmapModelBinary(options.output_folder / "model")), truth, &unused);

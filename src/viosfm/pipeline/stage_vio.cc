@@ -78,6 +78,7 @@ VioPoses RunOwnVio(const Sequence& sequence, const PipelineOptions& options, Fra
       poses.rolling_shutter_readout_s = time_offset.readout_s;
       poses.rolling_shutter_source = source.str();
     } else {
+      poses.rolling_shutter_source = source.str() + ", under rolling_shutter.min_readout_evidence: not used";
       VIOSFM_LOG(INFO) << "run: the own VIO estimated a rolling-shutter readout of "
                        << std::setprecision(1) << std::fixed << time_offset.readout_s * 1e3
                        << " ms, but the images' evidence for it is weak (" << source.str()
@@ -85,6 +86,8 @@ VioPoses RunOwnVio(const Sequence& sequence, const PipelineOptions& options, Fra
                        << std::setprecision(2) << options.min_readout_evidence
                        << "): the keypoints are taken as from a global shutter";
     }
+  } else {
+    poses.rolling_shutter_source = "the own VIO: a global shutter explains the images";
   }
   poses.segment_rule =
       "the own VIO's segments (a new one after every reset it did not re-localise)";
