@@ -38,8 +38,8 @@ struct ImageInfo {
   std::string name;
   camera_t camera_id = kInvalidCameraId;
   timestamp_ns_t timestamp_ns = 0;
-  std::optional<Rigid3d> world_from_body;  // the VIO pose, if associated
-  VioOdometer odometer;                    // of that pose
+  std::optional<Rigid3d> world_from_body;                      // the VIO pose, if associated
+  VioOdometer odometer;                                        // of that pose
   Eigen::Vector3d cam_angular_rate = Eigen::Vector3d::Zero();  // rad/s, for the rolling shutter
 };
 
@@ -208,7 +208,8 @@ VerificationResult RunVerification(const Sequence& sequence,
     info.name = row.name;
     info.camera_id = row.camera_id;
     info.timestamp_ns = sequence.images[it->second].timestamp_ns;
-    if (rolling_shutter.active()) info.cam_angular_rate = rolling_shutter.cam_angular_rate[it->second];
+    if (rolling_shutter.active())
+      info.cam_angular_rate = rolling_shutter.cam_angular_rate[it->second];
     if (options.use_vio_prior && frame_poses[it->second]) {
       info.world_from_body = frame_poses[it->second]->world_from_body;
       info.odometer = frame_poses[it->second]->odometer;

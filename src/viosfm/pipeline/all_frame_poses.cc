@@ -89,7 +89,8 @@ AllFramePoses PoseAllFrames(const std::vector<timestamp_ns_t>& image_stamps,
     }
     result.world_from_body.poses.push_back({stamp, world_from_body});
     result.source.push_back(source);
-    ++(source == AllFramePoseSource::kBetween ? result.counts.num_between : result.counts.num_beyond);
+    ++(source == AllFramePoseSource::kBetween ? result.counts.num_between
+                                              : result.counts.num_beyond);
   }
   return result;
 }

@@ -36,7 +36,8 @@ namespace viosfm {
 struct ModelFramePose {
   timestamp_ns_t timestamp_ns = 0;
   Rigid3d world_from_body;
-  std::optional<size_t> vio_index;  // into the VIO trajectory; none: registered from the images alone
+  std::optional<size_t>
+      vio_index;  // into the VIO trajectory; none: registered from the images alone
 };
 
 enum class AllFramePoseSource {

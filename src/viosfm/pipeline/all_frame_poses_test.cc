@@ -26,7 +26,9 @@ Rigid3d VioPose(double t, const Rigid3d& vio_world_from_world) {
   return vio_world_from_world * drift * TruePose(t);
 }
 
-double Seconds(timestamp_ns_t t) { return static_cast<double>(t) * 1e-9; }
+double Seconds(timestamp_ns_t t) {
+  return static_cast<double>(t) * 1e-9;
+}
 
 double PositionError(const Rigid3d& a, const Rigid3d& b) {
   return (a.translation - b.translation).norm();
@@ -127,9 +129,9 @@ TEST(PoseAllFrames, SegmentsAreNotJoinedAndUnposedImagesCounted) {
 
   const AllFramePoses poses = PoseAllFrames(stamps, model, vio, segments, 1'000'000);
   EXPECT_EQ(poses.counts.num_from_model, 9u);
-  EXPECT_EQ(poses.counts.num_without_vio_pose, 2u);       // images 48, 49
-  EXPECT_EQ(poses.counts.num_without_model_frame, 20u);   // images 80 to 99
-  EXPECT_EQ(poses.counts.num_beyond, 7u + 2u + 8u);  // 41-47; 50, 51; 71-79 but 75
+  EXPECT_EQ(poses.counts.num_without_vio_pose, 2u);      // images 48, 49
+  EXPECT_EQ(poses.counts.num_without_model_frame, 20u);  // images 80 to 99
+  EXPECT_EQ(poses.counts.num_beyond, 7u + 2u + 8u);      // 41-47; 50, 51; 71-79 but 75
   EXPECT_EQ(poses.world_from_body.size(), 100u - 22u);
   for (const StampedPose& pose : poses.world_from_body.poses) {
     const double t = Seconds(pose.timestamp_ns);

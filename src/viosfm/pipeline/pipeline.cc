@@ -179,7 +179,8 @@ PipelineSummary RunPipeline(const PipelineOptions& options) {
   summary.frame_selection = frames.selection;
   summary.num_frames_selected = frames.sequence.images.size();
   summary.num_frames_without_vio_pose = frames.num_without_vio_pose;
-  summary.rolling_shutter_readout_s = frames.rolling_shutter.active() ? frames.rolling_shutter.readout_s : 0.0;
+  summary.rolling_shutter_readout_s =
+      frames.rolling_shutter.active() ? frames.rolling_shutter.readout_s : 0.0;
   summary.rolling_shutter_source = vio.rolling_shutter_source;
 
   FeaturesStageOutput features = clock.Run([&] {
@@ -206,9 +207,9 @@ PipelineSummary RunPipeline(const PipelineOptions& options) {
                      &reconstruction);
   });
 
-  const TrajectoryEvaluation evaluation =
-      clock.Run([&] { return EvaluateStage(sequence, frames, vio, input, reconstruction,
-                                        options.max_vio_time_difference_ns);
+  const TrajectoryEvaluation evaluation = clock.Run([&] {
+    return EvaluateStage(sequence, frames, vio, input, reconstruction,
+                         options.max_vio_time_difference_ns);
   });
   summary.evaluation = evaluation.summary;
   summary.all_frames = evaluation.all_frames.counts;

@@ -171,7 +171,8 @@ TEST(PipelineTest, EveryImageIsPosedWhenTheModelHoldsEveryOtherFrame) {
   EXPECT_GE(counts.num_between, counts.num_from_model - 2);
   EXPECT_GE(counts.num_beyond, s.frame_selection.kept.front());
 
-  const Trajectory all = ReadTumTrajectory(options.output_folder / "trajectory_body_all_frames.tum");
+  const Trajectory all =
+      ReadTumTrajectory(options.output_folder / "trajectory_body_all_frames.tum");
   ASSERT_EQ(all.size(), s.num_frames_in);
   const Trajectory all_cam =
       ReadTumTrajectory(options.output_folder / "trajectory_cam_all_frames.tum");

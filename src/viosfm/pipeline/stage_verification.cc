@@ -13,9 +13,9 @@ VerificationResult VerifyPairsStage(const SelectedFrames& frames, const VioPoses
           FrameVioPose{vio.world_from_body.poses[*index].world_from_frame, vio.odometers[*index]};
     }
   }
-  VerificationResult result = RunVerification(frames.sequence, frame_poses, database,
-                                              options.EffectiveVerificationOptions(),
-                                              frames.rolling_shutter);
+  VerificationResult result =
+      RunVerification(frames.sequence, frame_poses, database,
+                      options.EffectiveVerificationOptions(), frames.rolling_shutter);
   VIOSFM_LOG(INFO) << "run: verification " << FormatVerificationSummary(result.summary);
   return result;
 }

@@ -78,12 +78,13 @@ VioPoses RunOwnVio(const Sequence& sequence, const PipelineOptions& options, Fra
       poses.rolling_shutter_readout_s = time_offset.readout_s;
       poses.rolling_shutter_source = source.str();
     } else {
-      poses.rolling_shutter_source = source.str() + ", under rolling_shutter.min_readout_evidence: not used";
+      poses.rolling_shutter_source =
+          source.str() + ", under rolling_shutter.min_readout_evidence: not used";
       VIOSFM_LOG(INFO) << "run: the own VIO estimated a rolling-shutter readout of "
                        << std::setprecision(1) << std::fixed << time_offset.readout_s * 1e3
                        << " ms, but the images' evidence for it is weak (" << source.str()
-                       << ", under rolling_shutter.min_readout_evidence "
-                       << std::setprecision(2) << options.min_readout_evidence
+                       << ", under rolling_shutter.min_readout_evidence " << std::setprecision(2)
+                       << options.min_readout_evidence
                        << "): the keypoints are taken as from a global shutter";
     }
   } else {

@@ -312,8 +312,8 @@ void SummarySection(const RunData& run, Page* page) {
   if (Find(s, "all_frames")) {
     rows.push_back(
         {"every image of the recording (trajectory_body_all_frames.tum)",
-         Integer(Number(s, "all_frames/images")) + " images: " +
-             Integer(Number(s, "all_frames/from_model")) + " from the model, " +
+         Integer(Number(s, "all_frames/images")) +
+             " images: " + Integer(Number(s, "all_frames/from_model")) + " from the model, " +
              Integer(Number(s, "all_frames/between_model_frames")) + " between model frames, " +
              Integer(Number(s, "all_frames/beyond_model_frames")) + " beyond them, " +
              Integer(Number(s, "all_frames/unposed")) + " without a pose"});

@@ -54,9 +54,8 @@ void CompensateRollingShutterRotation(const Camera& camera, double readout_s,
   for (FeatureKeypoint& keypoint : *keypoints) {
     const Eigen::Vector2d pixel(keypoint.x, keypoint.y);
     const double offset_s = RowTimeOffset(pixel.y(), height, readout_s);
-    const Eigen::Vector2d at_stamp =
-        CamToImage(camera, RotateBearingToStamp(ImageToCam(camera, pixel), cam_angular_rate,
-                                                offset_s));
+    const Eigen::Vector2d at_stamp = CamToImage(
+        camera, RotateBearingToStamp(ImageToCam(camera, pixel), cam_angular_rate, offset_s));
     keypoint.x = static_cast<float>(at_stamp.x());
     keypoint.y = static_cast<float>(at_stamp.y());
   }

@@ -44,7 +44,7 @@ Eigen::Vector2d RotateBearingToStamp(const Eigen::Vector2d& normalized,
 // What the structure-from-motion stages need to compensate a sequence's
 // frames: the readout and each frame's camera angular rate (CamAngularRate).
 struct FrameRollingShutter {
-  double readout_s = 0.0;  // 0: a global shutter, nothing compensated
+  double readout_s = 0.0;                         // 0: a global shutter, nothing compensated
   std::vector<Eigen::Vector3d> cam_angular_rate;  // per image of the sequence
   bool active() const { return readout_s > 0.0 && !cam_angular_rate.empty(); }
 };

@@ -21,9 +21,8 @@ Eigen::Vector2d RollingShutterPixel(const Camera& camera, const Eigen::Vector3d&
   Eigen::Vector2d pixel = CamToImage(camera, bearing.hnormalized());
   for (int iteration = 0; iteration < 50; ++iteration) {
     const double dt = RowTimeOffset(pixel.y(), static_cast<int>(camera.height), readout_s);
-    const Eigen::Vector3d turned = Eigen::AngleAxisd(rate.norm() * dt, rate.normalized())
-                                       .inverse() *
-                                   bearing;
+    const Eigen::Vector3d turned =
+        Eigen::AngleAxisd(rate.norm() * dt, rate.normalized()).inverse() * bearing;
     pixel = CamToImage(camera, turned.hnormalized());
   }
   return pixel;
@@ -39,8 +38,8 @@ TEST(RollingShutter, RowTimeOffsetIsZeroAtTheMiddleRow) {
 // in 20 ms: keypoints are up to ~9 px from where a global shutter at the
 // stamp would see them; compensated, within 0.002 px.
 TEST(RollingShutter, CompensationPutsKeypointsWhereTheStampSeesThem) {
-  const Camera camera =
-      MakeCamera(CameraModelId::kOpenCV, 752, 480, {458.0, 457.0, 367.0, 248.0, -0.28, 0.07, 2e-4, 2e-5});
+  const Camera camera = MakeCamera(CameraModelId::kOpenCV, 752, 480,
+                                   {458.0, 457.0, 367.0, 248.0, -0.28, 0.07, 2e-4, 2e-5});
   const Eigen::Vector3d rate = Eigen::Vector3d(0.4, -1.9, 0.5);
   const double readout_s = 0.02;
   Random random(3);
@@ -88,8 +87,8 @@ TEST(RollingShutter, CamAngularRateIsTheGyroInTheCameraFrame) {
     ImuSample sample;
     sample.timestamp_ns = k * 5'000'000;
     // 1 rad/s about the body's x until 0.2 s (IMU clock), then about z.
-    sample.gyro = sample.timestamp_ns < 200'000'000 ? Eigen::Vector3d::UnitX()
-                                                    : Eigen::Vector3d::UnitZ();
+    sample.gyro =
+        sample.timestamp_ns < 200'000'000 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitZ();
     imu.push_back(sample);
   }
   // Camera time 0.1 s is IMU time 0.15 s: about the body's x, which is the

@@ -183,9 +183,8 @@ RollingShutterMotionSummary CompensateRollingShutterMotion(
     const auto center = [&](size_t j) {
       return ProjectionCenter(reconstruction->GetImage(stamped_images[j].second).cam_from_world);
     };
-    const size_t before = k > 0 && stamped_images[k].first - stamped_images[k - 1].first <= max_gap_ns
-                              ? k - 1
-                              : k;
+    const size_t before =
+        k > 0 && stamped_images[k].first - stamped_images[k - 1].first <= max_gap_ns ? k - 1 : k;
     const size_t after = k + 1 < stamped_images.size() &&
                                  stamped_images[k + 1].first - stamped_images[k].first <= max_gap_ns
                              ? k + 1
@@ -203,7 +202,8 @@ RollingShutterMotionSummary CompensateRollingShutterMotion(
       const double offset_s =
           RowTimeOffset(point2D.xy.y(), static_cast<int>(camera.height), readout_s);
       const std::optional<Eigen::Vector2d> at_stamp = Project(camera, in_cam);
-      const std::optional<Eigen::Vector2d> at_row = Project(camera, in_cam - cam_velocity * offset_s);
+      const std::optional<Eigen::Vector2d> at_row =
+          Project(camera, in_cam - cam_velocity * offset_s);
       if (!at_stamp || !at_row) continue;
       const Eigen::Vector2d move = *at_stamp - *at_row;
       point2D.xy += move;
@@ -664,8 +664,8 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
           kRollingShutterVelocityMaxGapNs);
       rolling_shutter_motion_done = true;
       std::ostringstream message;
-      message << std::fixed << std::setprecision(3) << "final bundle adjustment: rolling shutter: "
-              << moved.num_observations
+      message << std::fixed << std::setprecision(3)
+              << "final bundle adjustment: rolling shutter: " << moved.num_observations
               << " observations moved by the camera's motion over their row's time (median "
               << moved.median_px << " px, largest " << moved.max_px << " px)";
       summary.rolling_shutter_message = message.str();

@@ -214,10 +214,10 @@ ScaleSolution SolveScale(const std::vector<StampedPose>& poses, const std::vecto
     // Too few equations for the unknowns: the weak priors would decide, and
     // the residual, nearly zero, would claim a precise scale.
     if (num_rows - num_unknowns < kMinRedundancy) {
-      result.failure = std::to_string(num_rows) + " equations for " +
-                       std::to_string(num_unknowns) + " unknowns from " +
-                       std::to_string(pairs.size()) + " frame pairs (at least " +
-                       std::to_string(kMinRedundancy) + " more equations than unknowns needed)";
+      result.failure = std::to_string(num_rows) + " equations for " + std::to_string(num_unknowns) +
+                       " unknowns from " + std::to_string(pairs.size()) +
+                       " frame pairs (at least " + std::to_string(kMinRedundancy) +
+                       " more equations than unknowns needed)";
       return result;
     }
     normal_matrix = Eigen::SparseMatrix<double>(num_unknowns, num_unknowns);
@@ -251,8 +251,8 @@ ScaleSolution SolveScale(const std::vector<StampedPose>& poses, const std::vecto
       result.residual_ratio = std::sqrt(sse / dof);
       // Over few degrees of freedom the factor itself is uncertain (about
       // 1 / sqrt(2 dof) relative): it may widen the sigma, not narrow it.
-      result.scale_sigma *= dof >= kMinDofToNarrow ? result.residual_ratio
-                                                   : std::max(1.0, result.residual_ratio);
+      result.scale_sigma *=
+          dof >= kMinDofToNarrow ? result.residual_ratio : std::max(1.0, result.residual_ratio);
     }
   }
   result.scale = scale;

@@ -148,11 +148,10 @@ TEST(ImuScale, SpacedFramesGiveTheScaleWhenPreciseEnough) {
 // consecutive frames' stands.
 TEST(ImuScale, TooFewEquationsForTheUnknownsIsNotAScale) {
   const Data data = MakeImu(6.0, 1);
-  const ImuScaleResult four = EstimateImuScale(
-      Reconstruction({1.0, 1.5, 2.0, 2.5}, 1.02, 2), data.imu, data.noise);
+  const ImuScaleResult four =
+      EstimateImuScale(Reconstruction({1.0, 1.5, 2.0, 2.5}, 1.02, 2), data.imu, data.noise);
   EXPECT_FALSE(four.usable);
-  EXPECT_NE(four.message.find("18 equations for 18 unknowns from 3 frame pairs"),
-            std::string::npos)
+  EXPECT_NE(four.message.find("18 equations for 18 unknowns from 3 frame pairs"), std::string::npos)
       << four.message;
   std::vector<double> stamps;
   for (int k = 0; k <= 35; ++k) stamps.push_back(1.0 + 0.1 * k);
