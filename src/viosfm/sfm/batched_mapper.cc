@@ -164,21 +164,16 @@ std::vector<Track> TracksOfImages(const std::vector<Track>& tracks,
 // it depends on each point's depth, which only the model knows). Each
 // registered image's camera velocity from the model's camera centres around
 // it (its registered neighbours in time, at most max_gap_ns away), and each
-// observation of a point moved by what that motion over its row's time
-// offset changes in the point's projection: to where the camera at the
-// stamp sees it. Returns the median and the largest move (px) and how many
-// observations moved.
-struct RollingShutterMotionSummary {
-  size_t num_observations = 0;
-  double median_px = 0.0;
-  double max_px = 0.0;
-};
-RollingShutterMotionSummary CompensateRollingShutterMotion(
-    Reconstruction* reconstruction, std::vector<std::pair<timestamp_ns_t, image_t>> stamped_images,
-    double readout_s, timestamp_ns_t max_gap_ns) {
-  RollingShutterMotionSummary summary;
+// observation of a point not moved yet (`moved`, per image and keypoint)
+// moved by what that motion over its row's time offset changes in the
+// point's projection: to where the camera at the stamp sees it. Appends
+// each move's length (px) to `move_lengths`.
+void CompensateRollingShutterMotion(Reconstruction* reconstruction,
+                                    std::vector<std::pair<timestamp_ns_t, image_t>> stamped_images,
+                                    double readout_s, timestamp_ns_t max_gap_ns,
+                                    std::unordered_map<image_t, std::vector<char>>* moved,
+                                    std::vector<float>* move_lengths) {
   std::sort(stamped_images.begin(), stamped_images.end());
-  std::vector<double> moves;
   for (size_t k = 0; k < stamped_images.size(); ++k) {
     const auto center = [&](size_t j) {
       return ProjectionCenter(reconstruction->GetImage(stamped_images[j].second).cam_from_world);
@@ -191,12 +186,15 @@ RollingShutterMotionSummary CompensateRollingShutterMotion(
                              : k;
     if (before == after) continue;
     Image& image = reconstruction->GetImage(stamped_images[k].second);
+    std::vector<char>& image_moved = (*moved)[image.image_id];
+    image_moved.resize(image.points2D.size(), 0);
     const Camera& camera = reconstruction->GetCamera(image.camera_id);
     const double span_s = NsToSeconds(stamped_images[after].first - stamped_images[before].first);
     const Eigen::Vector3d cam_velocity =
         image.cam_from_world.rotation * ((center(after) - center(before)) / span_s);
-    for (Point2D& point2D : image.points2D) {
-      if (!point2D.HasPoint3D()) continue;
+    for (size_t p = 0; p < image.points2D.size(); ++p) {
+      Point2D& point2D = image.points2D[p];
+      if (!point2D.HasPoint3D() || image_moved[p]) continue;
       const Eigen::Vector3d in_cam =
           image.cam_from_world * reconstruction->GetPoint3D(point2D.point3D_id).xyz;
       const double offset_s =
@@ -207,16 +205,10 @@ RollingShutterMotionSummary CompensateRollingShutterMotion(
       if (!at_stamp || !at_row) continue;
       const Eigen::Vector2d move = *at_stamp - *at_row;
       point2D.xy += move;
-      moves.push_back(move.norm());
+      image_moved[p] = 1;
+      move_lengths->push_back(static_cast<float>(move.norm()));
     }
   }
-  summary.num_observations = moves.size();
-  if (!moves.empty()) {
-    std::nth_element(moves.begin(), moves.begin() + moves.size() / 2, moves.end());
-    summary.median_px = moves[moves.size() / 2];
-    summary.max_px = *std::max_element(moves.begin(), moves.end());
-  }
-  return summary;
 }
 
 }  // namespace
@@ -468,6 +460,25 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
     newly_registered.push_back(i);
   };
   // Registers frame i if the VIO or the images allow (frame_registration.h).
+  // The camera's velocity at frame i in its own frame, from the VIO poses of
+  // its neighbours in the same VIO segment (for the rolling shutter's
+  // motion share at registration); none without them.
+  const auto vio_cam_velocity = [&](size_t i) -> std::optional<Eigen::Vector3d> {
+    if (!vio_poses[i]) return std::nullopt;
+    const auto neighbour = [&](size_t j) {
+      return j < num_images && vio_poses[j] &&
+             input.images[j].vio_odometer.segment == input.images[i].vio_odometer.segment &&
+             std::abs(input.images[j].timestamp_ns - input.images[i].timestamp_ns) <=
+                 kRollingShutterVelocityMaxGapNs;
+    };
+    const size_t before = i > 0 && neighbour(i - 1) ? i - 1 : i;
+    const size_t after = neighbour(i + 1) ? i + 1 : i;
+    if (before == after) return std::nullopt;
+    const double span_s =
+        NsToSeconds(input.images[after].timestamp_ns - input.images[before].timestamp_ns);
+    return vio_poses[i]->rotation *
+           ((ProjectionCenter(*vio_poses[after]) - ProjectionCenter(*vio_poses[before])) / span_s);
+  };
   const auto try_register = [&](size_t i) -> bool {
     MapperFrameStatus& status = frames[i];
     std::optional<Rigid3d> predicted;
@@ -481,8 +492,25 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
       }
     }
     if (registration.verify_with_images && i != gauge_index) {
-      const FrameCorrespondences correspondences = CollectFrameCorrespondences(
+      FrameCorrespondences correspondences = CollectFrameCorrespondences(
           reconstruction, tracks, tracks_of_image[i], input.images[i].image_id);
+      // A rolling shutter's motion share: each observation moved to where
+      // the predicted camera at the stamp sees its point (the points'
+      // depths from the model, the velocity from the VIO).
+      const std::optional<Eigen::Vector3d> velocity =
+          input.rolling_shutter_readout_s > 0.0 && predicted ? vio_cam_velocity(i) : std::nullopt;
+      if (velocity) {
+        const Camera& camera = reconstruction.GetCamera(input.images[i].camera_id);
+        for (size_t c = 0; c < correspondences.size(); ++c) {
+          const Eigen::Vector3d in_cam = *predicted * correspondences.points_in_world[c];
+          const double offset_s =
+              RowTimeOffset(CamToImage(camera, correspondences.points_normalized[c]).y(),
+                            static_cast<int>(camera.height), input.rolling_shutter_readout_s);
+          const Eigen::Vector3d at_row = in_cam - *velocity * offset_s;
+          if (in_cam.z() <= 0.0 || at_row.z() <= 0.0) continue;
+          correspondences.points_normalized[c] += in_cam.hnormalized() - at_row.hnormalized();
+        }
+      }
       status.num_correspondences = static_cast<int>(correspondences.size());
       if (static_cast<int>(correspondences.size()) >= registration.min_num_correspondences) {
         const Camera& camera = reconstruction.GetCamera(input.images[i].camera_id);
@@ -627,9 +655,11 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
   BundleAdjustmentOptions ba_options = options.ba;
   ba_options.num_threads = options.num_threads;
   LinearSolverChooser solver_chooser(ba_options);
-  // The rolling shutter's translation share is compensated once, before the
-  // first final adjustment (CompensateRollingShutterMotion).
-  bool rolling_shutter_motion_done = false;
+  // The rolling shutter's translation share, compensated before every
+  // adjustment for the observations of points not compensated yet
+  // (CompensateRollingShutterMotion).
+  std::unordered_map<image_t, std::vector<char>> rolling_shutter_moved;
+  std::vector<float> rolling_shutter_moves;
   // Bundle adjustment of the last registered images (all when window_begin
   // is 0), the gauge held.
   const auto adjust = [&](size_t window_begin, bool global) {
@@ -654,22 +684,30 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
     } else {
       batch_ba_options.linear_solver = solver_chooser.Next(free_images.size(), global);
     }
-    if (global && input.rolling_shutter_readout_s > 0.0 && !rolling_shutter_motion_done) {
+    if (input.rolling_shutter_readout_s > 0.0) {
       std::vector<std::pair<timestamp_ns_t, image_t>> stamped;
       for (const image_t image_id : registered) {
         stamped.emplace_back(input.images[index_of_image.at(image_id)].timestamp_ns, image_id);
       }
-      const RollingShutterMotionSummary moved = CompensateRollingShutterMotion(
+      CompensateRollingShutterMotion(
           &reconstruction, std::move(stamped), input.rolling_shutter_readout_s,
-          kRollingShutterVelocityMaxGapNs);
-      rolling_shutter_motion_done = true;
-      std::ostringstream message;
-      message << std::fixed << std::setprecision(3)
-              << "final bundle adjustment: rolling shutter: " << moved.num_observations
-              << " observations moved by the camera's motion over their row's time (median "
-              << moved.median_px << " px, largest " << moved.max_px << " px)";
-      summary.rolling_shutter_message = message.str();
-      VIOSFM_LOG(INFO) << summary.rolling_shutter_message;
+          kRollingShutterVelocityMaxGapNs, &rolling_shutter_moved, &rolling_shutter_moves);
+      if (global) {
+        std::vector<float> lengths = rolling_shutter_moves;
+        double median_px = 0.0, max_px = 0.0;
+        if (!lengths.empty()) {
+          std::nth_element(lengths.begin(), lengths.begin() + lengths.size() / 2, lengths.end());
+          median_px = lengths[lengths.size() / 2];
+          max_px = *std::max_element(lengths.begin(), lengths.end());
+        }
+        std::ostringstream message;
+        message << std::fixed << std::setprecision(3) << "rolling shutter: " << lengths.size()
+                << " observations moved by the camera's motion over their row's time before "
+                   "the adjustments (median "
+                << median_px << " px, largest " << max_px << " px)";
+        summary.rolling_shutter_message = message.str();
+        VIOSFM_LOG(INFO) << "final bundle adjustment: " << summary.rolling_shutter_message;
+      }
     }
     std::vector<RelativePosePrior> priors = active_priors();
     if (global && options.gyro.enabled && !input.imu.empty()) {

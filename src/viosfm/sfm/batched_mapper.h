@@ -25,14 +25,15 @@
 //     first image with a VIO pose is held (gauge);
 //  5. filtering (large reprojection error, small triangulation angle) and
 //     re-triangulation of the tracks left without a point;
-//  6. after the last batch a final global bundle adjustment (with a rolling
-//     shutter, BatchedMapperInput::rolling_shutter_readout_s, each
-//     observation first moved by the camera's motion over its row's time,
-//     the velocity from the model's camera centres and the depth from its
-//     point), filtering and
+//  6. after the last batch a final global bundle adjustment, filtering and
 //     re-triangulation (it replaces the last batch's own bundle adjustment);
 //     frames that only then can be registered are, followed by another
 //     global bundle adjustment;
+//  With a rolling shutter (BatchedMapperInput::rolling_shutter_readout_s)
+//  the observations are also moved by the camera's motion over their row's
+//  time: at registration, with the VIO's velocity and the model's points'
+//  depths, for the images' check; before every adjustment, with the
+//  velocity from the model's camera centres, once for each observation.
 //  7. every frame's verdict: supported by the images (frame_registration.h),
 //     placed by the VIO only, or not posed (and why).
 #pragma once

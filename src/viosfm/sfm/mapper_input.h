@@ -50,8 +50,8 @@ struct BatchedMapperInput {
   SensorRig rig;
   // s, the camera's rolling-shutter readout when the images' keypoints were
   // compensated for the camera's rotation during it (scene/rolling_shutter.h);
-  // the final bundle adjustment then compensates them for its motion too
-  // (batched_mapper.h). 0: a global shutter.
+  // the mapper then compensates them for its motion too (batched_mapper.h).
+  // 0: a global shutter.
   double rolling_shutter_readout_s = 0.0;
 };
 
