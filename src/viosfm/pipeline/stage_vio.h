@@ -36,9 +36,11 @@ struct VioPoses {
   // estimate and the IMU noise figures it used), for what else reads the
   // IMU (the metric scale); empty for an external VIO.
   std::optional<SensorRig> own_vio_rig;
-  // s, the camera's rolling-shutter readout: the one viosfm's own VIO used
-  // (given or estimated), or PipelineOptions::rolling_shutter_readout_s for
-  // an external VIO; 0: a global shutter.
+  // s, the camera's rolling-shutter readout for the structure-from-motion
+  // stages: the one viosfm's own VIO was given, or its estimate when the
+  // images' evidence for it reaches PipelineOptions::min_readout_evidence;
+  // PipelineOptions::rolling_shutter_readout_s for an external VIO; 0: a
+  // global shutter.
   double rolling_shutter_readout_s = 0.0;
   std::string rolling_shutter_source;  // for the log: where the readout came from
   int num_segments() const { return segments.empty() ? 0 : segments.back() + 1; }
