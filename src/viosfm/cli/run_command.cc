@@ -182,7 +182,8 @@ void RegisterRun(CLI::App& app) {
   command->add_flag_callback(
       "--realtime", [args] { ApplyRealtimeSettings(&args->options); },
       "Settings that reconstruct a recording in about its own duration on 2 cores: N1 10, N2 "
-      "5, 1000 features, --guided-matching, --ba-window 4 with 5 held views a point (the "
+      "5, 1000 features on images of at most 960 pixels, --guided-matching, --ba-window 4 with "
+      "5 held views a point (the "
       "paper's settings are more accurate and far slower; flags given with it override it)");
   AddOptionFlags(command, &args->options);
   command->add_option("--vio-trajectory", args->vio_trajectory,

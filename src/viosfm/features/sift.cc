@@ -6,6 +6,7 @@
 #include <numeric>
 #include <opencv2/core.hpp>
 #include <opencv2/features2d.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "viosfm/features/dog_detector.h"
 #include "viosfm/sensor/camera_models.h"
@@ -35,6 +36,7 @@ std::string SiftOptions::Validate() const {
   if (!(edge_threshold > 0.0)) return "edge_threshold must be > 0";
   if (num_octave_layers < 1) return "num_octave_layers must be >= 1";
   if (first_octave != -1 && first_octave != 0) return "first_octave must be -1 or 0";
+  if (max_image_size < 0) return "max_image_size must be >= 0 (0: no limit)";
   if (num_threads < 1) return "num_threads must be >= 1";
   return "";
 }
@@ -85,8 +87,22 @@ ImageFeatures ExtractSift(const GreyImage& image, const SiftOptions& options) {
   cv::Ptr<cv::SIFT> sift =
       cv::SIFT::create(options.max_num_features, options.num_octave_layers, contrast_threshold,
                        options.edge_threshold, kSiftSigma, CV_32F);
-  // A view of the pixels (cv::Mat does not take ownership).
-  const cv::Mat mat(image.height, image.width, CV_8UC1, const_cast<uint8_t*>(image.pixels.data()));
+  // A view of the pixels (cv::Mat does not take ownership), reduced when
+  // larger than max_image_size: a pixel centre x of the reduced image is
+  // (x + 0.5) / scale - 0.5 of the image.
+  const cv::Mat full(image.height, image.width, CV_8UC1, const_cast<uint8_t*>(image.pixels.data()));
+  cv::Mat mat = full;
+  double scale_x = 1.0, scale_y = 1.0;
+  const int longest = std::max(image.width, image.height);
+  if (options.max_image_size > 0 && longest > options.max_image_size) {
+    const double scale = static_cast<double>(options.max_image_size) / longest;
+    cv::resize(full, mat,
+               cv::Size(std::max(1, static_cast<int>(std::lround(image.width * scale))),
+                        std::max(1, static_cast<int>(std::lround(image.height * scale)))),
+               0.0, 0.0, cv::INTER_AREA);
+    scale_x = static_cast<double>(mat.cols) / image.width;
+    scale_y = static_cast<double>(mat.rows) / image.height;
+  }
   std::vector<cv::KeyPoint> cv_keypoints;
   cv::Mat cv_descriptors;
   // cv::SIFT's own detector starts from the image doubled and reports
@@ -125,11 +141,12 @@ ImageFeatures ExtractSift(const GreyImage& image, const SiftOptions& options) {
   features.keypoints.reserve(order.size());
   for (size_t i = 0; i < order.size(); ++i) {
     const cv::KeyPoint& k = cv_keypoints[order[i]];
-    const float scale = 0.5f * k.size;  // KeyPoint::size is the diameter 2 sigma
+    // KeyPoint::size is the diameter 2 sigma.
+    const float scale = static_cast<float>(0.5 * k.size / std::sqrt(scale_x * scale_y));
     const float orientation = k.angle * static_cast<float>(std::numbers::pi / 180.0);
     features.keypoints.push_back(FeatureKeypoint::FromScaleOrientation(
-        static_cast<float>(k.pt.x - position_bias), static_cast<float>(k.pt.y - position_bias),
-        scale, orientation));
+        static_cast<float>((k.pt.x - position_bias + 0.5) / scale_x - 0.5),
+        static_cast<float>((k.pt.y - position_bias + 0.5) / scale_y - 0.5), scale, orientation));
     const float* row = cv_descriptors.ptr<float>(order[i]);
     std::copy(row, row + num_cols, raw.row(static_cast<Eigen::Index>(i)).data());
   }

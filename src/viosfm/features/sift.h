@@ -61,6 +61,11 @@ struct SiftOptions {
   // cv::SIFT's detector always doubles, so 0 detects with viosfm's own
   // (features/dog_detector.h) and lets cv::SIFT describe. Default -1.
   int first_octave = -1;
+  // Pixels, the longest side the extraction works on: a larger image is
+  // first reduced to it (area averaging, as COLMAP's max_image_size), and
+  // its keypoints are given in the image's own pixels. 0 (default): every
+  // image as it is.
+  int max_image_size = 0;
   // Worker threads of the batch extraction (feature_extraction.h), each
   // extracting one image at a time. Default 2.
   int num_threads = 2;
@@ -83,6 +88,9 @@ struct SiftOptions {
     visit({"first_octave", "first octave of the scale space: -1 (image doubled) or 0",
            kShapesStoredData},
           self.first_octave);
+    visit({"max_image_size", "pixels, longest side extracted on (larger images reduced); 0: any",
+           kShapesStoredData},
+          self.max_image_size);
     visit({"num_threads", "worker threads of the extraction", kRunOnly}, self.num_threads);
   }
 };

@@ -261,6 +261,32 @@ TEST_P(SiftGeometry, RotationMovesPositionsAndOrientations) {
 }
 
 // Without the doubled octave no keypoint is finer than the initial blur.
+// The room frame enlarged twice by pixel replication, extracted with
+// max_image_size at the frame's own size: the area reduction gives the
+// frame back exactly, so the keypoints are the frame's, at the enlarged
+// image's pixel centres (pixel centre x of the frame is the middle of
+// pixels 2x and 2x + 1: 2x + 0.5) and twice the scale.
+TEST(Sift, MaxImageSizeGivesKeypointsInTheImagesOwnPixels) {
+  const GreyImage& image = RoomImage();
+  GreyImage enlarged(2 * image.width, 2 * image.height);
+  for (int y = 0; y < enlarged.height; ++y) {
+    for (int x = 0; x < enlarged.width; ++x) enlarged.at(x, y) = image.at(x / 2, y / 2);
+  }
+  SiftOptions options;
+  options.max_image_size = std::max(image.width, image.height);
+  const ImageFeatures reduced = ExtractSift(enlarged, options);
+  const ImageFeatures& original = RoomFeatures();
+  ASSERT_EQ(reduced.keypoints.size(), original.keypoints.size());
+  for (size_t i = 0; i < original.keypoints.size(); ++i) {
+    EXPECT_NEAR(reduced.keypoints[i].x, 2.0f * original.keypoints[i].x + 0.5f, 1e-3) << i;
+    EXPECT_NEAR(reduced.keypoints[i].y, 2.0f * original.keypoints[i].y + 0.5f, 1e-3) << i;
+    EXPECT_NEAR(reduced.keypoints[i].Scale(), 2.0f * original.keypoints[i].Scale(), 1e-3);
+  }
+  EXPECT_EQ(reduced.descriptors, original.descriptors);
+  options.max_image_size = -1;
+  EXPECT_NE(options.Validate().find("max_image_size"), std::string::npos);
+}
+
 TEST(Sift, FirstOctaveZeroHasNoKeypointBelowSigma16) {
   const ImageFeatures features = ExtractSift(RoomImage(), WithFirstOctave(0));
   EXPECT_GE(features.keypoints.size(), 500u);

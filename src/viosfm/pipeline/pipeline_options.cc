@@ -121,6 +121,7 @@ void ApplyRealtimeSettings(PipelineOptions* options) {
   options->verification.pairs.num_temporal_neighbors = 10;
   options->verification.pairs.num_retrieval_neighbors = 5;
   options->sift.max_num_features = 1000;
+  options->sift.max_image_size = 960;
   options->verification.guided_matching = true;
   options->mapper.ba_window_batches = 4;
   options->mapper.ba_window_max_held_views = 5;

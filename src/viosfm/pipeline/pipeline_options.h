@@ -240,7 +240,10 @@ struct PipelineOptions {
 // `viosfm run --realtime`: the settings with which a recording is
 // reconstructed in about its own duration on two cores, trading some of the
 // paper's accuracy for it. It sets N1 10 and N2 5 (the paper's 40 and 30),
-// up to 1000 features an image (8192), matching inside the VIO epipolar band
+// up to 1000 features an image (8192) found on images reduced to 960 pixels
+// at most (sift.max_image_size; a 752x480 EuRoC or simulated frame stays as
+// it is, a 1280x720 one is extracted at 960x540), matching inside the VIO
+// epipolar band
 // (verification.guided_matching), and per-batch adjustments over the last 4
 // batches whose points keep their 5 latest older views
 // (mapper.ba_window_batches, mapper.ba_window_max_held_views). Measured on

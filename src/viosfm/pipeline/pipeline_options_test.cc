@@ -120,7 +120,7 @@ TEST(PipelineOptions, DescriptionsCoverEveryKeyWithAHelp) {
   for (const auto& [key, value] : bag.ToKeyValues()) EXPECT_EQ(keys.count(key), 1u) << key;
 }
 
-// The real-time settings change exactly their six options, every other one
+// The real-time settings change exactly their seven options, every other one
 // keeps the paper's default, and the result is valid.
 TEST(PipelineOptions, RealtimeSettingsChangeOnlyTheirOptions) {
   PipelineOptions options;
@@ -141,6 +141,7 @@ TEST(PipelineOptions, RealtimeSettingsChangeOnlyTheirOptions) {
       {"verification.pairs.num_temporal_neighbors", "10"},
       {"verification.pairs.num_retrieval_neighbors", "5"},
       {"sift.max_num_features", "1000"},
+      {"sift.max_image_size", "960"},
       {"verification.guided_matching", "true"},
       {"mapper.ba_window_batches", "4"},
       {"mapper.ba_window_max_held_views", "5"}};
