@@ -125,7 +125,6 @@ constexpr std::pair<const char*, const char*> kOptionFlags[] = {
     {"--bridge-max-matches", "mapper.bridge_max_matches"},
     {"--prior-loss-scale", "mapper.ba.prior_loss_scale"},
     {"--verification-batch", "verification.batch_size"},
-    {"--rolling-shutter-readout", "own_vio.rolling_shutter_readout_s"},
     {"--threads", "num_threads"},
     {"--seed", "seed"},
 };
@@ -186,6 +185,27 @@ void RegisterRun(CLI::App& app) {
       "5 held views a point (the "
       "paper's settings are more accurate and far slower; flags given with it override it)");
   AddOptionFlags(command, &args->options);
+  // The camera's readout is one fact with two uses: viosfm's own VIO, and
+  // the keypoints' compensation when the VIO is external.
+  command
+      ->add_option(
+          "--rolling-shutter-readout",
+          [args](const CLI::results_t& results) {
+            for (const char* key :
+                 {"own_vio.rolling_shutter_readout_s", "rolling_shutter.readout_s"}) {
+              try {
+                SetOptionFromText(args->options, key, results.front());
+              } catch (const InputError& error) {
+                throw InputError(std::string("--rolling-shutter-readout: ") + error.what());
+              }
+            }
+            return true;
+          },
+          "The camera's rolling-shutter readout, first row to last (s; 0: not given): viosfm's "
+          "own VIO uses it instead of its estimate, and the keypoints are compensated with it "
+          "(options own_vio.rolling_shutter_readout_s and rolling_shutter.readout_s)")
+      ->default_str("0")
+      ->expected(1);
   command->add_option("--vio-trajectory", args->vio_trajectory,
                       "VIO trajectory (TUM by default), world_from_body unless --vio-frame cam; "
                       "without it viosfm's own VIO runs on the images and IMU");
