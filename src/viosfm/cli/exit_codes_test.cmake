@@ -67,6 +67,16 @@ expect_exit(2 "^error: ${WORK}/absent.bag: bag file not found" run "${WORK}/abse
 if(EXISTS "${WORK}/out_absent")
   message(FATAL_ERROR "run on an absent dataset left ${WORK}/out_absent behind")
 endif()
+# run --rolling-shutter-readout: a value that is not a number is refused,
+# naming the flag, before any work.
+expect_exit(2 "^error: --rolling-shutter-readout: option own_vio.rolling_shutter_readout_s: 'fast'"
+            run "${WORK}/dataset" --out "${WORK}/out_readout" --rolling-shutter-readout fast)
+expect_exit(2 "^error: invalid run options: rolling_shutter.readout_s must be in \\[0, 1\\) s"
+            run "${WORK}/dataset" --out "${WORK}/out_readout" --vio-trajectory "${WORK}/v.tum"
+            --rolling-shutter-readout 2)
+if(EXISTS "${WORK}/out_readout")
+  message(FATAL_ERROR "run with a bad readout left ${WORK}/out_readout behind")
+endif()
 # run --realtime: its settings, overridden by a flag given with it (whatever
 # the flags' order) and by --set; the run's first log line says which apply.
 execute_process(COMMAND "${VIOSFM}" --log-level info run "${WORK}/dataset" --max-features 2000
