@@ -12,8 +12,7 @@ BatchedMapperInput LoadMapperInputStage(const SelectedFrames& frames, const VioP
                                         const VerificationResult& verification,
                                         ColmapDatabase* database) {
   BatchedMapperInput input;
-  std::map<camera_t, bool> camera_ids;
-  std::map<camera_t, Camera> cameras;  // for the rolling-shutter compensation
+  std::map<camera_t, Camera> cameras;  // each read once, in id order
   for (size_t i = 0; i < frames.sequence.images.size(); ++i) {
     const SequenceImage& image = frames.sequence.images[i];
     const std::string name = DatabaseImageName(image);
@@ -25,11 +24,11 @@ BatchedMapperInput LoadMapperInputStage(const SelectedFrames& frames, const VioP
     mapper_image.name = name;
     mapper_image.timestamp_ns = image.timestamp_ns;
     mapper_image.keypoints = database->ReadKeypoints(row->image_id);
+    auto camera = cameras.find(row->camera_id);
+    if (camera == cameras.end()) {
+      camera = cameras.emplace(row->camera_id, database->ReadCamera(row->camera_id)).first;
+    }
     if (frames.rolling_shutter.active()) {
-      auto camera = cameras.find(row->camera_id);
-      if (camera == cameras.end()) {
-        camera = cameras.emplace(row->camera_id, database->ReadCamera(row->camera_id)).first;
-      }
       CompensateRollingShutterRotation(camera->second, frames.rolling_shutter.readout_s,
                                        frames.rolling_shutter.cam_angular_rate[i],
                                        &mapper_image.keypoints);
@@ -40,15 +39,12 @@ BatchedMapperInput LoadMapperInputStage(const SelectedFrames& frames, const VioP
                                             .Inverse();
       mapper_image.vio_odometer = vio.odometers[*pose_index];
     }
-    camera_ids[row->camera_id] = true;
     input.images.push_back(std::move(mapper_image));
   }
   if (frames.rolling_shutter.active()) {
     input.rolling_shutter_readout_s = frames.rolling_shutter.readout_s;
   }
-  for (const auto& [camera_id, unused] : camera_ids) {
-    input.cameras.push_back(database->ReadCamera(camera_id));
-  }
+  for (auto& [camera_id, camera] : cameras) input.cameras.push_back(std::move(camera));
   // For the gyro's priors in the final adjustment: the IMU and the rig the
   // VIO used (its clock offset and noise, when it estimated them).
   input.imu = frames.sequence.imu;
