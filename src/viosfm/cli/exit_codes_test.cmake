@@ -87,4 +87,21 @@ set(pattern "N1 10, N2 5, [0-9.]+ Hz, batch size 50, BA window 3, max 2000 featu
 if(NOT "${stderr}${stdout}" MATCHES "${pattern}")
   message(FATAL_ERROR "run --realtime: the log '${stderr}${stdout}' does not match '${pattern}'")
 endif()
+# --realtime alone lets the texture decide the rate and the feature count;
+# --rate (as --max-features above) or --set keeps the user's.
+foreach(extra "" "--rate;5" "--set;frame_selection.target_rate_hz=5")
+  file(REMOVE_RECURSE "${WORK}/out_probe")
+  execute_process(COMMAND "${VIOSFM}" --log-level info run "${WORK}/dataset" --realtime ${extra}
+                          --out "${WORK}/out_probe"
+                  RESULT_VARIABLE result ERROR_VARIABLE stderr OUTPUT_VARIABLE stdout)
+  string(REGEX MATCH "max [0-9]+ features, [^,]*," decision "${stderr}${stdout}")
+  if(extra STREQUAL "")
+    set(expected "max 1000 features, rate and features by texture,")
+  else()
+    set(expected "max 1000 features, guided matching,")
+  endif()
+  if(NOT decision STREQUAL expected)
+    message(FATAL_ERROR "run --realtime ${extra}: '${decision}', expected '${expected}'")
+  endif()
+endforeach()
 file(REMOVE_RECURSE "${WORK}")

@@ -47,6 +47,12 @@ struct RunArguments {
   PipelineOptions options;
 };
 
+// A frame rate or a feature count given by the user is kept: the texture
+// probe (pipeline/texture_probe.h) that --realtime turns on would change it.
+bool SettlesRateOrFeatures(const std::string& key) {
+  return key == "frame_selection.target_rate_hz" || key == "sift.max_num_features";
+}
+
 // --list-options: every option key with its default, whether it shapes the
 // stored data (a re-run with another value cannot reuse them) and its help.
 void ListOptions() {
@@ -84,7 +90,9 @@ void RunRun(RunArguments args) {
     if (equals == std::string::npos) {
       throw InputError("--set " + assignment + ": expected KEY=VALUE");
     }
-    SetOptionFromText(options, assignment.substr(0, equals), assignment.substr(equals + 1));
+    const std::string key = assignment.substr(0, equals);
+    SetOptionFromText(options, key, assignment.substr(equals + 1));
+    if (SettlesRateOrFeatures(key)) options.texture_probe.enable = false;
   }
   if (const std::string error = options.Validate(); !error.empty()) {
     throw InputError("invalid run options: " + error);
@@ -98,6 +106,7 @@ void RunRun(RunArguments args) {
                            ? ", BA window " + std::to_string(options.mapper.ba_window_batches)
                            : std::string())
                    << ", max " << options.sift.max_num_features << " features, "
+                   << (options.texture_probe.enable ? "rate and features by texture, " : "")
                    << (options.verification.guided_matching ? "guided matching, " : "")
                    << (options.verification.use_vio_prior ? "VIO prior" : "RANSAC only") << ", "
                    << (options.mapper.ba.use_relative_pose_priors
@@ -150,6 +159,7 @@ void AddOptionFlags(CLI::App* command, PipelineOptions* options) {
               } catch (const InputError& error) {
                 throw InputError(flag + ": " + error.what());
               }
+              if (SettlesRateOrFeatures(key)) options->texture_probe.enable = false;
               return true;
             },
             help + " (option " + key + ")")
@@ -182,8 +192,10 @@ void RegisterRun(CLI::App& app) {
       "--realtime", [args] { ApplyRealtimeSettings(&args->options); },
       "Settings that reconstruct a recording in about its own duration on 2 cores: N1 10, N2 "
       "5, 1000 features on images of at most 960 pixels, --guided-matching, --ba-window 4 with "
-      "5 held views a point (the "
-      "paper's settings are more accurate and far slower; flags given with it override it)");
+      "5 held views a point, and a textured recording (every frame rich in keypoints) taken at "
+      "4 Hz with 2500 features a frame (the "
+      "paper's settings are more accurate and far slower; flags given with it override it, "
+      "--rate and --max-features the texture's choice too)");
   AddOptionFlags(command, &args->options);
   // The camera's readout is one fact with two uses: viosfm's own VIO, and
   // the keypoints' compensation when the VIO is external.

@@ -3,10 +3,12 @@
 #include <malloc.h>
 #include <sys/resource.h>
 
+#include <algorithm>
 #include <chrono>
 #include <ctime>
 #include <iomanip>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -23,6 +25,7 @@
 #include "viosfm/pipeline/stage_outputs.h"
 #include "viosfm/pipeline/stage_verification.h"
 #include "viosfm/pipeline/stage_vio.h"
+#include "viosfm/pipeline/texture_probe.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/logging.h"
 #include "viosfm/util/timer.h"
@@ -107,9 +110,48 @@ class StageClock {
   int index_ = 0;
 };
 
+// Frames or features (texture_probe.h): the frame rate and the feature
+// count of a textured recording, settled before anything is extracted. The
+// probed frames stay in `frame_cache` for the VIO.
+void ResolveRateByTexture(const Sequence& sequence, FrameCache* frame_cache,
+                          PipelineOptions* options, PipelineSummary* summary) {
+  const TextureProbeOptions& probe = options->texture_probe;
+  if (probe.enable) {
+    std::vector<size_t> candidates;
+    if (!FrameSelectionUsesTrajectory(sequence, options->frame_selection)) {
+      candidates = SelectFrames(sequence, options->frame_selection, nullptr).kept;
+    } else {
+      for (size_t k = 0; k < sequence.images.size(); ++k) candidates.push_back(k);
+    }
+    summary->texture_probe =
+        ProbeTexture(sequence, candidates, options->EffectiveSiftOptions(), probe, frame_cache);
+    std::ostringstream message;
+    message << summary->texture_probe.ToString(probe);
+    if (summary->texture_probe.textured) {
+      double& rate = options->frame_selection.target_rate_hz;
+      rate = rate > 0.0 ? std::min(rate, probe.target_rate_hz) : probe.target_rate_hz;
+      int& features = options->sift.max_num_features;
+      features = std::max(features, probe.max_num_features);
+      message << "; fewer frames with more features: " << rate << " Hz, " << features
+              << " features a frame";
+    } else if (summary->texture_probe.probed) {
+      message << "; the rate and the feature count as set";
+    }
+    message << " (" << std::fixed << std::setprecision(1) << summary->texture_probe.seconds
+            << " s)";
+    summary->texture_probe_message = message.str();
+    VIOSFM_LOG(INFO) << "run: texture " << summary->texture_probe_message;
+  }
+  summary->frame_rate_hz = options->frame_selection.target_rate_hz;
+  summary->max_num_features = options->sift.max_num_features;
+}
+
 }  // namespace
 
-PipelineSummary RunPipeline(const PipelineOptions& options) {
+PipelineSummary RunPipeline(const PipelineOptions& requested) {
+  // The options as asked for, which fingerprint the stored data, until the
+  // texture probe settles the frame rate and the feature count.
+  PipelineOptions options = requested;
   if (const std::string error = options.Validate(); !error.empty()) {
     throw InputError("invalid run options: " + error);
   }
@@ -134,8 +176,11 @@ PipelineSummary RunPipeline(const PipelineOptions& options) {
   KeypointGreyValues keypoint_values;
   RunFingerprint fingerprint = FingerprintOfInputs(options);
 
-  const Sequence sequence =
-      clock.Run([&] { return ReadDatasetStage(options, folder, &fingerprint); });
+  const Sequence sequence = clock.Run([&] {
+    Sequence read = ReadDatasetStage(options, folder, &fingerprint);
+    ResolveRateByTexture(read, &frame_cache, &options, &summary);
+    return read;
+  });
   summary.num_frames_in = sequence.images.size();
 
   // When the frame selection does not need the VIO, the frames the

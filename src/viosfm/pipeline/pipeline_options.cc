@@ -51,6 +51,9 @@ std::string PipelineOptions::Validate() const {
   if (const std::string error = frame_selection.Validate(); !error.empty()) {
     return "frame_selection." + error;
   }
+  if (const std::string error = texture_probe.Validate(); !error.empty()) {
+    return "texture_probe." + error;
+  }
   if (const std::string error = EffectiveSiftOptions().Validate(); !error.empty()) {
     return "sift." + error;
   }
@@ -125,6 +128,7 @@ void ApplyRealtimeSettings(PipelineOptions* options) {
   options->verification.guided_matching = true;
   options->mapper.ba_window_batches = 4;
   options->mapper.ba_window_max_held_views = 5;
+  options->texture_probe.enable = true;
 }
 
 }  // namespace viosfm

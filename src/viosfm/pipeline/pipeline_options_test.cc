@@ -144,7 +144,8 @@ TEST(PipelineOptions, RealtimeSettingsChangeOnlyTheirOptions) {
       {"sift.max_image_size", "960"},
       {"verification.guided_matching", "true"},
       {"mapper.ba_window_batches", "4"},
-      {"mapper.ba_window_max_held_views", "5"}};
+      {"mapper.ba_window_max_held_views", "5"},
+      {"texture_probe.enable", "true"}};
   EXPECT_EQ(changed, expected);
 }
 

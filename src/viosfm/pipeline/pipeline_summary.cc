@@ -49,6 +49,9 @@ std::string PipelineSummary::ToString() const {
       << " registered (pose supported by the images), " << num_frames_vio_only
       << " placed by the VIO only, " << num_frames_unposed << " without a pose\n";
   out << "every image: " << all_frames.ToString() << "\n";
+  if (texture_probe.probed) {
+    out << "texture: " << texture_probe_message << "\n";
+  }
   out << "VIO: " << num_vio_segments << " segment(s), " << mapper.num_vio_segments_joined
       << " joined; " << mapper.num_reposed << " frame(s) re-posed from the images, "
       << mapper.num_registered_without_vio << " registered from the images without a VIO pose, "
@@ -125,6 +128,15 @@ std::string PipelineSummaryToJson(const PipelineSummary& s) {
                        {"applied_scale_sigma", s.metric_scale.applied_scale_sigma},
                        {"levelling_deg", s.metric_scale.levelling_deg},
                        {"message", s.metric_scale.message}};
+  json["texture_probe"] = {{"probed", s.texture_probe.probed},
+                           {"frames", s.texture_probe.frames},
+                           {"num_keypoints", s.texture_probe.num_keypoints},
+                           {"deciding_count", s.texture_probe.deciding_count},
+                           {"textured", s.texture_probe.textured},
+                           {"seconds", s.texture_probe.seconds},
+                           {"message", s.texture_probe_message},
+                           {"frame_rate_hz", s.frame_rate_hz},
+                           {"max_num_features", s.max_num_features}};
   json["rolling_shutter"] = {{"readout_s", s.rolling_shutter_readout_s},
                              {"source", s.rolling_shutter_source},
                              {"motion_message", s.mapper.rolling_shutter_message}};

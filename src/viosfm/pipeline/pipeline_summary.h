@@ -16,6 +16,7 @@
 #include "viosfm/pipeline/all_frame_poses.h"
 #include "viosfm/pipeline/frame_selection.h"
 #include "viosfm/pipeline/metric_scale.h"
+#include "viosfm/pipeline/texture_probe.h"
 #include "viosfm/sfm/batched_mapper.h"
 
 namespace viosfm {
@@ -68,6 +69,12 @@ struct PipelineSummary {
   int num_vio_segments = 0;  // in the VIO input
   std::string vio_segment_rule;
   FrameSelection frame_selection;
+  // The texture probe (texture_probe.h), and the frame rate (Hz) and
+  // feature count the run used after it.
+  TextureProbeResult texture_probe;
+  std::string texture_probe_message;
+  double frame_rate_hz = 0.0;
+  int max_num_features = 0;
   // The rolling-shutter readout the keypoints were compensated for (s; 0:
   // none), and where it came from or why it was not used.
   double rolling_shutter_readout_s = 0.0;

@@ -1,0 +1,102 @@
+// Frames or features: how a real-time run spends its budget, decided from
+// the images' texture.
+//
+// A run's time grows with the frames times the features a frame, and its
+// accuracy with the observations of each point. A recording whose every
+// frame holds far more SIFT keypoints than a real-time run keeps (1000) is
+// better served by fewer frames with more features each: each point keeps
+// as many observations, each better localised. Where some frames have few
+// keypoints (a bare wall, a stairwell), fewer frames leave those places
+// with fewer observations still, and the rate stays.
+//
+// The probe extracts SIFT, with the run's SIFT options but `max_num_features`
+// as the cap, on `num_frames` frames spread evenly over the frames the run
+// will select, and calls the recording textured when the `percentile`-th
+// smallest keypoint count reaches `min_fraction` of the cap. A textured
+// recording is then taken at `target_rate_hz` with `max_num_features` a
+// frame. SIFT is deterministic, so the same images give the same decision:
+// a run's stored data are fingerprinted by the options asked for and the
+// images (run_fingerprint.h).
+//
+// Measured on the simulated 100 s walks of docs/benchmarks.md ("Real time",
+// "Frames or features"): the room (textured everywhere) at 4 Hz and 2500
+// features is as accurate as the paper's settings, in less than its
+// duration; the corridor and two_floors (weak texture in places) lose half
+// their accuracy or more at 5 Hz, and stay at the run's rate.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "viosfm/features/sift.h"
+#include "viosfm/io/frame_cache.h"
+#include "viosfm/scene/sequence.h"
+#include "viosfm/util/option_fields.h"
+
+namespace viosfm {
+
+struct TextureProbeOptions {
+  // Decide the rate and the feature count from the texture (`viosfm run
+  // --realtime` turns it on; --rate or --max-features given with it turn it
+  // off). Default false: the rate and the feature count as set.
+  bool enable = false;
+  // Frames probed, evenly spread over the frames to select (>= 1). Default 24.
+  int num_frames = 24;
+  // The probe's cap of keypoints a frame, and a textured recording's feature
+  // count (>= 1). Default 2500.
+  int max_num_features = 2500;
+  // Hz, a textured recording's frame rate (> 0). Default 4.
+  double target_rate_hz = 4.0;
+  // Which of the probed frames' keypoint counts decides, as a fraction of
+  // them from the fewest (in [0, 1]; 0: the frame with the fewest). Default
+  // 0.1.
+  double percentile = 0.1;
+  // Textured when that count is at least this fraction of max_num_features
+  // (in (0, 1]). Default 0.9.
+  double min_fraction = 0.9;
+
+  std::string Validate() const;  // empty if valid, else names the bad field
+
+  template <class Self, class Visitor>
+  static void VisitFields(Self& self, Visitor&& visit) {
+    visit({"enable", "decide the frame rate and the feature count from the texture",
+           kShapesStoredData},
+          self.enable);
+    visit({"num_frames", "frames probed, spread over the frames to select", kShapesStoredData},
+          self.num_frames);
+    visit({"max_num_features", "the probe's keypoint cap and a textured recording's features",
+           kShapesStoredData},
+          self.max_num_features);
+    visit({"target_rate_hz", "Hz, a textured recording's frame rate", kShapesStoredData},
+          self.target_rate_hz);
+    visit({"percentile", "the probed frame that decides, as a fraction from the fewest keypoints",
+           kShapesStoredData},
+          self.percentile);
+    visit({"min_fraction", "textured when that frame's keypoints reach this fraction of the cap",
+           kShapesStoredData},
+          self.min_fraction);
+  }
+};
+
+struct TextureProbeResult {
+  bool probed = false;             // false: options.enable was false, or no frame to probe
+  std::vector<size_t> frames;      // indices into the sequence's images
+  std::vector<int> num_keypoints;  // per probed frame, under the probe's cap
+  int deciding_count = 0;          // the percentile-th smallest of num_keypoints
+  bool textured = false;
+  double seconds = 0.0;
+  // "textured: 2500 of 2500 keypoints at the 10th percentile of 24 frames"
+  std::string ToString(const TextureProbeOptions& options) const;
+};
+
+// Probes the images `candidates` (indices into sequence.images, in time
+// order; the frames the run will select) as above, decoding each probed
+// frame through `frame_cache`, which keeps it for the stages after. `sift` are the run's SIFT
+// options (their max_num_features is replaced by the probe's). Throws
+// InputError for invalid options or an unreadable image.
+TextureProbeResult ProbeTexture(const Sequence& sequence, const std::vector<size_t>& candidates,
+                                const SiftOptions& sift, const TextureProbeOptions& options,
+                                FrameCache* frame_cache);
+
+}  // namespace viosfm

@@ -1,0 +1,151 @@
+#include "viosfm/pipeline/texture_probe.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "viosfm/io/image_io.h"
+#include "viosfm/util/errors.h"
+#include "viosfm/util/testing.h"
+
+namespace viosfm {
+namespace {
+
+using ::testing::ElementsAre;
+using ::testing::HasSubstr;
+
+constexpr int kWidth = 240;
+constexpr int kHeight = 180;
+constexpr int kCap = 150;
+
+// Blocks of 6 px of random grey: corners and blobs everywhere.
+GreyImage TexturedImage(uint32_t seed) {
+  std::mt19937 random(seed);
+  std::uniform_int_distribution<int> grey(0, 255);
+  GreyImage image(kWidth, kHeight);
+  for (int by = 0; by < kHeight; by += 6) {
+    for (int bx = 0; bx < kWidth; bx += 6) {
+      const auto value = static_cast<uint8_t>(grey(random));
+      for (int y = by; y < std::min(by + 6, kHeight); ++y) {
+        for (int x = bx; x < std::min(bx + 6, kWidth); ++x) image.at(x, y) = value;
+      }
+    }
+  }
+  return image;
+}
+
+// A sequence of `num_frames` images, those in `bare` a uniform grey (no
+// keypoint at all), the others textured.
+Sequence MakeSequence(const std::string& name, int num_frames, const std::vector<int>& bare) {
+  const std::filesystem::path folder = testing::MakeScratchFolder(name);
+  Sequence sequence;
+  sequence.root = folder;
+  for (int k = 0; k < num_frames; ++k) {
+    const bool is_bare = std::find(bare.begin(), bare.end(), k) != bare.end();
+    const std::filesystem::path path = folder / (std::to_string(k) + ".png");
+    WriteGreyPng(path, is_bare ? GreyImage(kWidth, kHeight, 128) : TexturedImage(k + 1));
+    sequence.images.push_back({static_cast<timestamp_ns_t>(k) * 100'000'000, path});
+  }
+  return sequence;
+}
+
+std::vector<size_t> AllFrames(const Sequence& sequence) {
+  std::vector<size_t> frames(sequence.images.size());
+  for (size_t k = 0; k < frames.size(); ++k) frames[k] = k;
+  return frames;
+}
+
+TextureProbeOptions ProbeOptions() {
+  TextureProbeOptions options;
+  options.enable = true;
+  options.num_frames = 10;
+  options.max_num_features = kCap;
+  return options;
+}
+
+TEST(ProbeTexture, EveryFrameRichInKeypointsIsTextured) {
+  const Sequence sequence = MakeSequence("probe_textured", 10, {});
+  FrameCache cache(1 << 26);
+  const TextureProbeResult result =
+      ProbeTexture(sequence, AllFrames(sequence), SiftOptions(), ProbeOptions(), &cache);
+  ASSERT_TRUE(result.probed);
+  EXPECT_EQ(result.frames.size(), 10u);
+  for (const int count : result.num_keypoints) EXPECT_EQ(count, kCap);
+  EXPECT_EQ(result.deciding_count, kCap);
+  EXPECT_TRUE(result.textured);
+  EXPECT_THAT(result.ToString(ProbeOptions()), HasSubstr("textured: 150 of 150 keypoints"));
+  // The probed frames are held for the stages after: taking them decodes nothing.
+  EXPECT_EQ(cache.counts().decodes, 10u);
+  for (const SequenceImage& image : sequence.images) cache.Take(image.path);
+  EXPECT_EQ(cache.counts().decodes, 10u);
+  EXPECT_EQ(cache.counts().reuses, 10u);
+}
+
+TEST(ProbeTexture, AFewBareFramesKeepTheRateUnlessThePercentileIgnoresThem) {
+  // Three of ten frames are a bare wall: no keypoint.
+  const Sequence sequence = MakeSequence("probe_bare", 10, {2, 5, 8});
+  FrameCache cache(1 << 26);
+  TextureProbeOptions options = ProbeOptions();
+  const TextureProbeResult result =
+      ProbeTexture(sequence, AllFrames(sequence), SiftOptions(), options, &cache);
+  ASSERT_TRUE(result.probed);
+  EXPECT_EQ(result.num_keypoints[2], 0);
+  EXPECT_EQ(result.num_keypoints[5], 0);
+  EXPECT_EQ(result.num_keypoints[8], 0);
+  EXPECT_EQ(result.num_keypoints[0], kCap);
+  EXPECT_EQ(result.deciding_count, 0);
+  EXPECT_FALSE(result.textured);
+  EXPECT_THAT(result.ToString(options), HasSubstr("not textured: 0 of 150"));
+
+  // The median frame is textured: a percentile of 0.5 calls it textured.
+  options.percentile = 0.5;
+  const TextureProbeResult median =
+      ProbeTexture(sequence, AllFrames(sequence), SiftOptions(), options, &cache);
+  EXPECT_EQ(median.deciding_count, kCap);
+  EXPECT_TRUE(median.textured);
+}
+
+TEST(ProbeTexture, ProbedFramesAreSpreadEvenlyOverTheCandidates) {
+  const Sequence sequence = MakeSequence("probe_spread", 20, {});
+  std::vector<size_t> candidates;
+  for (size_t k = 1; k < 20; k += 2) candidates.push_back(k);  // 10 frames: 1, 3, ..., 19
+  TextureProbeOptions options = ProbeOptions();
+  options.num_frames = 4;
+  FrameCache cache(1 << 26);
+  const TextureProbeResult result =
+      ProbeTexture(sequence, candidates, SiftOptions(), options, &cache);
+  // The middle of each quarter of the candidates.
+  EXPECT_THAT(result.frames, ElementsAre(3u, 7u, 13u, 17u));
+}
+
+TEST(ProbeTexture, DisabledOrInvalid) {
+  const Sequence sequence = MakeSequence("probe_disabled", 2, {});
+  FrameCache cache(1 << 26);
+  TextureProbeOptions options = ProbeOptions();
+  options.enable = false;
+  const TextureProbeResult result =
+      ProbeTexture(sequence, AllFrames(sequence), SiftOptions(), options, &cache);
+  EXPECT_FALSE(result.probed);
+  EXPECT_EQ(cache.counts().decodes, 0u);
+  EXPECT_EQ(result.ToString(options), "not probed");
+
+  options.enable = true;
+  options.min_fraction = 0.0;
+  EXPECT_THAT(testing::InputErrorMessage([&] {
+                ProbeTexture(sequence, AllFrames(sequence), SiftOptions(), options, &cache);
+              }),
+              HasSubstr("min_fraction must be in (0, 1]"));
+  options = ProbeOptions();
+  options.num_frames = 0;
+  EXPECT_THAT(options.Validate(), HasSubstr("num_frames"));
+  options = ProbeOptions();
+  options.percentile = 1.5;
+  EXPECT_THAT(options.Validate(), HasSubstr("percentile"));
+  options = ProbeOptions();
+  options.target_rate_hz = 0.0;
+  EXPECT_THAT(options.Validate(), HasSubstr("target_rate_hz"));
+}
+
+}  // namespace
+}  // namespace viosfm
