@@ -253,13 +253,12 @@ struct PipelineOptions {
 // batches whose points keep their 5 latest older views
 // (mapper.ba_window_batches, mapper.ba_window_max_held_views), and the texture
 // probe (texture_probe.h: a recording whose every frame is rich in keypoints
-// is taken at 4 Hz with 2500 features a frame). Measured on
-// simulated 100 s walks at 10 Hz with viosfm's own VIO (docs/benchmarks.md,
-// "Real time"): 0.88 to 0.93 times the recording's duration (medians of
-// three runs; single runs 0.85 to 1.03) on the 2-core machine of
-// 2026-11-27; the paper's settings took 4519 s on the room
-// (2026-11-25, beside other jobs; 4052 s of it brute-force matching of
-// 40 561 pairs), for a Sim(3) ATE of 0.42 mm against 0.76 mm.
+// is taken at 4 Hz with 2500 features a frame). Measured on simulated 100
+// s walks with viosfm's own VIO (docs/benchmarks.md, "Real time"): 0.83 to
+// 0.97 times the recording's duration on the 2-core machine of 2026-11-27,
+// the room (textured: 4 Hz) at a Sim(3) ATE of 0.46 mm; the paper's
+// settings took 4519 s on the room (2026-11-25, beside other jobs; 4052 s
+// of it brute-force matching of 40 561 pairs), for 0.42 mm.
 void ApplyRealtimeSettings(PipelineOptions* options);
 
 }  // namespace viosfm
