@@ -7,6 +7,7 @@
 #include <chrono>
 #include <ctime>
 #include <iomanip>
+#include <iterator>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -119,7 +120,17 @@ void ResolveRateByTexture(const Sequence& sequence, FrameCache* frame_cache,
   if (probe.enable) {
     std::vector<size_t> candidates;
     if (!FrameSelectionUsesTrajectory(sequence, options->frame_selection)) {
+      // Frames selected at either rate, when there are enough: the cache
+      // keeps the probed frames for the features stage whatever it decides
+      // (a frame it releases before the VIO reads it is decoded twice).
       candidates = SelectFrames(sequence, options->frame_selection, nullptr).kept;
+      FrameSelectionOptions textured_selection = options->frame_selection;
+      textured_selection.target_rate_hz = probe.target_rate_hz;
+      const std::vector<size_t> textured = SelectFrames(sequence, textured_selection, nullptr).kept;
+      std::vector<size_t> both;
+      std::set_intersection(candidates.begin(), candidates.end(), textured.begin(), textured.end(),
+                            std::back_inserter(both));
+      if (both.size() >= static_cast<size_t>(probe.num_frames)) candidates = std::move(both);
     } else {
       for (size_t k = 0; k < sequence.images.size(); ++k) candidates.push_back(k);
     }

@@ -309,6 +309,9 @@ void SummarySection(const RunData& run, Page* page) {
       {"mean track length", Fixed(Number(s, "mean_track_length"), 2)},
       {"mean reprojection error (px)", Fixed(Number(s, "mean_reprojection_error_px"), 3)},
   };
+  if (Text(s, "texture_probe/probed") == "true") {
+    rows.push_back({"frame rate and features, from the texture", Text(s, "texture_probe/message")});
+  }
   if (Find(s, "all_frames")) {
     rows.push_back(
         {"every image of the recording (trajectory_body_all_frames.tum)",

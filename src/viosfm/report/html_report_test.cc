@@ -118,6 +118,9 @@ nlohmann::ordered_json MakeSummary(bool with_eval) {
       {"in", kFramesIn}, {"selected", kFramesSelected}, {"registered", kFramesRegistered}};
   s["pairs"] = {{"candidates", kNumPairs}, {"accepted", 48},  {"vio_rejected", 12},
                 {"ransac_rejected", 3},    {"no_matches", 1}, {"depth_rejected", 2}};
+  s["texture_probe"] = {{"probed", true},
+                        {"textured", true},
+                        {"message", "textured: 2500 of 2500 keypoints; 4 Hz, 2500 features"}};
   s["points"] = kPoints;
   s["observations"] = 98765;
   s["mean_track_length"] = 8.0004;
@@ -227,6 +230,10 @@ TEST(RenderRunReport, ShowsTheRunsNumbersAndFigures) {
   EXPECT_TRUE(Contains(html, "<td class=\"num\">197 (47.8 %)</td>"));
   EXPECT_TRUE(Contains(html, "<td class=\"num\">12345</td>"));
   EXPECT_TRUE(Contains(html, "<td class=\"num\">0.812</td>"));
+  EXPECT_TRUE(Contains(html,
+                       "<th>frame rate and features, from the texture</th><td "
+                       "class=\"num\">textured: 2500 of 2500 keypoints; 4 Hz, 2500 "
+                       "features</td>"));
   // ATE of the estimate from eval.json, of the VIO from summary.json.
   const double rmse = fixture.estimate_eval.ate_translation_m.rmse;
   EXPECT_GT(rmse, 0.005);
@@ -463,7 +470,8 @@ TEST(ChromiumRendering, ThreeDViewDrawsWithWebGl) {
   const size_t start = dom.find(prefix);
   ASSERT_NE(start, std::string::npos) << "no canvas data in the DOM (WebGL unavailable?)";
   const size_t end = dom.find('<', start);
-  const std::vector<uint8_t> png = DecodeBase64(dom.substr(start + prefix.size(), end - start - prefix.size()));
+  const std::vector<uint8_t> png =
+      DecodeBase64(dom.substr(start + prefix.size(), end - start - prefix.size()));
   const fs::path png_path = scratch / "view3d.png";
   {
     std::ofstream out(png_path, std::ios::binary);
