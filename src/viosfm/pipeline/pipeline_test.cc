@@ -139,6 +139,42 @@ TEST(PipelineTest, RealtimeSettingsRegisterEveryFrameAsAccurately) {
   EXPECT_LT(s.evaluation->ate_rmse_m, 1.25 * f.summary.evaluation->ate_rmse_m);
 }
 
+// The texture probe (texture_probe.h): the fixture's frames hold 700 and
+// more keypoints, so with a cap of 500 the recording is textured and is
+// taken at 4 Hz with 500 features a frame. The probed frames are among
+// those both rates select, so each image is still decoded once, and every
+// frame of the lower rate is registered.
+TEST(PipelineTest, TexturedRecordingIsTakenAtTheProbesRateAndFeatures) {
+  const Fixture& f = SharedFixture();
+  PipelineOptions options = SmallOptions(f, f.folder / "out_textured");
+  options.sift.max_num_features = 400;
+  options.texture_probe.enable = true;
+  options.texture_probe.num_frames = 6;
+  options.texture_probe.max_num_features = 500;
+  const PipelineSummary s = RunPipeline(options);
+  std::cerr << s.ToString() << "\n";
+  ASSERT_TRUE(s.texture_probe.probed);
+  EXPECT_TRUE(s.texture_probe.textured);
+  EXPECT_EQ(s.texture_probe.frames.size(), 6u);
+  EXPECT_GE(s.texture_probe.deciding_count, 450);
+  EXPECT_EQ(s.frame_rate_hz, 4.0);
+  EXPECT_EQ(s.max_num_features, 500);
+  // 4 Hz against the fixture's 10 Hz run, over the same moving stretch.
+  EXPECT_NEAR(static_cast<double>(s.num_frames_selected),
+              0.4 * static_cast<double>(f.summary.num_frames_selected), 2.0);
+  EXPECT_GT(s.features.MeanFeatures(), 400.0);
+  EXPECT_LE(s.features.MeanFeatures(), 500.0);
+  EXPECT_EQ(s.images.decodes, s.num_frames_selected);
+  EXPECT_EQ(s.num_frames_registered, s.num_frames_selected);
+  EXPECT_EQ(s.all_frames.num_unposed(), 0u);
+  // options.json keeps what was asked for; summary.json says what was used.
+  const nlohmann::json summary =
+      nlohmann::json::parse(ReadTextFile(options.output_folder / "summary.json"));
+  EXPECT_EQ(summary["texture_probe"]["frame_rate_hz"].get<double>(), 4.0);
+  EXPECT_EQ(summary["texture_probe"]["max_num_features"].get<int>(), 500);
+  EXPECT_TRUE(summary["texture_probe"]["textured"].get<bool>());
+}
+
 // Downsampled to 5 Hz, the model holds every other frame; every image of
 // the recording still gets a pose (trajectory_body_all_frames.tum): the
 // trimmed static start from the first model frame, the frames left out
