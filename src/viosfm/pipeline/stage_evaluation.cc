@@ -49,11 +49,25 @@ TrajectoryEvaluation EvaluateStage(const Sequence& sequence, const SelectedFrame
   eval_options.alignment = AlignmentMode::kSim3;
   eval_options.association = AssociationMethod::kNearest;
   if (sequence.has_ground_truth()) {
+    // The truth at every image, interpolated once; the selected frames'
+    // stamps are among the images' (both in time order).
     const Trajectory ground_truth = GroundTruthBodyTrajectory(sequence);
-    for (const SequenceImage& image : frames.sequence.images) {
+    Trajectory ground_truth_at_images;
+    for (const timestamp_ns_t stamp : image_stamps) {
       if (const std::optional<Rigid3d> pose =
-              InterpolatePose(ground_truth, image.timestamp_ns, kMaxGroundTruthGapNs)) {
-        result.ground_truth_at_frames.poses.push_back({image.timestamp_ns, *pose});
+              InterpolatePose(ground_truth, stamp, kMaxGroundTruthGapNs)) {
+        ground_truth_at_images.poses.push_back({stamp, *pose});
+      }
+    }
+    auto truth = ground_truth_at_images.poses.begin();
+    for (const SequenceImage& image : frames.sequence.images) {
+      while (truth != ground_truth_at_images.poses.end() &&
+             truth->timestamp_ns < image.timestamp_ns) {
+        ++truth;
+      }
+      if (truth != ground_truth_at_images.poses.end() &&
+          truth->timestamp_ns == image.timestamp_ns) {
+        result.ground_truth_at_frames.poses.push_back(*truth);
       }
     }
     if (result.ground_truth_at_frames.size() >= 3 && result.estimated_body.size() >= 3 &&
@@ -67,13 +81,6 @@ TrajectoryEvaluation EvaluateStage(const Sequence& sequence, const SelectedFrame
                                         eval_options);
         vio_metric =
             EvaluateMetricAccuracy(vio_registered, result.ground_truth_at_frames, eval_options);
-        Trajectory ground_truth_at_images;
-        for (const timestamp_ns_t stamp : image_stamps) {
-          if (const std::optional<Rigid3d> pose =
-                  InterpolatePose(ground_truth, stamp, kMaxGroundTruthGapNs)) {
-            ground_truth_at_images.poses.push_back({stamp, *pose});
-          }
-        }
         if (result.all_frames.world_from_body.size() >= 3) {
           all_frames_metric = EvaluateMetricAccuracy(result.all_frames.world_from_body,
                                                      ground_truth_at_images, eval_options);
