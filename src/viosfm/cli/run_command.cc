@@ -14,6 +14,7 @@
 #include "viosfm/cli/vio_uncertainty_options.h"
 #include "viosfm/io/trajectory_io.h"
 #include "viosfm/pipeline/pipeline.h"
+#include "viosfm/pipeline/texture_probe.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/logging.h"
 #include "viosfm/util/option_fields.h"
@@ -46,12 +47,6 @@ struct RunArguments {
   std::vector<std::string> set_options;
   PipelineOptions options;
 };
-
-// A frame rate or a feature count given by the user is kept: the texture
-// probe (pipeline/texture_probe.h) that --realtime turns on would change it.
-bool SettlesRateOrFeatures(const std::string& key) {
-  return key == "frame_selection.target_rate_hz" || key == "sift.max_num_features";
-}
 
 // --list-options: every option key with its default, whether it shapes the
 // stored data (a re-run with another value cannot reuse them) and its help.
@@ -92,7 +87,7 @@ void RunRun(RunArguments args) {
     }
     const std::string key = assignment.substr(0, equals);
     SetOptionFromText(options, key, assignment.substr(equals + 1));
-    if (SettlesRateOrFeatures(key)) options.texture_probe.enable = false;
+    if (SettledByTextureProbe(key)) options.texture_probe.enable = false;
   }
   if (const std::string error = options.Validate(); !error.empty()) {
     throw InputError("invalid run options: " + error);
@@ -159,7 +154,9 @@ void AddOptionFlags(CLI::App* command, PipelineOptions* options) {
               } catch (const InputError& error) {
                 throw InputError(flag + ": " + error.what());
               }
-              if (SettlesRateOrFeatures(key)) options->texture_probe.enable = false;
+              // A rate or a feature count given by the user is kept: the texture
+              // probe that --realtime turns on would change it.
+              if (SettledByTextureProbe(key)) options->texture_probe.enable = false;
               return true;
             },
             help + " (option " + key + ")")

@@ -160,8 +160,8 @@ void ResolveRateByTexture(const Sequence& sequence, FrameCache* frame_cache,
 }  // namespace
 
 PipelineSummary RunPipeline(const PipelineOptions& requested) {
-  // The options as asked for, which fingerprint the stored data, until the
-  // texture probe settles the frame rate and the feature count.
+  // The options as asked for, until the texture probe settles the frame
+  // rate and the feature count.
   PipelineOptions options = requested;
   if (const std::string error = options.Validate(); !error.empty()) {
     throw InputError("invalid run options: " + error);
@@ -190,6 +190,7 @@ PipelineSummary RunPipeline(const PipelineOptions& requested) {
   const Sequence sequence = clock.Run([&] {
     Sequence read = ReadDatasetStage(options, folder, &fingerprint);
     ResolveRateByTexture(read, &frame_cache, &options, &summary);
+    if (options.texture_probe.enable) AddSettledRateAndFeatures(options, &fingerprint);
     return read;
   });
   summary.num_frames_in = sequence.images.size();

@@ -173,6 +173,30 @@ TEST(PipelineTest, TexturedRecordingIsTakenAtTheProbesRateAndFeatures) {
   EXPECT_EQ(summary["texture_probe"]["frame_rate_hz"].get<double>(), 4.0);
   EXPECT_EQ(summary["texture_probe"]["max_num_features"].get<int>(), 500);
   EXPECT_TRUE(summary["texture_probe"]["textured"].get<bool>());
+  // fingerprint.json and options.json record what the probe settled.
+  const nlohmann::json fingerprint =
+      nlohmann::json::parse(ReadTextFile(options.output_folder / "fingerprint.json"));
+  const nlohmann::json& keys = fingerprint["entries"];
+  EXPECT_EQ(keys["sift.max_num_features"], "500");
+  EXPECT_EQ(keys["frame_selection.target_rate_hz"], "4");
+  const nlohmann::json written =
+      nlohmann::json::parse(ReadTextFile(options.output_folder / "options.json"));
+  EXPECT_EQ(written["sift.max_num_features"], "500");
+
+  // The same run again into its folder reuses every stored feature.
+  const PipelineSummary again = RunPipeline(options);
+  EXPECT_EQ(again.features.num_extracted, 0u);
+  EXPECT_EQ(again.features.num_skipped, s.num_frames_selected);
+  EXPECT_EQ(again.num_frames_registered, s.num_frames_selected);
+
+  // Stored data made with another decision (as another version of the
+  // probe could have made them) are refused, naming the feature count.
+  nlohmann::json stale = fingerprint;
+  stale["entries"]["sift.max_num_features"] = "400";
+  testing::WriteTextFile(options.output_folder / "fingerprint.json", stale.dump(2));
+  const std::string error = testing::InputErrorMessage([&] { RunPipeline(options); });
+  EXPECT_NE(error.find("sift.max_num_features was '400', is now '500'"), std::string::npos)
+      << error;
 }
 
 // Downsampled to 5 Hz, the model holds every other frame; every image of

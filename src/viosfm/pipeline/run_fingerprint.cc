@@ -9,6 +9,7 @@
 #include "viosfm/io/dataset.h"
 #include "viosfm/io/euroc.h"
 #include "viosfm/io/rosbag_dataset.h"
+#include "viosfm/pipeline/texture_probe.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/file_util.h"
 #include "viosfm/util/hash.h"
@@ -110,8 +111,18 @@ RunFingerprint FingerprintOfInputs(const PipelineOptions& options) {
   if (!options.verification.retrieval.vocabulary_path.empty()) {
     fingerprint.Set("vocabulary.file", FileValue(options.verification.retrieval.vocabulary_path));
   }
-  for (const auto& [key, value] : options.StoredDataKeyValues()) fingerprint.Set(key, value);
+  for (const auto& [key, value] : options.StoredDataKeyValues()) {
+    // Set once the texture probe has settled them (AddSettledRateAndFeatures).
+    if (options.texture_probe.enable && SettledByTextureProbe(key)) continue;
+    fingerprint.Set(key, value);
+  }
   return fingerprint;
+}
+
+void AddSettledRateAndFeatures(const PipelineOptions& options, RunFingerprint* fingerprint) {
+  for (const auto& [key, value] : options.StoredDataKeyValues()) {
+    if (SettledByTextureProbe(key)) fingerprint->Set(key, value);
+  }
 }
 
 void AddSequenceToFingerprint(const Sequence& sequence, RunFingerprint* fingerprint) {

@@ -10,6 +10,10 @@
 
 namespace viosfm {
 
+bool SettledByTextureProbe(const std::string& key) {
+  return key == "frame_selection.target_rate_hz" || key == "sift.max_num_features";
+}
+
 std::string TextureProbeOptions::Validate() const {
   if (num_frames < 1) return "num_frames must be at least 1";
   if (max_num_features < 1) return "max_num_features must be at least 1";

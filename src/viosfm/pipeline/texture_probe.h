@@ -14,9 +14,9 @@
 // will select, and calls the recording textured when the `percentile`-th
 // smallest keypoint count reaches `min_fraction` of the cap. A textured
 // recording is then taken at `target_rate_hz` with `max_num_features` a
-// frame. SIFT is deterministic, so the same images give the same decision:
-// a run's stored data are fingerprinted by the options asked for and the
-// images (run_fingerprint.h).
+// frame. The run's fingerprint (run_fingerprint.h) and options.json record
+// the rate and the feature count the probe settled, so stored data made
+// with another decision (by another version of the probe) are refused.
 //
 // Measured on the simulated 100 s walks of docs/benchmarks.md ("Real time",
 // "Frames or features"): the room (textured everywhere) at 4 Hz and 2500
@@ -78,6 +78,10 @@ struct TextureProbeOptions {
           self.min_fraction);
   }
 };
+
+// Whether the option `key` (options.json's key) is one the probe settles:
+// frame_selection.target_rate_hz and sift.max_num_features.
+bool SettledByTextureProbe(const std::string& key);
 
 struct TextureProbeResult {
   bool probed = false;             // false: options.enable was false, or no frame to probe
