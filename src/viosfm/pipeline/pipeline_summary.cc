@@ -129,6 +129,7 @@ std::string PipelineSummaryToJson(const PipelineSummary& s) {
                        {"levelling_deg", s.metric_scale.levelling_deg},
                        {"message", s.metric_scale.message}};
   json["texture_probe"] = {{"probed", s.texture_probe.probed},
+                           {"planned", s.texture_probe.num_planned},
                            {"frames", s.texture_probe.frames},
                            {"num_keypoints", s.texture_probe.num_keypoints},
                            {"deciding_count", s.texture_probe.deciding_count},

@@ -28,11 +28,20 @@ std::string TextureProbeOptions::Validate() const {
 std::string TextureProbeResult::ToString(const TextureProbeOptions& options) const {
   std::ostringstream text;
   if (!probed) return "not probed";
-  text << (textured ? "textured" : "not textured") << ": " << deciding_count << " of "
-       << options.max_num_features << " keypoints at the "
-       << static_cast<int>(std::lround(100.0 * options.percentile)) << "th percentile of "
-       << frames.size() << " frames (" << options.min_fraction * options.max_num_features
-       << " needed)";
+  const double needed = options.min_fraction * options.max_num_features;
+  text << (textured ? "textured" : "not textured") << ": ";
+  if (frames.size() < num_planned) {
+    const auto num_short = std::count_if(num_keypoints.begin(), num_keypoints.end(),
+                                         [&](int count) { return count < needed; });
+    text << num_short << " of the first " << frames.size() << " of " << num_planned
+         << " frames probed hold fewer than " << needed << " of " << options.max_num_features
+         << " keypoints (at the " << static_cast<int>(std::lround(100.0 * options.percentile))
+         << "th percentile of them " << deciding_count << ")";
+  } else {
+    text << deciding_count << " of " << options.max_num_features << " keypoints at the "
+         << static_cast<int>(std::lround(100.0 * options.percentile)) << "th percentile of "
+         << frames.size() << " frames (" << needed << " needed)";
+  }
   return text.str();
 }
 
@@ -48,24 +57,41 @@ TextureProbeResult ProbeTexture(const Sequence& sequence, const std::vector<size
   timer.Start();
   // Evenly spread: the middle of each of num_frames equal shares.
   const size_t count = std::min(candidates.size(), static_cast<size_t>(options.num_frames));
+  result.num_planned = count;
   for (size_t k = 0; k < count; ++k) {
     const size_t at = (2 * k + 1) * candidates.size() / (2 * count);
     result.frames.push_back(candidates[at]);
   }
   SiftOptions probe_sift = sift;
   probe_sift.max_num_features = options.max_num_features;
-  result.num_keypoints.assign(count, 0);
-  ParallelFor(static_cast<int64_t>(count), sift.num_threads, [&](int64_t k, int) {
-    const std::filesystem::path& path = sequence.images[result.frames[k]].path;
-    const std::shared_ptr<const GreyImage> image = frame_cache->Read(path, /*keep=*/true);
-    result.num_keypoints[k] = static_cast<int>(ExtractSift(*image, probe_sift).keypoints.size());
-  });
-  std::vector<int> sorted = result.num_keypoints;
-  std::sort(sorted.begin(), sorted.end());
   const size_t rank = std::min(
       count - 1, static_cast<size_t>(std::floor(options.percentile * static_cast<double>(count))));
-  result.deciding_count = sorted[rank];
-  result.textured = result.deciding_count >= options.min_fraction * options.max_num_features;
+  const double needed = options.min_fraction * options.max_num_features;
+  // kChunk frames at a time, in order, whatever the thread count (so the
+  // frames probed are the same on every run); done once more than `rank`
+  // of them fall short, since the rank-th smallest of all can then only be
+  // short too.
+  constexpr size_t kChunk = 2;
+  result.num_keypoints.assign(count, 0);
+  size_t probed = 0;
+  size_t num_short = 0;
+  while (probed < count && num_short <= rank) {
+    const size_t end = std::min(count, probed + kChunk);
+    ParallelFor(static_cast<int64_t>(end - probed), sift.num_threads, [&](int64_t i, int) {
+      const size_t k = probed + static_cast<size_t>(i);
+      const std::filesystem::path& path = sequence.images[result.frames[k]].path;
+      const std::shared_ptr<const GreyImage> image = frame_cache->Read(path, /*keep=*/true);
+      result.num_keypoints[k] = static_cast<int>(ExtractSift(*image, probe_sift).keypoints.size());
+    });
+    for (size_t k = probed; k < end; ++k) num_short += result.num_keypoints[k] < needed ? 1 : 0;
+    probed = end;
+  }
+  result.frames.resize(probed);
+  result.num_keypoints.resize(probed);
+  std::vector<int> sorted = result.num_keypoints;
+  std::sort(sorted.begin(), sorted.end());
+  result.deciding_count = sorted[std::min(rank, probed - 1)];
+  result.textured = result.deciding_count >= needed;
   result.probed = true;
   result.seconds = timer.ElapsedSeconds();
   return result;

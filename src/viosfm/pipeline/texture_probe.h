@@ -12,7 +12,10 @@
 // The probe extracts SIFT, with the run's SIFT options but `max_num_features`
 // as the cap, on `num_frames` frames spread evenly over the frames the run
 // will select, and calls the recording textured when the `percentile`-th
-// smallest keypoint count reaches `min_fraction` of the cap. A textured
+// smallest keypoint count reaches `min_fraction` of the cap. It probes them
+// in time order, two at a time, and stops as soon as more frames fall short
+// than the percentile allows (the decision cannot change then), so a
+// recording that is not textured costs a few frames. A textured
 // recording is then taken at `target_rate_hz` with `max_num_features` a
 // frame. The run's fingerprint (run_fingerprint.h) and options.json record
 // the rate and the feature count the probe settled, so stored data made
@@ -84,10 +87,16 @@ struct TextureProbeOptions {
 bool SettledByTextureProbe(const std::string& key);
 
 struct TextureProbeResult {
-  bool probed = false;             // false: options.enable was false, or no frame to probe
-  std::vector<size_t> frames;      // indices into the sequence's images
-  std::vector<int> num_keypoints;  // per probed frame, under the probe's cap
-  int deciding_count = 0;          // the percentile-th smallest of num_keypoints
+  bool probed = false;  // false: options.enable was false, or no frame to probe
+  // Indices into the sequence's images of the frames probed (fewer than
+  // num_frames when the probe stopped early) and their keypoint counts
+  // under the probe's cap.
+  std::vector<size_t> frames;
+  std::vector<int> num_keypoints;
+  size_t num_planned = 0;  // min(num_frames, candidates)
+  // The percentile-th smallest count of the num_frames planned; when the
+  // probe stopped early, that of the frames probed (short either way).
+  int deciding_count = 0;
   bool textured = false;
   double seconds = 0.0;
   // "textured: 2500 of 2500 keypoints at the 10th percentile of 24 frames"
