@@ -61,10 +61,10 @@ table="$out/realtime.md"
   echo "$(date -u +%Y-%m-%d), $(nproc) cores; ${duration} s at ${rate} Hz per scenario;" \
        "run arguments: ${extra[*]:-(defaults)}"
   echo
-  echo "| scenario | threads | vio s (CPU) | features s (CPU) | verification s (CPU) |" \
-       "mapper s (CPU) | other s | total s | CPU s | cores busy | x real time | registered |" \
-       "ATE Sim(3) mm | ATE SE(3) mm | decodes | peak MiB |"
-  echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+  echo "| scenario | threads | rate Hz, features | vio s (CPU) | features s (CPU) |" \
+       "verification s (CPU) | mapper s (CPU) | other s | total s | CPU s | cores busy |" \
+       "x real time | registered | ATE Sim(3) mm | ATE SE(3) mm | decodes | peak MiB |"
+  echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
 } > "$table"
 
 for scenario in $scenarios; do
@@ -108,8 +108,12 @@ peak = int(re.search(r"Maximum resident set size \(kbytes\): (\d+)", time_text).
 ev = summary.get("eval", {}).get("metric", {})
 def mm(key):
     return "%.2f" % (1000 * ev[key]) if key in ev else "n/a"
-print("| %s | %s | %s | %s | %s | %s | %.1f | %.1f | %.1f | %.2f | %.2f | %d of %d | %s | %s | %d | %.0f |" % (
-    scenario, threads, stage("vio"), stage("features"), stage("verification"), stage("mapper"),
+# The frame rate and feature count the run used (the texture probe may
+# have settled them, summary.json "texture_probe").
+probe = summary.get("texture_probe", {})
+used = "%g, %d" % (probe["frame_rate_hz"], probe["max_num_features"]) if probe else "n/a"
+print("| %s | %s | %s | %s | %s | %s | %s | %.1f | %.1f | %.1f | %.2f | %.2f | %d of %d | %s | %s | %d | %.0f |" % (
+    scenario, threads, used, stage("vio"), stage("features"), stage("verification"), stage("mapper"),
     other, total, total_cpu, total_cpu / total, total / duration,
     summary["frames"]["registered"], summary["frames"]["selected"],
     mm("ate_sim3_rmse_m"), mm("ate_se3_rmse_m"), summary.get("images", {}).get("decoded", 0), peak))

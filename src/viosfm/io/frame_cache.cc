@@ -9,17 +9,27 @@ namespace viosfm {
 namespace fs = std::filesystem;
 
 std::shared_ptr<const GreyImage> FrameCache::Read(const fs::path& path, bool keep) {
+  return Fetch(path, keep, /*mark_read=*/true);
+}
+
+std::shared_ptr<const GreyImage> FrameCache::Preload(const fs::path& path) {
+  return Fetch(path, /*keep=*/true, /*mark_read=*/false);
+}
+
+std::shared_ptr<const GreyImage> FrameCache::Fetch(const fs::path& path, bool keep,
+                                                   bool mark_read) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     if (const auto it = held_.find(path); it != held_.end()) {
       ++counts_.reuses;
+      if (mark_read && read_.insert(path).second) read_done_.notify_all();
       return it->second;
     }
   }
   auto image = std::make_shared<const GreyImage>(ReadGreyImage(path));
   std::lock_guard<std::mutex> lock(mutex_);
   ++counts_.decodes;
-  if (read_.insert(path).second) read_done_.notify_all();
+  if (mark_read && read_.insert(path).second) read_done_.notify_all();
   if (keep && (!filtered_ || wanted_.count(path) > 0)) {
     const size_t bytes = image->pixels.size();
     if (held_bytes_ + bytes <= max_bytes_) {

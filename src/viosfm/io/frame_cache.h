@@ -37,9 +37,13 @@ class FrameCache {
   // held copy if there is one, else decoded now; with `keep`, held for a
   // later Take if there is room. Throws InputError as ReadGreyImage does.
   std::shared_ptr<const GreyImage> Read(const std::filesystem::path& path, bool keep);
+  // Read with `keep`, by someone other than the reader that TakeAfterRead
+  // follows: the image is held for later, but a TakeAfterRead of it still
+  // waits for the reader's own Read (which then finds it held).
+  std::shared_ptr<const GreyImage> Preload(const std::filesystem::path& path);
   // The image for the last time: the held copy, released, or decoded now.
   std::shared_ptr<const GreyImage> Take(const std::filesystem::path& path);
-  // Take once `path` has been Read (by another thread: a stage that runs
+  // Take once `path` has been Read, decoded or found held (by another thread: a stage that runs
   // beside the reader takes each frame right after it); blocks until then.
   // Null if StopWaiting came first.
   std::shared_ptr<const GreyImage> TakeAfterRead(const std::filesystem::path& path);
@@ -54,6 +58,9 @@ class FrameCache {
   size_t max_bytes() const { return max_bytes_; }
 
  private:
+  std::shared_ptr<const GreyImage> Fetch(const std::filesystem::path& path, bool keep,
+                                         bool mark_read);
+
   const size_t max_bytes_;
   mutable std::mutex mutex_;
   std::map<std::filesystem::path, std::shared_ptr<const GreyImage>> held_;

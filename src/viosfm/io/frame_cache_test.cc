@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
+#include <chrono>
 #include <filesystem>
 #include <thread>
 
@@ -97,6 +99,31 @@ TEST(FrameCacheTest, TakeAfterReadWaitsForTheReaderAndStopsWhenItIsDone) {
   // Read paths stay read after StopWaiting: taken (decoded again, released before).
   EXPECT_NE(cache.TakeAfterRead(a), nullptr);
   EXPECT_EQ(cache.TakeAfterRead(never), nullptr);
+}
+
+// A frame preloaded (the texture probe) is held, but a follower still waits
+// for the reader's own Read, which then finds it held: the reader and the
+// follower share the one decode.
+TEST(FrameCacheTest, PreloadedFrameIsTakenAfterTheReadersReadNotBefore) {
+  const fs::path folder = testing::MakeScratchFolder("frame_cache_preload");
+  const fs::path a = WriteImage(folder, "a.png", 10);
+  FrameCache cache(1 << 20);
+  EXPECT_EQ(cache.Preload(a)->at(3, 2), 11);
+  std::atomic<bool> taken{false};
+  std::shared_ptr<const GreyImage> taken_a;
+  std::thread follower([&] {
+    taken_a = cache.TakeAfterRead(a);
+    taken = true;
+  });
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  EXPECT_FALSE(taken);  // preloaded, not read: the follower waits
+  EXPECT_EQ(cache.Read(a, /*keep=*/true)->at(3, 2), 11);
+  follower.join();
+  ASSERT_NE(taken_a, nullptr);
+  EXPECT_EQ(taken_a->at(3, 2), 11);
+  const FrameCache::Counts counts = cache.counts();
+  EXPECT_EQ(counts.decodes, 1u);
+  EXPECT_EQ(counts.reuses, 2u);  // the reader's Read and the follower's Take
 }
 
 TEST(FrameCacheTest, UnreadableFileIsAnInputError) {

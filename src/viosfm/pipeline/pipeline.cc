@@ -120,9 +120,11 @@ void ResolveRateByTexture(const Sequence& sequence, FrameCache* frame_cache,
   if (probe.enable) {
     std::vector<size_t> candidates;
     if (!FrameSelectionUsesTrajectory(sequence, options->frame_selection)) {
-      // Frames selected at either rate, when there are enough: the cache
-      // keeps the probed frames for the features stage whatever it decides
-      // (a frame it releases before the VIO reads it is decoded twice).
+      // Frames selected at both rates (all the lower rate's frames when
+      // the camera runs at the higher rate): the cache keeps the probed
+      // frames for the features stage whatever it decides (a frame it
+      // releases before the VIO reads it is decoded twice). A short
+      // recording has fewer of them to probe.
       candidates = SelectFrames(sequence, options->frame_selection, nullptr).kept;
       FrameSelectionOptions textured_selection = options->frame_selection;
       textured_selection.target_rate_hz = probe.target_rate_hz;
@@ -130,7 +132,7 @@ void ResolveRateByTexture(const Sequence& sequence, FrameCache* frame_cache,
       std::vector<size_t> both;
       std::set_intersection(candidates.begin(), candidates.end(), textured.begin(), textured.end(),
                             std::back_inserter(both));
-      if (both.size() >= static_cast<size_t>(probe.num_frames)) candidates = std::move(both);
+      if (!both.empty()) candidates = std::move(both);
     } else {
       for (size_t k = 0; k < sequence.images.size(); ++k) candidates.push_back(k);
     }

@@ -80,7 +80,7 @@ TextureProbeResult ProbeTexture(const Sequence& sequence, const std::vector<size
     ParallelFor(static_cast<int64_t>(end - probed), sift.num_threads, [&](int64_t i, int) {
       const size_t k = probed + static_cast<size_t>(i);
       const std::filesystem::path& path = sequence.images[result.frames[k]].path;
-      const std::shared_ptr<const GreyImage> image = frame_cache->Read(path, /*keep=*/true);
+      const std::shared_ptr<const GreyImage> image = frame_cache->Preload(path);
       result.num_keypoints[k] = static_cast<int>(ExtractSift(*image, probe_sift).keypoints.size());
     });
     for (size_t k = probed; k < end; ++k) num_short += result.num_keypoints[k] < needed ? 1 : 0;
