@@ -54,7 +54,11 @@ void RunVioCommand(VioArguments args) {
                    << ", trajectory_cam.tum, states.csv, vio_summary.txt; " << summary.num_frames
                    << " frames: tracking " << summary.status_counts[1] << ", initializing "
                    << summary.status_counts[0] << ", imu_only " << summary.status_counts[2]
-                   << ", lost " << summary.status_counts[3] << "; CPU " << summary.cpu_seconds
+                   << ", lost " << summary.status_counts[3] << "; "
+                   << summary.num_frames_without_pose
+                   << " without a pose (before the moving start was initialised, left out of "
+                      "the trajectories); CPU "
+                   << summary.cpu_seconds
                    << " s";
 }
 

@@ -86,6 +86,7 @@ Trajectory VioResult::BodyTrajectory() const {
   Trajectory trajectory;
   trajectory.poses.reserve(frames.size());
   for (const VioFrameResult& frame : frames) {
+    if (!frame.has_pose) continue;  // before a moving start is initialised
     trajectory.poses.push_back({frame.timestamp_ns, frame.state.world_from_body});
   }
   return trajectory;
@@ -448,7 +449,7 @@ VioResult RunVio(const Sequence& sequence, const VioOptions& options, FrameCache
         rotation_deg += GyroRotationSumDeg({startup[startup.size() - 2], startup.back()},
                                            sequence.imu, rig.cam_time_offset_ns);
       }
-      if (rotation_deg >= options.time_offset.min_total_rotation_deg ||
+      if (rotation_deg >= options.time_offset.target_rotation_deg ||
           NsToSeconds(startup.back().timestamp_ns - startup.front().timestamp_ns) >=
               options.time_offset.max_wait_s) {
         ++k;
@@ -522,6 +523,9 @@ VioResult RunVio(const Sequence& sequence, const VioOptions& options, FrameCache
     frame.segment = segment;
   }
   summary.num_segments = segment + 1;
+  summary.num_frames_without_pose = static_cast<size_t>(
+      std::count_if(result.frames.begin(), result.frames.end(),
+                    [](const VioFrameResult& frame) { return !frame.has_pose; }));
   summary.cpu_seconds = ProcessCpuSeconds() - cpu_start;
   summary.wall_seconds = timer.ElapsedSeconds();
 
@@ -564,6 +568,8 @@ std::string FormatVioSummary(const VioSummary& summary) {
   }
   out << "num_keyframes: " << summary.num_keyframes << "\n";
   out << "num_frames_beyond_imu: " << summary.num_frames_beyond_imu << "\n";
+  out << "num_frames_without_pose: " << summary.num_frames_without_pose
+      << "  # before a moving start was initialised\n";
   out << "static_start: " << (summary.static_init.is_static() ? "true" : "false") << "\n";
   out << "static_init_status: " << StaticInitStatusName(summary.static_init.status) << "\n";
   if (summary.static_init.is_static()) {

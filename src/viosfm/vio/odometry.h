@@ -318,10 +318,13 @@ struct VioOptions {
     visit({"time_offset.max_frame_gap", "frames are paired with each of the next this many",
            kShapesStoredData},
           self.time_offset.max_frame_gap);
-    visit({"time_offset.min_total_rotation_deg", "deg, gyro rotation needed before estimating",
+    visit({"time_offset.target_rotation_deg", "deg, gyro rotation collected before estimating",
            kShapesStoredData},
+          self.time_offset.target_rotation_deg);
+    visit({"time_offset.min_total_rotation_deg",
+           "deg, least gyro rotation with which the estimate is trusted", kShapesStoredData},
           self.time_offset.min_total_rotation_deg);
-    visit({"time_offset.max_wait_s", "s, longest wait for that rotation", kShapesStoredData},
+    visit({"time_offset.max_wait_s", "s, longest wait for the target rotation", kShapesStoredData},
           self.time_offset.max_wait_s);
     visit({"time_offset.min_cost_reduction", "relative cost reduction needed to replace the offset",
            kShapesStoredData},
@@ -426,6 +429,9 @@ struct VioSummary {
   // Frames at the end that lie after the last IMU sample (on the IMU clock):
   // not processed, no pose, not in VioResult::frames.
   size_t num_frames_beyond_imu = 0;
+  // Frames without a pose: those before a moving start was initialised
+  // (has_pose false; left out of the trajectories, kept in states.csv).
+  size_t num_frames_without_pose = 0;
   double cpu_seconds = 0.0;  // process CPU time of RunVio
   double wall_seconds = 0.0;
   std::string message;  // one-paragraph outcome (static start, initialisation, failures)
@@ -436,7 +442,9 @@ struct VioResult {
   VioSummary summary;
   Rigid3d body_from_cam;
 
-  // world_from_body / world_from_cam at the image stamps, every frame.
+  // world_from_body / world_from_cam at the image stamps, every frame with
+  // a pose (has_pose; the frames before a moving start is initialised have
+  // none and are left out).
   Trajectory BodyTrajectory() const;
   Trajectory CameraTrajectory() const;
 };

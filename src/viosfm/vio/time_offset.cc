@@ -260,6 +260,9 @@ std::string TimeOffsetOptions::Validate() const {
     return "readout_coarse_step_s must be in [fine_step_s, max_readout_s]";
   }
   if (!(min_total_rotation_deg >= 0)) return "min_total_rotation_deg must be >= 0";
+  if (!(target_rotation_deg >= min_total_rotation_deg)) {
+    return "target_rotation_deg must be >= min_total_rotation_deg";
+  }
   if (!(max_wait_s > 0)) return "max_wait_s must be > 0";
   if (!(min_cost_reduction >= 0) || !(min_cost_reduction < 1)) {
     return "min_cost_reduction must be in [0, 1)";

@@ -22,8 +22,9 @@
 // recording (-47 ms over its first 90 degrees of rotation, the same as over
 // all 30 s).
 //
-// The estimate is trusted only if the motion rotates enough (the sum of the
-// gyro rotation angles between consecutive frames), the minimum lies inside the search
+// The driver collects frames until they rotate target_rotation_deg (the sum
+// of the gyro rotation angles between consecutive frames) or for max_wait_s.
+// The estimate is trusted only if they rotate at least min_total_rotation_deg, the minimum lies inside the search
 // range, and the cost there is clearly below the cost at the offset the
 // calibration gave; otherwise the calibration's offset stands.
 #pragma once
@@ -59,9 +60,20 @@ struct TimeOffsetOptions {
   // consecutive frames alone (1) gave estimates 2.5 to 14 ms from a 47 ms
   // truth, pairs up to 3 apart 0.2 to 2.1 ms.
   int max_frame_gap = 3;
-  // deg, the gyro rotation summed over the pairs needed before the estimate
-  // is made (the driver waits for it) and trusted. Default 90.
-  double min_total_rotation_deg = 90.0;
+  // deg, the gyro rotation (summed over consecutive frames) the driver
+  // collects frames for before the estimate, up to max_wait_s: the more
+  // rotation, the more precise the estimate. Default 90.
+  double target_rotation_deg = 90.0;
+  // deg, the least rotation with which an estimate is made and trusted.
+  // Default 30: on the simulated room with every imperfection at once (blur,
+  // auto exposure, white walls, a 30 ms rolling shutter, a 47 ms offset) 20
+  // to 30 degrees gave 43.3 ms, 90 degrees 45.0 ms; on stretches of the real
+  // RealSense recording that start in motion and turn less than 90 degrees
+  // in 10 s, 30 degrees gave -42.5 to -57.3 ms (the whole recording -47.3 ms
+  // with a 21 ms readout), and the VIO then tracks them without a reset,
+  // where the calibration's 0 ms left 31 to 160 frames on the IMU alone
+  // (docs/benchmarks.md, "Starting in motion").
+  double min_total_rotation_deg = 30.0;
   // Estimate a rolling shutter's readout time with the offset (default
   // true; used when the frames are given uncorrected and with the image
   // height): each corner's observation time is its frame's stamp plus its
@@ -75,8 +87,9 @@ struct TimeOffsetOptions {
   // fine grid is fine_step_s.
   double max_readout_s = 0.05;
   double readout_coarse_step_s = 0.002;
-  // s, the longest stretch of frames collected while waiting for that
-  // rotation; after it, the estimate is made with what there is. Default 10.
+  // s, the longest stretch of frames collected while waiting for
+  // target_rotation_deg; after it, the estimate is made with what there is
+  // (and trusted from min_total_rotation_deg on). Default 10.
   double max_wait_s = 10.0;
   // The estimate replaces the calibration's offset only when its cost is
   // below (1 - min_cost_reduction) times the cost at the calibration's
