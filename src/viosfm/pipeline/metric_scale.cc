@@ -54,22 +54,42 @@ MetricScaleSummary ApplyImuMetricScale(const Sequence& sequence, const SensorRig
   summary.imu = EstimateImuScale(body, sequence.imu, rig.imu_noise, options);
   std::ostringstream message;
   message << summary.imu.message;
-  if (summary.imu.usable) {
-    // Inverse-variance fusion with the VIO's scale (1 +- vio_scale_sigma).
-    const double imu_variance = std::pow(summary.imu.scale_sigma * summary.imu.scale, 2);
-    const double vio_variance = std::max(1e-12, vio_scale_sigma * vio_scale_sigma);
-    summary.applied_scale = (summary.imu.scale / imu_variance + 1.0 / vio_variance) /
-                            (1.0 / imu_variance + 1.0 / vio_variance);
+  const ImuScaleResult& imu = summary.imu;
+  const double imu_variance = std::pow(imu.scale_sigma * imu.scale, 2);
+  const double vio_variance = std::max(1e-12, vio_scale_sigma * vio_scale_sigma);
+  const double sigmas_from_vio = std::abs(imu.scale - 1.0) / std::sqrt(imu_variance + vio_variance);
+  summary.vio_scale_refuted = imu.num_pairs > 0 && imu.scale > 0.0 &&
+                              imu.scale_sigma <= options.max_refuting_scale_sigma &&
+                              imu.residual_ratio <= options.max_refuting_residual_ratio &&
+                              sigmas_from_vio > options.vio_refuted_sigmas;
+  if (imu.usable || summary.vio_scale_refuted) {
+    if (summary.vio_scale_refuted) {
+      // The VIO's scale is not an estimate to fuse with: the IMU's alone.
+      summary.applied_scale = imu.scale;
+      summary.applied_scale_sigma = imu.scale_sigma;
+    } else {
+      // Inverse-variance fusion with the VIO's scale (1 +- vio_scale_sigma).
+      summary.applied_scale = (imu.scale / imu_variance + 1.0 / vio_variance) /
+                              (1.0 / imu_variance + 1.0 / vio_variance);
+      summary.applied_scale_sigma =
+          std::sqrt(1.0 / (1.0 / imu_variance + 1.0 / vio_variance)) / summary.applied_scale;
+    }
     const double s = summary.applied_scale;
-    summary.applied_scale_sigma = std::sqrt(1.0 / (1.0 / imu_variance + 1.0 / vio_variance)) / s;
     for (const image_t image_id : reconstruction->ImageIds()) {
       reconstruction->GetImage(image_id).cam_from_world.translation *= s;
     }
     for (const point3D_t point3D_id : reconstruction->Point3DIds()) {
       reconstruction->GetPoint3D(point3D_id).xyz *= s;
     }
-    message << std::fixed << std::setprecision(5) << "; applied " << s
-            << " (fused with the VIO's scale, +- " << vio_scale_sigma << ")";
+    if (summary.vio_scale_refuted) {
+      message << std::fixed << std::setprecision(1) << "; the VIO's scale is refuted ("
+              << sigmas_from_vio << " sigma from the IMU's, its sigma taken as "
+              << std::setprecision(5) << vio_scale_sigma << "): applied the IMU's " << s << " +- "
+              << imu.scale_sigma * s << " alone";
+    } else {
+      message << std::fixed << std::setprecision(5) << "; applied " << s
+              << " (fused with the VIO's scale, +- " << vio_scale_sigma << ")";
+    }
     summary.levelling_deg = LevelWithGravity(summary.imu.gravity_in_world, reconstruction);
     message << std::setprecision(3) << "; levelled with the IMU's gravity (turned by "
             << summary.levelling_deg << " deg)";

@@ -7,7 +7,10 @@
 // trajectory is estimated from it; when usable, it is fused with the VIO's
 // (1, with the VIO uncertainty model's scale_sigma) by inverse variance and
 // the reconstruction (points and camera positions, about the world origin)
-// is scaled by the result.
+// is scaled by the result. When the IMU's scale refutes the VIO's (lies
+// many sigmas from it, ImuScaleOptions::vio_refuted_sigmas; a VIO whose
+// initialisation in motion got the scale wrong), the IMU's is applied alone,
+// with its own sigma, and a warning says so.
 //
 // The same fit gives the direction of gravity in the reconstruction's world
 // frame, from every registered frame's IMU; the world frame itself is the
@@ -34,6 +37,9 @@ struct MetricScaleSummary {
   // Relative standard deviation of the model's scale after that: the fused
   // one when the IMU's was usable, else the VIO's.
   double applied_scale_sigma = 0.0;
+  // The IMU's scale refuted the VIO's (ImuScaleOptions::vio_refuted_sigmas)
+  // and was applied alone.
+  bool vio_scale_refuted = false;
   // Degrees the reconstruction was turned to level it with the IMU's
   // gravity (0 when not).
   double levelling_deg = 0.0;

@@ -4,11 +4,14 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <iostream>
 #include <numbers>
 #include <string>
 
 #include "viosfm/scene/reprojection.h"
 #include "viosfm/sensor/camera_models.h"
+#include "viosfm/sim/imu_synthesis.h"
+#include "viosfm/sim/trajectory.h"
 #include "viosfm/util/random.h"
 
 namespace viosfm {
@@ -62,6 +65,77 @@ TEST(MetricScale, LevelWithGravityTurnsTheWorldSoThatGravityPointsDown) {
   EXPECT_LT(error_before, 1e-9);
   // Levelling a level world changes nothing.
   EXPECT_NEAR(LevelWithGravity(Eigen::Vector3d(0, 0, -1), &reconstruction), 0.0, 1e-12);
+}
+
+// A 30 s walk's IMU and a reconstruction of its frames at 10 Hz whose
+// positions are the truth divided by true_scale (the scale a VIO gave it).
+struct ScaledWalk {
+  Sequence sequence;
+  Reconstruction reconstruction;
+};
+ScaledWalk MakeScaledWalk(double true_scale) {
+  WalkOptions walk;
+  walk.duration_s = 30.0;
+  walk.seed = 4;
+  const BodyTrajectory trajectory = GenerateWalk(walk);
+  ScaledWalk scaled;
+  ImuSynthesisOptions imu;
+  imu.seed = 5;
+  scaled.sequence.imu =
+      SynthesizeImu(trajectory, trajectory.start_ns(), trajectory.end_ns(), imu).samples;
+  scaled.sequence.rig.imu_noise = imu.noise;  // body_from_cam identity, no time offset
+  Camera camera = MakeCamera(CameraModelId::kPinhole, 640, 480, {400.0, 400.0, 320.0, 240.0});
+  camera.camera_id = 1;
+  scaled.reconstruction.AddCamera(camera);
+  image_t id = 1;
+  for (timestamp_ns_t t = trajectory.start_ns() + SecondsToNs(0.5);
+       t < trajectory.end_ns() - SecondsToNs(0.5); t += SecondsToNs(0.1), ++id) {
+    Rigid3d world_from_body = trajectory.WorldFromBody(t);
+    world_from_body.translation /= true_scale;
+    Image image;
+    image.image_id = id;
+    image.camera_id = 1;
+    image.name = "image" + std::to_string(id);
+    image.timestamp_ns = t;
+    image.cam_from_world = world_from_body.Inverse();
+    image.registered = true;
+    scaled.reconstruction.AddImage(std::move(image));
+  }
+  return scaled;
+}
+
+// A VIO whose scale is far off (a start in motion whose initialisation got
+// it wrong, as on the real handheld recording): the IMU's scale lies many
+// sigmas from the VIO's 1 +- 2 %, refutes it, and is applied alone, outside
+// the [1/1.2, 1.2] a usable scale keeps to. A VIO 1 % off is fused as
+// before, and not refuted.
+TEST(MetricScale, AnImuScaleManySigmasFromTheVioRefutesIt) {
+  const double kVioScaleSigma = 0.02;
+  ScaledWalk far = MakeScaledWalk(2.3);
+  const Eigen::Vector3d position_before =
+      far.reconstruction.GetImage(10).cam_from_world.Inverse().translation;
+  const MetricScaleSummary refuted = ApplyImuMetricScale(
+      far.sequence, far.sequence.rig, kVioScaleSigma, ImuScaleOptions(), &far.reconstruction);
+  std::cout << "2.3 times too small: " << refuted.message << "\n";
+  EXPECT_FALSE(refuted.imu.usable);
+  ASSERT_TRUE(refuted.vio_scale_refuted) << refuted.message;
+  EXPECT_NEAR(refuted.applied_scale, 2.3, 0.023) << refuted.message;
+  EXPECT_EQ(refuted.applied_scale_sigma, refuted.imu.scale_sigma);
+  EXPECT_NE(refuted.message.find("refuted"), std::string::npos);
+  // The cameras moved out by the applied scale (and levelled: a turn about
+  // the origin keeps distances).
+  const Eigen::Vector3d position_after =
+      far.reconstruction.GetImage(10).cam_from_world.Inverse().translation;
+  EXPECT_NEAR(position_after.norm(), refuted.applied_scale * position_before.norm(), 1e-9);
+
+  ScaledWalk near = MakeScaledWalk(1.01);
+  const MetricScaleSummary fused = ApplyImuMetricScale(
+      near.sequence, near.sequence.rig, kVioScaleSigma, ImuScaleOptions(), &near.reconstruction);
+  std::cout << "1 % too small: " << fused.message << "\n";
+  EXPECT_FALSE(fused.vio_scale_refuted) << fused.message;
+  ASSERT_TRUE(fused.imu.usable) << fused.message;
+  EXPECT_NEAR(fused.applied_scale, 1.01, 0.002) << fused.message;
+  EXPECT_NE(fused.message.find("fused with the VIO's scale"), std::string::npos);
 }
 
 }  // namespace

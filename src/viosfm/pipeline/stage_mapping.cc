@@ -75,7 +75,11 @@ Reconstruction MapStage(const BatchedMapperInput& input, const Sequence& sequenc
     summary->metric_scale = ApplyImuMetricScale(sequence, vio.own_vio_rig.value_or(sequence.rig),
                                                 options.vio_uncertainty.scale_sigma,
                                                 options.imu_scale, &reconstruction);
-    VIOSFM_LOG(INFO) << "run: metric scale: " << summary->metric_scale.message;
+    if (summary->metric_scale.vio_scale_refuted) {
+      VIOSFM_LOG(WARNING) << "run: metric scale: " << summary->metric_scale.message;
+    } else {
+      VIOSFM_LOG(INFO) << "run: metric scale: " << summary->metric_scale.message;
+    }
   }
   summary->num_frames_registered = static_cast<size_t>(summary->mapper.num_supported);
   summary->num_frames_vio_only = static_cast<size_t>(summary->mapper.num_vio_only);

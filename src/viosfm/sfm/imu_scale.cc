@@ -36,6 +36,9 @@ std::string ImuScaleOptions::Validate() const {
   if (gravity_iterations < 1) return "gravity_iterations must be >= 1";
   if (!(max_scale_sigma > 0.0)) return "max_scale_sigma must be > 0";
   if (!(max_scale_factor > 1.0)) return "max_scale_factor must be > 1";
+  if (!(vio_refuted_sigmas > 0.0)) return "vio_refuted_sigmas must be > 0";
+  if (!(max_refuting_scale_sigma > 0.0)) return "max_refuting_scale_sigma must be > 0";
+  if (!(max_refuting_residual_ratio > 0.0)) return "max_refuting_residual_ratio must be > 0";
   if (!(max_residual_ratio > 0.0)) return "max_residual_ratio must be > 0";
   return "";
 }

@@ -8,6 +8,7 @@
 #include <sstream>
 #include <unordered_map>
 
+#include "viosfm/estimators/absolute_pose.h"
 #include "viosfm/io/image_io.h"
 #include "viosfm/io/trajectory_io.h"
 #include "viosfm/io/vio_states_io.h"
@@ -195,6 +196,88 @@ ImuState VisualInertialOdometry::Propagate(const ImuState& state, timestamp_ns_t
   return predicted;
 }
 
+ImuState VisualInertialOdometry::PropagateBack(const ImuState& state, timestamp_ns_t to_ns) const {
+  if (to_ns >= state.timestamp_ns) return state;
+  ImuPreintegration preintegration(state.gyro_bias, state.accel_bias, rig_.imu_noise);
+  ImuState earlier = state;
+  earlier.timestamp_ns = to_ns;
+  if (!preintegration.IntegrateRange(imu_, to_ns, state.timestamp_ns)) return earlier;
+  // Predict's equations (imu_preintegration.h) solved for the earlier state:
+  // R_j = R_i dR, v_j = v_i + g dt + R_i dv, p_j = p_i + v_i dt + g dt^2 / 2 + R_i dp.
+  const double dt = NsToSeconds(state.timestamp_ns - to_ns);
+  const Eigen::Vector3d gravity = GravityInWorld();
+  const Eigen::Quaterniond rotation =
+      (state.world_from_body.rotation * preintegration.delta_R().conjugate()).normalized();
+  earlier.world_from_body.rotation = rotation;
+  earlier.velocity_in_world =
+      state.velocity_in_world - gravity * dt - rotation * preintegration.delta_v();
+  earlier.world_from_body.translation = state.world_from_body.translation -
+                                        earlier.velocity_in_world * dt -
+                                        0.5 * gravity * dt * dt - rotation * preintegration.delta_p();
+  return earlier;
+}
+
+void VisualInertialOdometry::PoseMovingStart(
+    const std::vector<ImuState>& keyframe_states,
+    const std::unordered_map<uint64_t, Eigen::Vector3d>& points_in_world) {
+  const double focal_length_px = MeanFocalLength(rig_.camera);
+  const Rigid3d cam_from_body = rig_.body_from_cam.Inverse();
+  const AbsolutePoseOptions pnp_options;  // 8 px, 15 inliers
+  std::vector<Eigen::Vector2d> points_normalized;
+  std::vector<Eigen::Vector3d> points;
+  for (const auto& [camera_ns, frame] : moving_start_frames_) {
+    // The keyframe nearest in time.
+    const ImuState* nearest = nullptr;
+    timestamp_ns_t nearest_gap_ns = 0;
+    for (const ImuState& keyframe : keyframe_states) {
+      const timestamp_ns_t gap_ns = std::abs(frame.timestamp_ns - keyframe.timestamp_ns);
+      if (nearest == nullptr || gap_ns < nearest_gap_ns) {
+        nearest = &keyframe;
+        nearest_gap_ns = gap_ns;
+      }
+    }
+    if (nearest == nullptr) break;
+    ImuState state = *nearest;
+    if (nearest_gap_ns == 0) {
+      ++summary_.num_moving_start_keyframes;
+    } else {
+      state = frame.timestamp_ns > nearest->timestamp_ns
+                  ? Propagate(*nearest, frame.timestamp_ns)
+                  : PropagateBack(*nearest, frame.timestamp_ns);
+      points_normalized.clear();
+      points.clear();
+      for (const FeatureObservation& observation : frame.observations) {
+        const auto point = points_in_world.find(observation.track_id);
+        if (point == points_in_world.end()) continue;
+        points_normalized.push_back(observation.normalized);
+        points.push_back(point->second);
+      }
+      AbsolutePoseResult pnp;
+      if (static_cast<int>(points.size()) >= pnp_options.min_num_inliers) {
+        pnp = EstimateAbsolutePose(points_normalized, points, focal_length_px, pnp_options,
+                                   cam_from_body * state.world_from_body.Inverse());
+      }
+      if (pnp.success) {
+        state.world_from_body = pnp.cam_from_world.Inverse() * cam_from_body;
+        ++summary_.num_moving_start_pnp;
+      } else if (NsToSeconds(nearest_gap_ns) <= options_.moving_start_max_imu_s) {
+        ++summary_.num_moving_start_imu;
+      } else {
+        continue;
+      }
+    }
+    state.timestamp_ns = frame.timestamp_ns;
+    moving_start_states_.emplace_back(camera_ns, state);
+  }
+  moving_start_frames_.clear();
+}
+
+std::vector<std::pair<timestamp_ns_t, ImuState>> VisualInertialOdometry::TakeMovingStartStates() {
+  std::vector<std::pair<timestamp_ns_t, ImuState>> states;
+  states.swap(moving_start_states_);
+  return states;
+}
+
 Eigen::Quaterniond GyroRotationPrior(const SensorRig& rig, const std::vector<ImuSample>& imu,
                                      const Eigen::Vector3d& gyro_bias, timestamp_ns_t from_ns,
                                      timestamp_ns_t to_ns) {
@@ -276,6 +359,9 @@ bool VisualInertialOdometry::TryVisualInertialInitialization(const FrameFeatures
       state.velocity_in_world = rotation * state.velocity_in_world;
     }
     for (auto& [track_id, point] : points) point = rotation * point + translation;
+  }
+  if (carried == nullptr && summary_.resets.empty() && options_.pose_moving_start) {
+    PoseMovingStart(states, points);
   }
   window_->InitializeWithKeyframes(used_keyframes, states, points, imu_, options_.restart_sigmas);
   init_keyframes_.clear();
@@ -374,6 +460,8 @@ VioFrameResult VisualInertialOdometry::ProcessFrame(const FrameFeatures& feature
         relocalization_pending_ = true;
         restart_ns_ = frame.timestamp_ns;
       }
+    } else if (!result.has_pose && summary_.resets.empty() && options_.pose_moving_start) {
+      moving_start_frames_.emplace_back(features.timestamp_ns, frame);
     }
   }
   Record(result);
@@ -481,12 +569,24 @@ VioResult RunVio(const Sequence& sequence, const VioOptions& options, FrameCache
   // propagated to; they end the run, counted and reported.
   const timestamp_ns_t last_imu_ns = sequence.imu.back().timestamp_ns;
   size_t num_beyond_imu = 0;
+  // States found for earlier frames once a moving start is initialised.
+  const auto pose_moving_start = [&] {
+    for (const auto& [camera_ns, state] : vio.TakeMovingStartStates()) {
+      for (auto frame = result.frames.rbegin(); frame != result.frames.rend(); ++frame) {
+        if (frame->timestamp_ns != camera_ns) continue;
+        frame->state = state;
+        frame->has_pose = true;
+        break;
+      }
+    }
+  };
   for (const FrameFeatures& features : startup) {
     if (rig.CamToImuTime(features.timestamp_ns) > last_imu_ns) {
       ++num_beyond_imu;
       continue;
     }
     result.frames.push_back(vio.ProcessFrame(features));
+    pose_moving_start();
   }
   for (; k < num_frames; ++k) {
     if (rig.CamToImuTime(sequence.images[k].timestamp_ns) > last_imu_ns) {
@@ -499,6 +599,7 @@ VioResult RunVio(const Sequence& sequence, const VioOptions& options, FrameCache
                                     sequence.images[k].timestamp_ns);
     }
     result.frames.push_back(vio.ProcessFrame(read_and_track(k, prior)));
+    pose_moving_start();
   }
   progress.Finish();
   result.summary = vio.summary();
@@ -548,6 +649,15 @@ VioResult RunVio(const Sequence& sequence, const VioOptions& options, FrameCache
   } else {
     message << "the visual part was never initialised (not enough motion or landmarks)";
   }
+  const size_t moving_start_posed = summary.num_moving_start_keyframes +
+                                    summary.num_moving_start_pnp + summary.num_moving_start_imu;
+  if (moving_start_posed > 0 || summary.num_frames_without_pose > 0) {
+    message << "; the moving start's frames before it: " << moving_start_posed
+            << " posed once initialised (" << summary.num_moving_start_keyframes
+            << " keyframes, " << summary.num_moving_start_pnp << " by PnP on its landmarks, "
+            << summary.num_moving_start_imu << " by the IMU), " << summary.num_frames_without_pose
+            << " without a pose";
+  }
   if (summary.num_resets > 0) message << "; " << summary.num_resets << " resets after failures";
   summary.message = message.str();
   VIOSFM_LOG(INFO) << "vio: " << summary.num_frames << " frames (tracking "
@@ -569,7 +679,10 @@ std::string FormatVioSummary(const VioSummary& summary) {
   out << "num_keyframes: " << summary.num_keyframes << "\n";
   out << "num_frames_beyond_imu: " << summary.num_frames_beyond_imu << "\n";
   out << "num_frames_without_pose: " << summary.num_frames_without_pose
-      << "  # before a moving start was initialised\n";
+      << "  # before a moving start was initialised, not posed then\n";
+  out << "moving_start_posed: [" << summary.num_moving_start_keyframes << ", "
+      << summary.num_moving_start_pnp << ", " << summary.num_moving_start_imu
+      << "]  # frames of a moving start posed once initialised: keyframes, PnP, IMU\n";
   out << "static_start: " << (summary.static_init.is_static() ? "true" : "false") << "\n";
   out << "static_init_status: " << StaticInitStatusName(summary.static_init.status) << "\n";
   if (summary.static_init.is_static()) {

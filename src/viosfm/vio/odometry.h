@@ -24,6 +24,7 @@
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -62,6 +63,16 @@ struct VioOptions {
   InitialStateSigmas restart_sigmas{1e-3, 1e-3, 0.05, 0.5, 0.01, 0.2};
   // Feed the tracker a gyro rotation prior between frames (default true).
   bool gyro_rotation_prior = true;
+  // Pose the frames of a moving start once it is initialised (default true):
+  // the initialisation's keyframes take its states, the other frames a pose
+  // from their corners on its landmarks (PnP-RANSAC seeded by the IMU's
+  // propagation from the nearest keyframe), or, where too few corners see
+  // them, that propagation when the keyframe is at most
+  // moving_start_max_imu_s away; farther frames keep no pose.
+  bool pose_moving_start = true;
+  // s, see pose_moving_start. Default 0.5: a tenth of the accelerometer bias
+  // the initialisation leaves (0.1 m/s^2) moves the position by 1.3 cm.
+  double moving_start_max_imu_s = 0.5;
   // s, the camera's rolling-shutter readout time (first row to last; the
   // stamp is the middle row's exposure); each observation is moved to the
   // stamp's time (rolling_shutter.h). Default 0: not given; the readout is
@@ -350,6 +361,13 @@ struct VioOptions {
     VisitSigmas("restart_sigmas", self.restart_sigmas, visit);
     visit({"gyro_rotation_prior", "feed the tracker a gyro rotation prior", kShapesStoredData},
           self.gyro_rotation_prior);
+    visit({"pose_moving_start", "pose the frames of a moving start once it is initialised",
+           kShapesStoredData},
+          self.pose_moving_start);
+    visit({"moving_start_max_imu_s",
+           "s, farthest a moving start's frame is carried by the IMU from a keyframe",
+           kShapesStoredData},
+          self.moving_start_max_imu_s);
     visit({"rolling_shutter_readout_s",
            "s, rolling-shutter readout time of the camera (0: not given, estimated)",
            kShapesStoredData},
@@ -430,8 +448,14 @@ struct VioSummary {
   // not processed, no pose, not in VioResult::frames.
   size_t num_frames_beyond_imu = 0;
   // Frames without a pose: those before a moving start was initialised
-  // (has_pose false; left out of the trajectories, kept in states.csv).
+  // that VioOptions::pose_moving_start could not pose (has_pose false; left
+  // out of the trajectories, kept in states.csv).
   size_t num_frames_without_pose = 0;
+  // Frames of a moving start posed once it was initialised, by how:
+  // an initialisation keyframe's state, PnP on its landmarks, the IMU alone.
+  size_t num_moving_start_keyframes = 0;
+  size_t num_moving_start_pnp = 0;
+  size_t num_moving_start_imu = 0;
   double cpu_seconds = 0.0;  // process CPU time of RunVio
   double wall_seconds = 0.0;
   std::string message;  // one-paragraph outcome (static start, initialisation, failures)
@@ -467,6 +491,11 @@ class VisualInertialOdometry {
   // identity without IMU coverage.
   Eigen::Quaterniond GyroRotationPrior(timestamp_ns_t from_ns, timestamp_ns_t to_ns) const;
 
+  // States given, once a moving start is initialised, to frames returned
+  // earlier without a pose (VioOptions::pose_moving_start): camera stamp and
+  // state, each once (the call empties the list).
+  std::vector<std::pair<timestamp_ns_t, ImuState>> TakeMovingStartStates();
+
   // The summary so far (the caller sets the timings).
   const VioSummary& summary() const { return summary_; }
   VioSummary& mutable_summary() { return summary_; }
@@ -480,6 +509,14 @@ class VisualInertialOdometry {
   // state's IMU propagation, which places the new world in the old one.
   bool TryVisualInertialInitialization(const FrameFeatures& frame, const ImuState* carried);
   ImuState Propagate(const ImuState& state, timestamp_ns_t to_ns) const;
+  // The state at to_ns (before state.timestamp_ns) from which the IMU leads
+  // to `state`: the propagation run backwards.
+  ImuState PropagateBack(const ImuState& state, timestamp_ns_t to_ns) const;
+  // Poses the frames held while a moving start was not initialised
+  // (pose_moving_start), from the initialisation's keyframe states (IMU
+  // clock) and landmarks.
+  void PoseMovingStart(const std::vector<ImuState>& keyframe_states,
+                       const std::unordered_map<uint64_t, Eigen::Vector3d>& points_in_world);
   void Record(const VioFrameResult& result);
 
   SensorRig rig_;
@@ -493,6 +530,10 @@ class VisualInertialOdometry {
   ImuState last_good_state_;
   ImuState last_state_;
   std::vector<FrameFeatures> init_keyframes_;  // for the visual-inertial initialisation
+  // The frames of a moving start returned without a pose (IMU clock), held
+  // until it is initialised (pose_moving_start), and the states found then.
+  std::vector<std::pair<timestamp_ns_t, FrameFeatures>> moving_start_frames_;  // camera stamp
+  std::vector<std::pair<timestamp_ns_t, ImuState>> moving_start_states_;
   // The restart after the last reset, while its re-localisation is pending.
   bool relocalization_pending_ = false;
   timestamp_ns_t restart_ns_ = 0;

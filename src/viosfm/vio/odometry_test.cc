@@ -38,13 +38,23 @@ TEST(VioOptions, ValidateNamesTheBadField) {
 
 // A short rendered room sequence (half-resolution camera to keep it fast):
 // static start, then tracking with a bounded error.
-TEST(RunVio, RenderedRoomSequence) {
+// A small rendered room (376 x 240 at 12 Hz), written and read back as a
+// dataset in `folder_name`.
+struct SmallRoom {
   SimulationOptions simulation;
+  SimulatedSequence simulated;
+  std::filesystem::path folder;
+  Sequence sequence;
+};
+SmallRoom SimulateSmallRoom(double duration_s, double static_start_s, uint64_t seed,
+                            const std::string& folder_name) {
+  SmallRoom room;
+  SimulationOptions& simulation = room.simulation;
   simulation.scenario = "room";
-  simulation.duration_s = 7.0;
-  simulation.static_start_s = 2.0;
+  simulation.duration_s = duration_s;
+  simulation.static_start_s = static_start_s;
   simulation.camera_rate_hz = 12.0;
-  simulation.seed = 3;
+  simulation.seed = seed;
   simulation.num_threads = 2;
   simulation.texels_per_metre = 64.0;
   Camera camera = SimulationOptions::DefaultCamera();
@@ -55,16 +65,31 @@ TEST(RunVio, RenderedRoomSequence) {
   camera.params[2] = (camera.params[2] + 0.5) * 0.5 - 0.5;
   camera.params[3] = (camera.params[3] + 0.5) * 0.5 - 0.5;
   simulation.camera = camera;
-  const SimulatedSequence simulated = SimulateSequence(simulation);
-  const std::filesystem::path folder = testing::MakeScratchFolder("vio_room");
-  WriteSimulatedSequence(folder, simulated, simulation);
-  const Sequence sequence = ReadEurocDataset(folder);
-  ASSERT_EQ(sequence.images.size(), simulated.sequence.images.size());
+  room.simulated = SimulateSequence(simulation);
+  room.folder = testing::MakeScratchFolder(folder_name);
+  WriteSimulatedSequence(room.folder, room.simulated, simulation);
+  room.sequence = ReadEurocDataset(room.folder);
+  return room;
+}
 
+// The VIO options of these rendered rooms: fewer, sparser corners.
+VioOptions SmallRoomVioOptions() {
   VioOptions options;
   options.show_progress = false;
   options.tracker.min_distance_px = 15.0;
   options.tracker.max_num_features = 120;
+  return options;
+}
+
+TEST(RunVio, RenderedRoomSequence) {
+  const SmallRoom room = SimulateSmallRoom(7.0, 2.0, 3, "vio_room");
+  const SimulationOptions& simulation = room.simulation;
+  const SimulatedSequence& simulated = room.simulated;
+  const std::filesystem::path& folder = room.folder;
+  const Sequence& sequence = room.sequence;
+  ASSERT_EQ(sequence.images.size(), simulated.sequence.images.size());
+
+  const VioOptions options = SmallRoomVioOptions();
   const VioResult result = RunVio(sequence, options);
   ASSERT_EQ(result.frames.size(), sequence.images.size());
 
@@ -114,6 +139,63 @@ TEST(RunVio, RenderedRoomSequence) {
   EXPECT_EQ(CountLines(out / "states.csv"), static_cast<int>(result.frames.size()) + 1);
   EXPECT_EQ(ReadTumTrajectory(out / "trajectory_body.tum").size(), result.frames.size());
   EXPECT_EQ(ReadTumTrajectory(out / "trajectory_cam.tum").size(), result.frames.size());
+}
+
+// A start in motion: the frames before the visual-inertial initialisation
+// are posed once it succeeds (its keyframes by its states, the others by
+// PnP on its landmarks or, near a keyframe, the IMU), within a few
+// centimetres of the truth once the trajectory is aligned on the tracking
+// frames, as the tracking frames themselves are; with the option off they
+// have no pose and are left out of the trajectory.
+TEST(RunVio, MovingStartFramesArePosedOnceInitialised) {
+  const SmallRoom room = SimulateSmallRoom(6.0, 0.0, 5, "vio_moving_start");
+  const VioResult result = RunVio(room.sequence, SmallRoomVioOptions());
+  const VioSummary& summary = result.summary;
+  ASSERT_FALSE(summary.static_init.is_static()) << summary.static_init.message;
+  ASSERT_TRUE(summary.visual_initialized) << summary.message;
+  std::cout << "moving start: " << summary.message << "\n";
+  const size_t posed_before = summary.num_moving_start_keyframes + summary.num_moving_start_pnp +
+                              summary.num_moving_start_imu;
+  EXPECT_GE(posed_before, 5u);
+  EXPECT_EQ(summary.num_frames_without_pose, 0u);
+
+  // Align on the tracking frames (SE(3): the VIO is metric), then compare.
+  std::vector<Eigen::Vector3d> estimated;
+  std::vector<Eigen::Vector3d> truth;
+  for (const VioFrameResult& frame : result.frames) {
+    ASSERT_TRUE(frame.has_pose);
+    if (frame.status != VioStatus::kTracking) continue;
+    estimated.push_back(frame.state.world_from_body.translation);
+    truth.push_back(room.simulated.motion.PositionInWorld(frame.timestamp_ns));
+  }
+  const std::optional<Sim3d> se3 = AlignPointsUmeyama(estimated, truth, false);
+  ASSERT_TRUE(se3);
+  const auto rmse = [&](VioStatus status) {
+    double sum = 0.0;
+    int count = 0;
+    for (const VioFrameResult& frame : result.frames) {
+      if (frame.status != status) continue;
+      sum += ((*se3) * frame.state.world_from_body.translation -
+              room.simulated.motion.PositionInWorld(frame.timestamp_ns))
+                 .squaredNorm();
+      ++count;
+    }
+    return std::sqrt(sum / std::max(count, 1));
+  };
+  const double tracking_m = rmse(VioStatus::kTracking);
+  const double before_m = rmse(VioStatus::kInitializing);
+  std::cout << "  position RMSE after SE(3) alignment: tracking frames " << tracking_m
+            << " m, the " << posed_before << " frames posed once initialised " << before_m
+            << " m\n";
+  EXPECT_LT(tracking_m, 0.05);
+  EXPECT_LT(before_m, 0.05);
+
+  VioOptions unposed = SmallRoomVioOptions();
+  unposed.pose_moving_start = false;
+  const VioResult without = RunVio(room.sequence, unposed);
+  EXPECT_GT(without.summary.num_frames_without_pose, 0u);
+  EXPECT_EQ(without.BodyTrajectory().poses.size(),
+            without.frames.size() - without.summary.num_frames_without_pose);
 }
 
 // The first 4.7 s of EuRoC V1_01_easy: the platform stands still. The
