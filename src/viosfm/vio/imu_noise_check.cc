@@ -75,6 +75,24 @@ std::pair<double, double> MeasureWhiteNoiseDensities(const std::vector<ImuSample
   return {gyro_var.cwiseSqrt().mean() * root_dt, accel_var.cwiseSqrt().mean() * root_dt};
 }
 
+std::pair<timestamp_ns_t, std::pair<double, double>> QuietestWindowDensities(
+    const std::vector<ImuSample>& imu, double window_s) {
+  std::pair<timestamp_ns_t, std::pair<double, double>> quietest{0, {0.0, 0.0}};
+  if (imu.size() < 10) return quietest;
+  const timestamp_ns_t window_ns = SecondsToNs(window_s);
+  const timestamp_ns_t step_ns = std::max<timestamp_ns_t>(1, window_ns / 4);
+  for (timestamp_ns_t start = imu.front().timestamp_ns;
+       start + window_ns <= imu.back().timestamp_ns; start += step_ns) {
+    const std::pair<double, double> densities =
+        MeasureWhiteNoiseDensities(imu, start, start + window_ns);
+    if (densities.second <= 0.0) continue;
+    if (quietest.second.second == 0.0 || densities.second < quietest.second.second) {
+      quietest = {start, densities};
+    }
+  }
+  return quietest;
+}
+
 ImuNoiseCheck CheckImuNoise(const ImuNoise& given, const std::vector<ImuSample>& imu,
                             const StaticInitResult* static_interval,
                             const ImuNoiseCheckOptions& options) {
@@ -108,6 +126,23 @@ ImuNoiseCheck CheckImuNoise(const ImuNoise& given, const std::vector<ImuSample>&
           &used.gyro_noise_density, &check.changes);
     Bound("accelerometer_noise_density", why, kMinAccelDensity, kMaxAccelDensity,
           &used.accel_noise_density, &check.changes);
+    // The quietest stretch of the stream bounds the white noise from above.
+    const auto [start_ns, densities] = QuietestWindowDensities(imu, options.min_static_s);
+    if (densities.first > 0.0 && densities.second > 0.0) {
+      check.bound_start_ns = start_ns;
+      check.bound_gyro_density = densities.first;
+      check.bound_accel_density = densities.second;
+      const std::string bound_why = "above the spread of the quietest " +
+                                    Number(options.min_static_s) + " s of the IMU, " +
+                                    FormatNsAsSeconds(start_ns - imu.front().timestamp_ns, 2) +
+                                    " s after its first sample";
+      Bound("gyroscope_noise_density", bound_why, kMinGyroDensity,
+            std::max(kMinGyroDensity, densities.first), &used.gyro_noise_density,
+            &check.changes);
+      Bound("accelerometer_noise_density", bound_why, kMinAccelDensity,
+            std::max(kMinAccelDensity, densities.second), &used.accel_noise_density,
+            &check.changes);
+    }
   }
   if (options.scale_random_walks) {
     // A calibration's figures for one sensor come from one source (an Allan

@@ -22,7 +22,17 @@
 //  - without one, a density outside the range of MEMS IMUs (data sheets:
 //    gyros 5e-5 to 1e-2 rad/s/sqrt(Hz), accelerometers 5e-4 to 5e-2
 //    m/s^2/sqrt(Hz), inflated by up to ten as configurations do) is clamped
-//    into it;
+//    into it; then the quietest min_static_s of the whole IMU stream (the
+//    window whose accelerometer readings spread least about their mean)
+//    bounds each density from above, measured there as at rest: motion
+//    only adds to the spread, so the white noise cannot exceed it, and a
+//    density above it is lowered to it. On stretches of the real
+//    RealSense recording that start in motion, the file's accelerometer
+//    density of 0.18 clamped to 0.05 left the scale to the images, and the
+//    VIO's trajectory came out 1.5 to 5.3 times too small; the quietest
+//    half second of the walk bounds the density at about 0.009, and the
+//    trajectory is then within 10 % of the one that started at rest
+//    (docs/benchmarks.md, "Starting in motion");
 //  - random walks cannot be measured in a few seconds. A sensor's random
 //    walk is scaled by the factor its white-noise density was changed by
 //    (scale_random_walks): a calibration's two figures of one sensor come
@@ -68,6 +78,11 @@ struct ImuNoiseCheck {
   ImuNoise given;                       // as the calibration states
   ImuNoise used;                        // what the VIO uses
   bool measured = false;                // whether a static interval was measured
+  // Without one: the quietest window's densities, upper bounds (0 when the
+  // stream is shorter than the window), and the window's first stamp.
+  double bound_gyro_density = 0.0;
+  double bound_accel_density = 0.0;
+  timestamp_ns_t bound_start_ns = 0;
   double measured_gyro_density = 0.0;   // rad/s/sqrt(Hz), when measured
   double measured_accel_density = 0.0;  // m/s^2/sqrt(Hz), when measured
   std::vector<std::string> changes;     // one line per changed figure
@@ -82,6 +97,12 @@ std::pair<double, double> MeasureWhiteNoiseDensities(const std::vector<ImuSample
                                                      timestamp_ns_t start_ns,
                                                      timestamp_ns_t end_ns);
 
+// The window of `window_s` (stepped by a quarter of it) whose accelerometer
+// readings spread least about their mean, and its densities measured as by
+// MeasureWhiteNoiseDensities: {start stamp, {gyro, accel}}; {0, {0, 0}}
+// when the stream is shorter than the window.
+std::pair<timestamp_ns_t, std::pair<double, double>> QuietestWindowDensities(
+    const std::vector<ImuSample>& imu, double window_s);
 // `static_interval` may be null or not static (no measurement then).
 ImuNoiseCheck CheckImuNoise(const ImuNoise& given, const std::vector<ImuSample>& imu,
                             const StaticInitResult* static_interval,

@@ -9,6 +9,7 @@
 #include <unordered_map>
 
 #include "viosfm/estimators/absolute_pose.h"
+#include "viosfm/geometry/alignment.h"
 #include "viosfm/io/image_io.h"
 #include "viosfm/io/trajectory_io.h"
 #include "viosfm/io/vio_states_io.h"
@@ -217,9 +218,43 @@ ImuState VisualInertialOdometry::PropagateBack(const ImuState& state, timestamp_
   return earlier;
 }
 
-void VisualInertialOdometry::PoseMovingStart(
-    const std::vector<ImuState>& keyframe_states,
-    const std::unordered_map<uint64_t, Eigen::Vector3d>& points_in_world) {
+void VisualInertialOdometry::FinishMovingStart() {
+  if (!moving_start_pending_) return;
+  PoseMovingStart(window_->initialized() ? window_->States() : std::vector<ImuState>());
+}
+
+void VisualInertialOdometry::PoseMovingStart(const std::vector<ImuState>& window_states) {
+  moving_start_pending_ = false;
+  std::vector<ImuState> keyframe_states = std::move(moving_start_keyframes_);
+  std::unordered_map<uint64_t, Eigen::Vector3d> points_in_world = std::move(moving_start_points_);
+  // The initialisation's keyframes the window still holds, and its estimates of them.
+  std::vector<Eigen::Vector3d> initial_positions;
+  std::vector<Eigen::Vector3d> window_positions;
+  std::unordered_map<timestamp_ns_t, const ImuState*> window_by_stamp;
+  for (const ImuState& state : window_states) window_by_stamp.emplace(state.timestamp_ns, &state);
+  for (const ImuState& state : keyframe_states) {
+    const auto found = window_by_stamp.find(state.timestamp_ns);
+    if (found == window_by_stamp.end()) continue;
+    initial_positions.push_back(state.world_from_body.translation);
+    window_positions.push_back(found->second->world_from_body.translation);
+  }
+  if (initial_positions.size() >= 3) {
+    if (const std::optional<Sim3d> window_from_initial =
+            AlignPointsUmeyama(initial_positions, window_positions, /*with_scale=*/true)) {
+      const Sim3d& t = *window_from_initial;
+      for (ImuState& state : keyframe_states) {
+        const auto found = window_by_stamp.find(state.timestamp_ns);
+        if (found != window_by_stamp.end()) {
+          state = *found->second;
+          continue;
+        }
+        state.world_from_body.rotation = (t.rotation * state.world_from_body.rotation).normalized();
+        state.world_from_body.translation = t * state.world_from_body.translation;
+        state.velocity_in_world = t.scale * (t.rotation * state.velocity_in_world);
+      }
+      for (auto& [track_id, point] : points_in_world) point = t * point;
+    }
+  }
   const double focal_length_px = MeanFocalLength(rig_.camera);
   const Rigid3d cam_from_body = rig_.body_from_cam.Inverse();
   const AbsolutePoseOptions pnp_options;  // 8 px, 15 inliers
@@ -361,7 +396,9 @@ bool VisualInertialOdometry::TryVisualInertialInitialization(const FrameFeatures
     for (auto& [track_id, point] : points) point = rotation * point + translation;
   }
   if (carried == nullptr && summary_.resets.empty() && options_.pose_moving_start) {
-    PoseMovingStart(states, points);
+    moving_start_pending_ = true;
+    moving_start_keyframes_ = states;
+    moving_start_points_ = points;
   }
   window_->InitializeWithKeyframes(used_keyframes, states, points, imu_, options_.restart_sigmas);
   init_keyframes_.clear();
@@ -377,6 +414,18 @@ VioFrameResult VisualInertialOdometry::ProcessFrame(const FrameFeatures& feature
 
   if (window_->initialized()) {
     const WindowFrameEstimate estimate = window_->AddFrame(frame, imu_);
+    if (moving_start_pending_) {
+      // Posed once the first of the initialisation's keyframes has left the
+      // window (the others then carry the window's estimates), or now if
+      // the window was lost.
+      const std::vector<ImuState> window_states = window_->States();
+      const bool first_left =
+          window_states.empty() ||
+          std::none_of(window_states.begin(), window_states.end(), [&](const ImuState& state) {
+            return state.timestamp_ns == moving_start_keyframes_.front().timestamp_ns;
+          });
+      if (first_left) PoseMovingStart(window_states);
+    }
     result.state = estimate.state;
     result.status = estimate.status;
     result.is_keyframe = estimate.is_keyframe;
@@ -601,6 +650,8 @@ VioResult RunVio(const Sequence& sequence, const VioOptions& options, FrameCache
     result.frames.push_back(vio.ProcessFrame(read_and_track(k, prior)));
     pose_moving_start();
   }
+  vio.FinishMovingStart();
+  pose_moving_start();
   progress.Finish();
   result.summary = vio.summary();
   VioSummary& summary = result.summary;

@@ -495,6 +495,9 @@ class VisualInertialOdometry {
   // earlier without a pose (VioOptions::pose_moving_start): camera stamp and
   // state, each once (the call empties the list).
   std::vector<std::pair<timestamp_ns_t, ImuState>> TakeMovingStartStates();
+  // Poses the moving start's frames now if that is still pending (the
+  // caller's last frame was processed; see PoseMovingStart).
+  void FinishMovingStart();
 
   // The summary so far (the caller sets the timings).
   const VioSummary& summary() const { return summary_; }
@@ -514,9 +517,14 @@ class VisualInertialOdometry {
   ImuState PropagateBack(const ImuState& state, timestamp_ns_t to_ns) const;
   // Poses the frames held while a moving start was not initialised
   // (pose_moving_start), from the initialisation's keyframe states (IMU
-  // clock) and landmarks.
-  void PoseMovingStart(const std::vector<ImuState>& keyframe_states,
-                       const std::unordered_map<uint64_t, Eigen::Vector3d>& points_in_world);
+  // clock) and landmarks. It waits until the window has optimised them
+  // with the frames after: when the first of those keyframes leaves the
+  // window (or the window is lost, or the run ends), the initialisation's
+  // states and landmarks are moved by the similarity that takes its
+  // keyframes' positions to the window's estimates of the keyframes still
+  // there (its scale is what the IMU changed the initialisation's by), and
+  // those keyframes take the window's states.
+  void PoseMovingStart(const std::vector<ImuState>& window_states);
   void Record(const VioFrameResult& result);
 
   SensorRig rig_;
@@ -533,6 +541,9 @@ class VisualInertialOdometry {
   // The frames of a moving start returned without a pose (IMU clock), held
   // until it is initialised (pose_moving_start), and the states found then.
   std::vector<std::pair<timestamp_ns_t, FrameFeatures>> moving_start_frames_;  // camera stamp
+  bool moving_start_pending_ = false;  // initialised, its frames not yet posed
+  std::vector<ImuState> moving_start_keyframes_;                        // the initialisation's
+  std::unordered_map<uint64_t, Eigen::Vector3d> moving_start_points_;  // its landmarks
   std::vector<std::pair<timestamp_ns_t, ImuState>> moving_start_states_;
   // The restart after the last reset, while its re-localisation is pending.
   bool relocalization_pending_ = false;

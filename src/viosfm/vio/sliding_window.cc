@@ -138,6 +138,15 @@ ImuState SlidingWindowEstimator::NewestState() const {
   return StateOf(frames_.back()->parameters, frames_.back()->timestamp_ns);
 }
 
+std::vector<ImuState> SlidingWindowEstimator::States() const {
+  std::vector<ImuState> states;
+  states.reserve(frames_.size());
+  for (const std::unique_ptr<Frame>& frame : frames_) {
+    states.push_back(StateOf(frame->parameters, frame->timestamp_ns));
+  }
+  return states;
+}
+
 void SlidingWindowEstimator::Initialize(const ImuState& state, const InitialStateSigmas& sigmas_in,
                                         const FrameFeatures& features) {
   ClearWindow();

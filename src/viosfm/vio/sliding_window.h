@@ -208,6 +208,9 @@ class SlidingWindowEstimator {
 
   // The newest state (requires initialized()).
   ImuState NewestState() const;
+  // The states of the window's frames, oldest first, as the last
+  // optimisation left them (empty when not initialized()).
+  std::vector<ImuState> States() const;
   // Clears the window; the landmarks of the last frame that tracked are
   // kept for the re-localisation of the next Initialize.
   void Reset();
