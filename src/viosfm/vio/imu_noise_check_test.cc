@@ -72,6 +72,16 @@ constexpr double kAccelDensity = 2.0e-3;    // m/s^2/sqrt(Hz)
 constexpr double kGyroWalk = 1.9393e-5;     // rad/s^2/sqrt(Hz)
 constexpr double kAccelWalk = 3.0e-3;       // m/s^3/sqrt(Hz)
 
+// The RealSense file's white-noise densities, with the given walks.
+ImuNoise RealSenseFileDensities(double gyro_walk, double accel_walk) {
+  ImuNoise noise;
+  noise.gyro_noise_density = 3.7e-5;
+  noise.accel_noise_density = 0.183;
+  noise.gyro_random_walk = gyro_walk;
+  noise.accel_random_walk = accel_walk;
+  return noise;
+}
+
 TEST(ImuNoiseCheck, OptionsValidate) {
   EXPECT_EQ(ImuNoiseCheckOptions().Validate(), "");
   ImuNoiseCheckOptions options;
@@ -194,15 +204,11 @@ TEST(ImuNoiseCheck, BoundsTheFileFiguresByTheMeasuredNoise) {
 // min_static_s) the densities are clamped into the MEMS ranges of the
 // header (gyro 5e-5 to 1e-2, accel 5e-4 to 5e-2), and random walks, scaled
 // with them, into theirs (gyro 1e-7 to 1e-2, accel 1e-6 to 1e-1).
-// Without rest (and a stream that moves throughout, so that its quietest
-// stretch bounds nothing here): the MEMS ranges.
+// (The stream moves throughout here, so that its quietest stretch bounds
+// nothing.)
 TEST(ImuNoiseCheck, WithoutRestClampsIntoTheMemsRanges) {
   const StaticImu imu = MakeStaticImu(kGyroDensity, kAccelDensity, 200.0, 0.0, 1.5, 6);
-  ImuNoise wrong;
-  wrong.gyro_noise_density = 3.7e-5;  // the RealSense file's figures
-  wrong.accel_noise_density = 0.183;
-  wrong.gyro_random_walk = 1e-9;
-  wrong.accel_random_walk = 1.0;
+  const ImuNoise wrong = RealSenseFileDensities(1e-9, 1.0);
   StaticInitResult moving = StaticInterval(imu.static_start_ns, imu.static_end_ns);
   moving.status = StaticInitStatus::kNotStatic;
   const StaticInitResult too_short =
@@ -248,11 +254,7 @@ TEST(ImuNoiseCheck, WithoutRestClampsIntoTheMemsRanges) {
 // lowest of several windows' estimates (measured 11 % here, 4 % a window).
 TEST(ImuNoiseCheck, WithoutRestTheQuietestStretchBoundsTheNoise) {
   const StaticImu imu = MakeStaticImu(kGyroDensity, kAccelDensity, 200.0, 2.0, 1.0, 7);
-  ImuNoise wrong;
-  wrong.gyro_noise_density = 3.7e-5;  // the RealSense file's figures
-  wrong.accel_noise_density = 0.183;
-  wrong.gyro_random_walk = 2.6e-6;
-  wrong.accel_random_walk = 0.0245;
+  const ImuNoise wrong = RealSenseFileDensities(2.6e-6, 0.0245);
   const ImuNoiseCheck check = CheckImuNoise(wrong, imu.samples, nullptr);
   std::cout << check.message << "\n";
   EXPECT_FALSE(check.measured);
