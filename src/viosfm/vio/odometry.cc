@@ -355,6 +355,9 @@ void VisualInertialOdometry::Record(const VioFrameResult& result) {
 
 bool VisualInertialOdometry::TryVisualInertialInitialization(const FrameFeatures& frame,
                                                              const ImuState* carried) {
+  // A frame before the IMU's first sample cannot be initialised from: kept
+  // among the keyframes, it would fail every attempt until it left them.
+  if (imu_.empty() || frame.timestamp_ns <= imu_.front().timestamp_ns) return false;
   if (!(frame.is_keyframe || init_keyframes_.empty() ||
         IsNewKeyframe(init_keyframes_.back(), frame, options_.window))) {
     return false;
