@@ -73,9 +73,10 @@ struct ScaledWalk {
   Sequence sequence;
   Reconstruction reconstruction;
 };
-ScaledWalk MakeScaledWalk(double true_scale) {
+ScaledWalk MakeScaledWalk(double true_scale, double duration_s = 30.0,
+                          double position_jitter_m = 0.0) {
   WalkOptions walk;
-  walk.duration_s = 30.0;
+  walk.duration_s = duration_s;
   walk.seed = 4;
   const BodyTrajectory trajectory = GenerateWalk(walk);
   ScaledWalk scaled;
@@ -87,11 +88,15 @@ ScaledWalk MakeScaledWalk(double true_scale) {
   Camera camera = MakeCamera(CameraModelId::kPinhole, 640, 480, {400.0, 400.0, 320.0, 240.0});
   camera.camera_id = 1;
   scaled.reconstruction.AddCamera(camera);
+  Random random(6);
   image_t id = 1;
   for (timestamp_ns_t t = trajectory.start_ns() + SecondsToNs(0.5);
        t < trajectory.end_ns() - SecondsToNs(0.5); t += SecondsToNs(0.1), ++id) {
     Rigid3d world_from_body = trajectory.WorldFromBody(t);
     world_from_body.translation /= true_scale;
+    for (int axis = 0; axis < 3; ++axis) {
+      world_from_body.translation[axis] += random.Normal(0.0, position_jitter_m);
+    }
     Image image;
     image.image_id = id;
     image.camera_id = 1;
@@ -136,6 +141,21 @@ TEST(MetricScale, AnImuScaleManySigmasFromTheVioRefutesIt) {
   ASSERT_TRUE(fused.imu.usable) << fused.message;
   EXPECT_NEAR(fused.applied_scale, 1.01, 0.002) << fused.message;
   EXPECT_NE(fused.message.find("fused with the VIO's scale"), std::string::npos);
+  // A right scale whose frames jitter by 1 cm over a 6 s walk, the fit told
+  // so (position_sigma_m): too few frames lie 1 s apart for the spaced fit,
+  // and the consecutive frames' scale, shrunk by the jitter, comes out
+  // 0.31 +- 0.04 with a residual of 0.6. It must not refute the VIO's (it
+  // is not from frames far enough apart), and nothing is applied.
+  ScaledWalk jittered = MakeScaledWalk(1.0, 6.0, 0.01);
+  ImuScaleOptions told;
+  told.position_sigma_m = 0.01;
+  const MetricScaleSummary shrunk = ApplyImuMetricScale(
+      jittered.sequence, jittered.sequence.rig, kVioScaleSigma, told, &jittered.reconstruction);
+  std::cout << "jittered: " << shrunk.message << "\n";
+  EXPECT_LT(shrunk.imu.scale, 0.5) << shrunk.message;  // the test's premise
+  EXPECT_FALSE(shrunk.imu.spaced_used);
+  EXPECT_FALSE(shrunk.vio_scale_refuted) << shrunk.message;
+  EXPECT_EQ(shrunk.applied_scale, 1.0);
 }
 
 }  // namespace
