@@ -58,8 +58,7 @@ void RunVioCommand(VioArguments args) {
                    << summary.num_frames_without_pose
                    << " without a pose (before the moving start was initialised, left out of "
                       "the trajectories); CPU "
-                   << summary.cpu_seconds
-                   << " s";
+                   << summary.cpu_seconds << " s";
 }
 
 }  // namespace

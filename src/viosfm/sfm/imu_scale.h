@@ -128,8 +128,8 @@ struct ImuScaleOptions {
           self.gravity_iterations);
     visit({"max_scale_factor", "usable when the scale is within [1/this, this]", kRunOnly},
           self.max_scale_factor);
-    visit({"vio_refuted_sigmas",
-           "sigmas from the VIO's scale beyond which the IMU's refutes it", kRunOnly},
+    visit({"vio_refuted_sigmas", "sigmas from the VIO's scale beyond which the IMU's refutes it",
+           kRunOnly},
           self.vio_refuted_sigmas);
     visit({"max_refuting_scale_sigma",
            "largest relative sigma of an IMU scale that refutes the VIO's", kRunOnly},

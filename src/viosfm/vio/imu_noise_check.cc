@@ -132,13 +132,11 @@ ImuNoiseCheck CheckImuNoise(const ImuNoise& given, const std::vector<ImuSample>&
       check.bound_start_ns = start_ns;
       check.bound_gyro_density = densities.first;
       check.bound_accel_density = densities.second;
-      const std::string bound_why = "above the spread of the quietest " +
-                                    Number(options.min_static_s) + " s of the IMU, " +
-                                    FormatNsAsSeconds(start_ns - imu.front().timestamp_ns, 2) +
-                                    " s after its first sample";
+      const std::string bound_why =
+          "above the spread of the quietest " + Number(options.min_static_s) + " s of the IMU, " +
+          FormatNsAsSeconds(start_ns - imu.front().timestamp_ns, 2) + " s after its first sample";
       Bound("gyroscope_noise_density", bound_why, kMinGyroDensity,
-            std::max(kMinGyroDensity, densities.first), &used.gyro_noise_density,
-            &check.changes);
+            std::max(kMinGyroDensity, densities.first), &used.gyro_noise_density, &check.changes);
       Bound("accelerometer_noise_density", bound_why, kMinAccelDensity,
             std::max(kMinAccelDensity, densities.second), &used.accel_noise_density,
             &check.changes);

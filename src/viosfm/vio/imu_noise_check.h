@@ -75,9 +75,9 @@ struct ImuNoiseCheckOptions {
 };
 
 struct ImuNoiseCheck {
-  ImuNoise given;                       // as the calibration states
-  ImuNoise used;                        // what the VIO uses
-  bool measured = false;                // whether a static interval was measured
+  ImuNoise given;         // as the calibration states
+  ImuNoise used;          // what the VIO uses
+  bool measured = false;  // whether a static interval was measured
   // Without one: the quietest window's densities, upper bounds (0 when the
   // stream is shorter than the window), and the window's first stamp.
   double bound_gyro_density = 0.0;

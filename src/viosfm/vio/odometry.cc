@@ -213,8 +213,8 @@ ImuState VisualInertialOdometry::PropagateBack(const ImuState& state, timestamp_
   earlier.velocity_in_world =
       state.velocity_in_world - gravity * dt - rotation * preintegration.delta_v();
   earlier.world_from_body.translation = state.world_from_body.translation -
-                                        earlier.velocity_in_world * dt -
-                                        0.5 * gravity * dt * dt - rotation * preintegration.delta_p();
+                                        earlier.velocity_in_world * dt - 0.5 * gravity * dt * dt -
+                                        rotation * preintegration.delta_p();
   return earlier;
 }
 
@@ -707,8 +707,8 @@ VioResult RunVio(const Sequence& sequence, const VioOptions& options, FrameCache
                                     summary.num_moving_start_pnp + summary.num_moving_start_imu;
   if (moving_start_posed > 0 || summary.num_frames_without_pose > 0) {
     message << "; the moving start's frames before it: " << moving_start_posed
-            << " posed once initialised (" << summary.num_moving_start_keyframes
-            << " keyframes, " << summary.num_moving_start_pnp << " by PnP on its landmarks, "
+            << " posed once initialised (" << summary.num_moving_start_keyframes << " keyframes, "
+            << summary.num_moving_start_pnp << " by PnP on its landmarks, "
             << summary.num_moving_start_imu << " by the IMU), " << summary.num_frames_without_pose
             << " without a pose";
   }

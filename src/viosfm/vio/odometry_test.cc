@@ -184,9 +184,8 @@ TEST(RunVio, MovingStartFramesArePosedOnceInitialised) {
   };
   const double tracking_m = rmse(VioStatus::kTracking);
   const double before_m = rmse(VioStatus::kInitializing);
-  std::cout << "  position RMSE after SE(3) alignment: tracking frames " << tracking_m
-            << " m, the " << posed_before << " frames posed once initialised " << before_m
-            << " m\n";
+  std::cout << "  position RMSE after SE(3) alignment: tracking frames " << tracking_m << " m, the "
+            << posed_before << " frames posed once initialised " << before_m << " m\n";
   EXPECT_LT(tracking_m, 0.05);
   EXPECT_LT(before_m, 0.05);
 

@@ -239,8 +239,8 @@ TEST(RealSenseReplay, StartingInMotion) {
     sum += ((*whole_from_cut) * cut_points[k] - whole_points[k]).squaredNorm();
   }
   const double rmse_m = std::sqrt(sum / static_cast<double>(cut_points.size()));
-  std::cout << "  against the whole recording's VIO (" << cut_points.size()
-            << " frames): scale " << whole_from_cut->scale << ", RMSE " << rmse_m << " m\n";
+  std::cout << "  against the whole recording's VIO (" << cut_points.size() << " frames): scale "
+            << whole_from_cut->scale << ", RMSE " << rmse_m << " m\n";
   EXPECT_NEAR(whole_from_cut->scale, 1.0, 0.1);
   EXPECT_LT(rmse_m, 0.03);
 }

@@ -24,8 +24,8 @@
 //
 // The driver collects frames until they rotate target_rotation_deg (the sum
 // of the gyro rotation angles between consecutive frames) or for max_wait_s.
-// The estimate is trusted only if they rotate at least min_total_rotation_deg, the minimum lies inside the search
-// range, and the cost there is clearly below the cost at the offset the
+// The estimate is trusted only if they rotate at least min_total_rotation_deg, the minimum lies
+// inside the search range, and the cost there is clearly below the cost at the offset the
 // calibration gave; otherwise the calibration's offset stands.
 #pragma once
 
