@@ -197,6 +197,12 @@ ImuState VisualInertialOdometry::Propagate(const ImuState& state, timestamp_ns_t
   return predicted;
 }
 
+// s, the longest a moving start's frames wait for its initialisation to
+// pose them (VioOptions::pose_moving_start): the 15 s start of the real
+// recording initialised 3.8 s in, and its first 2.5 s of corners were gone
+// by then.
+constexpr double kMovingStartHoldS = 10.0;
+
 ImuState VisualInertialOdometry::PropagateBack(const ImuState& state, timestamp_ns_t to_ns) const {
   if (to_ns >= state.timestamp_ns) return state;
   ImuPreintegration preintegration(state.gyro_bias, state.accel_bias, rig_.imu_noise);
@@ -514,6 +520,13 @@ VioFrameResult VisualInertialOdometry::ProcessFrame(const FrameFeatures& feature
       }
     } else if (!result.has_pose && summary_.resets.empty() && options_.pose_moving_start) {
       moving_start_frames_.emplace_back(features.timestamp_ns, frame);
+      // Held for kMovingStartHoldS at most: older frames' corners have left
+      // the view by the time an initialisation succeeds, and a recording
+      // that never initialises must not hold every frame.
+      while (frame.timestamp_ns - moving_start_frames_.front().second.timestamp_ns >
+             SecondsToNs(kMovingStartHoldS)) {
+        moving_start_frames_.erase(moving_start_frames_.begin());
+      }
     }
   }
   Record(result);
