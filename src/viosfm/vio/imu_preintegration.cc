@@ -142,15 +142,30 @@ bool ImuPreintegration::IntegrateRange(const std::vector<ImuSample>& samples, ti
       std::upper_bound(samples.begin(), samples.end(), t_from,
                        [](timestamp_ns_t t, const ImuSample& s) { return t < s.timestamp_ns; });
   VIOSFM_CHECK(it != samples.begin() && it != samples.end());
+  // One interval in at least min_parts steps, none longer than kMaxImuStepNs.
+  const auto integrate_bridged = [this](const ImuSample& a, const ImuSample& b, int min_parts) {
+    const timestamp_ns_t span = b.timestamp_ns - a.timestamp_ns;
+    int parts = min_parts;
+    if (span > kMaxImuStepNs) {
+      parts = std::max(parts, static_cast<int>((span + kImuBridgeStepNs - 1) / kImuBridgeStepNs));
+    }
+    ImuSample from = a;
+    for (int k = 1; k <= parts; ++k) {
+      const ImuSample to = k == parts ? b : InterpolateImu(a, b, a.timestamp_ns + span * k / parts);
+      Integrate(from, to);
+      from = to;
+    }
+  };
+  const bool within_one_interval = it->timestamp_ns >= t_to;
   ImuSample previous = InterpolateImu(*(it - 1), *it, t_from);
   for (; it->timestamp_ns < t_to; ++it) {
     VIOSFM_CHECK_LT(previous.timestamp_ns, it->timestamp_ns) << "IMU stamps must increase";
-    Integrate(previous, *it);
+    integrate_bridged(previous, *it, 1);
     previous = *it;
     VIOSFM_CHECK(it + 1 != samples.end());
   }
   // Now it->timestamp_ns >= t_to > previous.timestamp_ns.
-  Integrate(previous, InterpolateImu(previous, *it, t_to));
+  integrate_bridged(previous, InterpolateImu(previous, *it, t_to), within_one_interval ? 2 : 1);
   return true;
 }
 

@@ -78,6 +78,12 @@ struct PreintegratedDeltas {
   Eigen::Vector3d delta_p = Eigen::Vector3d::Zero();
 };
 
+// ns, the longest interval between IMU samples integrated as one step
+// (IntegrateRange; 25 ms: the real RealSense recording's longest is 19.9 ms
+// at 200 Hz), and the step of the readings interpolated across a longer gap.
+constexpr timestamp_ns_t kMaxImuStepNs = 25'000'000;
+constexpr timestamp_ns_t kImuBridgeStepNs = 5'000'000;
+
 class ImuPreintegration {
  public:
   ImuPreintegration(const Eigen::Vector3d& gyro_bias, const Eigen::Vector3d& accel_bias,
@@ -89,8 +95,14 @@ class ImuPreintegration {
 
   // Integrates [t_from, t_to] from samples ordered by strictly increasing
   // stamp; the readings at t_from and t_to are interpolated linearly between
-  // the neighbouring samples. Returns false (and integrates nothing) when the
-  // samples do not cover [t_from, t_to] or t_to <= t_from.
+  // the neighbouring samples. A gap between samples longer than
+  // kMaxImuStepNs (samples a real IMU dropped) is bridged by readings
+  // interpolated linearly every kImuBridgeStepNs, and a range within one
+  // interval between samples is integrated in two halves: one step's
+  // covariance is singular (its velocity and position noise both come from
+  // one reading), which failed every adjustment holding it. Returns false
+  // (and integrates nothing) when the samples do not cover [t_from, t_to] or
+  // t_to <= t_from.
   [[nodiscard]] bool IntegrateRange(const std::vector<ImuSample>& samples, timestamp_ns_t t_from,
                                     timestamp_ns_t t_to);
 

@@ -140,6 +140,44 @@ TEST(ImuPreintegration, IntegrateRangeNeedsCoverage) {
   EXPECT_EQ(preintegration.num_steps(), 100);
 }
 
+// Samples a real IMU dropped: a range across a 0.2 s gap is bridged by
+// readings interpolated every 5 ms, and a range within one interval between
+// samples is integrated in two halves, so that the covariance is positive
+// definite (one step's is singular: its velocity and position noise come
+// from one reading; the VIO failed on such a recording with an internal
+// error). Ranges over the 200 Hz samples themselves keep their steps.
+TEST(ImuPreintegration, GapsAndShortRangesGiveAPositiveDefiniteCovariance) {
+  const BodyTrajectory trajectory = MakeWalk(4);
+  const timestamp_ns_t start = trajectory.start_ns();
+  const SynthesizedImu imu =
+      SynthesizeImu(trajectory, start, start + SecondsToNs(1.0),
+                    NoiseFree(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()));
+  std::vector<ImuSample> with_gap;
+  const timestamp_ns_t gap_from = start + SecondsToNs(0.4);
+  const timestamp_ns_t gap_to = start + SecondsToNs(0.6);
+  for (const ImuSample& sample : imu.samples) {
+    if (sample.timestamp_ns <= gap_from || sample.timestamp_ns >= gap_to) {
+      with_gap.push_back(sample);
+    }
+  }
+  // A frame pair inside the gap (0.45 to 0.5 s): one interval, 0.05 s of it.
+  ImuPreintegration inside(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), ImuNoise());
+  ASSERT_TRUE(inside.IntegrateRange(with_gap, start + SecondsToNs(0.45), start + SecondsToNs(0.5)));
+  EXPECT_EQ(inside.num_steps(), 10);  // 50 ms in steps of at most 5 ms
+  EXPECT_TRUE(inside.SqrtInformation().allFinite());
+  // Across the gap (0.3 to 0.7 s): 20 samples' steps each side, 40 bridging.
+  ImuPreintegration across(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), ImuNoise());
+  ASSERT_TRUE(across.IntegrateRange(with_gap, start + SecondsToNs(0.3), start + SecondsToNs(0.7)));
+  EXPECT_EQ(across.num_steps(), 80);
+  EXPECT_TRUE(across.SqrtInformation().allFinite());
+  // Within one 5 ms interval of the 200 Hz samples: two halves.
+  ImuPreintegration short_range(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), ImuNoise());
+  ASSERT_TRUE(short_range.IntegrateRange(imu.samples, start + SecondsToNs(0.1) + 1'000'000,
+                                         start + SecondsToNs(0.1) + 3'000'000));
+  EXPECT_EQ(short_range.num_steps(), 2);
+  EXPECT_TRUE(short_range.SqrtInformation().allFinite());
+}
+
 // Central finite differences of re-integration with perturbed biases.
 TEST(ImuPreintegration, BiasJacobiansMatchFiniteDifferences) {
   const BodyTrajectory trajectory = MakeWalk(5);

@@ -543,6 +543,27 @@ VioResult RunVio(const Sequence& sequence, const VioOptions& options, FrameCache
   if (sequence.images.empty()) throw InputError(sequence.root.string(), 0, "no images");
   const double cpu_start = ProcessCpuSeconds();
   Timer timer;
+  // Samples the IMU dropped: said once, bridged in the preintegration.
+  size_t num_imu_gaps = 0;
+  timestamp_ns_t longest_gap_ns = 0;
+  timestamp_ns_t longest_gap_at_ns = 0;
+  for (size_t i = 1; i < sequence.imu.size(); ++i) {
+    const timestamp_ns_t gap_ns = sequence.imu[i].timestamp_ns - sequence.imu[i - 1].timestamp_ns;
+    if (gap_ns > kMaxImuStepNs) ++num_imu_gaps;
+    if (gap_ns > longest_gap_ns) {
+      longest_gap_ns = gap_ns;
+      longest_gap_at_ns = sequence.imu[i - 1].timestamp_ns;
+    }
+  }
+  if (num_imu_gaps > 0) {
+    VIOSFM_LOG(WARNING) << "vio: the IMU stream has " << num_imu_gaps
+                        << " gap(s) between samples longer than " << NsToSeconds(kMaxImuStepNs)
+                        << " s (the longest " << FormatNsAsSeconds(longest_gap_ns, 3)
+                        << " s, after "
+                        << FormatNsAsSeconds(longest_gap_at_ns - sequence.imu.front().timestamp_ns,
+                                             2)
+                        << " s of it): bridged by readings interpolated linearly";
+  }
   size_t num_frames = sequence.images.size();
   if (options.max_frames > 0) num_frames = std::min(num_frames, size_t(options.max_frames));
 
@@ -691,6 +712,8 @@ VioResult RunVio(const Sequence& sequence, const VioOptions& options, FrameCache
     frame.segment = segment;
   }
   summary.num_segments = segment + 1;
+  summary.num_imu_gaps = num_imu_gaps;
+  summary.longest_imu_gap_s = NsToSeconds(longest_gap_ns);
   summary.num_frames_without_pose = static_cast<size_t>(
       std::count_if(result.frames.begin(), result.frames.end(),
                     [](const VioFrameResult& frame) { return !frame.has_pose; }));
@@ -745,6 +768,9 @@ std::string FormatVioSummary(const VioSummary& summary) {
   }
   out << "num_keyframes: " << summary.num_keyframes << "\n";
   out << "num_frames_beyond_imu: " << summary.num_frames_beyond_imu << "\n";
+  out << "imu_gaps: " << summary.num_imu_gaps << "  # intervals between IMU samples longer than "
+      << NsToSeconds(kMaxImuStepNs) << " s, bridged; the longest " << summary.longest_imu_gap_s
+      << " s\n";
   out << "num_frames_without_pose: " << summary.num_frames_without_pose
       << "  # before a moving start was initialised, not posed then\n";
   out << "moving_start_posed: [" << summary.num_moving_start_keyframes << ", "

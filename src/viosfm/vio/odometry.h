@@ -447,6 +447,11 @@ struct VioSummary {
   // Frames at the end that lie after the last IMU sample (on the IMU clock):
   // not processed, no pose, not in VioResult::frames.
   size_t num_frames_beyond_imu = 0;
+  // Intervals between IMU samples longer than kMaxImuStepNs (samples the
+  // IMU dropped; bridged by interpolated readings, imu_preintegration.h) and
+  // the longest interval, s.
+  size_t num_imu_gaps = 0;
+  double longest_imu_gap_s = 0.0;
   // Frames without a pose: those before a moving start was initialised
   // that VioOptions::pose_moving_start could not pose (has_pose false; left
   // out of the trajectories, kept in states.csv).
