@@ -57,11 +57,16 @@ void ImuPreintegration::Reset() {
 }
 
 void ImuPreintegration::Integrate(const ImuSample& a, const ImuSample& b) {
-  Step(a, b);
-  steps_.emplace_back(a, b);
+  IntegrateScaled(a, b, 1.0);
 }
 
-void ImuPreintegration::Step(const ImuSample& a, const ImuSample& b) {
+void ImuPreintegration::IntegrateScaled(const ImuSample& a, const ImuSample& b,
+                                        double noise_scale) {
+  Step(a, b, noise_scale);
+  steps_.push_back({a, b, noise_scale});
+}
+
+void ImuPreintegration::Step(const ImuSample& a, const ImuSample& b, double noise_scale) {
   VIOSFM_CHECK_LT(a.timestamp_ns, b.timestamp_ns);
   const double dt = NsToSeconds(b.timestamp_ns - a.timestamp_ns);
   const double dt2 = dt * dt;
@@ -103,8 +108,9 @@ void ImuPreintegration::Step(const ImuSample& a, const ImuSample& b) {
 
   // Covariance: white noise with covariance density^2 / dt on the step's
   // mean rate and mean specific force.
-  const double rate_var = noise_.gyro_noise_density * noise_.gyro_noise_density / dt;
-  const double force_var = noise_.accel_noise_density * noise_.accel_noise_density / dt;
+  const double scale2 = noise_scale * noise_scale;
+  const double rate_var = scale2 * noise_.gyro_noise_density * noise_.gyro_noise_density / dt;
+  const double force_var = scale2 * noise_.accel_noise_density * noise_.accel_noise_density / dt;
   covariance_ = A * covariance_ * A.transpose() + rate_var * B_rate * B_rate.transpose() +
                 force_var * B_force * B_force.transpose();
 
@@ -149,10 +155,12 @@ bool ImuPreintegration::IntegrateRange(const std::vector<ImuSample>& samples, ti
     if (span > kMaxImuStepNs) {
       parts = std::max(parts, static_cast<int>((span + kImuBridgeStepNs - 1) / kImuBridgeStepNs));
     }
+    // Readings interpolated across a gap are far less certain than measured ones.
+    const double noise_scale = span > kMaxImuStepNs ? kImuBridgeNoiseScale : 1.0;
     ImuSample from = a;
     for (int k = 1; k <= parts; ++k) {
       const ImuSample to = k == parts ? b : InterpolateImu(a, b, a.timestamp_ns + span * k / parts);
-      Integrate(from, to);
+      IntegrateScaled(from, to, noise_scale);
       from = to;
     }
   };
@@ -174,7 +182,7 @@ void ImuPreintegration::Repropagate(const Eigen::Vector3d& gyro_bias,
   gyro_bias_ = gyro_bias;
   accel_bias_ = accel_bias;
   Reset();
-  for (const auto& [a, b] : steps_) Step(a, b);
+  for (const StepSamples& step : steps_) Step(step.a, step.b, step.noise_scale);
 }
 
 bool ImuPreintegration::RepropagateIfNeeded(const Eigen::Vector3d& gyro_bias,
