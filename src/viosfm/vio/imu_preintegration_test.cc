@@ -170,6 +170,15 @@ TEST(ImuPreintegration, GapsAndShortRangesGiveAPositiveDefiniteCovariance) {
   ASSERT_TRUE(across.IntegrateRange(with_gap, start + SecondsToNs(0.3), start + SecondsToNs(0.7)));
   EXPECT_EQ(across.num_steps(), 80);
   EXPECT_TRUE(across.SqrtInformation().allFinite());
+  // The interpolated readings count 30 times a measured one's noise: the
+  // position across the gap is known far less well than with the samples.
+  ImuPreintegration measured(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), ImuNoise());
+  ASSERT_TRUE(
+      measured.IntegrateRange(imu.samples, start + SecondsToNs(0.3), start + SecondsToNs(0.7)));
+  EXPECT_EQ(measured.num_steps(), 80);
+  const double bridged_position_var = across.covariance().block(6, 6, 3, 3).trace();
+  const double measured_position_var = measured.covariance().block(6, 6, 3, 3).trace();
+  EXPECT_GT(bridged_position_var, 100.0 * measured_position_var);
   // Within one 5 ms interval of the 200 Hz samples: two halves.
   ImuPreintegration short_range(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), ImuNoise());
   ASSERT_TRUE(short_range.IntegrateRange(imu.samples, start + SecondsToNs(0.1) + 1'000'000,
