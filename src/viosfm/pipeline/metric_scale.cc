@@ -67,16 +67,23 @@ MetricScaleSummary ApplyImuMetricScale(const Sequence& sequence, const SensorRig
                               imu.residual_ratio <= options.max_refuting_residual_ratio &&
                               sigmas_from_vio > options.vio_refuted_sigmas;
   if (imu.usable || summary.vio_scale_refuted) {
+    std::ostringstream applied;
     if (summary.vio_scale_refuted) {
       // The VIO's scale is not an estimate to fuse with: the IMU's alone.
       summary.applied_scale = imu.scale;
       summary.applied_scale_sigma = imu.scale_sigma;
+      applied << std::fixed << std::setprecision(1) << "; the VIO's scale is refuted ("
+              << sigmas_from_vio << " sigma from the IMU's, its sigma taken as "
+              << std::setprecision(5) << vio_scale_sigma << "): applied the IMU's " << imu.scale
+              << " +- " << imu.scale_sigma * imu.scale << " alone";
     } else {
       // Inverse-variance fusion with the VIO's scale (1 +- vio_scale_sigma).
       summary.applied_scale = (imu.scale / imu_variance + 1.0 / vio_variance) /
                               (1.0 / imu_variance + 1.0 / vio_variance);
       summary.applied_scale_sigma =
           std::sqrt(1.0 / (1.0 / imu_variance + 1.0 / vio_variance)) / summary.applied_scale;
+      applied << std::fixed << std::setprecision(5) << "; applied " << summary.applied_scale
+              << " (fused with the VIO's scale, +- " << vio_scale_sigma << ")";
     }
     const double s = summary.applied_scale;
     for (const image_t image_id : reconstruction->ImageIds()) {
@@ -85,15 +92,7 @@ MetricScaleSummary ApplyImuMetricScale(const Sequence& sequence, const SensorRig
     for (const point3D_t point3D_id : reconstruction->Point3DIds()) {
       reconstruction->GetPoint3D(point3D_id).xyz *= s;
     }
-    if (summary.vio_scale_refuted) {
-      message << std::fixed << std::setprecision(1) << "; the VIO's scale is refuted ("
-              << sigmas_from_vio << " sigma from the IMU's, its sigma taken as "
-              << std::setprecision(5) << vio_scale_sigma << "): applied the IMU's " << s << " +- "
-              << imu.scale_sigma * s << " alone";
-    } else {
-      message << std::fixed << std::setprecision(5) << "; applied " << s
-              << " (fused with the VIO's scale, +- " << vio_scale_sigma << ")";
-    }
+    message << applied.str();
     summary.levelling_deg = LevelWithGravity(summary.imu.gravity_in_world, reconstruction);
     message << std::setprecision(3) << "; levelled with the IMU's gravity (turned by "
             << summary.levelling_deg << " deg)";

@@ -525,7 +525,7 @@ VioFrameResult VisualInertialOdometry::ProcessFrame(const FrameFeatures& feature
       // that never initialises must not hold every frame.
       while (frame.timestamp_ns - moving_start_frames_.front().second.timestamp_ns >
              SecondsToNs(kMovingStartHoldS)) {
-        moving_start_frames_.erase(moving_start_frames_.begin());
+        moving_start_frames_.pop_front();
       }
     }
   }

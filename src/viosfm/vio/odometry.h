@@ -21,6 +21,7 @@
 #pragma once
 
 #include <array>
+#include <deque>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -545,7 +546,7 @@ class VisualInertialOdometry {
   std::vector<FrameFeatures> init_keyframes_;  // for the visual-inertial initialisation
   // The frames of a moving start returned without a pose (IMU clock), held
   // until it is initialised (pose_moving_start), and the states found then.
-  std::vector<std::pair<timestamp_ns_t, FrameFeatures>> moving_start_frames_;  // camera stamp
+  std::deque<std::pair<timestamp_ns_t, FrameFeatures>> moving_start_frames_;  // camera stamp
   bool moving_start_pending_ = false;             // initialised, its frames not yet posed
   std::vector<ImuState> moving_start_keyframes_;  // the initialisation's
   std::unordered_map<uint64_t, Eigen::Vector3d> moving_start_points_;  // its landmarks
