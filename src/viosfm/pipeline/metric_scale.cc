@@ -92,7 +92,7 @@ MetricScaleSummary ApplyImuMetricScale(const Sequence& sequence, const SensorRig
     for (const point3D_t point3D_id : reconstruction->Point3DIds()) {
       reconstruction->GetPoint3D(point3D_id).xyz *= s;
     }
-    message << applied.str();
+    message << applied.str() << std::fixed;
     summary.levelling_deg = LevelWithGravity(summary.imu.gravity_in_world, reconstruction);
     message << std::setprecision(3) << "; levelled with the IMU's gravity (turned by "
             << summary.levelling_deg << " deg)";
