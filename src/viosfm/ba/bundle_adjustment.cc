@@ -91,7 +91,8 @@ std::string BundleAdjustmentSummary::ToString() const {
 BundleAdjustmentSummary BundleAdjust(Reconstruction* reconstruction,
                                      const std::vector<RelativePosePrior>& priors,
                                      const std::vector<image_t>& constant_poses,
-                                     const BundleAdjustmentOptions& options) {
+                                     const BundleAdjustmentOptions& options,
+                                     BundleAdjustmentTerms* terms) {
   VIOSFM_CHECK(reconstruction != nullptr);
   VIOSFM_CHECK(options.Check()) << options.Validate();
   const Timer timer;
@@ -232,6 +233,14 @@ BundleAdjustmentSummary BundleAdjust(Reconstruction* reconstruction,
       ++summary.num_priors;
     }
   }
+  std::vector<double*> term_blocks;
+  if (terms != nullptr) {
+    term_blocks = terms->AddTo(&problem, [&](image_t image_id) -> double* {
+      if (!reconstruction->ExistsImage(image_id)) return nullptr;
+      const Image& image = reconstruction->GetImage(image_id);
+      return image.registered ? pose_block(image) : nullptr;
+    });
+  }
   summary.num_images = static_cast<int>(pose_parameters.size());
 
   for (size_t k = 0; k < pose_parameters.size(); ++k) {
@@ -301,6 +310,7 @@ BundleAdjustmentSummary BundleAdjust(Reconstruction* reconstruction,
         ordering->AddElementToGroup(pose_parameters[k].data(), 1);
       }
     }
+    for (double* block : term_blocks) ordering->AddElementToGroup(block, 1);
     if (ordering->NumGroups() == 2) solver_options.linear_solver_ordering = ordering;
   }
   std::string error;

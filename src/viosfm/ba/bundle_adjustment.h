@@ -15,6 +15,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -24,6 +25,10 @@
 #include "viosfm/scene/reprojection.h"
 #include "viosfm/util/option_fields.h"
 #include "viosfm/util/types.h"
+
+namespace ceres {
+class Problem;
+}
 
 namespace viosfm {
 
@@ -230,13 +235,29 @@ struct BundleAdjustmentSummary {
   std::string ToString() const;  // one summary line
 };
 
+// Terms beyond the reprojection errors and the relative-pose priors that a
+// caller adds to an adjustment (sfm/inertial_terms.h: the IMU's): residual
+// blocks on the images' pose blocks and on parameter blocks of the caller's
+// own, which are solved with the poses (not eliminated with the points).
+class BundleAdjustmentTerms {
+ public:
+  virtual ~BundleAdjustmentTerms() = default;
+  // Adds the terms to `problem`. pose_block(image_id) is the pose block
+  // (geometry/pose_parameters.h) of a registered image, nullptr for any
+  // other image. Returns the caller's own parameter blocks. Their values
+  // are the solution once BundleAdjust returns.
+  virtual std::vector<double*> AddTo(ceres::Problem* problem,
+                                     const std::function<double*(image_t)>& pose_block) = 0;
+};
+
 // Refines `reconstruction` in place (see the top of this file). Priors whose
 // images are not both registered, or both constant, are skipped; every id in
 // `constant_poses` must be a registered image (CHECK). Observations of
-// unregistered images are ignored.
+// unregistered images are ignored. `terms`, if given, adds its own.
 BundleAdjustmentSummary BundleAdjust(Reconstruction* reconstruction,
                                      const std::vector<RelativePosePrior>& priors,
                                      const std::vector<image_t>& constant_poses,
-                                     const BundleAdjustmentOptions& options);
+                                     const BundleAdjustmentOptions& options,
+                                     BundleAdjustmentTerms* terms = nullptr);
 
 }  // namespace viosfm

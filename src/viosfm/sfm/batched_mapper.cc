@@ -4,6 +4,7 @@
 #include <cmath>
 #include <iomanip>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <set>
 #include <sstream>
@@ -67,10 +68,12 @@ BundleAdjustmentSummary AdjustImages(Reconstruction* reconstruction,
                                      const std::vector<image_t>& free_images,
                                      image_t held_neighbour, image_t gauge_image,
                                      const std::vector<RelativePosePrior>& priors,
-                                     const BundleAdjustmentOptions& options, int max_held_views) {
+                                     const BundleAdjustmentOptions& options, int max_held_views,
+                                     BundleAdjustmentTerms* terms) {
   if (free_images.size() == reconstruction->NumRegImages()) {
-    return BundleAdjust(reconstruction, priors, {gauge_image}, options);
+    return BundleAdjust(reconstruction, priors, {gauge_image}, options, terms);
   }
+  VIOSFM_CHECK(terms == nullptr) << "terms are only added to a global adjustment";
   const std::unordered_set<image_t> free(free_images.begin(), free_images.end());
   std::vector<point3D_t> point_ids;
   std::unordered_set<point3D_t> point_seen;
@@ -235,6 +238,7 @@ std::string BatchedMapperOptions::Validate() const {
     return "registration." + error;
   }
   if (std::string error = gyro.Validate(); !error.empty()) return "gyro." + error;
+  if (std::string error = inertial.Validate(); !error.empty()) return "inertial." + error;
   if (num_threads < 1) return "num_threads must be >= 1";
   return "";
 }
@@ -665,6 +669,7 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
   const auto adjust = [&](size_t window_begin, bool global) {
     BundleAdjustmentSummary ba_summary;
     if (!is_registered[gauge_index]) return ba_summary;
+    std::unique_ptr<InertialTerms> inertial_terms;
     const std::vector<image_t> free_images(registered.begin() + window_begin, registered.end());
     const image_t held_neighbour =
         window_begin > 0 ? registered[window_begin - 1] : kInvalidImageId;
@@ -725,14 +730,52 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
         return a.timestamp_ns < b.timestamp_ns;
       });
       GyroPriors gyro = MakeGyroPriors(frames, input.imu, input.rig, options.gyro);
-      summary.num_gyro_priors = static_cast<int>(gyro.priors.size());
-      summary.gyro_message = gyro.message;
-      VIOSFM_LOG(INFO) << "final bundle adjustment: " << gyro.message;
-      priors.insert(priors.end(), std::make_move_iterator(gyro.priors.begin()),
-                    std::make_move_iterator(gyro.priors.end()));
+      if (options.inertial.enabled) {
+        // The IMU's factors, started from the gyro priors' bias fit (the
+        // median of its windows'), in their place.
+        Eigen::Vector3d gyro_bias = Eigen::Vector3d::Zero();
+        if (!gyro.gyro_biases.empty()) {
+          for (int d = 0; d < 3; ++d) {
+            std::vector<double> values;
+            for (const Eigen::Vector3d& bias : gyro.gyro_biases) values.push_back(bias[d]);
+            std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+            gyro_bias[d] = values[values.size() / 2];
+          }
+        }
+        std::vector<InertialFrame> inertial_frames;
+        for (const GyroFrame& frame : frames) {
+          inertial_frames.push_back({frame.image_id, frame.timestamp_ns, frame.cam_from_world});
+        }
+        inertial_terms = std::make_unique<InertialTerms>(inertial_frames, input.imu, input.rig,
+                                                         gyro_bias, options.inertial);
+        if (inertial_terms->Initialise()) {
+          summary.num_inertial_factors = inertial_terms->num_factors();
+          VIOSFM_LOG(INFO) << "final bundle adjustment: before it, " << inertial_terms->Message();
+        } else {
+          inertial_terms.reset();
+        }
+      }
+      if (inertial_terms == nullptr) {
+        summary.num_gyro_priors = static_cast<int>(gyro.priors.size());
+        summary.gyro_message = gyro.message;
+        VIOSFM_LOG(INFO) << "final bundle adjustment: " << gyro.message;
+        priors.insert(priors.end(), std::make_move_iterator(gyro.priors.begin()),
+                      std::make_move_iterator(gyro.priors.end()));
+      }
     }
     ba_summary = AdjustImages(&reconstruction, free_images, held_neighbour, gauge_image, priors,
-                              batch_ba_options, global ? 0 : options.ba_window_max_held_views);
+                              batch_ba_options, global ? 0 : options.ba_window_max_held_views,
+                              inertial_terms.get());
+    if (inertial_terms != nullptr) {
+      summary.inertial_scale = inertial_terms->scale();
+      std::ostringstream message;
+      message << inertial_terms->Message() << "; after it: scale " << std::fixed
+              << std::setprecision(5) << inertial_terms->scale() << ", median "
+              << std::setprecision(2) << inertial_terms->MedianWhitenedResidual(reconstruction)
+              << " sigma";
+      summary.inertial_message = message.str();
+      VIOSFM_LOG(INFO) << "final bundle adjustment: " << summary.inertial_message;
+    }
     solver_chooser.Record(ba_summary, free_images.size());
     if (!ba_summary.usable && ba_summary.termination != "nothing to adjust") {
       VIOSFM_LOG(WARNING) << "bundle adjustment: " << ba_summary.ToString();

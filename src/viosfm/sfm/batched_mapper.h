@@ -49,6 +49,7 @@
 #include "viosfm/sfm/filters.h"
 #include "viosfm/sfm/frame_registration.h"
 #include "viosfm/sfm/gyro_priors.h"
+#include "viosfm/sfm/inertial_terms.h"
 #include "viosfm/sfm/mapper_input.h"
 #include "viosfm/sfm/relative_pose_priors.h"
 #include "viosfm/sfm/tracks.h"
@@ -77,6 +78,9 @@ struct BatchedMapperOptions {
   // The gyro's relative rotations in the final global bundle adjustment,
   // when the input has an IMU (BatchedMapperInput::imu).
   GyroPriorOptions gyro;
+  // The IMU's factors in the final global bundle adjustment, when the input
+  // has an IMU (in place of the gyro's priors, whose bias fit starts them).
+  InertialTermOptions inertial;
   // Local window of the per-batch bundle adjustment, in batches, >= 0. 0 (the
   // paper, default): every registered image but the first is refined after
   // every batch, so the cost of the run grows quadratically with the number
@@ -168,6 +172,7 @@ struct BatchedMapperOptions {
     VisitOptionGroup({"filter", "", kRunOnly}, self.filter, visit);
     VisitOptionGroup({"registration", "", kRunOnly}, self.registration, visit);
     VisitOptionGroup({"gyro", "", kRunOnly}, self.gyro, visit);
+    VisitOptionGroup({"inertial", "", kRunOnly}, self.inertial, visit);
     visit({"retriangulate", "re-triangulate tracks without a point after each filtering", kRunOnly},
           self.retriangulate);
     visit({"ba_after_each_batch", "bundle adjustment after each batch", kRunOnly},
@@ -226,9 +231,12 @@ struct BatchedMapperSummary {
   double mean_track_length = 0.0;
   double mean_reprojection_error_px = 0.0;
   int num_consecutive_priors = 0;
-  int num_bridging_priors = 0;  // BatchedMapperOptions::bridge_spans
-  int num_gyro_priors = 0;      // in the final adjustment (BatchedMapperOptions::gyro)
-  std::string gyro_message;     // MakeGyroPriors' line, empty without them
+  int num_bridging_priors = 0;   // BatchedMapperOptions::bridge_spans
+  int num_gyro_priors = 0;       // in the final adjustment (BatchedMapperOptions::gyro)
+  std::string gyro_message;      // MakeGyroPriors' line, empty without them
+  int num_inertial_factors = 0;  // in the final adjustment (BatchedMapperOptions::inertial)
+  std::string inertial_message;  // InertialTerms' line after the adjustment, empty without them
+  double inertial_scale = 0.0;   // InertialTerms::scale(), 0 without them
   // The final adjustment's rolling-shutter motion compensation
   // (BatchedMapperInput::rolling_shutter_readout_s), empty without it.
   std::string rolling_shutter_message;

@@ -1,0 +1,133 @@
+// The IMU in the final bundle adjustment: a preintegrated IMU factor
+// (vio/imu_factor.h) between every two consecutive registered frames, with
+// each frame's velocity and biases, one scale and the gravity's tilt as
+// unknowns beside the poses and the points.
+//
+// The relative-pose priors carry the VIO's lengths only as far as its
+// covariance allows, and where the images are strong the connectivity
+// factor hands the shape to them; but images never see a length, so over a
+// long walk the model's local scale drifts with the images' (the simulated
+// two_floors walk: +0.17 % on the first floor, +0.95 % on the second, where
+// the VIO stayed within 0.3 %). The accelerometer sees lengths everywhere:
+// its factors keep every stretch of the model at one metric scale, and
+// with the gyro's rotations in them they also hold what the gyro's priors
+// held (sfm/gyro_priors.h), which they replace.
+//
+// Frames: the body (IMU) pose of frame i is world_from_cam_i * cam_from_body
+// (SensorRig::body_from_cam), at the frame's stamp on the IMU's clock
+// (SensorRig::CamToImuTime). The factor sees it as
+//   world'_from_body_i = [R_tilt * R_i, s * R_tilt * p_i],
+// with s the model's metric scale (the model keeps the VIO's scale, which the
+// priors and the gauge fix; s is what the IMU says of it: metric lengths
+// are s times the model's) and R_tilt = Exp([a, b, 0]) the small rotation
+// that levels the model's world (its z axis is the VIO's estimate of the
+// vertical; yaw is not observable). The velocities are metric, in the
+// levelled world.
+//
+// Before the adjustment, the velocities, biases, scale and tilt are solved
+// with the poses held (Initialise); where the model and the IMU disagree
+// by more than the preintegration's covariance says (the median whitened
+// residual over the chi-square median; a real rig's timing, rolling shutter
+// and calibration), every factor's covariance is inflated by the ratio, as
+// the gyro's priors do.
+#pragma once
+
+#include <array>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "viosfm/ba/bundle_adjustment.h"
+#include "viosfm/geometry/rigid3.h"
+#include "viosfm/scene/reconstruction.h"
+#include "viosfm/sensor/imu.h"
+#include "viosfm/sensor/sensor_rig.h"
+#include "viosfm/util/option_fields.h"
+#include "viosfm/util/timestamp.h"
+#include "viosfm/util/types.h"
+#include "viosfm/vio/imu_preintegration.h"
+
+namespace viosfm {
+
+struct InertialTermOptions {
+  // IMU factors in the final bundle adjustment, when the dataset has an IMU,
+  // in place of the gyro's rotation priors. Default false.
+  bool enabled = false;
+  // s: no factor between consecutive frames further apart. Default 10.
+  double max_gap_s = 10.0;
+
+  std::string Validate() const;  // empty if valid, else names the bad field
+  bool Check() const { return Validate().empty(); }
+
+  template <class Self, class Visitor>
+  static void VisitFields(Self& self, Visitor&& visit) {
+    visit({"enabled", "IMU factors in the final bundle adjustment (replace the gyro's priors)",
+           kRunOnly},
+          self.enabled);
+    visit({"max_gap_s", "s, no IMU factor between frames further apart", kRunOnly}, self.max_gap_s);
+  }
+};
+
+// A registered frame: its image, time on the camera's clock and pose.
+struct InertialFrame {
+  image_t image_id = kInvalidImageId;
+  timestamp_ns_t timestamp_ns = 0;
+  Rigid3d cam_from_world;
+};
+
+class InertialTerms : public BundleAdjustmentTerms {
+ public:
+  // `frames` in strictly increasing time, `imu` in increasing time;
+  // `initial_gyro_bias` the gyro bias the factors start from (rad/s, e.g.
+  // the gyro priors' fit).
+  InertialTerms(const std::vector<InertialFrame>& frames, const std::vector<ImuSample>& imu,
+                const SensorRig& rig, const Eigen::Vector3d& initial_gyro_bias,
+                const InertialTermOptions& options);
+  ~InertialTerms() override;
+
+  // Solves the velocities, biases, scale and tilt with the frames' poses
+  // held, then inflates the factors' covariance where the poses and the
+  // IMU disagree (see the top). Returns false (and the terms add nothing)
+  // with fewer than two factors.
+  bool Initialise();
+
+  std::vector<double*> AddTo(ceres::Problem* problem,
+                             const std::function<double*(image_t)>& pose_block) override;
+
+  int num_factors() const { return static_cast<int>(factors_.size()); }
+  // Metric lengths are scale() times the model's.
+  double scale() const { return scale_[0]; }
+  // rad, the levelling rotation's angle.
+  double tilt_rad() const;
+  // The frames' velocities and biases (v m/s, bg rad/s, ba m/s^2).
+  const std::vector<std::array<double, 9>>& speed_bias() const { return speed_bias_; }
+  // The factors' covariance inflation (>= 1) and the median whitened
+  // residual (15-D) it came from, at Initialise.
+  double sigma_factor() const { return sigma_factor_; }
+  double median_whitened_residual() const { return median_whitened_residual_; }
+  // The median whitened residual at the current values (after the
+  // adjustment: at its solution), the frames' poses from `reconstruction`.
+  double MedianWhitenedResidual(const Reconstruction& reconstruction) const;
+  std::string Message() const;  // one line for the log
+
+ private:
+  double MedianWhitenedResidual(const std::vector<Rigid3d>& cam_from_world) const;
+  // The same for the rotation residual alone (3-D, its own covariance).
+  double MedianWhitenedRotationResidual(const std::vector<Rigid3d>& cam_from_world) const;
+
+  struct Factor;
+  std::vector<InertialFrame> frames_;
+  SensorRig rig_;
+  InertialTermOptions options_;
+  std::vector<std::array<double, 9>> speed_bias_;  // per frame: v, bg, ba
+  std::vector<bool> used_;                         // frame has a factor
+  std::vector<std::unique_ptr<Factor>> factors_;
+  std::array<double, 1> scale_{1.0};
+  std::array<double, 2> tilt_{0.0, 0.0};
+  double sigma_factor_ = 1.0;
+  double median_whitened_residual_ = 0.0;
+  double median_whitened_rotation_residual_ = 0.0;
+  bool initialised_ = false;
+};
+
+}  // namespace viosfm

@@ -1,0 +1,187 @@
+#include "viosfm/sfm/inertial_terms.h"
+
+#include <ceres/ceres.h>
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <iostream>
+#include <unordered_map>
+#include <vector>
+
+#include "viosfm/geometry/lie.h"
+#include "viosfm/geometry/pose_parameters.h"
+#include "viosfm/util/random.h"
+
+namespace viosfm {
+namespace {
+
+// A hand-held-like walk with a closed form: the body's rotation (yaw,
+// pitch and roll sinusoids and a slow turn) and position (m).
+Eigen::Matrix3d WorldFromBody(double t) {
+  return (Eigen::AngleAxisd(0.8 * std::sin(0.3 * t) + 0.05 * t, Eigen::Vector3d::UnitZ()) *
+          Eigen::AngleAxisd(0.1 * std::sin(0.7 * t), Eigen::Vector3d::UnitY()) *
+          Eigen::AngleAxisd(0.05 * std::sin(1.1 * t), Eigen::Vector3d::UnitX()))
+      .toRotationMatrix();
+}
+
+Eigen::Vector3d Position(double t) {
+  return Eigen::Vector3d(2.0 * std::sin(0.4 * t) + 0.3 * t, 1.5 * std::cos(0.3 * t),
+                         0.2 * std::sin(0.9 * t));
+}
+
+const Eigen::Vector3d kGyroBias(0.002, -0.001, 0.003);
+const Eigen::Vector3d kAccelBias(0.03, -0.02, 0.05);
+
+// 200 Hz IMU over [0, duration] with constant biases and white noise of
+// `noise_factor` times `noise`'s.
+std::vector<ImuSample> MakeImu(double duration_s, const ImuNoise& noise, double noise_factor,
+                               uint64_t seed) {
+  Random random(seed);
+  std::vector<ImuSample> imu;
+  const double dt = 1.0 / noise.rate_hz;
+  const double h = 1e-4;
+  for (int k = 0; k * dt <= duration_s; ++k) {
+    const double t = k * dt;
+    const Eigen::AngleAxisd turn(WorldFromBody(t - h).transpose() * WorldFromBody(t + h));
+    const Eigen::Vector3d omega = turn.angle() * turn.axis() / (2 * h);
+    const Eigen::Vector3d acceleration =
+        (Position(t + h) - 2.0 * Position(t) + Position(t - h)) / (h * h);
+    const Eigen::Vector3d specific_force =
+        WorldFromBody(t).transpose() * (acceleration + Eigen::Vector3d(0, 0, kStandardGravity));
+    ImuSample sample;
+    sample.timestamp_ns = static_cast<timestamp_ns_t>(std::llround(t * 1e9));
+    for (int a = 0; a < 3; ++a) {
+      sample.gyro[a] =
+          omega[a] + kGyroBias[a] + random.Normal(0, noise_factor * noise.GyroSampleStddev());
+      sample.accel[a] = specific_force[a] + kAccelBias[a] +
+                        random.Normal(0, noise_factor * noise.AccelSampleStddev());
+    }
+    imu.push_back(sample);
+  }
+  return imu;
+}
+
+// A rig whose camera looks along the body's x axis.
+SensorRig Rig() {
+  SensorRig rig;
+  rig.body_from_cam =
+      Rigid3d(Eigen::Quaterniond(Eigen::AngleAxisd(0.5 * M_PI, Eigen::Vector3d::UnitY()) *
+                                 Eigen::AngleAxisd(-0.5 * M_PI, Eigen::Vector3d::UnitZ())),
+              Eigen::Vector3d(0.05, 0.0, 0.01));
+  return rig;
+}
+
+// Frames at 10 Hz over [0.5, duration - 0.5] s in a model whose world is the
+// true one turned by `model_from_world` and shrunk by `model_scale` (a
+// VIO's scale error and tilt).
+std::vector<InertialFrame> MakeFrames(double duration_s, const SensorRig& rig,
+                                      const Eigen::Quaterniond& model_from_world,
+                                      double model_scale) {
+  std::vector<InertialFrame> frames;
+  for (int k = 5; k * 0.1 <= duration_s - 0.5; ++k) {
+    const double t = k * 0.1;
+    const Rigid3d world_from_body(Eigen::Quaterniond(WorldFromBody(t)), Position(t));
+    const Rigid3d model_from_body(model_from_world * world_from_body.rotation,
+                                  model_scale * (model_from_world * world_from_body.translation));
+    InertialFrame frame;
+    frame.image_id = static_cast<image_t>(k);
+    frame.timestamp_ns = static_cast<timestamp_ns_t>(std::llround(t * 1e9));
+    frame.cam_from_world = rig.cam_from_body() * model_from_body.Inverse();
+    frames.push_back(frame);
+  }
+  return frames;
+}
+
+// The terms alone on the frames' poses, held: the scale and tilt they solve.
+void SolveWithPosesHeld(const std::vector<InertialFrame>& frames, InertialTerms* terms) {
+  std::vector<PoseParameters> poses;
+  poses.reserve(frames.size());
+  std::unordered_map<image_t, double*> block_of;
+  for (const InertialFrame& frame : frames) {
+    poses.push_back(ToPoseParameters(frame.cam_from_world));
+    block_of[frame.image_id] = poses.back().data();
+  }
+  ceres::Problem problem;
+  const std::vector<double*> blocks =
+      terms->AddTo(&problem, [&](image_t image_id) { return block_of.at(image_id); });
+  ASSERT_FALSE(blocks.empty());
+  for (PoseParameters& pose : poses) {
+    if (problem.HasParameterBlock(pose.data())) problem.SetParameterBlockConstant(pose.data());
+  }
+  ceres::Solver::Options options;
+  options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+  options.max_num_iterations = 100;
+  ceres::Solver::Summary summary;
+  ceres::Solve(options, &problem, &summary);
+  ASSERT_TRUE(summary.IsSolutionUsable()) << summary.BriefReport();
+}
+
+TEST(InertialTerms, RecoverTheModelsMetricScaleTiltVelocitiesAndBiases) {
+  const SensorRig rig = Rig();
+  const std::vector<ImuSample> imu = MakeImu(30.0, rig.imu_noise, 1.0, 1);
+  // The model 3 % too small and tilted by 0.4 degrees.
+  const Eigen::Quaterniond model_from_world(
+      Eigen::AngleAxisd(0.4 * M_PI / 180.0, Eigen::Vector3d(1, 1, 0).normalized()));
+  const std::vector<InertialFrame> frames = MakeFrames(30.0, rig, model_from_world, 0.97);
+  InertialTerms terms(frames, imu, rig, Eigen::Vector3d::Zero(), InertialTermOptions());
+  ASSERT_TRUE(terms.Initialise());
+  EXPECT_EQ(terms.num_factors(), static_cast<int>(frames.size()) - 1);
+  // The poses are exact: the rotations agree with the gyro as its noise
+  // says, and nothing is inflated much.
+  EXPECT_LT(terms.sigma_factor(), 1.3) << terms.Message();
+  SolveWithPosesHeld(frames, &terms);
+  std::cout << terms.Message() << "\n";
+  EXPECT_NEAR(terms.scale(), 1.0 / 0.97, 1e-3);
+  EXPECT_NEAR(terms.tilt_rad(), 0.4 * M_PI / 180.0, 0.02 * M_PI / 180.0);
+  // Each frame's velocity (metric, in the true world up to the yaw, which
+  // the tilt leaves; here the model's yaw is the world's) and biases.
+  double velocity_error2 = 0.0;
+  for (size_t k = 0; k < frames.size(); ++k) {
+    const double t = static_cast<double>(frames[k].timestamp_ns) * 1e-9;
+    const Eigen::Vector3d truth = (Position(t + 1e-4) - Position(t - 1e-4)) / 2e-4;
+    const std::array<double, 9>& block = terms.speed_bias()[k];
+    velocity_error2 += (Eigen::Vector3d(block[0], block[1], block[2]) - truth).squaredNorm();
+    EXPECT_LT((Eigen::Vector3d(block[3], block[4], block[5]) - kGyroBias).norm(), 2e-4) << k;
+    EXPECT_LT((Eigen::Vector3d(block[6], block[7], block[8]) - kAccelBias).norm(), 0.02) << k;
+  }
+  EXPECT_LT(std::sqrt(velocity_error2 / static_cast<double>(frames.size())), 0.005);
+}
+
+TEST(InertialTerms, InflatedWhereTheRotationsDisagreeBeyondTheCovariance) {
+  // An IMU three times as noisy as the rig claims: the model's exact
+  // rotations disagree with it by three times its covariance.
+  const SensorRig rig = Rig();
+  const std::vector<ImuSample> imu = MakeImu(30.0, rig.imu_noise, 3.0, 2);
+  const std::vector<InertialFrame> frames =
+      MakeFrames(30.0, rig, Eigen::Quaterniond::Identity(), 1.0);
+  InertialTerms terms(frames, imu, rig, Eigen::Vector3d::Zero(), InertialTermOptions());
+  ASSERT_TRUE(terms.Initialise());
+  std::cout << terms.Message() << "\n";
+  EXPECT_GT(terms.sigma_factor(), 2.5);
+  EXPECT_LT(terms.sigma_factor(), 3.5);
+}
+
+TEST(InertialTerms, NoFactorAcrossAGapLongerThanTheLimit) {
+  const SensorRig rig = Rig();
+  const std::vector<ImuSample> imu = MakeImu(30.0, rig.imu_noise, 1.0, 3);
+  std::vector<InertialFrame> frames = MakeFrames(30.0, rig, Eigen::Quaterniond::Identity(), 1.0);
+  // Remove 2 s of frames around 15 s.
+  std::erase_if(frames, [](const InertialFrame& frame) {
+    return frame.timestamp_ns > 14'000'000'000 && frame.timestamp_ns < 16'000'000'000;
+  });
+  InertialTermOptions options;
+  options.max_gap_s = 1.5;
+  InertialTerms terms(frames, imu, rig, Eigen::Vector3d::Zero(), options);
+  EXPECT_EQ(terms.num_factors(), static_cast<int>(frames.size()) - 2);
+  options.max_gap_s = 10.0;
+  InertialTerms across(frames, imu, rig, Eigen::Vector3d::Zero(), options);
+  EXPECT_EQ(across.num_factors(), static_cast<int>(frames.size()) - 1);
+  // Nothing without an IMU.
+  InertialTerms without(frames, {}, rig, Eigen::Vector3d::Zero(), options);
+  EXPECT_EQ(without.num_factors(), 0);
+  EXPECT_FALSE(without.Initialise());
+}
+
+}  // namespace
+}  // namespace viosfm
