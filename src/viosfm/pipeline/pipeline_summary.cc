@@ -166,6 +166,9 @@ std::string PipelineSummaryToJson(const PipelineSummary& s) {
                                   {"bridging", s.mapper.num_bridging_priors},
                                   {"gyro", s.mapper.num_gyro_priors},
                                   {"gyro_message", s.mapper.gyro_message}};
+  json["imu_factors"] = {{"factors", s.mapper.num_inertial_factors},
+                         {"scale", s.mapper.inertial_scale},
+                         {"message", s.mapper.inertial_message}};
   ordered_json batches = ordered_json::array();
   for (const MapperBatchStatistics& batch : s.mapper.batches) {
     batches.push_back({{"index", batch.batch_index},

@@ -58,8 +58,16 @@ TEST(PipelineTest, RegistersEverySelectedFrame) {
     EXPECT_LT(Eigen::AngleAxisd(rotation_error).angle(), 1.0 * M_PI / 180.0) << stamp;
   }
 
-  // The dataset's IMU reached the mapper: the final adjustment held every
-  // pair of consecutive registered frames (0.1 s apart) to the gyro.
+  // The dataset's IMU reached the mapper. Its 376x240 images give
+  // rotations about a milliradian apart from the gyro's over 0.1 s, some 25
+  // times the preintegration's sigma: beyond what the IMU's factors take
+  // (InertialTermOptions::max_sigma_factor), so the final adjustment held
+  // every pair of consecutive registered frames to the gyro's priors, which
+  // allow for it, instead.
+  EXPECT_EQ(s.mapper.num_inertial_factors, 0) << s.mapper.inertial_message;
+  EXPECT_NE(s.mapper.inertial_message.find("no IMU factors: the model's rotations disagree"),
+            std::string::npos)
+      << s.mapper.inertial_message;
   EXPECT_EQ(s.mapper.num_gyro_priors, s.mapper.num_registered - 1) << s.mapper.gyro_message;
   EXPECT_GT(s.verification.num_accepted, s.num_frames_selected);
   EXPECT_GT(s.num_points, 500u);

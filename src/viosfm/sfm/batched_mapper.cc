@@ -752,6 +752,9 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
           summary.num_inertial_factors = inertial_terms->num_factors();
           VIOSFM_LOG(INFO) << "final bundle adjustment: before it, " << inertial_terms->Message();
         } else {
+          summary.inertial_message = inertial_terms->Message();
+          VIOSFM_LOG(INFO) << "final bundle adjustment: " << summary.inertial_message
+                           << "; the gyro's priors instead";
           inertial_terms.reset();
         }
       }

@@ -94,6 +94,7 @@ struct InertialTerms::Factor {
 
 std::string InertialTermOptions::Validate() const {
   if (!(max_gap_s > 0.0)) return "max_gap_s must be > 0";
+  if (!(max_sigma_factor >= 1.0)) return "max_sigma_factor must be >= 1";
   return "";
 }
 
@@ -152,7 +153,10 @@ double InertialTerms::tilt_rad() const {
 }
 
 bool InertialTerms::Initialise() {
-  if (factors_.size() < 2) return false;
+  if (factors_.size() < 2) {
+    refusal_ = "the IMU covers too few frame pairs for its factors";
+    return false;
+  }
   std::vector<PoseParameters> poses(frames_.size());
   for (size_t k = 0; k < frames_.size(); ++k)
     poses[k] = ToPoseParameters(frames_[k].cam_from_world);
@@ -203,6 +207,16 @@ bool InertialTerms::Initialise() {
   // is 15.8 sigma with the poses held and 0.7 after the adjustment).
   median_whitened_rotation_residual_ = MedianWhitenedRotationResidual(cam_from_world);
   sigma_factor_ = std::max(1.0, median_whitened_rotation_residual_ / kMedianChi3);
+  if (sigma_factor_ > options_.max_sigma_factor) {
+    std::ostringstream refusal;
+    refusal << std::fixed << std::setprecision(2)
+            << "the model's rotations disagree with the gyro's by "
+            << median_whitened_rotation_residual_ << " sigma (median; " << kMedianChi3
+            << " expected), more than max_sigma_factor " << options_.max_sigma_factor
+            << " times: the rig is further from the IMU model than its factors can take";
+    refusal_ = refusal.str();
+    return false;
+  }
   initialised_ = true;
   return true;
 }
@@ -283,6 +297,7 @@ std::vector<double*> InertialTerms::AddTo(ceres::Problem* problem,
 }
 
 std::string InertialTerms::Message() const {
+  if (!refusal_.empty()) return "no IMU factors: " + refusal_;
   std::ostringstream message;
   message << std::fixed << std::setprecision(2) << factors_.size()
           << " IMU factors between consecutive frames; the model's metric scale "
