@@ -129,6 +129,7 @@ void ApplyRealtimeSettings(PipelineOptions* options) {
   options->mapper.ba_window_batches = 4;
   options->mapper.ba_window_max_held_views = 5;
   options->texture_probe.enable = true;
+  options->mapper.ba.function_tolerance = 3e-5;
 }
 
 }  // namespace viosfm

@@ -145,7 +145,8 @@ TEST(PipelineOptions, RealtimeSettingsChangeOnlyTheirOptions) {
       {"verification.guided_matching", "true"},
       {"mapper.ba_window_batches", "4"},
       {"mapper.ba_window_max_held_views", "5"},
-      {"texture_probe.enable", "true"}};
+      {"texture_probe.enable", "true"},
+      {"mapper.ba.function_tolerance", "3e-05"}};
   EXPECT_EQ(changed, expected);
 }
 

@@ -402,6 +402,8 @@ TEST(PipelineTest, SummaryJsonHasTheDocumentedKeys) {
   }
   EXPECT_EQ(json["pairs"]["candidates"], s.verification.num_pairs);
   EXPECT_EQ(json["points"], s.num_points);
+  EXPECT_EQ(json["imu_factors"]["factors"], s.mapper.num_inertial_factors);
+  EXPECT_EQ(json["imu_factors"]["message"], s.mapper.inertial_message);
   // 31-40 frames in batches of 10.
   ASSERT_EQ(json["batches"].size(), s.mapper.batches.size());
   EXPECT_EQ(json["batches"].size(), (s.num_frames_selected + 9) / 10);

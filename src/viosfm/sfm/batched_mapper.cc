@@ -730,7 +730,7 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
         return a.timestamp_ns < b.timestamp_ns;
       });
       GyroPriors gyro = MakeGyroPriors(frames, input.imu, input.rig, options.gyro);
-      if (options.inertial.enabled) {
+      if (options.inertial.enabled && ba_options.use_relative_pose_priors) {
         // The IMU's factors, started from the gyro priors' bias fit (the
         // median of its windows'), in their place.
         Eigen::Vector3d gyro_bias = Eigen::Vector3d::Zero();

@@ -16,9 +16,9 @@
 namespace viosfm {
 namespace {
 
-// The median of the norm of a 15-D standard normal vector (the square root
-// of the chi-square median with 15 degrees of freedom, 14.339).
-constexpr double kMedianChi15 = 3.7867;
+// The median of the norm of a 9-D standard normal vector (the square root
+// of the chi-square median with 9 degrees of freedom, 8.343).
+constexpr double kMedianChi9 = 2.8884;
 // The same with 3 degrees of freedom.
 constexpr double kMedianChi3 = 1.5382;
 
@@ -29,22 +29,37 @@ class InertialCost {
   InertialCost(const ImuPreintegration& preintegration, const Rigid3d& cam_from_body, double weight)
       : factor_(preintegration), cam_from_body_(cam_from_body), weight_(weight) {}
 
+  // Blocks: the two frames' poses (cam_from_world) and velocities, the
+  // biases of the first frame's window (both frames take them: the factor's
+  // bias rows are zero, the walk between windows is BiasWalkCost's), the
+  // scale and the tilt. Residuals: ImuFactor's first 9 (rotation, velocity,
+  // position).
   template <typename T>
-  bool operator()(const T* cam_from_world_i, const T* speed_bias_i, const T* cam_from_world_j,
-                  const T* speed_bias_j, const T* scale, const T* tilt, T* residuals) const {
+  bool operator()(const T* cam_from_world_i, const T* velocity_i, const T* cam_from_world_j,
+                  const T* velocity_j, const T* biases, const T* scale, const T* tilt,
+                  T* residuals) const {
     T pose_i[7];
     T pose_j[7];
     WorldFromBody(cam_from_world_i, scale, tilt, pose_i);
     WorldFromBody(cam_from_world_j, scale, tilt, pose_j);
-    if (!factor_(pose_i, speed_bias_i, pose_j, speed_bias_j, residuals)) return false;
-    for (int k = 0; k < ImuFactor::kNumResiduals; ++k) residuals[k] *= T(weight_);
+    T speed_bias_i[9];
+    T speed_bias_j[9];
+    for (int d = 0; d < 3; ++d) {
+      speed_bias_i[d] = velocity_i[d];
+      speed_bias_j[d] = velocity_j[d];
+    }
+    for (int d = 0; d < 6; ++d) speed_bias_i[3 + d] = speed_bias_j[3 + d] = biases[d];
+    T full[ImuFactor::kNumResiduals];
+    if (!factor_(pose_i, speed_bias_i, pose_j, speed_bias_j, full)) return false;
+    for (int k = 0; k < kNumResiduals; ++k) residuals[k] = T(weight_) * full[k];
     return true;
   }
 
+  static constexpr int kNumResiduals = 9;
+
   static ceres::CostFunction* Create(const ImuPreintegration& preintegration,
                                      const Rigid3d& cam_from_body, double weight) {
-    return new ceres::AutoDiffCostFunction<InertialCost, ImuFactor::kNumResiduals, 7, 9, 7, 9, 1,
-                                           2>(
+    return new ceres::AutoDiffCostFunction<InertialCost, kNumResiduals, 7, 3, 7, 3, 6, 1, 2>(
         new InertialCost(preintegration, cam_from_body, weight));
   }
 
@@ -78,6 +93,32 @@ class InertialCost {
   double weight_;
 };
 
+// The biases' random walk between two consecutive windows' biases (gyro,
+// accelerometer), whitened by its standard deviation over `seconds`.
+class BiasWalkCost {
+ public:
+  BiasWalkCost(const ImuNoise& noise, double seconds)
+      : gyro_sigma_(noise.gyro_random_walk * std::sqrt(seconds)),
+        accel_sigma_(noise.accel_random_walk * std::sqrt(seconds)) {}
+
+  template <typename T>
+  bool operator()(const T* biases_a, const T* biases_b, T* residuals) const {
+    for (int d = 0; d < 3; ++d) {
+      residuals[d] = (biases_b[d] - biases_a[d]) / T(gyro_sigma_);
+      residuals[3 + d] = (biases_b[3 + d] - biases_a[3 + d]) / T(accel_sigma_);
+    }
+    return true;
+  }
+
+  static ceres::CostFunction* Create(const ImuNoise& noise, double seconds) {
+    return new ceres::AutoDiffCostFunction<BiasWalkCost, 6, 6, 6>(new BiasWalkCost(noise, seconds));
+  }
+
+ private:
+  double gyro_sigma_;
+  double accel_sigma_;
+};
+
 double Median(std::vector<double> values) {
   if (values.empty()) return 0.0;
   std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
@@ -94,6 +135,7 @@ struct InertialTerms::Factor {
 
 std::string InertialTermOptions::Validate() const {
   if (!(max_gap_s > 0.0)) return "max_gap_s must be > 0";
+  if (!(bias_window_s > 0.0)) return "bias_window_s must be > 0";
   if (!(max_sigma_factor >= 1.0)) return "max_sigma_factor must be >= 1";
   return "";
 }
@@ -107,8 +149,17 @@ InertialTerms::InertialTerms(const std::vector<InertialFrame>& frames,
   for (size_t k = 1; k < frames_.size(); ++k) {
     VIOSFM_CHECK_LT(frames_[k - 1].timestamp_ns, frames_[k].timestamp_ns);
   }
-  speed_bias_.assign(frames_.size(), {});
+  velocity_.assign(frames_.size(), {});
+  window_.assign(frames_.size(), 0);
   used_.assign(frames_.size(), false);
+  if (!frames_.empty()) {
+    const timestamp_ns_t t0 = frames_.front().timestamp_ns;
+    for (size_t k = 0; k < frames_.size(); ++k) {
+      window_[k] = static_cast<int>(static_cast<double>(frames_[k].timestamp_ns - t0) * 1e-9 /
+                                    options.bias_window_s);
+    }
+    biases_.assign(static_cast<size_t>(window_.back()) + 1, {});
+  }
   const auto max_gap_ns = static_cast<timestamp_ns_t>(std::llround(options.max_gap_s * 1e9));
   for (size_t k = 0; k + 1 < frames_.size(); ++k) {
     if (frames_[k + 1].timestamp_ns - frames_[k].timestamp_ns > max_gap_ns) continue;
@@ -137,11 +188,12 @@ InertialTerms::InertialTerms(const std::vector<InertialFrame>& frames,
       velocity = (positions[b] - positions[a]) /
                  (static_cast<double>(frames_[b].timestamp_ns - frames_[a].timestamp_ns) * 1e-9);
     }
-    std::array<double, 9>& block = speed_bias_[k];
+    for (int d = 0; d < 3; ++d) velocity_[k][d] = velocity[d];
+  }
+  for (std::array<double, 6>& biases : biases_) {
     for (int d = 0; d < 3; ++d) {
-      block[d] = velocity[d];
-      block[3 + d] = initial_gyro_bias[d];
-      block[6 + d] = 0.0;
+      biases[d] = initial_gyro_bias[d];
+      biases[3 + d] = 0.0;
     }
   }
 }
@@ -168,10 +220,11 @@ bool InertialTerms::Initialise() {
     ceres::Problem problem;
     for (const std::unique_ptr<Factor>& factor : factors_) {
       problem.AddResidualBlock(InertialCost::Create(factor->preintegration, cam_from_body, 1.0),
-                               nullptr, poses[factor->i].data(), speed_bias_[factor->i].data(),
-                               poses[factor->j].data(), speed_bias_[factor->j].data(),
-                               scale_.data(), tilt_.data());
+                               nullptr, poses[factor->i].data(), velocity_[factor->i].data(),
+                               poses[factor->j].data(), velocity_[factor->j].data(),
+                               biases_[window_[factor->i]].data(), scale_.data(), tilt_.data());
     }
+    AddBiasWalks(&problem);
     for (size_t k = 0; k < frames_.size(); ++k) {
       if (used_[k]) problem.SetParameterBlockConstant(poses[k].data());
     }
@@ -190,9 +243,9 @@ bool InertialTerms::Initialise() {
     ceres::Solver::Summary summary;
     ceres::Solve(solver_options, &problem, &summary);
     for (const std::unique_ptr<Factor>& factor : factors_) {
-      const std::array<double, 9>& block = speed_bias_[factor->i];
-      factor->preintegration.Repropagate(Eigen::Vector3d(block[3], block[4], block[5]),
-                                         Eigen::Vector3d(block[6], block[7], block[8]));
+      const std::array<double, 6>& biases = biases_[window_[factor->i]];
+      factor->preintegration.Repropagate(Eigen::Vector3d(biases[0], biases[1], biases[2]),
+                                         Eigen::Vector3d(biases[3], biases[4], biases[5]));
     }
   }
   std::vector<Rigid3d> cam_from_world(frames_.size());
@@ -203,7 +256,7 @@ bool InertialTerms::Initialise() {
   // the covariance the rig is to blame (its timing, rolling shutter,
   // camera-IMU rotation), and the rest of the factor shares that; the
   // positions' disagreement is the held poses' own jitter, which the
-  // adjustment removes (on the simulated two_floors walk the 15-D median
+  // adjustment removes (on the simulated two_floors walk the 9-D median
   // is 15.8 sigma with the poses held and 0.7 after the adjustment).
   median_whitened_rotation_residual_ = MedianWhitenedRotationResidual(cam_from_world);
   sigma_factor_ = std::max(1.0, median_whitened_rotation_residual_ / kMedianChi3);
@@ -229,9 +282,9 @@ double InertialTerms::MedianWhitenedResidual(const std::vector<Rigid3d>& cam_fro
     const InertialCost cost(factor->preintegration, cam_from_body, 1.0);
     const PoseParameters pose_i = ToPoseParameters(cam_from_world[factor->i]);
     const PoseParameters pose_j = ToPoseParameters(cam_from_world[factor->j]);
-    Eigen::Matrix<double, 15, 1> residual;
-    cost(pose_i.data(), speed_bias_[factor->i].data(), pose_j.data(), speed_bias_[factor->j].data(),
-         scale_.data(), tilt_.data(), residual.data());
+    Eigen::Matrix<double, InertialCost::kNumResiduals, 1> residual;
+    cost(pose_i.data(), velocity_[factor->i].data(), pose_j.data(), velocity_[factor->j].data(),
+         biases_[window_[factor->i]].data(), scale_.data(), tilt_.data(), residual.data());
     norms.push_back(residual.norm());
   }
   return Median(std::move(norms));
@@ -243,10 +296,10 @@ double InertialTerms::MedianWhitenedRotationResidual(
   std::vector<double> norms;
   for (const std::unique_ptr<Factor>& factor : factors_) {
     const ImuPreintegration& preintegration = factor->preintegration;
-    const std::array<double, 9>& block = speed_bias_[factor->i];
+    const std::array<double, 6>& biases = biases_[window_[factor->i]];
     const PreintegratedDeltas deltas =
-        preintegration.Corrected(Eigen::Vector3d(block[3], block[4], block[5]),
-                                 Eigen::Vector3d(block[6], block[7], block[8]));
+        preintegration.Corrected(Eigen::Vector3d(biases[0], biases[1], biases[2]),
+                                 Eigen::Vector3d(biases[3], biases[4], biases[5]));
     // body_i_from_body_j = body_from_cam * cam_i_from_world * world_from_cam_j * cam_from_body.
     const Eigen::Quaterniond body_i_from_body_j =
         body_from_cam * cam_from_world[factor->i].rotation *
@@ -273,27 +326,57 @@ std::vector<double*> InertialTerms::AddTo(ceres::Problem* problem,
   std::vector<double*> blocks;
   if (!initialised_) return blocks;
   const Rigid3d cam_from_body = rig_.cam_from_body();
-  std::vector<bool> added(frames_.size(), false);
-  bool any = false;
+  std::vector<bool> velocity_added(frames_.size(), false);
+  std::vector<bool> biases_added(biases_.size(), false);
   for (const std::unique_ptr<Factor>& factor : factors_) {
     double* pose_i = pose_block(frames_[factor->i].image_id);
     double* pose_j = pose_block(frames_[factor->j].image_id);
     if (pose_i == nullptr || pose_j == nullptr) continue;
+    const int window = window_[factor->i];
     problem->AddResidualBlock(
         InertialCost::Create(factor->preintegration, cam_from_body, 1.0 / sigma_factor_), nullptr,
-        pose_i, speed_bias_[factor->i].data(), pose_j, speed_bias_[factor->j].data(), scale_.data(),
-        tilt_.data());
+        pose_i, velocity_[factor->i].data(), pose_j, velocity_[factor->j].data(),
+        biases_[window].data(), scale_.data(), tilt_.data());
     for (const size_t k : {factor->i, factor->j}) {
-      if (!added[k]) blocks.push_back(speed_bias_[k].data());
-      added[k] = true;
+      if (!velocity_added[k]) blocks.push_back(velocity_[k].data());
+      velocity_added[k] = true;
     }
-    any = true;
+    if (!biases_added[window]) blocks.push_back(biases_[window].data());
+    biases_added[window] = true;
   }
-  if (any) {
+  if (!blocks.empty()) {
+    AddBiasWalks(problem);
     blocks.push_back(scale_.data());
     blocks.push_back(tilt_.data());
   }
   return blocks;
+}
+
+void InertialTerms::AddBiasWalks(ceres::Problem* problem) {
+  int previous = -1;
+  for (int w = 0; w < static_cast<int>(biases_.size()); ++w) {
+    if (!problem->HasParameterBlock(biases_[w].data())) continue;
+    if (previous >= 0) {
+      problem->AddResidualBlock(
+          BiasWalkCost::Create(rig_.imu_noise, (w - previous) * options_.bias_window_s), nullptr,
+          biases_[previous].data(), biases_[w].data());
+    }
+    previous = w;
+  }
+}
+
+Eigen::Vector3d InertialTerms::velocity(size_t k) const {
+  return Eigen::Vector3d(velocity_[k][0], velocity_[k][1], velocity_[k][2]);
+}
+
+Eigen::Vector3d InertialTerms::gyro_bias(size_t k) const {
+  const std::array<double, 6>& biases = biases_[window_[k]];
+  return Eigen::Vector3d(biases[0], biases[1], biases[2]);
+}
+
+Eigen::Vector3d InertialTerms::accel_bias(size_t k) const {
+  const std::array<double, 6>& biases = biases_[window_[k]];
+  return Eigen::Vector3d(biases[3], biases[4], biases[5]);
 }
 
 std::string InertialTerms::Message() const {
@@ -303,7 +386,7 @@ std::string InertialTerms::Message() const {
           << " IMU factors between consecutive frames; the model's metric scale "
           << std::setprecision(5) << scale_[0] << ", its tilt " << std::setprecision(3)
           << tilt_rad() * 180.0 / M_PI << " degrees; the poses against the IMU: median "
-          << std::setprecision(2) << median_whitened_residual_ << " sigma (" << kMedianChi15
+          << std::setprecision(2) << median_whitened_residual_ << " sigma (" << kMedianChi9
           << " expected)";
   message << ", their rotations " << median_whitened_rotation_residual_ << " sigma (" << kMedianChi3
           << " expected)";

@@ -132,7 +132,16 @@ TEST(InertialTerms, RecoverTheModelsMetricScaleTiltVelocitiesAndBiases) {
   EXPECT_LT(terms.sigma_factor(), 1.3) << terms.Message();
   SolveWithPosesHeld(frames, &terms);
   std::cout << terms.Message() << "\n";
-  EXPECT_NEAR(terms.scale(), 1.0 / 0.97, 1e-3);
+  // With the IMU's noise, within the 0.5 % (one draw: 0.23 % off
+  // with the default 10 s bias windows, 0.05 % with a bias per frame);
+  // without it, exact.
+  EXPECT_NEAR(terms.scale() * 0.97, 1.0, 0.005);
+  InertialTerms noiseless(frames, MakeImu(30.0, rig.imu_noise, 0.0, 1), rig,
+                          Eigen::Vector3d::Zero(), InertialTermOptions());
+  ASSERT_TRUE(noiseless.Initialise());
+  SolveWithPosesHeld(frames, &noiseless);
+  EXPECT_NEAR(noiseless.scale() * 0.97, 1.0, 1e-5);
+  EXPECT_NEAR(noiseless.tilt_rad(), 0.4 * M_PI / 180.0, 1e-5);
   EXPECT_NEAR(terms.tilt_rad(), 0.4 * M_PI / 180.0, 0.02 * M_PI / 180.0);
   // Each frame's velocity (metric, in the true world up to the yaw, which
   // the tilt leaves; here the model's yaw is the world's) and biases.
@@ -140,10 +149,9 @@ TEST(InertialTerms, RecoverTheModelsMetricScaleTiltVelocitiesAndBiases) {
   for (size_t k = 0; k < frames.size(); ++k) {
     const double t = static_cast<double>(frames[k].timestamp_ns) * 1e-9;
     const Eigen::Vector3d truth = (Position(t + 1e-4) - Position(t - 1e-4)) / 2e-4;
-    const std::array<double, 9>& block = terms.speed_bias()[k];
-    velocity_error2 += (Eigen::Vector3d(block[0], block[1], block[2]) - truth).squaredNorm();
-    EXPECT_LT((Eigen::Vector3d(block[3], block[4], block[5]) - kGyroBias).norm(), 2e-4) << k;
-    EXPECT_LT((Eigen::Vector3d(block[6], block[7], block[8]) - kAccelBias).norm(), 0.02) << k;
+    velocity_error2 += (terms.velocity(k) - truth).squaredNorm();
+    EXPECT_LT((terms.gyro_bias(k) - kGyroBias).norm(), 2e-4) << k;
+    EXPECT_LT((terms.accel_bias(k) - kAccelBias).norm(), 0.02) << k;
   }
   EXPECT_LT(std::sqrt(velocity_error2 / static_cast<double>(frames.size())), 0.005);
 }
