@@ -51,22 +51,27 @@ namespace viosfm {
 
 struct InertialTermOptions {
   // IMU factors in the final bundle adjustment, when the dataset has an IMU,
-  // in place of the gyro's rotation priors (without relative-pose priors,
-  // ba.use_relative_pose_priors = false, neither). Default true: on the simulated
-  // sequences with the realistic emulated VIO (scripts/bench-vio-trust.sh)
-  // the Sim(3) ATE fell on every one (keyframes: room 0.98 -> 0.70 mm,
-  // two_floors 27.9 -> 25.7, corridor 17.4 -> 15.3; 10 Hz: 0.56 -> 0.47,
-  // 21.0 -> 17.5, 5.09 -> 3.39), and on the 100 s two_floors walk with the
-  // own VIO from 25.5 to 12.9 mm, its scale error from +0.56 % to -0.03 %
-  // (docs/benchmarks.md "The IMU in the final adjustment").
+  // in place of the gyro's rotation priors and of the bridging priors
+  // (without relative-pose priors, ba.use_relative_pose_priors = false,
+  // neither). Default true: on the simulated sequences with the realistic
+  // emulated VIO (scripts/bench-vio-trust.sh) the Sim(3) ATE fell on every
+  // one (keyframes: room 0.98 -> 0.87 mm, two_floors 27.9 -> 14.7,
+  // corridor 17.4 -> 14.0; 10 Hz: 0.56 -> 0.51, 21.0 -> 10.0, 5.09 ->
+  // 3.77), and on the 100 s two_floors walk with the own VIO its scale error
+  // from +0.56 % to about 0 (docs/benchmarks.md "The IMU in the final
+  // adjustment").
   bool enabled = true;
   // s: no factor between consecutive frames further apart. Default 10.
   double max_gap_s = 10.0;
   // s, one pair of biases (gyro, accelerometer) per window, joined to the
-  // next window's by their random walk. Per frame they made the final
-  // adjustment's reduced system 2.5 times as large (15 instead of 6 unknowns
-  // a frame, with the velocity) and each iteration 19 % slower on the
-  // simulated room. Default 10.
+  // next window's by their random walk. A pair per frame (any value below
+  // the frame interval) is the other choice measured: 6 more unknowns a
+  // frame in the reduced system for a mixed result (with bridging priors in
+  // the final adjustment, on the six sequences of
+  // scripts/bench-vio-trust.sh, Sim(3) ATE per frame against 10 s windows:
+  // room_kf 0.70 / 0.87 mm, room_10hz 0.47 / 0.51, corridor_10hz 3.39 /
+  // 3.77; corridor_kf 15.3 / 14.0, two_floors_kf 25.7 / 24.5,
+  // two_floors_10hz 17.5 / 15.7), and no faster. Default 10.
   double bias_window_s = 10.0;
   // The factors are not used (the gyro's priors are, which allow for a
   // floor of unmodelled rotation error) when the model's rotations disagree

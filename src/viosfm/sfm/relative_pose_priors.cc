@@ -71,6 +71,7 @@ RelativePosePriors MakeRelativePosePriors(const BatchedMapperInput& input,
     prior.rotation_only = bridging && !covariance;
     result.priors.push_back(std::move(prior));
     result.frame_indices.emplace_back(i, j);
+    result.bridging.push_back(bridging);
     ++(bridging ? result.num_bridging : result.num_consecutive);
   };
   // With the covariance weighting, a stretch is poorly connected where few

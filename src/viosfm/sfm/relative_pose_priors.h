@@ -42,6 +42,9 @@ struct RelativePosePriors {
   // Per prior, the indices (into the input's images, first < second) of its
   // frames.
   std::vector<std::pair<size_t, size_t>> frame_indices;
+  // Per prior, whether it is a bridging prior (RelativePosePriorOptions::
+  // bridge_spans).
+  std::vector<bool> bridging;
   int num_consecutive = 0;
   int num_bridging = 0;
 };
