@@ -8,20 +8,13 @@
 #include <vector>
 
 #include "viosfm/geometry/lie.h"
+#include "viosfm/sfm/synthetic_imu_walk.h"
 #include "viosfm/util/random.h"
 
 namespace viosfm {
 namespace {
 
-// A hand-held-like rotation with a closed form: yaw, pitch and roll
-// sinusoids and a slow turn.
-Eigen::Matrix3d WorldFromBody(double t) {
-  return (Eigen::AngleAxisd(0.8 * std::sin(0.3 * t) + 0.05 * t, Eigen::Vector3d::UnitZ()) *
-          Eigen::AngleAxisd(0.1 * std::sin(0.7 * t), Eigen::Vector3d::UnitY()) *
-          Eigen::AngleAxisd(0.05 * std::sin(1.1 * t), Eigen::Vector3d::UnitX()))
-      .toRotationMatrix();
-}
-
+// The walk's rotation: WalkWorldFromBody (synthetic_imu_walk.h).
 const Eigen::Vector3d kGyroBias(0.002, -0.001, 0.003);
 
 // 200 Hz gyro over [0, duration] with EuRoC-like noise and a constant bias
@@ -33,7 +26,7 @@ std::vector<ImuSample> MakeGyro(double duration_s, const ImuNoise& noise, uint64
   const double h = 1e-5;
   for (int k = 0; k * dt <= duration_s; ++k) {
     const double t = k * dt;
-    const Eigen::AngleAxisd turn(WorldFromBody(t - h).transpose() * WorldFromBody(t + h));
+    const Eigen::AngleAxisd turn(WalkWorldFromBody(t - h).transpose() * WalkWorldFromBody(t + h));
     const Eigen::Vector3d omega = turn.angle() * turn.axis() / (2 * h);
     ImuSample sample;
     sample.timestamp_ns = static_cast<timestamp_ns_t>(std::llround(t * 1e9));
@@ -44,16 +37,6 @@ std::vector<ImuSample> MakeGyro(double duration_s, const ImuNoise& noise, uint64
     imu.push_back(sample);
   }
   return imu;
-}
-
-// A rig whose camera looks along the body's x axis.
-SensorRig Rig() {
-  SensorRig rig;
-  rig.body_from_cam =
-      Rigid3d(Eigen::Quaterniond(Eigen::AngleAxisd(0.5 * M_PI, Eigen::Vector3d::UnitY()) *
-                                 Eigen::AngleAxisd(-0.5 * M_PI, Eigen::Vector3d::UnitZ())),
-              Eigen::Vector3d(0.05, 0.0, 0.01));
-  return rig;
 }
 
 // Frames at 10 Hz over [0.5, duration - 0.5] s whose rotations carry
@@ -73,8 +56,8 @@ std::vector<GyroFrame> MakeFrames(double duration_s, const SensorRig& rig, doubl
     const Eigen::Vector3d noise(random.Normal(0, noise_rad), random.Normal(0, noise_rad),
                                 random.Normal(0, noise_rad));
     const Eigen::Matrix3d world_from_body =
-        Eigen::AngleAxisd(drift, Eigen::Vector3d::UnitZ()).toRotationMatrix() * WorldFromBody(t) *
-        QuaternionExp(noise).toRotationMatrix();
+        Eigen::AngleAxisd(drift, Eigen::Vector3d::UnitZ()).toRotationMatrix() *
+        WalkWorldFromBody(t) * QuaternionExp(noise).toRotationMatrix();
     GyroFrame frame;
     frame.image_id = static_cast<image_t>(k);
     frame.timestamp_ns = static_cast<timestamp_ns_t>(std::llround(t * 1e9));
@@ -89,12 +72,12 @@ std::vector<GyroFrame> MakeFrames(double duration_s, const SensorRig& rig, doubl
 // The true cam2_from_cam1 rotation of two frames.
 Eigen::Matrix3d TrueCam2FromCam1(const SensorRig& rig, double t1, double t2) {
   const Eigen::Matrix3d cam_from_body = rig.cam_from_body().rotation.toRotationMatrix();
-  return cam_from_body * WorldFromBody(t2).transpose() * WorldFromBody(t1) *
+  return cam_from_body * WalkWorldFromBody(t2).transpose() * WalkWorldFromBody(t1) *
          cam_from_body.transpose();
 }
 
 TEST(GyroPriors, BiasAndRotationsAgreeWithTheTruthWithinTheirCovariance) {
-  const SensorRig rig = Rig();
+  const SensorRig rig = CameraAlongXRig();
   const std::vector<ImuSample> imu = MakeGyro(60.0, rig.imu_noise, 1);
   // Frames whose rotations are as good as the gyro's over 0.1 s.
   const std::vector<GyroFrame> frames = MakeFrames(60.0, rig, 0.00003, 0.0, 0.0, 0.0, 2);
@@ -137,7 +120,7 @@ TEST(GyroPriors, InflatedWhereTheFramesDisagreeBeyondTheirCovariance) {
   // Frames whose rotations are 0.5 mrad off each (or a rig whose timing
   // the gyro model misses: the same disagreement) against priors of about
   // 0.2 mrad: the sigmas grow by the median's excess.
-  const SensorRig rig = Rig();
+  const SensorRig rig = CameraAlongXRig();
   const std::vector<ImuSample> imu = MakeGyro(30.0, rig.imu_noise, 5);
   const GyroPriors agreeing =
       MakeGyroPriors(MakeFrames(30.0, rig, 0.00003, 0.0, 0.0, 0.0, 6), imu, rig, {});
@@ -155,7 +138,7 @@ TEST(GyroPriors, HoldTheRotationAcrossAStretchTheImagesDoNotSupport) {
   // with a drifting VIO (2 mrad/s, 16 mrad across the stretch). The priors
   // chained across the stretch give its true relative rotation, the bias
   // taken from the supported frames on either side.
-  const SensorRig rig = Rig();
+  const SensorRig rig = CameraAlongXRig();
   const std::vector<ImuSample> imu = MakeGyro(40.0, rig.imu_noise, 3);
   const std::vector<GyroFrame> frames = MakeFrames(40.0, rig, 0.0005, 16.0, 24.0, 0.002, 4);
   GyroPriorOptions options;

@@ -11,20 +11,14 @@
 
 #include "viosfm/geometry/lie.h"
 #include "viosfm/geometry/pose_parameters.h"
+#include "viosfm/sfm/synthetic_imu_walk.h"
 #include "viosfm/util/random.h"
 
 namespace viosfm {
 namespace {
 
-// A hand-held-like walk with a closed form: the body's rotation (yaw,
-// pitch and roll sinusoids and a slow turn) and position (m).
-Eigen::Matrix3d WorldFromBody(double t) {
-  return (Eigen::AngleAxisd(0.8 * std::sin(0.3 * t) + 0.05 * t, Eigen::Vector3d::UnitZ()) *
-          Eigen::AngleAxisd(0.1 * std::sin(0.7 * t), Eigen::Vector3d::UnitY()) *
-          Eigen::AngleAxisd(0.05 * std::sin(1.1 * t), Eigen::Vector3d::UnitX()))
-      .toRotationMatrix();
-}
-
+// The walk's position (m); its rotation is WalkWorldFromBody
+// (synthetic_imu_walk.h).
 Eigen::Vector3d Position(double t) {
   return Eigen::Vector3d(2.0 * std::sin(0.4 * t) + 0.3 * t, 1.5 * std::cos(0.3 * t),
                          0.2 * std::sin(0.9 * t));
@@ -43,12 +37,12 @@ std::vector<ImuSample> MakeImu(double duration_s, const ImuNoise& noise, double 
   const double h = 1e-4;
   for (int k = 0; k * dt <= duration_s; ++k) {
     const double t = k * dt;
-    const Eigen::AngleAxisd turn(WorldFromBody(t - h).transpose() * WorldFromBody(t + h));
+    const Eigen::AngleAxisd turn(WalkWorldFromBody(t - h).transpose() * WalkWorldFromBody(t + h));
     const Eigen::Vector3d omega = turn.angle() * turn.axis() / (2 * h);
     const Eigen::Vector3d acceleration =
         (Position(t + h) - 2.0 * Position(t) + Position(t - h)) / (h * h);
     const Eigen::Vector3d specific_force =
-        WorldFromBody(t).transpose() * (acceleration + Eigen::Vector3d(0, 0, kStandardGravity));
+        WalkWorldFromBody(t).transpose() * (acceleration + Eigen::Vector3d(0, 0, kStandardGravity));
     ImuSample sample;
     sample.timestamp_ns = static_cast<timestamp_ns_t>(std::llround(t * 1e9));
     for (int a = 0; a < 3; ++a) {
@@ -62,16 +56,6 @@ std::vector<ImuSample> MakeImu(double duration_s, const ImuNoise& noise, double 
   return imu;
 }
 
-// A rig whose camera looks along the body's x axis.
-SensorRig Rig() {
-  SensorRig rig;
-  rig.body_from_cam =
-      Rigid3d(Eigen::Quaterniond(Eigen::AngleAxisd(0.5 * M_PI, Eigen::Vector3d::UnitY()) *
-                                 Eigen::AngleAxisd(-0.5 * M_PI, Eigen::Vector3d::UnitZ())),
-              Eigen::Vector3d(0.05, 0.0, 0.01));
-  return rig;
-}
-
 // Frames at 10 Hz over [0.5, duration - 0.5] s in a model whose world is the
 // true one turned by `model_from_world` and shrunk by `model_scale` (a
 // VIO's scale error and tilt).
@@ -81,7 +65,7 @@ std::vector<InertialFrame> MakeFrames(double duration_s, const SensorRig& rig,
   std::vector<InertialFrame> frames;
   for (int k = 5; k * 0.1 <= duration_s - 0.5; ++k) {
     const double t = k * 0.1;
-    const Rigid3d world_from_body(Eigen::Quaterniond(WorldFromBody(t)), Position(t));
+    const Rigid3d world_from_body(Eigen::Quaterniond(WalkWorldFromBody(t)), Position(t));
     const Rigid3d model_from_body(model_from_world * world_from_body.rotation,
                                   model_scale * (model_from_world * world_from_body.translation));
     InertialFrame frame;
@@ -118,7 +102,7 @@ void SolveWithPosesHeld(const std::vector<InertialFrame>& frames, InertialTerms*
 }
 
 TEST(InertialTerms, RecoverTheModelsMetricScaleTiltVelocitiesAndBiases) {
-  const SensorRig rig = Rig();
+  const SensorRig rig = CameraAlongXRig();
   const std::vector<ImuSample> imu = MakeImu(30.0, rig.imu_noise, 1.0, 1);
   // The model 3 % too small and tilted by 0.4 degrees.
   const Eigen::Quaterniond model_from_world(
@@ -159,7 +143,7 @@ TEST(InertialTerms, RecoverTheModelsMetricScaleTiltVelocitiesAndBiases) {
 TEST(InertialTerms, InflatedWhereTheRotationsDisagreeBeyondTheCovariance) {
   // An IMU three times as noisy as the rig claims: the model's exact
   // rotations disagree with it by three times its covariance.
-  const SensorRig rig = Rig();
+  const SensorRig rig = CameraAlongXRig();
   const std::vector<ImuSample> imu = MakeImu(30.0, rig.imu_noise, 3.0, 2);
   const std::vector<InertialFrame> frames =
       MakeFrames(30.0, rig, Eigen::Quaterniond::Identity(), 1.0);
@@ -179,7 +163,7 @@ TEST(InertialTerms, InflatedWhereTheRotationsDisagreeBeyondTheCovariance) {
 }
 
 TEST(InertialTerms, NoFactorAcrossAGapLongerThanTheLimit) {
-  const SensorRig rig = Rig();
+  const SensorRig rig = CameraAlongXRig();
   const std::vector<ImuSample> imu = MakeImu(30.0, rig.imu_noise, 1.0, 3);
   std::vector<InertialFrame> frames = MakeFrames(30.0, rig, Eigen::Quaterniond::Identity(), 1.0);
   // Remove 2 s of frames around 15 s.
