@@ -750,7 +750,7 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
         }
         inertial_terms = std::make_unique<InertialTerms>(inertial_frames, input.imu, input.rig,
                                                          gyro_bias, options.inertial);
-        if (inertial_terms->Initialise()) {
+        if (inertial_terms->Initialise(options.num_threads)) {
           summary.num_inertial_factors = inertial_terms->num_factors();
           // The IMU holds the stretches the images barely see, where the
           // bridging priors carried the VIO's drift over seconds: they no

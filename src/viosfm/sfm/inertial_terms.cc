@@ -204,7 +204,7 @@ double InertialTerms::tilt_rad() const {
   return std::hypot(tilt_[0], tilt_[1]);
 }
 
-bool InertialTerms::Initialise() {
+bool InertialTerms::Initialise(int num_threads) {
   if (factors_.size() < 2) {
     refusal_ = "the IMU covers too few frame pairs for its factors";
     return false;
@@ -238,7 +238,7 @@ bool InertialTerms::Initialise() {
     ceres::Solver::Options solver_options;
     solver_options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
     solver_options.max_num_iterations = 50;
-    solver_options.num_threads = 2;
+    solver_options.num_threads = std::max(1, num_threads);
     solver_options.logging_type = ceres::SILENT;
     ceres::Solver::Summary summary;
     ceres::Solve(solver_options, &problem, &summary);

@@ -124,7 +124,8 @@ class InertialTerms : public BundleAdjustmentTerms {
   // IMU disagree (see the top). Returns false (and the terms add nothing)
   // with fewer than two factors or an inflation beyond
   // InertialTermOptions::max_sigma_factor (Message() says which).
-  bool Initialise();
+  // `num_threads`: Ceres' threads for that solve.
+  bool Initialise(int num_threads = 2);
 
   std::vector<double*> AddTo(ceres::Problem* problem,
                              const std::function<double*(image_t)>& pose_block) override;
