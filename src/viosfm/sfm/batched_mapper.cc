@@ -754,8 +754,9 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
           summary.num_inertial_factors = inertial_terms->num_factors();
           // The IMU holds the stretches the images barely see, where the
           // bridging priors carried the VIO's drift over seconds: they no
-          // longer earn their place (two_floors_kf 24.5 -> 16.1 mm,
-          // two_floors_10hz 15.7 -> 10.1 mm without them).
+          // longer earn their place in the final adjustment (two_floors_kf
+          // 24.5 -> 14.7 mm, two_floors_10hz 15.7 -> 10.0 mm without them
+          // there; the per-batch adjustments keep them).
           priors = active_priors(/*with_bridging=*/false);
           VIOSFM_LOG(INFO) << "final bundle adjustment: before it, " << inertial_terms->Message();
         } else {
