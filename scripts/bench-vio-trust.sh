@@ -18,6 +18,8 @@
 # The variants map the default run's stored features and verified matches
 # (a copy of its database), so they differ in the mapping only. Settings of
 # the sweeps of docs/benchmarks.md: N1 10, N2 5, 1500 SIFT features.
+# SEED (environment, default 0) seeds the simulated sequences (scene, motion,
+# images, IMU and the emulated VIO's errors).
 # Prints one table row per case (ATE after Sim(3), mm) and writes OUT/table.md.
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
@@ -40,7 +42,7 @@ for case in "${cases[@]}"; do
   IFS=: read -r name scenario duration mode extra <<< "$case"
   seq=$out/seq/$name
   if [ ! -d "$seq" ]; then
-    sim_flags=(--scenario "$scenario" --duration "$duration" --seed 0 --vio-profile realistic)
+    sim_flags=(--scenario "$scenario" --duration "$duration" --seed "${SEED:-0}" --vio-profile realistic)
     if [ "$mode" = kf ]; then sim_flags+=(--keyframes --rate 20); else sim_flags+=(--rate "$mode"); fi
     # shellcheck disable=SC2086
     "$VIOSFM" simulate "${sim_flags[@]}" $extra --out "$seq" > "$out/$name.simulate.log" 2>&1
