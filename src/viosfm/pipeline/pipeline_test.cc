@@ -147,6 +147,37 @@ TEST(PipelineTest, RealtimeSettingsRegisterEveryFrameAsAccurately) {
   EXPECT_LT(s.evaluation->ate_rmse_m, 1.25 * f.summary.evaluation->ate_rmse_m);
 }
 
+// The IMU's factors accepted at their start, but their adjustment putting
+// the model's metric scale further from 1 than max_scale_change allows
+// (here any change at all): the adjustment is undone and done again with
+// the gyro's priors, so the model is the fixture's, whose factors were
+// refused at their start, pose for pose.
+TEST(PipelineTest, FactorsThatMoveTheScaleTooFarAreUndone) {
+  const Fixture& f = SharedFixture();
+  PipelineOptions options = SmallOptions(f, f.folder / "out_scale_undone");
+  options.mapper.inertial.max_sigma_factor = 1000.0;
+  options.mapper.inertial.max_scale_change = 1e-12;
+  const PipelineSummary s = RunPipeline(options);
+  EXPECT_EQ(s.mapper.num_inertial_factors, 0);
+  EXPECT_NE(s.mapper.inertial_message.find(
+                "further from 1 than max_scale_change 0.00000: dropped, the adjustment again "
+                "with the gyro's priors"),
+            std::string::npos)
+      << s.mapper.inertial_message;
+  EXPECT_EQ(s.mapper.num_gyro_priors, f.summary.mapper.num_gyro_priors);
+  ASSERT_EQ(s.num_frames_registered, f.summary.num_frames_registered);
+  const std::map<timestamp_ns_t, Rigid3d> undone =
+      BodyPosesOfModel(ReadColmapModelBinary(options.output_folder / "model"));
+  const std::map<timestamp_ns_t, Rigid3d> refused =
+      BodyPosesOfModel(ReadColmapModelBinary(f.out / "model"));
+  ASSERT_EQ(undone.size(), refused.size());
+  for (const auto& [stamp, pose] : refused) {
+    ASSERT_EQ(undone.count(stamp), 1u) << stamp;
+    EXPECT_LT((undone.at(stamp).translation - pose.translation).norm(), 1e-9) << stamp;
+    EXPECT_LT(undone.at(stamp).rotation.angularDistance(pose.rotation), 1e-9) << stamp;
+  }
+}
+
 // The texture probe (texture_probe.h): the fixture's frames hold 700 and
 // more keypoints, so with a cap of 500 the recording is textured and is
 // taken at 4 Hz with 500 features a frame. The probed frames are among

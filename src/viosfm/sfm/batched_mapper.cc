@@ -717,6 +717,7 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
       }
     }
     std::vector<RelativePosePrior> priors = active_priors(/*with_bridging=*/true);
+    std::optional<GyroPriors> gyro_priors;
     if (global && options.gyro.enabled && !input.imu.empty()) {
       // The gyro's relative rotations between consecutive registered frames,
       // with the biases the current rotations give (gyro_priors.h).
@@ -731,7 +732,8 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
       std::sort(frames.begin(), frames.end(), [](const GyroFrame& a, const GyroFrame& b) {
         return a.timestamp_ns < b.timestamp_ns;
       });
-      GyroPriors gyro = MakeGyroPriors(frames, input.imu, input.rig, options.gyro);
+      gyro_priors = MakeGyroPriors(frames, input.imu, input.rig, options.gyro);
+      const GyroPriors& gyro = *gyro_priors;
       if (options.inertial.enabled && ba_options.use_relative_pose_priors) {
         // The IMU's factors, started from the gyro priors' bias fit (the
         // median of its windows'), in their place.
@@ -766,17 +768,61 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
           inertial_terms.reset();
         }
       }
-      if (inertial_terms == nullptr) {
-        summary.num_gyro_priors = static_cast<int>(gyro.priors.size());
-        summary.gyro_message = gyro.message;
-        VIOSFM_LOG(INFO) << "final bundle adjustment: " << gyro.message;
-        priors.insert(priors.end(), std::make_move_iterator(gyro.priors.begin()),
-                      std::make_move_iterator(gyro.priors.end()));
+    }
+    // The gyro's priors with the bridging priors, where the IMU's factors
+    // are not used.
+    const auto use_gyro_priors = [&]() {
+      const GyroPriors& gyro = *gyro_priors;
+      summary.num_gyro_priors = static_cast<int>(gyro.priors.size());
+      summary.gyro_message = gyro.message;
+      VIOSFM_LOG(INFO) << "final bundle adjustment: " << gyro.message;
+      priors = active_priors(/*with_bridging=*/true);
+      priors.insert(priors.end(), gyro.priors.begin(), gyro.priors.end());
+    };
+    if (gyro_priors && inertial_terms == nullptr) use_gyro_priors();
+    // What the factors' adjustment may have to undo (max_scale_change).
+    std::vector<std::pair<image_t, Rigid3d>> poses_before;
+    std::vector<std::pair<point3D_t, Eigen::Vector3d>> points_before;
+    std::unordered_map<camera_t, Camera> cameras_before;
+    if (inertial_terms != nullptr) {
+      for (const auto& [image_id, image] : reconstruction.Images()) {
+        if (image.registered) poses_before.emplace_back(image_id, image.cam_from_world);
       }
+      for (const auto& [point_id, point] : reconstruction.Points3D()) {
+        points_before.emplace_back(point_id, point.xyz);
+      }
+      cameras_before = reconstruction.Cameras();
     }
     ba_summary = AdjustImages(&reconstruction, free_images, held_neighbour, gauge_image, priors,
                               batch_ba_options, global ? 0 : options.ba_window_max_held_views,
                               inertial_terms.get());
+    if (inertial_terms != nullptr && std::abs(std::log(inertial_terms->scale())) >
+                                         std::log1p(options.inertial.max_scale_change)) {
+      // The factors took the model somewhere no VIO's scale error explains:
+      // the rig is further from the IMU model than their start showed. The
+      // adjustment again, from where it started, with the gyro's priors.
+      std::ostringstream message;
+      message << std::fixed << std::setprecision(5)
+              << "the IMU factors put the model's metric scale at " << inertial_terms->scale()
+              << ", further from 1 than max_scale_change " << options.inertial.max_scale_change
+              << ": dropped, the adjustment again with the gyro's priors";
+      VIOSFM_LOG(WARNING) << "final bundle adjustment: " << message.str();
+      for (const auto& [image_id, pose] : poses_before) {
+        reconstruction.GetImage(image_id).cam_from_world = pose;
+      }
+      for (const auto& [point_id, xyz] : points_before) {
+        if (reconstruction.ExistsPoint3D(point_id)) reconstruction.GetPoint3D(point_id).xyz = xyz;
+      }
+      for (const auto& [camera_id, camera] : cameras_before) {
+        reconstruction.GetCamera(camera_id) = camera;
+      }
+      inertial_terms.reset();
+      summary.num_inertial_factors = 0;
+      summary.inertial_message = message.str();
+      use_gyro_priors();
+      ba_summary = AdjustImages(&reconstruction, free_images, held_neighbour, gauge_image, priors,
+                                batch_ba_options, 0, nullptr);
+    }
     if (inertial_terms != nullptr) {
       summary.inertial_scale = inertial_terms->scale();
       std::ostringstream message;

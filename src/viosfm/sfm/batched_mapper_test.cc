@@ -626,6 +626,9 @@ TEST(BatchedMapperTest, BridgingPriors) {
   options.inertial.bias_window_s = 10.0;
   options.inertial.max_sigma_factor = 0.5;
   EXPECT_EQ(options.Validate(), "inertial.max_sigma_factor must be >= 1");
+  options.inertial.max_sigma_factor = 12.0;
+  options.inertial.max_scale_change = 0.0;
+  EXPECT_EQ(options.Validate(), "inertial.max_scale_change must be > 0");
 }
 
 void ExpectInputError(const BatchedMapperInput& input, const BatchedMapperOptions& options,

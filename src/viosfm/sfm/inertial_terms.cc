@@ -137,6 +137,7 @@ std::string InertialTermOptions::Validate() const {
   if (!(max_gap_s > 0.0)) return "max_gap_s must be > 0";
   if (!(bias_window_s > 0.0)) return "bias_window_s must be > 0";
   if (!(max_sigma_factor >= 1.0)) return "max_sigma_factor must be >= 1";
+  if (!(max_scale_change > 0.0)) return "max_scale_change must be > 0";
   return "";
 }
 

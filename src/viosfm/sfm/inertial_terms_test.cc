@@ -152,8 +152,8 @@ TEST(InertialTerms, InflatedWhereTheRotationsDisagreeBeyondTheCovariance) {
   std::cout << terms.Message() << "\n";
   EXPECT_GT(terms.sigma_factor(), 2.5);
   EXPECT_LT(terms.sigma_factor(), 3.5);
-  // Eight times: beyond max_sigma_factor (5), the factors are refused.
-  const std::vector<ImuSample> noisier = MakeImu(30.0, rig.imu_noise, 8.0, 2);
+  // Sixteen times: beyond max_sigma_factor (12), the factors are refused.
+  const std::vector<ImuSample> noisier = MakeImu(30.0, rig.imu_noise, 16.0, 2);
   InertialTerms refused(frames, noisier, rig, Eigen::Vector3d::Zero(), InertialTermOptions());
   EXPECT_FALSE(refused.Initialise());
   EXPECT_NE(refused.Message().find("no IMU factors"), std::string::npos) << refused.Message();
