@@ -72,6 +72,7 @@ std::string BundleAdjustmentOptions::Validate() const {
   if (num_threads < 1) return "num_threads must be >= 1";
   if (max_images_for_sparse_schur < 0) return "max_images_for_sparse_schur must be >= 0";
   if (!(function_tolerance >= 0.0)) return "function_tolerance must be >= 0";
+  if (max_linear_solver_iterations < 1) return "max_linear_solver_iterations must be >= 1";
   if (!(gradient_tolerance >= 0.0)) return "gradient_tolerance must be >= 0";
   if (!(parameter_tolerance >= 0.0)) return "parameter_tolerance must be >= 0";
   return "";
@@ -293,6 +294,7 @@ BundleAdjustmentSummary BundleAdjust(Reconstruction* reconstruction,
     case BaLinearSolver::kIterativeSchur:
       solver_options.linear_solver_type = ceres::ITERATIVE_SCHUR;
       solver_options.preconditioner_type = ceres::SCHUR_JACOBI;
+      solver_options.max_linear_solver_iterations = options.max_linear_solver_iterations;
       break;
     case BaLinearSolver::kDenseSchur: solver_options.linear_solver_type = ceres::DENSE_SCHUR; break;
     default: solver_options.linear_solver_type = ceres::SPARSE_SCHUR; break;

@@ -130,6 +130,7 @@ void ApplyRealtimeSettings(PipelineOptions* options) {
   options->mapper.ba_window_max_held_views = 5;
   options->texture_probe.enable = true;
   options->mapper.ba.function_tolerance = 3e-5;
+  options->mapper.ba.max_linear_solver_iterations = 100;
 }
 
 }  // namespace viosfm

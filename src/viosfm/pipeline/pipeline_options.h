@@ -257,7 +257,9 @@ struct PipelineOptions {
 // stop at a relative cost change of 3e-5 (mapper.ba.function_tolerance,
 // 1e-5 otherwise): the IMU's factors (sfm/inertial_terms.h) made the final
 // adjustment 10 s longer on the 100 s corridor, which this takes back
-// (docs/benchmarks.md "The IMU in the final adjustment"). Measured on simulated 100
+// (docs/benchmarks.md "The IMU in the final adjustment"), with at most 100
+// conjugate-gradient steps an iteration where ITERATIVE_SCHUR solves
+// (mapper.ba.max_linear_solver_iterations, 500 otherwise). Measured on simulated 100
 // s walks with viosfm's own VIO (docs/benchmarks.md, "Real time"): 0.83 to
 // 0.97 times the recording's duration on the 2-core machine of 2026-11-27,
 // the room (textured: 4 Hz) at a Sim(3) ATE of 0.46 mm; the paper's

@@ -629,6 +629,9 @@ TEST(BatchedMapperTest, BridgingPriors) {
   options.inertial.max_sigma_factor = 12.0;
   options.inertial.max_scale_change = 0.0;
   EXPECT_EQ(options.Validate(), "inertial.max_scale_change must be > 0");
+  options.inertial.max_scale_change = 0.1;
+  options.ba.max_linear_solver_iterations = 0;
+  EXPECT_EQ(options.Validate(), "ba.max_linear_solver_iterations must be >= 1");
 }
 
 void ExpectInputError(const BatchedMapperInput& input, const BatchedMapperOptions& options,
