@@ -820,8 +820,9 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
       summary.num_inertial_factors = 0;
       summary.inertial_message = message.str();
       use_gyro_priors();
-      ba_summary = AdjustImages(&reconstruction, free_images, held_neighbour, gauge_image, priors,
-                                batch_ba_options, 0, nullptr);
+      ba_summary =
+          AdjustImages(&reconstruction, free_images, held_neighbour, gauge_image, priors,
+                       batch_ba_options, global ? 0 : options.ba_window_max_held_views, nullptr);
     }
     if (inertial_terms != nullptr) {
       summary.inertial_scale = inertial_terms->scale();
