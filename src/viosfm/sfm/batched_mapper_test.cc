@@ -622,7 +622,7 @@ TEST(BatchedMapperTest, BridgingPriors) {
   // So is a bad option of the IMU's factors.
   options.gyro.bias_window_s = 20.0;
   options.inertial.bias_window_s = -1.0;
-  EXPECT_EQ(options.Validate(), "inertial.bias_window_s must be > 0");
+  EXPECT_EQ(options.Validate(), "inertial.bias_window_s must be >= 0");
   options.inertial.bias_window_s = 10.0;
   options.inertial.max_sigma_factor = 0.5;
   EXPECT_EQ(options.Validate(), "inertial.max_sigma_factor must be >= 1");

@@ -5,6 +5,7 @@
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <iomanip>
 #include <sstream>
 
@@ -135,7 +136,7 @@ struct InertialTerms::Factor {
 
 std::string InertialTermOptions::Validate() const {
   if (!(max_gap_s > 0.0)) return "max_gap_s must be > 0";
-  if (!(bias_window_s > 0.0)) return "bias_window_s must be > 0";
+  if (!(bias_window_s >= 0.0)) return "bias_window_s must be >= 0";
   if (!(max_sigma_factor >= 1.0)) return "max_sigma_factor must be >= 1";
   if (!(max_scale_change > 0.0)) return "max_scale_change must be > 0";
   return "";
@@ -154,12 +155,24 @@ InertialTerms::InertialTerms(const std::vector<InertialFrame>& frames,
   window_.assign(frames_.size(), 0);
   used_.assign(frames_.size(), false);
   if (!frames_.empty()) {
+    // Only the windows that hold a frame get biases (a window shorter than
+    // the frames' interval is a pair per frame, not one per window number);
+    // bias_window_s = 0: a pair per frame, each window starting at its frame.
     const timestamp_ns_t t0 = frames_.front().timestamp_ns;
+    int64_t previous_number = -1;
     for (size_t k = 0; k < frames_.size(); ++k) {
-      window_[k] = static_cast<int>(static_cast<double>(frames_[k].timestamp_ns - t0) * 1e-9 /
-                                    options.bias_window_s);
+      const double t = static_cast<double>(frames_[k].timestamp_ns - t0) * 1e-9;
+      const bool per_frame = options.bias_window_s == 0.0;
+      const auto number =
+          per_frame ? static_cast<int64_t>(k) : static_cast<int64_t>(t / options.bias_window_s);
+      if (number != previous_number) {
+        window_start_s_.push_back(per_frame ? t
+                                            : static_cast<double>(number) * options.bias_window_s);
+      }
+      previous_number = number;
+      window_[k] = static_cast<int>(window_start_s_.size()) - 1;
     }
-    biases_.assign(static_cast<size_t>(window_.back()) + 1, {});
+    biases_.assign(window_start_s_.size(), {});
   }
   const auto max_gap_ns = static_cast<timestamp_ns_t>(std::llround(options.max_gap_s * 1e9));
   for (size_t k = 0; k + 1 < frames_.size(); ++k) {
@@ -359,8 +372,8 @@ void InertialTerms::AddBiasWalks(ceres::Problem* problem) {
     if (!problem->HasParameterBlock(biases_[w].data())) continue;
     if (previous >= 0) {
       problem->AddResidualBlock(
-          BiasWalkCost::Create(rig_.imu_noise, (w - previous) * options_.bias_window_s), nullptr,
-          biases_[previous].data(), biases_[w].data());
+          BiasWalkCost::Create(rig_.imu_noise, window_start_s_[w] - window_start_s_[previous]),
+          nullptr, biases_[previous].data(), biases_[w].data());
     }
     previous = w;
   }
@@ -370,13 +383,21 @@ Eigen::Vector3d InertialTerms::velocity(size_t k) const {
   return Eigen::Vector3d(velocity_[k][0], velocity_[k][1], velocity_[k][2]);
 }
 
+int InertialTerms::BiasWindowOfFrame(size_t k) const {
+  std::vector<bool> starts_factor(biases_.size(), false);
+  for (const std::unique_ptr<Factor>& factor : factors_) starts_factor[window_[factor->i]] = true;
+  int window = window_[k];
+  while (window > 0 && !starts_factor[window]) --window;
+  return window;
+}
+
 Eigen::Vector3d InertialTerms::gyro_bias(size_t k) const {
-  const std::array<double, 6>& biases = biases_[window_[k]];
+  const std::array<double, 6>& biases = biases_[BiasWindowOfFrame(k)];
   return Eigen::Vector3d(biases[0], biases[1], biases[2]);
 }
 
 Eigen::Vector3d InertialTerms::accel_bias(size_t k) const {
-  const std::array<double, 6>& biases = biases_[window_[k]];
+  const std::array<double, 6>& biases = biases_[BiasWindowOfFrame(k)];
   return Eigen::Vector3d(biases[3], biases[4], biases[5]);
 }
 
