@@ -92,7 +92,14 @@ std::vector<InertialFrame> MakeFrames(double duration_s, const SensorRig& rig,
 }
 
 // The terms alone on the frames' poses, held: the scale and tilt they solve.
-void SolveWithPosesHeld(const std::vector<InertialFrame>& frames, InertialTerms* terms) {
+// With `counts`: the terms' parameter blocks and residual blocks in the
+// problem.
+struct ProblemCounts {
+  size_t num_blocks = 0;
+  int num_residual_blocks = 0;
+};
+void SolveWithPosesHeld(const std::vector<InertialFrame>& frames, InertialTerms* terms,
+                        ProblemCounts* counts = nullptr) {
   std::vector<PoseParameters> poses;
   poses.reserve(frames.size());
   std::unordered_map<image_t, double*> block_of;
@@ -104,6 +111,7 @@ void SolveWithPosesHeld(const std::vector<InertialFrame>& frames, InertialTerms*
   const std::vector<double*> blocks =
       terms->AddTo(&problem, [&](image_t image_id) { return block_of.at(image_id); });
   ASSERT_FALSE(blocks.empty());
+  if (counts != nullptr) *counts = {blocks.size(), problem.NumResidualBlocks()};
   for (PoseParameters& pose : poses) {
     if (problem.HasParameterBlock(pose.data())) problem.SetParameterBlockConstant(pose.data());
   }
@@ -207,16 +215,8 @@ TEST(InertialTerms, BiasesPerFrameKeepTheScaleWhereTheAccelerometersBiasWalks) {
       // that holds a factor's first frame (per frame: one each but the
       // last), the scale and the tilt; a factor per consecutive pair and a
       // walk per consecutive windows.
-      std::vector<PoseParameters> poses;
-      poses.reserve(keyframes.size());
-      std::unordered_map<image_t, double*> block_of;
-      for (const InertialFrame& frame : keyframes) {
-        poses.push_back(ToPoseParameters(frame.cam_from_world));
-        block_of[frame.image_id] = poses.back().data();
-      }
-      ceres::Problem problem;
-      const size_t num_blocks =
-          terms.AddTo(&problem, [&](image_t image_id) { return block_of.at(image_id); }).size();
+      ProblemCounts counts;
+      SolveWithPosesHeld(keyframes, &terms, &counts);
       size_t num_windows = keyframes.size() - 1;  // bias_window_s = 0: per frame
       if (bias_window_s > 0.0) {
         std::set<int64_t> windows;
@@ -227,10 +227,9 @@ TEST(InertialTerms, BiasesPerFrameKeepTheScaleWhereTheAccelerometersBiasWalks) {
         }
         num_windows = windows.size();
       }
-      EXPECT_EQ(num_blocks, keyframes.size() + num_windows + 2);
-      EXPECT_EQ(problem.NumResidualBlocks(),
+      EXPECT_EQ(counts.num_blocks, keyframes.size() + num_windows + 2);
+      EXPECT_EQ(counts.num_residual_blocks,
                 static_cast<int>(keyframes.size() - 1 + num_windows - 1));
-      SolveWithPosesHeld(keyframes, &terms);
       return std::abs(terms.scale() - 1.0);
     };
     const double per_frame = scale_error(0.0);
