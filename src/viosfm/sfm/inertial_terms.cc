@@ -159,10 +159,10 @@ InertialTerms::InertialTerms(const std::vector<InertialFrame>& frames,
     // the frames' interval is a pair per frame, not one per window number);
     // bias_window_s = 0: a pair per frame, each window starting at its frame.
     const timestamp_ns_t t0 = frames_.front().timestamp_ns;
+    const bool per_frame = options.bias_window_s == 0.0;
     int64_t previous_number = -1;
     for (size_t k = 0; k < frames_.size(); ++k) {
       const double t = static_cast<double>(frames_[k].timestamp_ns - t0) * 1e-9;
-      const bool per_frame = options.bias_window_s == 0.0;
       const auto number =
           per_frame ? static_cast<int64_t>(k) : static_cast<int64_t>(t / options.bias_window_s);
       if (number != previous_number) {

@@ -161,7 +161,7 @@ class InertialTerms : public BundleAdjustmentTerms {
   // Frame k's velocity (m/s, metric, in the levelled world) and biases
   // (gyro rad/s, accelerometer m/s^2): those its window's factors integrate
   // with, or for a frame whose window starts no factor (the last frame, one
-  // after a gap beyond max_gap_s) the previous such window's.
+  // before a gap beyond max_gap_s) the previous such window's.
   Eigen::Vector3d velocity(size_t k) const;
   Eigen::Vector3d gyro_bias(size_t k) const;
   Eigen::Vector3d accel_bias(size_t k) const;
