@@ -30,9 +30,11 @@ double LevelWithGravity(const Eigen::Vector3d& gravity_in_world, Reconstruction*
 
 MetricScaleSummary ApplyImuMetricScale(const Sequence& sequence, const SensorRig& rig,
                                        double vio_scale_sigma, const ImuScaleOptions& options,
-                                       Reconstruction* reconstruction) {
+                                       Reconstruction* reconstruction, double factor_scale) {
   VIOSFM_CHECK(reconstruction != nullptr);
+  VIOSFM_CHECK(factor_scale >= 0.0) << factor_scale;
   MetricScaleSummary summary;
+  summary.factor_scale = factor_scale;
   summary.applied_scale_sigma = vio_scale_sigma;
   if (!sequence.has_imu()) {
     summary.message = "no IMU in the dataset: the scale is the VIO's";
@@ -77,11 +79,26 @@ MetricScaleSummary ApplyImuMetricScale(const Sequence& sequence, const SensorRig
               << std::setprecision(5) << vio_scale_sigma << "): applied the IMU's " << imu.scale
               << " +- " << imu.scale_sigma * imu.scale << " alone";
     } else {
+      // The IMU's estimate: the factors' scale where the fit confirms it
+      // (they solved it with the shape and the biases of every second),
+      // with the fit's relative sigma.
+      double imu_scale = imu.scale;
+      if (factor_scale > 0.0 && options.use_factor_scale) {
+        const double sigmas_from_fit = std::abs(factor_scale - imu.scale) / std::sqrt(imu_variance);
+        summary.factor_scale_used = sigmas_from_fit <= options.max_factor_disagreement;
+        applied << std::fixed << std::setprecision(5)
+                << "; the final adjustment's IMU factors' scale " << factor_scale
+                << std::setprecision(1) << " (" << sigmas_from_fit << " sigma from the fit's) "
+                << (summary.factor_scale_used ? "taken as the IMU's"
+                                              : "not used: further than max_factor_disagreement");
+        if (summary.factor_scale_used) imu_scale = factor_scale;
+      }
       // Inverse-variance fusion with the VIO's scale (1 +- vio_scale_sigma).
-      summary.applied_scale = (imu.scale / imu_variance + 1.0 / vio_variance) /
-                              (1.0 / imu_variance + 1.0 / vio_variance);
+      const double variance = std::pow(imu.scale_sigma * imu_scale, 2);
+      summary.applied_scale =
+          (imu_scale / variance + 1.0 / vio_variance) / (1.0 / variance + 1.0 / vio_variance);
       summary.applied_scale_sigma =
-          std::sqrt(1.0 / (1.0 / imu_variance + 1.0 / vio_variance)) / summary.applied_scale;
+          std::sqrt(1.0 / (1.0 / variance + 1.0 / vio_variance)) / summary.applied_scale;
       applied << std::fixed << std::setprecision(5) << "; applied " << summary.applied_scale
               << " (fused with the VIO's scale, +- " << vio_scale_sigma << ")";
     }

@@ -4,7 +4,9 @@
 // The mapped shape carries the VIO's scale (through the relative-pose
 // priors and the first batch's placement), off by the VIO's scale error.
 // With an IMU in the dataset, the scale of the registered frames' body
-// trajectory is estimated from it; when usable, it is fused with the VIO's
+// trajectory is estimated from it (or, where the final adjustment's IMU
+// factors held, taken from them and checked by that estimate:
+// ImuScaleOptions::use_factor_scale); when usable, it is fused with the VIO's
 // (1, with the VIO uncertainty model's scale_sigma) by inverse variance and
 // the reconstruction (points and camera positions, about the world origin)
 // is scaled by the result. When the IMU's scale refutes the VIO's (lies
@@ -40,6 +42,11 @@ struct MetricScaleSummary {
   // The IMU's scale refuted the VIO's (ImuScaleOptions::vio_refuted_sigmas)
   // and was applied alone.
   bool vio_scale_refuted = false;
+  // The final adjustment's IMU factors' scale of the model (0 when they did
+  // not hold) and whether it was the IMU's estimate
+  // (ImuScaleOptions::use_factor_scale).
+  double factor_scale = 0.0;
+  bool factor_scale_used = false;
   // Degrees the reconstruction was turned to level it with the IMU's
   // gravity (0 when not).
   double levelling_deg = 0.0;
@@ -58,9 +65,11 @@ double LevelWithGravity(const Eigen::Vector3d& gravity_in_world, Reconstruction*
 // sequence's IMU. `rig` gives body_from_cam, the camera-IMU time offset and
 // the IMU noise figures (the sequence's own, or as viosfm's own VIO
 // estimated and checked them). vio_scale_sigma: the VIO's relative scale
-// uncertainty.
+// uncertainty. factor_scale: the final adjustment's IMU factors' metric
+// scale of `reconstruction` (BatchedMapperSummary::inertial_scale), 0 when
+// they did not hold.
 MetricScaleSummary ApplyImuMetricScale(const Sequence& sequence, const SensorRig& rig,
                                        double vio_scale_sigma, const ImuScaleOptions& options,
-                                       Reconstruction* reconstruction);
+                                       Reconstruction* reconstruction, double factor_scale = 0.0);
 
 }  // namespace viosfm

@@ -158,5 +158,58 @@ TEST(MetricScale, AnImuScaleManySigmasFromTheVioRefutesIt) {
   EXPECT_EQ(shrunk.applied_scale, 1.0);
 }
 
+// Where the final adjustment's IMU factors held, their scale is the IMU's
+// estimate when the linear fit confirms it: a factors' scale two of the
+// fit's sigmas away moves the applied scale by those two sigmas (less the
+// VIO's small share of the fusion); four sigmas away, or with
+// use_factor_scale off, it is not used and the applied scale is the fit's.
+TEST(MetricScale, TheFactorsScaleIsTheImusWhereTheFitConfirmsIt) {
+  const double kVioScaleSigma = 0.02;
+  const double kTrueScale = 1.01;
+  ScaledWalk plain = MakeScaledWalk(kTrueScale);
+  const MetricScaleSummary fit_only = ApplyImuMetricScale(
+      plain.sequence, plain.sequence.rig, kVioScaleSigma, ImuScaleOptions(), &plain.reconstruction);
+  ASSERT_TRUE(fit_only.imu.usable) << fit_only.message;
+  EXPECT_FALSE(fit_only.factor_scale_used);
+  const double fit_sigma = fit_only.imu.scale_sigma * fit_only.imu.scale;  // absolute
+  ASSERT_GT(fit_sigma, 0.0);
+  // The VIO's share of the fusion: the IMU's weight is vio_var / (imu_var + vio_var).
+  const double imu_weight =
+      kVioScaleSigma * kVioScaleSigma / (kVioScaleSigma * kVioScaleSigma + fit_sigma * fit_sigma);
+
+  ScaledWalk near = MakeScaledWalk(kTrueScale);
+  const MetricScaleSummary used =
+      ApplyImuMetricScale(near.sequence, near.sequence.rig, kVioScaleSigma, ImuScaleOptions(),
+                          &near.reconstruction, fit_only.imu.scale + 2.0 * fit_sigma);
+  std::cout << "two sigmas away: " << used.message << "\n";
+  EXPECT_TRUE(used.factor_scale_used) << used.message;
+  EXPECT_NEAR(used.applied_scale - fit_only.applied_scale, 2.0 * fit_sigma * imu_weight,
+              0.05 * fit_sigma)
+      << used.message;
+  EXPECT_NE(used.message.find("taken as the IMU's"), std::string::npos);
+  // The model was scaled by what was applied: the cameras moved out by it.
+  EXPECT_NEAR(near.reconstruction.GetImage(10).cam_from_world.Inverse().translation.norm() /
+                  plain.reconstruction.GetImage(10).cam_from_world.Inverse().translation.norm(),
+              used.applied_scale / fit_only.applied_scale, 1e-9);
+
+  ScaledWalk far = MakeScaledWalk(kTrueScale);
+  const MetricScaleSummary refused =
+      ApplyImuMetricScale(far.sequence, far.sequence.rig, kVioScaleSigma, ImuScaleOptions(),
+                          &far.reconstruction, fit_only.imu.scale + 4.0 * fit_sigma);
+  std::cout << "four sigmas away: " << refused.message << "\n";
+  EXPECT_FALSE(refused.factor_scale_used) << refused.message;
+  EXPECT_EQ(refused.applied_scale, fit_only.applied_scale);
+  EXPECT_NE(refused.message.find("not used"), std::string::npos);
+
+  ScaledWalk off = MakeScaledWalk(kTrueScale);
+  ImuScaleOptions without;
+  without.use_factor_scale = false;
+  const MetricScaleSummary ablated =
+      ApplyImuMetricScale(off.sequence, off.sequence.rig, kVioScaleSigma, without,
+                          &off.reconstruction, fit_only.imu.scale + 2.0 * fit_sigma);
+  EXPECT_FALSE(ablated.factor_scale_used);
+  EXPECT_EQ(ablated.applied_scale, fit_only.applied_scale);
+}
+
 }  // namespace
 }  // namespace viosfm

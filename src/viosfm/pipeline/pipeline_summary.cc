@@ -127,6 +127,8 @@ std::string PipelineSummaryToJson(const PipelineSummary& s) {
                        {"applied_scale", s.metric_scale.applied_scale},
                        {"applied_scale_sigma", s.metric_scale.applied_scale_sigma},
                        {"vio_scale_refuted", s.metric_scale.vio_scale_refuted},
+                       {"factor_scale", s.metric_scale.factor_scale},
+                       {"factor_scale_used", s.metric_scale.factor_scale_used},
                        {"levelling_deg", s.metric_scale.levelling_deg},
                        {"message", s.metric_scale.message}};
   json["texture_probe"] = {{"probed", s.texture_probe.probed},

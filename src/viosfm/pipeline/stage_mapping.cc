@@ -72,9 +72,9 @@ Reconstruction MapStage(const BatchedMapperInput& input, const Sequence& sequenc
       RunBatchedMapper(input, options.EffectiveMapperOptions(), &summary->mapper);
   VIOSFM_LOG(INFO) << "run: mapper " << summary->mapper.ToString();
   if (options.use_imu_scale) {
-    summary->metric_scale = ApplyImuMetricScale(sequence, vio.own_vio_rig.value_or(sequence.rig),
-                                                options.vio_uncertainty.scale_sigma,
-                                                options.imu_scale, &reconstruction);
+    summary->metric_scale = ApplyImuMetricScale(
+        sequence, vio.own_vio_rig.value_or(sequence.rig), options.vio_uncertainty.scale_sigma,
+        options.imu_scale, &reconstruction, summary->mapper.inertial_scale);
     if (summary->metric_scale.vio_scale_refuted) {
       VIOSFM_LOG(WARNING) << "run: metric scale: " << summary->metric_scale.message;
     } else {

@@ -40,6 +40,7 @@ std::string ImuScaleOptions::Validate() const {
   if (!(max_refuting_scale_sigma > 0.0)) return "max_refuting_scale_sigma must be > 0";
   if (!(max_refuting_residual_ratio > 0.0)) return "max_refuting_residual_ratio must be > 0";
   if (!(max_residual_ratio > 0.0)) return "max_residual_ratio must be > 0";
+  if (!(max_factor_disagreement > 0.0)) return "max_factor_disagreement must be > 0";
   return "";
 }
 

@@ -105,6 +105,20 @@ struct ImuScaleOptions {
   // reconstructions, 2.2-2.7 on a two_floors reconstruction 44 mm off,
   // whose IMU scale was 3 % off).
   double max_residual_ratio = 1.0;
+  // Where the final bundle adjustment's IMU factors held
+  // (sfm/inertial_terms.h), their metric scale of the model is the IMU's
+  // estimate, and this fit checks it: it is used when the fit is usable and
+  // lies within max_factor_disagreement of the fit's standard deviations
+  // from it (with the fit's sigma), else the fit's is. The factors solve
+  // the scale with the shape, the velocities and a pair of biases every
+  // second; this linear fit holds the shape and one accelerometer bias per
+  // bias_window_s. Defaults true and 3: on the 18 simulated trust sequences
+  // (three seeds) the applied scale's errors summed 3.56 % with the fit's
+  // (two beyond 0.5 %), 1.87 % with the factors' (all within 0.35 %), which
+  // lay 0.1 to 1.1 of the fit's sigmas from it (docs/benchmarks.md, "The
+  // scale from the IMU factors").
+  bool use_factor_scale = true;
+  double max_factor_disagreement = 3.0;
 
   std::string Validate() const;  // empty if valid, else names the bad field
   bool Check() const { return Validate().empty(); }
@@ -140,6 +154,13 @@ struct ImuScaleOptions {
     visit({"max_residual_ratio",
            "usable when the fit's residual is at most this times the expected", kRunOnly},
           self.max_residual_ratio);
+    visit({"use_factor_scale",
+           "the final adjustment's IMU factors' scale, where they held, in place of the fit's",
+           kRunOnly},
+          self.use_factor_scale);
+    visit({"max_factor_disagreement",
+           "fit sigmas the factors' scale may lie from the fit's and still be used", kRunOnly},
+          self.max_factor_disagreement);
   }
 };
 
