@@ -177,10 +177,14 @@ TEST(MetricScale, TheFactorsScaleIsTheImusWhereTheFitConfirmsIt) {
   const double imu_weight =
       kVioScaleSigma * kVioScaleSigma / (kVioScaleSigma * kVioScaleSigma + fit_sigma * fit_sigma);
 
-  ScaledWalk near = MakeScaledWalk(kTrueScale);
-  const MetricScaleSummary used =
-      ApplyImuMetricScale(near.sequence, near.sequence.rig, kVioScaleSigma, ImuScaleOptions(),
-                          &near.reconstruction, fit_only.imu.scale + 2.0 * fit_sigma);
+  // A fresh walk each time: ApplyImuMetricScale scales its reconstruction.
+  ScaledWalk near;
+  const auto apply = [&](double factor_scale, const ImuScaleOptions& options) {
+    near = MakeScaledWalk(kTrueScale);
+    return ApplyImuMetricScale(near.sequence, near.sequence.rig, kVioScaleSigma, options,
+                               &near.reconstruction, factor_scale);
+  };
+  const MetricScaleSummary used = apply(fit_only.imu.scale + 2.0 * fit_sigma, ImuScaleOptions());
   std::cout << "two sigmas away: " << used.message << "\n";
   EXPECT_TRUE(used.factor_scale_used) << used.message;
   EXPECT_NEAR(used.applied_scale - fit_only.applied_scale, 2.0 * fit_sigma * imu_weight,
@@ -192,21 +196,15 @@ TEST(MetricScale, TheFactorsScaleIsTheImusWhereTheFitConfirmsIt) {
                   plain.reconstruction.GetImage(10).cam_from_world.Inverse().translation.norm(),
               used.applied_scale / fit_only.applied_scale, 1e-9);
 
-  ScaledWalk far = MakeScaledWalk(kTrueScale);
-  const MetricScaleSummary refused =
-      ApplyImuMetricScale(far.sequence, far.sequence.rig, kVioScaleSigma, ImuScaleOptions(),
-                          &far.reconstruction, fit_only.imu.scale + 4.0 * fit_sigma);
+  const MetricScaleSummary refused = apply(fit_only.imu.scale + 4.0 * fit_sigma, ImuScaleOptions());
   std::cout << "four sigmas away: " << refused.message << "\n";
   EXPECT_FALSE(refused.factor_scale_used) << refused.message;
   EXPECT_EQ(refused.applied_scale, fit_only.applied_scale);
   EXPECT_NE(refused.message.find("not used"), std::string::npos);
 
-  ScaledWalk off = MakeScaledWalk(kTrueScale);
   ImuScaleOptions without;
   without.use_factor_scale = false;
-  const MetricScaleSummary ablated =
-      ApplyImuMetricScale(off.sequence, off.sequence.rig, kVioScaleSigma, without,
-                          &off.reconstruction, fit_only.imu.scale + 2.0 * fit_sigma);
+  const MetricScaleSummary ablated = apply(fit_only.imu.scale + 2.0 * fit_sigma, without);
   EXPECT_FALSE(ablated.factor_scale_used);
   EXPECT_EQ(ablated.applied_scale, fit_only.applied_scale);
 }
