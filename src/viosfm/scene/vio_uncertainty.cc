@@ -89,9 +89,14 @@ std::vector<std::pair<std::string, std::string>> VioUncertaintyModel::ToKeyValue
   return OptionsToKeyValues(*this);
 }
 
-Eigen::Matrix<double, 6, 6> RelativePoseCovariance(const VioUncertaintyModel& model,
-                                                   const VioSample& frame1,
-                                                   const VioSample& frame2) {
+namespace {
+
+// The covariance of RelativePoseCovariance, with or without the frames' own
+// noise.
+Eigen::Matrix<double, 6, 6> RelativePoseCovarianceOf(const VioUncertaintyModel& model,
+                                                     const VioSample& frame1,
+                                                     const VioSample& frame2,
+                                                     bool with_frame_noise) {
   VIOSFM_CHECK(model.Check()) << model.Validate();
   VIOSFM_CHECK_EQ(frame1.odometer.segment, frame2.odometer.segment)
       << "a relative pose across VIO segments";
@@ -140,8 +145,10 @@ Eigen::Matrix<double, 6, 6> RelativePoseCovariance(const VioUncertaintyModel& mo
       pos.diagonal().array() += diff_var;
     }
   };
-  add_frame_noise(model.rotation_noise_rad, model.correlated_rotation_noise_rad, true);
-  add_frame_noise(model.position_noise_m, model.correlated_position_noise_m, false);
+  if (with_frame_noise) {
+    add_frame_noise(model.rotation_noise_rad, model.correlated_rotation_noise_rad, true);
+    add_frame_noise(model.position_noise_m, model.correlated_position_noise_m, false);
+  }
   cov.topRightCorner<3, 3>() = cov.bottomLeftCorner<3, 3>().transpose();
 
   // Into camera 2's frame.
@@ -151,6 +158,20 @@ Eigen::Matrix<double, 6, 6> RelativePoseCovariance(const VioUncertaintyModel& mo
   cam2_from_world.bottomRightCorner<3, 3>() = r2t;
   Eigen::Matrix<double, 6, 6> result = cam2_from_world * cov * cam2_from_world.transpose();
   return 0.5 * (result + result.transpose());
+}
+
+}  // namespace
+
+Eigen::Matrix<double, 6, 6> RelativePoseCovariance(const VioUncertaintyModel& model,
+                                                   const VioSample& frame1,
+                                                   const VioSample& frame2) {
+  return RelativePoseCovarianceOf(model, frame1, frame2, /*with_frame_noise=*/true);
+}
+
+Eigen::Matrix<double, 6, 6> RelativePoseDriftCovariance(const VioUncertaintyModel& model,
+                                                        const VioSample& frame1,
+                                                        const VioSample& frame2) {
+  return RelativePoseCovarianceOf(model, frame1, frame2, /*with_frame_noise=*/false);
 }
 
 Eigen::Matrix<double, 6, 6> SqrtInformationFromCovariance(

@@ -161,6 +161,13 @@ Eigen::Matrix<double, 6, 6> RelativePoseCovariance(const VioUncertaintyModel& mo
                                                    const VioSample& frame1,
                                                    const VioSample& frame2);
 
+// The part of RelativePoseCovariance that the drift between the two frames
+// and the scale's variation make, without the frames' own noise: positive
+// semi-definite only (zero for two frames at one time and place).
+Eigen::Matrix<double, 6, 6> RelativePoseDriftCovariance(const VioUncertaintyModel& model,
+                                                        const VioSample& frame1,
+                                                        const VioSample& frame2);
+
 // The upper-triangular S with S^T S = covariance^-1 (so |S r|^2 is r's
 // Mahalanobis distance): what weights a residual. CHECKs that the
 // covariance is positive definite.

@@ -15,6 +15,7 @@
 #include "viosfm/scene/rolling_shutter.h"
 #include "viosfm/sensor/camera_models.h"
 #include "viosfm/sfm/linear_solver_chooser.h"
+#include "viosfm/sfm/vio_drift_terms.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/logging.h"
 #include "viosfm/util/progress.h"
@@ -53,6 +54,25 @@ Image CopyImageWithoutPoints(const Image& image) {
   for (Point2D& point2D : copy.points2D) point2D.point3D_id = kInvalidPoint3DId;
   return copy;
 }
+
+// Several callers' terms in one adjustment.
+class CombinedTerms : public BundleAdjustmentTerms {
+ public:
+  explicit CombinedTerms(std::vector<BundleAdjustmentTerms*> parts) : parts_(std::move(parts)) {}
+  std::vector<double*> AddTo(ceres::Problem* problem,
+                             const std::function<double*(image_t)>& pose_block) override {
+    std::vector<double*> blocks;
+    for (BundleAdjustmentTerms* part : parts_) {
+      if (part == nullptr) continue;
+      const std::vector<double*> added = part->AddTo(problem, pose_block);
+      blocks.insert(blocks.end(), added.begin(), added.end());
+    }
+    return blocks;
+  }
+
+ private:
+  std::vector<BundleAdjustmentTerms*> parts_;
+};
 
 // Bundle adjustment of the poses of `free_images` and of the points they
 // observe. Every other image observing those points is held constant, and so
@@ -413,6 +433,13 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
     prior_options.weighting = options.ba.prior_weighting;
     prior_options.vio_uncertainty = options.vio_uncertainty;
     all_priors = MakeRelativePosePriors(input, prior_options);
+  }
+  std::unordered_set<image_pair_t> consecutive_pairs;  // those of the consecutive priors
+  for (size_t p = 0; p < all_priors.priors.size(); ++p) {
+    if (!all_priors.bridging[p]) {
+      consecutive_pairs.insert(
+          ImagePairToPairId(all_priors.priors[p].image_id1, all_priors.priors[p].image_id2));
+    }
   }
   summary.num_consecutive_priors = all_priors.num_consecutive;
   summary.num_bridging_priors = all_priors.num_bridging;
@@ -793,9 +820,57 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
       }
       cameras_before = reconstruction.Cameras();
     }
+    // The final adjustment with the VIO's drift states in place of its
+    // consecutive priors (vio_drift_terms.h).
+    std::unique_ptr<VioDriftTerms> drift_terms;
+    const auto take_drift_states = [&]() {
+      drift_terms.reset();
+      if (!global || !options.vio_drift_states || !ba_options.use_relative_pose_priors ||
+          ba_options.prior_weighting != PriorWeighting::kCovariance) {
+        return;
+      }
+      std::vector<VioDriftFrame> frames;
+      std::vector<VioDriftLink> links;
+      std::unordered_map<image_t, size_t> frame_of_image;
+      const auto frame_index = [&](image_t image_id) {
+        const auto [it, inserted] = frame_of_image.emplace(image_id, frames.size());
+        if (inserted) {
+          frames.push_back({image_id, VioSampleOfImage(input.images[index_of_image.at(image_id)])});
+        }
+        return it->second;
+      };
+      std::vector<RelativePosePrior> kept;
+      for (const RelativePosePrior& prior : priors) {
+        if (prior.from_gyro ||
+            consecutive_pairs.count(ImagePairToPairId(prior.image_id1, prior.image_id2)) == 0) {
+          kept.push_back(prior);
+          continue;
+        }
+        const size_t first = frame_index(prior.image_id1);
+        const size_t second = frame_index(prior.image_id2);
+        links.push_back({first, second, prior.num_verified_matches});
+      }
+      if (links.empty()) return;
+      priors = std::move(kept);
+      VioDriftTermsOptions drift_options;
+      drift_options.vio_uncertainty = options.vio_uncertainty;
+      drift_options.prior_beta = ba_options.prior_beta;
+      drift_options.prior_loss_scale = ba_options.prior_loss_scale;
+      drift_options.image_noise_px = ba_options.image_noise_px;
+      drift_terms =
+          std::make_unique<VioDriftTerms>(std::move(frames), std::move(links), drift_options);
+    };
+    take_drift_states();
+    CombinedTerms combined({inertial_terms.get(), drift_terms.get()});
     ba_summary = AdjustImages(&reconstruction, free_images, held_neighbour, gauge_image, priors,
                               batch_ba_options, global ? 0 : options.ba_window_max_held_views,
-                              inertial_terms.get());
+                              inertial_terms || drift_terms ? &combined : nullptr);
+    if (drift_terms != nullptr) {
+      VIOSFM_LOG(INFO) << "final bundle adjustment: the VIO as drift states ("
+                       << drift_terms->num_frame_terms() << " frames, "
+                       << drift_terms->num_drift_terms()
+                       << " links) in place of its consecutive priors";
+    }
     if (inertial_terms != nullptr && std::abs(std::log(inertial_terms->scale())) >
                                          std::log1p(options.inertial.max_scale_change)) {
       // The factors took the model somewhere no VIO's scale error explains:
@@ -820,9 +895,10 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
       summary.num_inertial_factors = 0;
       summary.inertial_message = message.str();
       use_gyro_priors();
-      ba_summary =
-          AdjustImages(&reconstruction, free_images, held_neighbour, gauge_image, priors,
-                       batch_ba_options, global ? 0 : options.ba_window_max_held_views, nullptr);
+      take_drift_states();
+      ba_summary = AdjustImages(&reconstruction, free_images, held_neighbour, gauge_image, priors,
+                                batch_ba_options, global ? 0 : options.ba_window_max_held_views,
+                                drift_terms.get());
     }
     if (inertial_terms != nullptr) {
       summary.inertial_scale = inertial_terms->scale();

@@ -137,6 +137,12 @@ struct BatchedMapperOptions {
   // the priors' covariance. Default: the model's defaults (an external VIO
   // on EuRoC-class data).
   VioUncertaintyModel vio_uncertainty;
+  // The final adjustment takes the VIO as a drifting world frame plus frame
+  // noise (vio_drift_terms.h) in place of its consecutive relative-pose
+  // priors (covariance weighting only): a chain of priors counts each
+  // frame's noise twice and so trusts the VIO's pose over seconds less than
+  // its own model does. Default false.
+  bool vio_drift_states = false;
   // Verified registration of each frame (frame_registration.h).
   FrameRegistrationOptions registration;
   // Worker threads (BA, triangulation); default 2.
@@ -166,6 +172,9 @@ struct BatchedMapperOptions {
     visit({"bridge_max_matches",
            "a consecutive pair with fewer verified matches is poorly matched (bridged)", kRunOnly},
           self.bridge_max_matches);
+    visit({"vio_drift_states",
+           "final BA: the VIO as drift states and frame noise, not a chain of priors", kRunOnly},
+          self.vio_drift_states);
     VisitOptionGroup({"tracks", "", kRunOnly}, self.tracks, visit);
     VisitOptionGroup({"triangulation", "", kRunOnly}, self.triangulation, visit);
     VisitOptionGroup({"ba", "", kRunOnly}, self.ba, visit);
