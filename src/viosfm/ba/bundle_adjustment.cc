@@ -89,6 +89,17 @@ std::string BundleAdjustmentSummary::ToString() const {
   return out.str();
 }
 
+ceres::LossFunction* CreateWhitenedLoss(double prior_loss_scale, double image_noise_px) {
+  ceres::LossFunction* loss = nullptr;
+  if (prior_loss_scale > 0.0) loss = new ceres::TukeyLoss(prior_loss_scale);
+  if (image_noise_px != 1.0) {
+    // Against reprojection errors in units of image_noise_px; the loss still
+    // acts in the term's own sigmas.
+    loss = new ceres::ScaledLoss(loss, image_noise_px * image_noise_px, ceres::TAKE_OWNERSHIP);
+  }
+  return loss;
+}
+
 BundleAdjustmentSummary BundleAdjust(Reconstruction* reconstruction,
                                      const std::vector<RelativePosePrior>& priors,
                                      const std::vector<image_t>& constant_poses,
@@ -189,16 +200,8 @@ BundleAdjustmentSummary BundleAdjust(Reconstruction* reconstruction,
       Eigen::Matrix<double, 6, 6> sqrt_information;
       ceres::LossFunction* prior_loss = nullptr;
       // The loss of a whitened prior (covariance-weighted or the gyro's).
-      const auto whitened_loss = [&options]() -> ceres::LossFunction* {
-        ceres::LossFunction* loss = nullptr;
-        if (options.prior_loss_scale > 0.0) loss = new ceres::TukeyLoss(options.prior_loss_scale);
-        if (options.image_noise_px != 1.0) {
-          // The whitened prior against reprojection errors in units of
-          // image_noise_px; the loss still acts in the prior's own sigmas.
-          loss = new ceres::ScaledLoss(loss, options.image_noise_px * options.image_noise_px,
-                                       ceres::TAKE_OWNERSHIP);
-        }
-        return loss;
+      const auto whitened_loss = [&options]() {
+        return CreateWhitenedLoss(options.prior_loss_scale, options.image_noise_px);
       };
       if (prior.from_gyro) {
         VIOSFM_CHECK(prior.sqrt_information.has_value());

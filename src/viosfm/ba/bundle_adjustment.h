@@ -27,8 +27,9 @@
 #include "viosfm/util/types.h"
 
 namespace ceres {
+class LossFunction;
 class Problem;
-}
+}  // namespace ceres
 
 namespace viosfm {
 
@@ -261,6 +262,14 @@ class BundleAdjustmentTerms {
   virtual std::vector<double*> AddTo(ceres::Problem* problem,
                                      const std::function<double*(image_t)>& pose_block) = 0;
 };
+
+// The loss of a whitened term (a covariance-weighted prior, the gyro's, a
+// caller's): Tukey's biweight of scale `prior_loss_scale` sigmas (none if 0),
+// its cost multiplied by image_noise_px^2 so that it weighs against
+// reprojection errors in units of image_noise_px (BundleAdjustmentOptions).
+// Null when neither applies; the caller owns it (ceres::Problem does once
+// it is given to a residual block).
+ceres::LossFunction* CreateWhitenedLoss(double prior_loss_scale, double image_noise_px);
 
 // Refines `reconstruction` in place (see the top of this file). Priors whose
 // images are not both registered, or both constant, are skipped; every id in

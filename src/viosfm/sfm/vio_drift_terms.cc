@@ -1,7 +1,6 @@
 #include "viosfm/sfm/vio_drift_terms.h"
 
 #include <ceres/autodiff_cost_function.h>
-#include <ceres/loss_function.h>
 #include <ceres/problem.h>
 
 #include <Eigen/Geometry>
@@ -92,17 +91,6 @@ class DriftCost {
   Eigen::Matrix<double, 6, 6> sqrt_information_;
 };
 
-// The whitened terms' loss (as the covariance-weighted priors').
-ceres::LossFunction* WhitenedLoss(const VioDriftTermsOptions& options) {
-  ceres::LossFunction* loss = nullptr;
-  if (options.prior_loss_scale > 0.0) loss = new ceres::TukeyLoss(options.prior_loss_scale);
-  if (options.image_noise_px != 1.0) {
-    loss = new ceres::ScaledLoss(loss, options.image_noise_px * options.image_noise_px,
-                                 ceres::TAKE_OWNERSHIP);
-  }
-  return loss;
-}
-
 }  // namespace
 
 Eigen::Matrix<double, 6, 6> VioDriftTerms::FrameSqrtInformation(const VioUncertaintyModel& model) {
@@ -162,9 +150,11 @@ std::vector<double*> VioDriftTerms::AddTo(ceres::Problem* problem,
     const Rigid3d vio_cam_from_vio_world = frames_[k].vio.world_from_cam.Inverse();
     // G = P^-1 V: the frame term starts at zero.
     states_[k] = ToPoseParameters(cam_from_world.Inverse() * vio_cam_from_vio_world);
-    problem->AddResidualBlock(new ceres::AutoDiffCostFunction<FrameCost, 6, 7, 7>(
-                                  new FrameCost(vio_cam_from_vio_world, frame_sqrt_information)),
-                              WhitenedLoss(options_), pose, states_[k].data());
+    problem->AddResidualBlock(
+        new ceres::AutoDiffCostFunction<FrameCost, 6, 7, 7>(
+            new FrameCost(vio_cam_from_vio_world, frame_sqrt_information)),
+        CreateWhitenedLoss(options_.prior_loss_scale, options_.image_noise_px), pose,
+        states_[k].data());
     problem->SetManifold(states_[k].data(), CreatePoseManifold());
     blocks.push_back(states_[k].data());
     added[k] = true;
@@ -180,10 +170,11 @@ std::vector<double*> VioDriftTerms::AddTo(ceres::Problem* problem,
         std::sqrt(RelativePoseWeight(link.num_verified_matches, 1.0, options_.prior_beta));
     const Eigen::Matrix<double, 6, 6> sqrt_information =
         factor * DriftSqrtInformation(model, first, second);
-    problem->AddResidualBlock(new ceres::AutoDiffCostFunction<DriftCost, 6, 7, 7>(
-                                  new DriftCost(second.world_from_cam.Inverse(), sqrt_information)),
-                              WhitenedLoss(options_), states_[link.first].data(),
-                              states_[link.second].data());
+    problem->AddResidualBlock(
+        new ceres::AutoDiffCostFunction<DriftCost, 6, 7, 7>(
+            new DriftCost(second.world_from_cam.Inverse(), sqrt_information)),
+        CreateWhitenedLoss(options_.prior_loss_scale, options_.image_noise_px),
+        states_[link.first].data(), states_[link.second].data());
     ++num_drift_terms_;
   }
   return blocks;
