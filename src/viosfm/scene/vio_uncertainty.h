@@ -168,7 +168,7 @@ Eigen::Matrix<double, 6, 6> RelativePoseDriftCovariance(const VioUncertaintyMode
                                                         const VioSample& frame1,
                                                         const VioSample& frame2);
 
-// The upper-triangular S with S^T S = covariance^-1 (so |S r|^2 is r's
+// The lower-triangular S with S^T S = covariance^-1 (so |S r|^2 is r's
 // Mahalanobis distance): what weights a residual. CHECKs that the
 // covariance is positive definite.
 Eigen::Matrix<double, 6, 6> SqrtInformationFromCovariance(
