@@ -171,7 +171,8 @@ VerificationResult RunVerification(const Sequence& sequence, const Trajectory& v
 VerificationResult RunVerification(const Sequence& sequence,
                                    const std::vector<std::optional<FrameVioPose>>& frame_poses,
                                    ColmapDatabase* database, const VerificationOptions& options,
-                                   const FrameRollingShutter& rolling_shutter) {
+                                   const FrameRollingShutter& rolling_shutter,
+                                   const VerifiedPairsCallback& on_verified) {
   VIOSFM_CHECK(database != nullptr);
   VIOSFM_CHECK(!rolling_shutter.active() ||
                rolling_shutter.cam_angular_rate.size() == sequence.images.size());
@@ -291,6 +292,15 @@ VerificationResult RunVerification(const Sequence& sequence,
   guided.matching = matching;
   guided.max_epipolar_distance_px = options.guided_band_px;
   const Rigid3d& body_from_cam = sequence.rig.body_from_cam;
+
+  // For on_verified: the earliest stamp among the frames of pairs[k..].
+  std::vector<timestamp_ns_t> pending_from_ns(pairs.size() + 1,
+                                              std::numeric_limits<timestamp_ns_t>::max());
+  for (size_t k = pairs.size(); k-- > 0;) {
+    pending_from_ns[k] =
+        std::min({pending_from_ns[k + 1], images[index_by_id.at(pairs[k].image_id1)].timestamp_ns,
+                  images[index_by_id.at(pairs[k].image_id2)].timestamp_ns});
+  }
 
   ProgressBar progress(
       "verifying pairs", static_cast<int64_t>(pairs.size()),
@@ -478,8 +488,17 @@ VerificationResult RunVerification(const Sequence& sequence,
 
     // Store: matches and geometry of a pair together.
     step_timer.Start();
+    std::vector<ImagePairMatches> accepted;
     for (PairWork& pair_work : work) {
       const PairDecision& decision = pair_work.decision;
+      if (on_verified && decision.accepted) {
+        accepted.push_back(
+            {decision.image_id1, decision.image_id2,
+             pair_work.geometry
+                 ? pair_work.geometry->inlier_matches
+                 : database->ReadTwoViewGeometry(decision.image_id1, decision.image_id2)
+                       .inlier_matches});
+      }
       // A resumed pair is written again only if it is now accepted without
       // a stored geometry (it cannot be with the options it was stored with,
       // which the caller keeps; the database then holds what the decision says).
@@ -501,6 +520,7 @@ VerificationResult RunVerification(const Sequence& sequence,
       result.decisions.push_back(std::move(pair_work.decision));
     }
     summary.seconds_writing += step_timer.ElapsedSeconds();
+    if (on_verified) on_verified(std::move(accepted), pending_from_ns[end]);
     progress.Update(static_cast<int64_t>(end - begin));
   }
   progress.Finish();

@@ -40,6 +40,7 @@
 // geometries replaced.
 #pragma once
 
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -50,12 +51,14 @@
 #include "viosfm/matching/descriptor_matcher.h"
 #include "viosfm/matching/pair_generator.h"
 #include "viosfm/retrieval/image_retrieval.h"
+#include "viosfm/scene/features.h"
 #include "viosfm/scene/pair_decision.h"
 #include "viosfm/scene/rolling_shutter.h"
 #include "viosfm/scene/sequence.h"
 #include "viosfm/scene/trajectory.h"
 #include "viosfm/scene/vio_uncertainty.h"
 #include "viosfm/util/option_fields.h"
+#include "viosfm/util/timestamp.h"
 
 namespace viosfm {
 
@@ -247,10 +250,20 @@ struct FrameVioPose {
 // `sequence`), each image's keypoints are compensated for the camera's
 // rotation during the readout before they are matched and verified
 // (scene/rolling_shutter.h); the database keeps them as detected.
+//
+// `on_verified`, if given, is called on the calling thread after each batch
+// of pairs is stored, with the batch's accepted pairs (their inlier
+// matches, as stored) and a stamp: every pair still to be decided has both
+// its frames at or after it (the largest timestamp_ns_t after the last
+// batch). A mapper running beside the verification reads them
+// (sfm/verified_pair_stream.h).
+using VerifiedPairsCallback =
+    std::function<void(std::vector<ImagePairMatches> accepted, timestamp_ns_t pending_from_ns)>;
 VerificationResult RunVerification(const Sequence& sequence,
                                    const std::vector<std::optional<FrameVioPose>>& frame_poses,
                                    ColmapDatabase* database, const VerificationOptions& options,
-                                   const FrameRollingShutter& rolling_shutter = {});
+                                   const FrameRollingShutter& rolling_shutter = {},
+                                   const VerifiedPairsCallback& on_verified = {});
 
 // The epipolar band (pixels) of a pair whose VIO relative pose
 // cam2_from_cam1 has covariance `covariance` (of [Log R_E; t_E],

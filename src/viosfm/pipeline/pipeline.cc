@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <chrono>
 #include <ctime>
+#include <future>
 #include <iomanip>
 #include <iterator>
 #include <optional>
@@ -27,6 +28,7 @@
 #include "viosfm/pipeline/stage_verification.h"
 #include "viosfm/pipeline/stage_vio.h"
 #include "viosfm/pipeline/texture_probe.h"
+#include "viosfm/sfm/verified_pair_stream.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/logging.h"
 #include "viosfm/util/timer.h"
@@ -109,6 +111,38 @@ class StageClock {
 
   std::vector<PipelineStageTime>* stages_;
   int index_ = 0;
+};
+
+// The mapper running beside the verification (PipelineOptions::
+// stream_mapper): the stream of verified pairs it reads and its result. If
+// the run stops before the mapper's result is taken (the verification
+// failed), the stream fails, so that the mapper stops too, and the
+// mapper's end is awaited before the stream and its input go.
+struct StreamedMapping {
+  explicit StreamedMapping(const BatchedMapperInput& input)
+      : stream(ImageIds(input), Timestamps(input)) {}
+  StreamedMapping(const StreamedMapping&) = delete;
+  StreamedMapping& operator=(const StreamedMapping&) = delete;
+  ~StreamedMapping() {
+    if (result.valid()) {
+      stream.Fail("the run stopped before the mapping ended");
+      result.wait();
+    }
+  }
+
+  static std::vector<image_t> ImageIds(const BatchedMapperInput& input) {
+    std::vector<image_t> ids;
+    for (const MapperImage& image : input.images) ids.push_back(image.image_id);
+    return ids;
+  }
+  static std::vector<timestamp_ns_t> Timestamps(const BatchedMapperInput& input) {
+    std::vector<timestamp_ns_t> stamps;
+    for (const MapperImage& image : input.images) stamps.push_back(image.timestamp_ns);
+    return stamps;
+  }
+
+  VerifiedPairStream stream;
+  std::future<Reconstruction> result;
 };
 
 // Frames or features (texture_probe.h): the frame rate and the feature
@@ -250,16 +284,43 @@ PipelineSummary RunPipeline(const PipelineOptions& requested) {
   summary.features = features.summary;
   ReturnFreedMemory();
 
-  const VerificationResult verification =
-      clock.Run([&] { return VerifyPairsStage(frames, vio, options, &features.database); });
+  // With stream_mapper the mapper runs beside the verification on its own
+  // thread, fed the pairs as they are verified; the verification stage's
+  // time then holds the batches mapped beside it, the mapper stage's the
+  // time the mapper takes after the verification has ended.
+  BatchedMapperInput input;
+  std::optional<StreamedMapping> streamed;
+  const VerificationResult verification = clock.Run([&] {
+    if (!options.stream_mapper) return VerifyPairsStage(frames, vio, options, &features.database);
+    input = LoadMapperImages(frames, vio, &features.database);
+    streamed.emplace(input);
+    PipelineOptions mapping_options = options;
+    mapping_options.show_progress = false;  // the verification's progress bar is shown
+    streamed->result = std::async(std::launch::async, [&input, &sequence, &vio, mapping_options,
+                                                       &summary, &streamed] {
+      return MapStage(input, sequence, vio, mapping_options, &summary, &streamed->stream);
+    });
+    VerificationResult result = VerifyPairsStage(
+        frames, vio, options, &features.database,
+        [&](std::vector<ImagePairMatches> accepted, timestamp_ns_t pending_from_ns) {
+          streamed->stream.Add(std::move(accepted), pending_from_ns);
+        });
+    streamed->stream.Close();
+    return result;
+  });
   summary.verification = verification.summary;
   ReturnFreedMemory();
 
-  const BatchedMapperInput input = clock.Run(
-      [&] { return LoadMapperInputStage(frames, vio, verification, &features.database); });
+  if (!streamed) {
+    input = clock.Run(
+        [&] { return LoadMapperInputStage(frames, vio, verification, &features.database); });
+  } else {
+    clock.Run([] {});  // loaded before the verification
+  }
 
-  Reconstruction reconstruction =
-      clock.Run([&] { return MapStage(input, sequence, vio, options, &summary); });
+  Reconstruction reconstruction = clock.Run([&] {
+    return streamed ? streamed->result.get() : MapStage(input, sequence, vio, options, &summary);
+  });
 
   clock.Run([&] {
     ColorPointsStage(frames, input, options.show_progress, &keypoint_values, &frame_cache,

@@ -129,6 +129,11 @@ struct PipelineOptions {
   VerificationOptions verification;
   // Batched mapper (k = 50, relative-pose priors on).
   BatchedMapperOptions mapper;
+  // The mapper runs beside the verification: each batch is mapped once the
+  // verification has passed its frames, with the pairs verified so far
+  // (sfm/verified_pair_stream.h), instead of after every pair is verified.
+  // The final adjustment has every pair. Default false.
+  bool stream_mapper = false;
   // The metric scale from the IMU (metric_scale.h), when the dataset has
   // one. Default true.
   bool use_imu_scale = true;
@@ -234,6 +239,8 @@ struct PipelineOptions {
     VisitOptionGroup({"sift", "", kShapesStoredData}, self.sift, visit);
     VisitOptionGroup({"verification", "", kShapesStoredData}, self.verification, visit);
     VisitOptionGroup({"mapper", "", kRunOnly}, self.mapper, visit);
+    visit({"stream_mapper", "the mapper runs beside the verification, batch by batch", kRunOnly},
+          self.stream_mapper);
     visit({"use_imu_scale", "the metric scale from the IMU", kRunOnly}, self.use_imu_scale);
     VisitOptionGroup({"imu_scale", "", kRunOnly}, self.imu_scale, visit);
     visit({"num_threads", "worker threads of every stage", kRunOnly}, self.num_threads);

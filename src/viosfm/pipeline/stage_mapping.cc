@@ -8,9 +8,8 @@
 
 namespace viosfm {
 
-BatchedMapperInput LoadMapperInputStage(const SelectedFrames& frames, const VioPoses& vio,
-                                        const VerificationResult& verification,
-                                        ColmapDatabase* database) {
+BatchedMapperInput LoadMapperImages(const SelectedFrames& frames, const VioPoses& vio,
+                                    ColmapDatabase* database) {
   BatchedMapperInput input;
   std::map<camera_t, Camera> cameras;  // each read once, in id order
   for (size_t i = 0; i < frames.sequence.images.size(); ++i) {
@@ -49,6 +48,13 @@ BatchedMapperInput LoadMapperInputStage(const SelectedFrames& frames, const VioP
   // VIO used (its clock offset and noise, when it estimated them).
   input.imu = frames.sequence.imu;
   input.rig = vio.own_vio_rig.value_or(frames.sequence.rig);
+  return input;
+}
+
+BatchedMapperInput LoadMapperInputStage(const SelectedFrames& frames, const VioPoses& vio,
+                                        const VerificationResult& verification,
+                                        ColmapDatabase* database) {
+  BatchedMapperInput input = LoadMapperImages(frames, vio, database);
   size_t num_inlier_matches = 0;
   for (const PairDecision& decision : verification.decisions) {
     if (!decision.accepted) continue;
@@ -67,9 +73,9 @@ BatchedMapperInput LoadMapperInputStage(const SelectedFrames& frames, const VioP
 
 Reconstruction MapStage(const BatchedMapperInput& input, const Sequence& sequence,
                         const VioPoses& vio, const PipelineOptions& options,
-                        PipelineSummary* summary) {
+                        PipelineSummary* summary, VerifiedPairStream* stream) {
   Reconstruction reconstruction =
-      RunBatchedMapper(input, options.EffectiveMapperOptions(), &summary->mapper);
+      RunBatchedMapper(input, options.EffectiveMapperOptions(), &summary->mapper, stream);
   VIOSFM_LOG(INFO) << "run: mapper " << summary->mapper.ToString();
   if (options.use_imu_scale) {
     summary->metric_scale = ApplyImuMetricScale(

@@ -15,16 +15,23 @@
 
 namespace viosfm {
 
-// The mapper's input; input.images[i] is frames.sequence.images[i].
+// The mapper's input without its pairs: the frames' keypoints (compensated
+// for a rolling shutter's rotation) and VIO camera poses, the cameras, the
+// IMU and the rig; input.images[i] is frames.sequence.images[i].
+BatchedMapperInput LoadMapperImages(const SelectedFrames& frames, const VioPoses& vio,
+                                    ColmapDatabase* database);
+
+// The mapper's input with the inlier matches of the accepted pairs.
 BatchedMapperInput LoadMapperInputStage(const SelectedFrames& frames, const VioPoses& vio,
                                         const VerificationResult& verification,
                                         ColmapDatabase* database);
 
 // Maps, applies the metric scale, and fills summary's mapper, metric_scale,
 // frame counts and model figures (logging every frame left without a pose
-// and why).
+// and why). With a `stream` the pairs come from it (input.verified_pairs
+// empty; sfm/batched_mapper.h).
 Reconstruction MapStage(const BatchedMapperInput& input, const Sequence& sequence,
                         const VioPoses& vio, const PipelineOptions& options,
-                        PipelineSummary* summary);
+                        PipelineSummary* summary, VerifiedPairStream* stream = nullptr);
 
 }  // namespace viosfm

@@ -5,7 +5,8 @@
 namespace viosfm {
 
 VerificationResult VerifyPairsStage(const SelectedFrames& frames, const VioPoses& vio,
-                                    const PipelineOptions& options, ColmapDatabase* database) {
+                                    const PipelineOptions& options, ColmapDatabase* database,
+                                    const VerifiedPairsCallback& on_verified) {
   std::vector<std::optional<FrameVioPose>> frame_poses(frames.vio_index.size());
   for (size_t i = 0; i < frames.vio_index.size(); ++i) {
     if (const std::optional<size_t> index = frames.vio_index[i]) {
@@ -15,7 +16,7 @@ VerificationResult VerifyPairsStage(const SelectedFrames& frames, const VioPoses
   }
   VerificationResult result =
       RunVerification(frames.sequence, frame_poses, database,
-                      options.EffectiveVerificationOptions(), frames.rolling_shutter);
+                      options.EffectiveVerificationOptions(), frames.rolling_shutter, on_verified);
   VIOSFM_LOG(INFO) << "run: verification " << FormatVerificationSummary(result.summary);
   return result;
 }

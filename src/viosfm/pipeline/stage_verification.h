@@ -13,7 +13,9 @@
 
 namespace viosfm {
 
+// `on_verified`: RunVerification's (matching/verification_driver.h).
 VerificationResult VerifyPairsStage(const SelectedFrames& frames, const VioPoses& vio,
-                                    const PipelineOptions& options, ColmapDatabase* database);
+                                    const PipelineOptions& options, ColmapDatabase* database,
+                                    const VerifiedPairsCallback& on_verified = {});
 
 }  // namespace viosfm

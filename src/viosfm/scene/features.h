@@ -38,6 +38,14 @@ struct FeatureMatch {
 };
 using FeatureMatches = std::vector<FeatureMatch>;
 
+// The (verified) matches of one image pair: match.point2D_idx1 indexes
+// image_id1's keypoints, point2D_idx2 image_id2's. Either order of the ids.
+struct ImagePairMatches {
+  image_t image_id1 = kInvalidImageId;
+  image_t image_id2 = kInvalidImageId;
+  FeatureMatches matches;
+};
+
 // COLMAP's pair id: ordered so that image_id1 < image_id2,
 // pair_id = kMaxNumImages * image_id1 + image_id2 with kMaxNumImages = 2^31 - 1.
 inline constexpr uint64_t kMaxNumImages = 2147483647;

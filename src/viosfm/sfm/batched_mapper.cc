@@ -6,6 +6,7 @@
 #include <limits>
 #include <memory>
 #include <optional>
+#include <iterator>
 #include <set>
 #include <sstream>
 #include <unordered_map>
@@ -234,6 +235,41 @@ void CompensateRollingShutterMotion(Reconstruction* reconstruction,
   }
 }
 
+// Throws InputError for a pair naming an image not in `images` or a match
+// indexing a keypoint its image does not have; `first_label` numbers the
+// pairs in the messages.
+void ValidateVerifiedPairs(const std::vector<MapperImage>& images,
+                           const std::vector<ImagePairMatches>& pairs, size_t first_label) {
+  std::unordered_map<image_t, size_t> keypoints_of_image;
+  for (const MapperImage& image : images) keypoints_of_image[image.image_id] = image.keypoints.size();
+  for (size_t p = 0; p < pairs.size(); ++p) {
+    const ImagePairMatches& pair = pairs[p];
+    const auto it1 = keypoints_of_image.find(pair.image_id1);
+    const auto it2 = keypoints_of_image.find(pair.image_id2);
+    const std::string pair_label = "verified pair " + std::to_string(first_label + p) +
+                                   " (images " + std::to_string(pair.image_id1) + ", " +
+                                   std::to_string(pair.image_id2) + ")";
+    if (it1 == keypoints_of_image.end() || it2 == keypoints_of_image.end()) {
+      throw InputError(
+          kInputLabel, 0,
+          pair_label + " refers to unknown image id " +
+              std::to_string(it1 == keypoints_of_image.end() ? pair.image_id1 : pair.image_id2));
+    }
+    for (size_t m = 0; m < pair.matches.size(); ++m) {
+      const FeatureMatch& match = pair.matches[m];
+      const bool bad1 = match.point2D_idx1 >= it1->second;
+      if (bad1 || match.point2D_idx2 >= it2->second) {
+        throw InputError(kInputLabel, 0,
+                         pair_label + ": match " + std::to_string(m) + " indexes keypoint " +
+                             std::to_string(bad1 ? match.point2D_idx1 : match.point2D_idx2) +
+                             " of image " + std::to_string(bad1 ? pair.image_id1 : pair.image_id2) +
+                             ", which has " + std::to_string(bad1 ? it1->second : it2->second) +
+                             " keypoints");
+      }
+    }
+  }
+}
+
 }  // namespace
 
 std::string BatchedMapperOptions::Validate() const {
@@ -338,60 +374,51 @@ void ValidateBatchedMapperInput(const BatchedMapperInput& input) {
     throw InputError(kInputLabel, 0,
                      "no image has a VIO pose (the VIO gives the world frame and the scale)");
   }
-  for (size_t p = 0; p < input.verified_pairs.size(); ++p) {
-    const ImagePairMatches& pair = input.verified_pairs[p];
-    const auto it1 = keypoints_of_image.find(pair.image_id1);
-    const auto it2 = keypoints_of_image.find(pair.image_id2);
-    const std::string pair_label = "verified pair " + std::to_string(p) + " (images " +
-                                   std::to_string(pair.image_id1) + ", " +
-                                   std::to_string(pair.image_id2) + ")";
-    if (it1 == keypoints_of_image.end() || it2 == keypoints_of_image.end()) {
-      throw InputError(
-          kInputLabel, 0,
-          pair_label + " refers to unknown image id " +
-              std::to_string(it1 == keypoints_of_image.end() ? pair.image_id1 : pair.image_id2));
-    }
-    for (size_t m = 0; m < pair.matches.size(); ++m) {
-      const FeatureMatch& match = pair.matches[m];
-      const bool bad1 = match.point2D_idx1 >= it1->second;
-      if (bad1 || match.point2D_idx2 >= it2->second) {
-        throw InputError(kInputLabel, 0,
-                         pair_label + ": match " + std::to_string(m) + " indexes keypoint " +
-                             std::to_string(bad1 ? match.point2D_idx1 : match.point2D_idx2) +
-                             " of image " + std::to_string(bad1 ? pair.image_id1 : pair.image_id2) +
-                             ", which has " + std::to_string(bad1 ? it1->second : it2->second) +
-                             " keypoints");
-      }
-    }
-  }
+  ValidateVerifiedPairs(input.images, input.verified_pairs, 0);
 }
 
 Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
                                 const BatchedMapperOptions& options,
-                                BatchedMapperSummary* summary_out) {
+                                BatchedMapperSummary* summary_out, VerifiedPairStream* stream) {
   const Timer total_timer;
   if (!options.Check()) throw InputError("batched mapper options: " + options.Validate());
   ValidateBatchedMapperInput(input);
+  if (stream != nullptr) {
+    VIOSFM_CHECK(input.verified_pairs.empty()) << "verified pairs given and streamed";
+    VIOSFM_CHECK_EQ(stream->num_frames(), input.images.size());
+  }
   BatchedMapperSummary summary;
   const size_t num_images = input.images.size();
   summary.num_images = static_cast<int>(num_images);
   const FrameRegistrationOptions& registration = options.registration;
 
-  // 1. Tracks, and the tracks of each image.
-  Timer timer;
-  const TrackBuildResult track_result = BuildTracks(input.verified_pairs, options.tracks);
-  const std::vector<Track>& tracks = track_result.tracks;
-  summary.tracks = track_result.statistics;
-  summary.seconds_tracks = timer.ElapsedSeconds();
-  VIOSFM_LOG(INFO) << "batched mapper: " << num_images << " images, " << input.verified_pairs.size()
-                   << " verified pairs; " << summary.tracks.Summary();
+  // 1. Tracks, and the tracks of each image: of every verified pair or,
+  // streamed, of those taken so far (built again as each batch takes more;
+  // verified_pair_stream.h).
+  std::vector<ImagePairMatches> streamed_pairs;
+  const std::vector<ImagePairMatches>& pairs = stream ? streamed_pairs : input.verified_pairs;
   std::unordered_map<image_t, size_t> index_of_image;
   for (size_t i = 0; i < num_images; ++i) index_of_image[input.images[i].image_id] = i;
+  std::vector<Track> tracks;
   std::vector<std::vector<size_t>> tracks_of_image(num_images);
-  for (size_t t = 0; t < tracks.size(); ++t) {
-    for (const TrackElement& element : tracks[t].elements) {
-      tracks_of_image[index_of_image.at(element.image_id)].push_back(t);
+  const auto build_tracks = [&]() {
+    const Timer timer;
+    TrackBuildResult track_result = BuildTracks(pairs, options.tracks);
+    tracks = std::move(track_result.tracks);
+    summary.tracks = track_result.statistics;
+    tracks_of_image.assign(num_images, {});
+    for (size_t t = 0; t < tracks.size(); ++t) {
+      for (const TrackElement& element : tracks[t].elements) {
+        tracks_of_image[index_of_image.at(element.image_id)].push_back(t);
+      }
     }
+    summary.seconds_tracks += timer.ElapsedSeconds();
+  };
+  Timer timer;
+  if (stream == nullptr) {
+    build_tracks();
+    VIOSFM_LOG(INFO) << "batched mapper: " << num_images << " images, " << pairs.size()
+                     << " verified pairs; " << summary.tracks.Summary();
   }
 
   // The model: all images, unregistered, with their keypoints.
@@ -424,25 +451,30 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
   summary.num_vio_segments = static_cast<int>(segments.size());
 
   // Relative-pose priors (none without the relative-pose term: the w/o RPC
-  // ablation).
+  // ablation), of the pairs known (built again with the tracks when
+  // streamed: the priors between the frames taken so far are those of
+  // every pair).
   RelativePosePriors all_priors;
-  if (options.ba.use_relative_pose_priors) {
+  std::unordered_set<image_pair_t> consecutive_pairs;  // those of the consecutive priors
+  const auto build_priors = [&]() {
+    if (!options.ba.use_relative_pose_priors) return;
     RelativePosePriorOptions prior_options;
     prior_options.bridge_spans = options.bridge_spans;
     prior_options.bridge_max_matches = options.bridge_max_matches;
     prior_options.weighting = options.ba.prior_weighting;
     prior_options.vio_uncertainty = options.vio_uncertainty;
-    all_priors = MakeRelativePosePriors(input, prior_options);
-  }
-  std::unordered_set<image_pair_t> consecutive_pairs;  // those of the consecutive priors
-  for (size_t p = 0; p < all_priors.priors.size(); ++p) {
-    if (!all_priors.bridging[p]) {
-      consecutive_pairs.insert(
-          ImagePairToPairId(all_priors.priors[p].image_id1, all_priors.priors[p].image_id2));
+    all_priors = MakeRelativePosePriors(input.images, pairs, prior_options);
+    consecutive_pairs.clear();
+    for (size_t p = 0; p < all_priors.priors.size(); ++p) {
+      if (!all_priors.bridging[p]) {
+        consecutive_pairs.insert(
+            ImagePairToPairId(all_priors.priors[p].image_id1, all_priors.priors[p].image_id2));
+      }
     }
-  }
-  summary.num_consecutive_priors = all_priors.num_consecutive;
-  summary.num_bridging_priors = all_priors.num_bridging;
+    summary.num_consecutive_priors = all_priors.num_consecutive;
+    summary.num_bridging_priors = all_priors.num_bridging;
+  };
+  build_priors();
 
   // Registration state. A break at frame k (the VIO jumped between k and the
   // frame before it) ends a run of frames whose VIO poses can be chained.
@@ -931,6 +963,19 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
     MapperBatchStatistics stats;
     stats.batch_index = static_cast<int>(b);
     stats.num_images = static_cast<int>(end - begin);
+    if (stream != nullptr) {
+      // The pairs of the batch's frames and those before it: complete once
+      // the verification has passed the batch.
+      std::vector<ImagePairMatches> taken = stream->TakeUntil(end);
+      ValidateVerifiedPairs(input.images, taken, streamed_pairs.size());
+      std::move(taken.begin(), taken.end(), std::back_inserter(streamed_pairs));
+      build_tracks();
+      build_priors();
+      if (last) {
+        VIOSFM_LOG(INFO) << "batched mapper: " << num_images << " images, " << pairs.size()
+                         << " verified pairs (streamed); " << summary.tracks.Summary();
+      }
+    }
 
     // 2. Registration: each frame by its VIO pose relative to the latest
     // registered frame of its VIO segment, checked against the images.

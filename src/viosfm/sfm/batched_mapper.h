@@ -54,6 +54,7 @@
 #include "viosfm/sfm/relative_pose_priors.h"
 #include "viosfm/sfm/tracks.h"
 #include "viosfm/sfm/triangulator.h"
+#include "viosfm/sfm/verified_pair_stream.h"
 #include "viosfm/util/option_fields.h"
 #include "viosfm/util/timestamp.h"
 #include "viosfm/util/types.h"
@@ -277,8 +278,15 @@ void ValidateBatchedMapperInput(const BatchedMapperInput& input);
 // Runs the batched reconstruction (see the top of this file). Throws
 // InputError for invalid options, images not in time order, an unknown
 // camera id, or a match indexing a keypoint that does not exist.
+// With a `stream` (input.verified_pairs then empty), the verified pairs come
+// from it while the mapper runs: before each batch the mapper takes those of
+// the batch's frames and the frames before them, waiting for the
+// verification to pass the batch, and builds the tracks and the priors
+// again (verified_pair_stream.h); the last batch, and so the final
+// adjustment, has every pair. Rethrows the stream's failure.
 Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
                                 const BatchedMapperOptions& options,
-                                BatchedMapperSummary* summary = nullptr);
+                                BatchedMapperSummary* summary = nullptr,
+                                VerifiedPairStream* stream = nullptr);
 
 }  // namespace viosfm

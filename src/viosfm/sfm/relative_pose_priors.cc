@@ -11,9 +11,9 @@ namespace viosfm {
 namespace {
 
 // Verified matches of each pair (the largest count of a pair listed twice).
-std::unordered_map<image_pair_t, int> MatchCounts(const BatchedMapperInput& input) {
+std::unordered_map<image_pair_t, int> MatchCounts(const std::vector<ImagePairMatches>& pairs) {
   std::unordered_map<image_pair_t, int> num_matches;
-  for (const ImagePairMatches& pair : input.verified_pairs) {
+  for (const ImagePairMatches& pair : pairs) {
     if (pair.image_id1 == pair.image_id2) continue;
     int& count = num_matches[ImagePairToPairId(pair.image_id1, pair.image_id2)];
     count = std::max(count, static_cast<int>(pair.matches.size()));
@@ -32,11 +32,11 @@ RelativePosePrior MakePrior(const MapperImage& image1, const MapperImage& image2
 }
 
 // The posed frames (input indices, in time order) of each VIO segment.
-std::map<int, std::vector<size_t>> PosedFramesBySegment(const BatchedMapperInput& input) {
+std::map<int, std::vector<size_t>> PosedFramesBySegment(const std::vector<MapperImage>& images) {
   std::map<int, std::vector<size_t>> frames;
-  for (size_t i = 0; i < input.images.size(); ++i) {
-    if (input.images[i].vio_cam_from_world) {
-      frames[input.images[i].vio_odometer.segment].push_back(i);
+  for (size_t i = 0; i < images.size(); ++i) {
+    if (images[i].vio_cam_from_world) {
+      frames[images[i].vio_odometer.segment].push_back(i);
     }
   }
   return frames;
@@ -51,10 +51,15 @@ VioSample VioSampleOfImage(const MapperImage& image) {
 
 RelativePosePriors MakeRelativePosePriors(const BatchedMapperInput& input,
                                           const RelativePosePriorOptions& options) {
-  const std::unordered_map<image_pair_t, int> num_matches = MatchCounts(input);
+  return MakeRelativePosePriors(input.images, input.verified_pairs, options);
+}
+
+RelativePosePriors MakeRelativePosePriors(const std::vector<MapperImage>& images,
+                                          const std::vector<ImagePairMatches>& verified_pairs,
+                                          const RelativePosePriorOptions& options) {
+  const std::unordered_map<image_pair_t, int> num_matches = MatchCounts(verified_pairs);
   const auto matches_of = [&](size_t i, size_t j) {
-    const auto it =
-        num_matches.find(ImagePairToPairId(input.images[i].image_id, input.images[j].image_id));
+    const auto it = num_matches.find(ImagePairToPairId(images[i].image_id, images[j].image_id));
     return it == num_matches.end() ? 0 : it->second;
   };
   const bool covariance = options.weighting == PriorWeighting::kCovariance;
@@ -63,10 +68,10 @@ RelativePosePriors MakeRelativePosePriors(const BatchedMapperInput& input,
   const VioUncertaintyModel within_segment = options.vio_uncertainty.WithinSegment();
   RelativePosePriors result;
   const auto add = [&](size_t i, size_t j, int matches, bool bridging) {
-    RelativePosePrior prior = MakePrior(input.images[i], input.images[j], matches);
+    RelativePosePrior prior = MakePrior(images[i], images[j], matches);
     if (covariance) {
       prior.sqrt_information = SqrtInformationFromCovariance(RelativePoseCovariance(
-          within_segment, VioSampleOfImage(input.images[i]), VioSampleOfImage(input.images[j])));
+          within_segment, VioSampleOfImage(images[i]), VioSampleOfImage(images[j])));
     }
     prior.rotation_only = bridging && !covariance;
     result.priors.push_back(std::move(prior));
@@ -79,12 +84,12 @@ RelativePosePriors MakeRelativePosePriors(const BatchedMapperInput& input,
   // each cut between two consecutive frames i <= k < j (not only those of
   // the consecutive pair: keyframes seconds apart may share nothing while
   // their neighbours hold them together).
-  std::vector<int64_t> crossing(input.images.size() + 1, 0);
+  std::vector<int64_t> crossing(images.size() + 1, 0);
   if (covariance) {
     std::unordered_map<image_t, size_t> index_of;
-    for (size_t i = 0; i < input.images.size(); ++i) index_of[input.images[i].image_id] = i;
-    std::vector<int64_t> difference(input.images.size() + 1, 0);
-    for (const ImagePairMatches& pair : input.verified_pairs) {
+    for (size_t i = 0; i < images.size(); ++i) index_of[images[i].image_id] = i;
+    std::vector<int64_t> difference(images.size() + 1, 0);
+    for (const ImagePairMatches& pair : verified_pairs) {
       const auto it1 = index_of.find(pair.image_id1);
       const auto it2 = index_of.find(pair.image_id2);
       if (it1 == index_of.end() || it2 == index_of.end() || it1->second == it2->second) continue;
@@ -94,9 +99,9 @@ RelativePosePriors MakeRelativePosePriors(const BatchedMapperInput& input,
       difference[b] -= static_cast<int64_t>(pair.matches.size());
     }
     int64_t running = 0;
-    for (size_t k = 0; k < input.images.size(); ++k) crossing[k] = running += difference[k];
+    for (size_t k = 0; k < images.size(); ++k) crossing[k] = running += difference[k];
   }
-  for (const auto& [segment, frames] : PosedFramesBySegment(input)) {
+  for (const auto& [segment, frames] : PosedFramesBySegment(images)) {
     std::vector<int> consecutive_matches;
     std::vector<int> connectivity;  // per cut between posed frames k and k + 1
     for (size_t k = 0; k + 1 < frames.size(); ++k) {

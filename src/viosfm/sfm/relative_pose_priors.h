@@ -55,6 +55,10 @@ VioSample VioSampleOfImage(const MapperImage& image);
 // Consecutive and bridging priors of `input` (see the top of the file).
 RelativePosePriors MakeRelativePosePriors(const BatchedMapperInput& input,
                                           const RelativePosePriorOptions& options);
+// The same of `images` and their verified pairs.
+RelativePosePriors MakeRelativePosePriors(const std::vector<MapperImage>& images,
+                                          const std::vector<ImagePairMatches>& verified_pairs,
+                                          const RelativePosePriorOptions& options);
 
 // The relative-pose priors between consecutive frames (time order), with
 // the paper's weighting (no covariance): cam2_from_cam1 from their VIO

@@ -35,14 +35,6 @@
 
 namespace viosfm {
 
-// The (verified) matches of one image pair: match.point2D_idx1 indexes
-// image_id1's keypoints, point2D_idx2 image_id2's. Either order of the ids.
-struct ImagePairMatches {
-  image_t image_id1 = kInvalidImageId;
-  image_t image_id2 = kInvalidImageId;
-  FeatureMatches matches;
-};
-
 // Observations of one scene point, at most one a image, sorted by
 // (image_id, point2D_idx).
 struct Track {
