@@ -315,6 +315,9 @@ std::string BatchedMapperSummary::ToString() const {
       << "  relative-pose priors: " << num_consecutive_priors << " consecutive, "
       << num_bridging_priors << " bridging, " << num_gyro_priors << " from the gyro\n"
       << "  " << tracks.Summary();
+  if (num_points_merged > 0) {
+    out << "; " << num_points_merged << " points joined as later pairs joined their tracks";
+  }
   if (!final_ba.termination.empty()) out << "\n  final " << final_ba.ToString();
   return out.str();
 }
@@ -401,9 +404,25 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
   for (size_t i = 0; i < num_images; ++i) index_of_image[input.images[i].image_id] = i;
   std::vector<Track> tracks;
   std::vector<std::vector<size_t>> tracks_of_image(num_images);
-  const auto build_tracks = [&]() {
+  std::optional<IncrementalTrackBuilder> track_builder;
+  if (stream != nullptr) {
+    std::vector<std::pair<image_t, size_t>> num_keypoints;
+    for (const MapperImage& image : input.images) {
+      num_keypoints.emplace_back(image.image_id, image.keypoints.size());
+    }
+    track_builder.emplace(num_keypoints, options.tracks);
+  }
+  // The tracks of every pair, or, streamed, of those taken so far, the
+  // `new_pairs` among them just taken.
+  const auto build_tracks = [&](const std::vector<ImagePairMatches>& new_pairs) {
     const Timer timer;
-    TrackBuildResult track_result = BuildTracks(pairs, options.tracks);
+    TrackBuildResult track_result;
+    if (track_builder) {
+      track_builder->AddPairs(new_pairs);
+      track_result = track_builder->Result();
+    } else {
+      track_result = BuildTracks(pairs, options.tracks);
+    }
     tracks = std::move(track_result.tracks);
     summary.tracks = track_result.statistics;
     tracks_of_image.assign(num_images, {});
@@ -416,7 +435,7 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
   };
   Timer timer;
   if (stream == nullptr) {
-    build_tracks();
+    build_tracks(pairs);
     VIOSFM_LOG(INFO) << "batched mapper: " << num_images << " images, " << pairs.size()
                      << " verified pairs; " << summary.tracks.Summary();
   }
@@ -968,9 +987,14 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
       // the verification has passed the batch.
       std::vector<ImagePairMatches> taken = stream->TakeUntil(end);
       ValidateVerifiedPairs(input.images, taken, streamed_pairs.size());
+      build_tracks(taken);
       std::move(taken.begin(), taken.end(), std::back_inserter(streamed_pairs));
-      build_tracks();
       build_priors();
+      // Points made from parts of tracks the new pairs joined.
+      const std::vector<point3D_t> merged =
+          MergeTrackPoints(&reconstruction, tracks, options.triangulation);
+      summary.num_points_merged += static_cast<int>(merged.size());
+      changed_since_filter.insert(changed_since_filter.end(), merged.begin(), merged.end());
       if (last) {
         VIOSFM_LOG(INFO) << "batched mapper: " << num_images << " images, " << pairs.size()
                          << " verified pairs (streamed); " << summary.tracks.Summary();

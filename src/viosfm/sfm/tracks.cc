@@ -77,28 +77,18 @@ size_t CountCommon(const std::vector<size_t>& a, const std::vector<size_t>& b) {
   return count;
 }
 
-// Splits an inconsistent component (nodes: sorted global node indices,
-// edges: pairs of global indices u < v inside it) into consistent pieces,
+// Splits an inconsistent component (keys: its nodes' keys, sorted; edges:
+// pairs of indices u < v into keys, sorted, unique) into consistent pieces,
 // accepting the best-supported matches first. Returns the pieces as lists of
-// global node indices (each sorted) and adds the refused matches to *refused.
-std::vector<std::vector<size_t>> SplitComponent(const std::vector<NodeKey>& keys,
-                                                const std::vector<size_t>& nodes,
-                                                const std::vector<std::pair<size_t, size_t>>& edges,
-                                                size_t* refused) {
-  const auto local = [&nodes](size_t global) {
-    return static_cast<size_t>(std::lower_bound(nodes.begin(), nodes.end(), global) -
-                               nodes.begin());
-  };
-  const size_t num_nodes = nodes.size();
+// indices into keys (each sorted) and adds the refused matches to *refused.
+std::vector<std::vector<size_t>> SplitComponent(
+    const std::vector<NodeKey>& keys, const std::vector<std::pair<size_t, size_t>>& local_edges,
+    size_t* refused) {
+  const size_t num_nodes = keys.size();
   std::vector<std::vector<size_t>> adjacency(num_nodes);
-  std::vector<std::pair<size_t, size_t>> local_edges;
-  local_edges.reserve(edges.size());
-  for (const auto& [u, v] : edges) {
-    const size_t lu = local(u);
-    const size_t lv = local(v);
-    adjacency[lu].push_back(lv);
-    adjacency[lv].push_back(lu);
-    local_edges.emplace_back(lu, lv);
+  for (const auto& [u, v] : local_edges) {
+    adjacency[u].push_back(v);
+    adjacency[v].push_back(u);
   }
   for (std::vector<size_t>& neighbours : adjacency) std::sort(neighbours.begin(), neighbours.end());
 
@@ -124,7 +114,7 @@ std::vector<std::vector<size_t>> SplitComponent(const std::vector<NodeKey>& keys
   UnionFind sets(num_nodes);
   // Sorted image ids of each set, valid at its root.
   std::vector<std::vector<image_t>> images(num_nodes);
-  for (size_t i = 0; i < num_nodes; ++i) images[i] = {KeyImage(keys[nodes[i]])};
+  for (size_t i = 0; i < num_nodes; ++i) images[i] = {KeyImage(keys[i])};
   for (const RankedEdge& edge : ranked) {
     size_t root_u = sets.Find(edge.u);
     size_t root_v = sets.Find(edge.v);
@@ -151,9 +141,29 @@ std::vector<std::vector<size_t>> SplitComponent(const std::vector<NodeKey>& keys
       piece_of_root[root] = pieces.size();
       pieces.emplace_back();
     }
-    pieces[piece_of_root[root]].push_back(nodes[i]);
+    pieces[piece_of_root[root]].push_back(i);
   }
   return pieces;
+}
+
+// Orders the tracks by their first elements (nodes are sorted within each
+// track, and tracks are disjoint) and counts them, their observations and
+// their lengths.
+void SortTracksAndCount(TrackBuildResult* result) {
+  std::sort(result->tracks.begin(), result->tracks.end(), [](const Track& a, const Track& b) {
+    const TrackElement& ea = a.elements.front();
+    const TrackElement& eb = b.elements.front();
+    return MakeKey(ea.image_id, ea.point2D_idx) < MakeKey(eb.image_id, eb.point2D_idx);
+  });
+  TrackStatistics& stats = result->statistics;
+  stats.num_tracks = result->tracks.size();
+  for (const Track& track : result->tracks) {
+    stats.num_observations += track.Length();
+    if (stats.length_histogram.size() <= track.Length()) {
+      stats.length_histogram.resize(track.Length() + 1, 0);
+    }
+    ++stats.length_histogram[track.Length()];
+  }
 }
 
 }  // namespace
@@ -290,27 +300,209 @@ TrackBuildResult BuildTracks(const std::vector<ImagePairMatches>& pair_matches,
       ++stats.num_dropped_inconsistent;
       continue;
     }
+    // The component's nodes are sorted global indices, so sorted by key too.
+    const std::vector<size_t>& nodes = component_nodes[c];
+    std::vector<NodeKey> component_keys;
+    component_keys.reserve(nodes.size());
+    for (const size_t node : nodes) component_keys.push_back(keys[node]);
+    const auto local = [&nodes](size_t global) {
+      return static_cast<size_t>(std::lower_bound(nodes.begin(), nodes.end(), global) -
+                                 nodes.begin());
+    };
+    std::vector<std::pair<size_t, size_t>> local_edges;
+    local_edges.reserve(component_edges[c].size());
+    for (const auto& [u, v] : component_edges[c]) local_edges.emplace_back(local(u), local(v));
     const std::vector<std::vector<size_t>> pieces =
-        SplitComponent(keys, component_nodes[c], component_edges[c], &stats.num_refused_matches);
+        SplitComponent(component_keys, local_edges, &stats.num_refused_matches);
     stats.num_split_pieces += pieces.size();
-    for (const std::vector<size_t>& piece : pieces) emit(piece);
+    for (const std::vector<size_t>& piece : pieces) {
+      std::vector<size_t> global;
+      global.reserve(piece.size());
+      for (const size_t i : piece) global.push_back(nodes[i]);
+      emit(global);
+    }
   }
 
-  // Nodes are sorted within each track, and tracks are disjoint, so the first
-  // element orders them.
-  std::sort(result.tracks.begin(), result.tracks.end(), [](const Track& a, const Track& b) {
-    const TrackElement& ea = a.elements.front();
-    const TrackElement& eb = b.elements.front();
-    return MakeKey(ea.image_id, ea.point2D_idx) < MakeKey(eb.image_id, eb.point2D_idx);
-  });
-  stats.num_tracks = result.tracks.size();
-  for (const Track& track : result.tracks) {
-    stats.num_observations += track.Length();
-    if (stats.length_histogram.size() <= track.Length()) {
-      stats.length_histogram.resize(track.Length() + 1, 0);
-    }
-    ++stats.length_histogram[track.Length()];
+  SortTracksAndCount(&result);
+  return result;
+}
+
+}  // namespace viosfm
+
+namespace viosfm {
+namespace {
+
+constexpr uint32_t kNoNode = UINT32_MAX;
+
+}  // namespace
+
+IncrementalTrackBuilder::IncrementalTrackBuilder(
+    const std::vector<std::pair<image_t, size_t>>& num_keypoints_of_image,
+    const TrackBuilderOptions& options)
+    : options_(options) {
+  VIOSFM_CHECK(options_.Check()) << options_.Validate();
+  for (const auto& [image_id, num_keypoints] : num_keypoints_of_image) {
+    VIOSFM_CHECK(image_index_.emplace(image_id, node_of_keypoint_.size()).second)
+        << "image " << image_id << " listed twice";
+    node_of_keypoint_.emplace_back(num_keypoints, kNoNode);
   }
+}
+
+uint32_t IncrementalTrackBuilder::NodeOf(image_t image_id, point2D_t point2D_idx) {
+  uint32_t& node = node_of_keypoint_[image_index_.at(image_id)][point2D_idx];
+  if (node == kNoNode) {
+    VIOSFM_CHECK_LT(keys_.size(), size_t{kNoNode}) << "too many matched keypoints";
+    node = static_cast<uint32_t>(keys_.size());
+    keys_.push_back(MakeKey(image_id, point2D_idx));
+    parent_.push_back(node);
+    components_[node].nodes = {node};
+  }
+  return node;
+}
+
+uint32_t IncrementalTrackBuilder::Find(uint32_t node) {
+  while (parent_[node] != node) {
+    parent_[node] = parent_[parent_[node]];
+    node = parent_[node];
+  }
+  return node;
+}
+
+void IncrementalTrackBuilder::AddPairs(const std::vector<ImagePairMatches>& pair_matches) {
+  std::vector<uint32_t> touched;
+  for (const ImagePairMatches& pair : pair_matches) {
+    ++num_pairs_;
+    num_input_matches_ += pair.matches.size();
+    if (pair.image_id1 == pair.image_id2) {
+      num_self_matches_ += pair.matches.size();
+      continue;
+    }
+    const auto it1 = image_index_.find(pair.image_id1);
+    const auto it2 = image_index_.find(pair.image_id2);
+    if (it1 == image_index_.end() || it2 == image_index_.end()) {
+      throw InputError("tracks: pair (images " + std::to_string(pair.image_id1) + ", " +
+                       std::to_string(pair.image_id2) + ") names an unknown image");
+    }
+    const size_t size1 = node_of_keypoint_[it1->second].size();
+    const size_t size2 = node_of_keypoint_[it2->second].size();
+    for (const FeatureMatch& match : pair.matches) {
+      if (match.point2D_idx1 >= size1 || match.point2D_idx2 >= size2) {
+        throw InputError("tracks: pair (images " + std::to_string(pair.image_id1) + ", " +
+                         std::to_string(pair.image_id2) + ") matches a keypoint beyond its image's");
+      }
+      const uint32_t u = NodeOf(pair.image_id1, match.point2D_idx1);
+      const uint32_t v = NodeOf(pair.image_id2, match.point2D_idx2);
+      uint32_t root_u = Find(u);
+      uint32_t root_v = Find(v);
+      if (root_u != root_v) {
+        // The smaller component goes into the larger.
+        if (components_.at(root_u).nodes.size() < components_.at(root_v).nodes.size()) {
+          std::swap(root_u, root_v);
+        }
+        Component& into = components_.at(root_u);
+        Component& from = components_.at(root_v);
+        into.nodes.insert(into.nodes.end(), from.nodes.begin(), from.nodes.end());
+        into.edges.insert(into.edges.end(), from.edges.begin(), from.edges.end());
+        components_.erase(root_v);
+        parent_[root_v] = root_u;
+      }
+      components_.at(root_u).edges.emplace_back(u, v);
+      touched.push_back(root_u);
+    }
+  }
+  for (uint32_t& root : touched) root = Find(root);
+  std::sort(touched.begin(), touched.end());
+  touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+  for (const uint32_t root : touched) Build(&components_.at(root));
+}
+
+void IncrementalTrackBuilder::Build(Component* component) const {
+  // Nodes by key, and each node's place in that order.
+  std::vector<std::pair<uint64_t, uint32_t>> by_key;
+  by_key.reserve(component->nodes.size());
+  for (const uint32_t node : component->nodes) by_key.emplace_back(keys_[node], node);
+  std::sort(by_key.begin(), by_key.end());
+  std::vector<NodeKey> keys;
+  keys.reserve(by_key.size());
+  for (const auto& entry : by_key) keys.push_back(entry.first);
+  // The edges as pairs of key indices, smaller first, unique (a match given
+  // twice counts once).
+  std::vector<std::pair<uint32_t, size_t>> local_of_node;
+  local_of_node.reserve(by_key.size());
+  for (size_t i = 0; i < by_key.size(); ++i) local_of_node.emplace_back(by_key[i].second, i);
+  std::sort(local_of_node.begin(), local_of_node.end());
+  const auto local = [&](uint32_t node) {
+    return std::lower_bound(local_of_node.begin(), local_of_node.end(),
+                            std::make_pair(node, size_t{0}))
+        ->second;
+  };
+  std::vector<std::pair<size_t, size_t>> local_edges;
+  local_edges.reserve(component->edges.size());
+  for (const auto& [u, v] : component->edges) {
+    const size_t lu = local(u);
+    const size_t lv = local(v);
+    local_edges.emplace_back(std::min(lu, lv), std::max(lu, lv));
+  }
+  std::sort(local_edges.begin(), local_edges.end());
+  local_edges.erase(std::unique(local_edges.begin(), local_edges.end()), local_edges.end());
+  component->edges.clear();
+  for (const auto& [lu, lv] : local_edges) {
+    component->edges.emplace_back(by_key[lu].second, by_key[lv].second);
+  }
+  component->edges.shrink_to_fit();
+
+  component->inconsistent = false;
+  for (size_t k = 1; k < keys.size(); ++k) {
+    if (KeyImage(keys[k]) == KeyImage(keys[k - 1])) {
+      component->inconsistent = true;
+      break;
+    }
+  }
+  component->pieces.clear();
+  component->num_refused_matches = 0;
+  if (!component->inconsistent) {
+    component->pieces.push_back(std::move(keys));
+  } else if (options_.conflict_policy == TrackConflictPolicy::kSplit) {
+    for (const std::vector<size_t>& piece :
+         SplitComponent(keys, local_edges, &component->num_refused_matches)) {
+      std::vector<uint64_t> piece_keys;
+      piece_keys.reserve(piece.size());
+      for (const size_t i : piece) piece_keys.push_back(keys[i]);
+      component->pieces.push_back(std::move(piece_keys));
+    }
+  }
+}
+
+TrackBuildResult IncrementalTrackBuilder::Result() const {
+  TrackBuildResult result;
+  TrackStatistics& stats = result.statistics;
+  stats.num_pairs = num_pairs_;
+  stats.num_input_matches = num_input_matches_;
+  stats.num_self_matches = num_self_matches_;
+  for (const auto& [root, component] : components_) {
+    ++stats.num_components;
+    stats.num_unique_matches += component.edges.size();
+    if (component.inconsistent) {
+      ++stats.num_inconsistent_components;
+      if (options_.conflict_policy == TrackConflictPolicy::kDrop) {
+        ++stats.num_dropped_inconsistent;
+        continue;
+      }
+      stats.num_refused_matches += component.num_refused_matches;
+      stats.num_split_pieces += component.pieces.size();
+    }
+    for (const std::vector<uint64_t>& piece : component.pieces) {
+      if (piece.size() < static_cast<size_t>(options_.min_track_length)) {
+        ++stats.num_dropped_short;
+        continue;
+      }
+      Track track;
+      track.elements.reserve(piece.size());
+      for (const uint64_t key : piece) track.elements.push_back(KeyElement(key));
+      result.tracks.push_back(std::move(track));
+    }
+  }
+  SortTracksAndCount(&result);
   return result;
 }
 

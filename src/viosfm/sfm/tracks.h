@@ -25,7 +25,10 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <string>
+#include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "viosfm/scene/features.h"
@@ -118,5 +121,49 @@ struct TrackBuildResult {
 // Builds the tracks of the matches (see the top of this file). CHECKs options.
 TrackBuildResult BuildTracks(const std::vector<ImagePairMatches>& pair_matches,
                              const TrackBuilderOptions& options = {});
+
+// The tracks of matches that arrive a few pairs at a time (the mapper beside
+// the verification, verified_pair_stream.h): after each AddPairs, Result()
+// is BuildTracks of every pair added so far, track for track and figure for
+// figure. Only the connected components the new matches touch are built
+// again (the result of a component depends on its matches alone), so
+// adding the pairs of a batch costs what their components hold, not what
+// every pair does.
+class IncrementalTrackBuilder {
+ public:
+  // The images the pairs may name, with their keypoint counts (a match
+  // indexing a keypoint beyond its image's count, or an unknown image:
+  // InputError). CHECKs options.
+  IncrementalTrackBuilder(const std::vector<std::pair<image_t, size_t>>& num_keypoints_of_image,
+                          const TrackBuilderOptions& options = {});
+
+  void AddPairs(const std::vector<ImagePairMatches>& pair_matches);
+  TrackBuildResult Result() const;
+
+ private:
+  struct Component {
+    std::vector<uint32_t> nodes;
+    std::vector<std::pair<uint32_t, uint32_t>> edges;  // node ids, unique after a build
+    // The component's tracks (or pieces) as built, any length, each sorted
+    // by key.
+    std::vector<std::vector<uint64_t>> pieces;
+    bool inconsistent = false;
+    size_t num_refused_matches = 0;
+  };
+  uint32_t NodeOf(image_t image_id, point2D_t point2D_idx);
+  uint32_t Find(uint32_t node);
+  void Build(Component* component) const;
+
+  TrackBuilderOptions options_;
+  std::unordered_map<image_t, size_t> image_index_;
+  // Per image, the node id of each keypoint (kNoNode until matched).
+  std::vector<std::vector<uint32_t>> node_of_keypoint_;
+  std::vector<uint64_t> keys_;      // per node: image id << 32 | point2D_idx
+  std::vector<uint32_t> parent_;    // union-find over nodes
+  std::unordered_map<uint32_t, Component> components_;  // by root
+  size_t num_pairs_ = 0;
+  size_t num_input_matches_ = 0;
+  size_t num_self_matches_ = 0;
+};
 
 }  // namespace viosfm

@@ -194,6 +194,90 @@ TEST(TracksTest, OutputDoesNotDependOnPairOrderOrOrientation) {
   }
 }
 
+// Every figure of a track build, compared.
+void ExpectSameStatistics(const TrackStatistics& a, const TrackStatistics& b) {
+  EXPECT_EQ(a.num_pairs, b.num_pairs);
+  EXPECT_EQ(a.num_input_matches, b.num_input_matches);
+  EXPECT_EQ(a.num_unique_matches, b.num_unique_matches);
+  EXPECT_EQ(a.num_self_matches, b.num_self_matches);
+  EXPECT_EQ(a.num_components, b.num_components);
+  EXPECT_EQ(a.num_inconsistent_components, b.num_inconsistent_components);
+  EXPECT_EQ(a.num_refused_matches, b.num_refused_matches);
+  EXPECT_EQ(a.num_split_pieces, b.num_split_pieces);
+  EXPECT_EQ(a.num_dropped_inconsistent, b.num_dropped_inconsistent);
+  EXPECT_EQ(a.num_dropped_short, b.num_dropped_short);
+  EXPECT_EQ(a.num_tracks, b.num_tracks);
+  EXPECT_EQ(a.num_observations, b.num_observations);
+  EXPECT_EQ(a.length_histogram, b.length_histogram);
+}
+
+// The incremental builder, given the pairs a few at a time in a random
+// order (with wrong matches that split components, a pair given twice and
+// a self-match), gives after every addition what BuildTracks gives of every
+// pair added so far, with either conflict policy and a minimum length.
+TEST(TracksTest, IncrementalBuildIsTheBuildOfEveryPairSoFar) {
+  Random random(11);
+  constexpr int kNumImages = 30;
+  constexpr int kNumPoints = 80;
+  std::vector<std::vector<point2D_t>> keypoint(kNumPoints, std::vector<point2D_t>(kNumImages));
+  for (int i = 0; i < kNumImages; ++i) {
+    std::vector<point2D_t> indices(kNumPoints);
+    for (int j = 0; j < kNumPoints; ++j) indices[j] = static_cast<point2D_t>(j);
+    std::shuffle(indices.begin(), indices.end(), random.engine());
+    for (int j = 0; j < kNumPoints; ++j) keypoint[j][i] = indices[j];
+  }
+  std::vector<ImagePairMatches> pairs;
+  for (image_t a = 0; a < kNumImages; ++a) {
+    for (image_t b = a + 1; b < kNumImages && b <= a + 4; ++b) {
+      ImagePairMatches pair{a + 1, b + 1, {}};
+      for (int j = 0; j < kNumPoints; ++j) {
+        // Each point seen in a stretch of images; wrong matches now and then.
+        if ((j + a) % 9 == 0) continue;
+        pair.matches.push_back({keypoint[j][a], keypoint[j][b]});
+      }
+      if (a % 6 == 0 && b == a + 2) {
+        pair.matches.push_back({static_cast<point2D_t>(random.UniformInt(0, kNumPoints - 1)),
+                                static_cast<point2D_t>(random.UniformInt(0, kNumPoints - 1))});
+      }
+      pairs.push_back(pair);
+    }
+  }
+  pairs.push_back(pairs[5]);                  // a pair given twice
+  pairs.push_back(Pair(3, 3, {{1, 2}}));      // a self-match
+  std::shuffle(pairs.begin(), pairs.end(), random.engine());
+  std::vector<std::pair<image_t, size_t>> num_keypoints;
+  for (image_t i = 1; i <= kNumImages; ++i) num_keypoints.emplace_back(i, kNumPoints);
+
+  for (const TrackConflictPolicy policy : {TrackConflictPolicy::kSplit, TrackConflictPolicy::kDrop}) {
+    TrackBuilderOptions options;
+    options.conflict_policy = policy;
+    options.min_track_length = 3;
+    IncrementalTrackBuilder builder(num_keypoints, options);
+    std::vector<ImagePairMatches> so_far;
+    for (size_t begin = 0; begin < pairs.size();) {
+      const size_t end = std::min(pairs.size(), begin + 1 + static_cast<size_t>(random.UniformInt(0, 9)));
+      const std::vector<ImagePairMatches> handful(pairs.begin() + static_cast<ptrdiff_t>(begin),
+                                                  pairs.begin() + static_cast<ptrdiff_t>(end));
+      builder.AddPairs(handful);
+      so_far.insert(so_far.end(), handful.begin(), handful.end());
+      const TrackBuildResult reference = BuildTracks(so_far, options);
+      const TrackBuildResult result = builder.Result();
+      ExpectSameTracks(result.tracks, reference.tracks);
+      ExpectSameStatistics(result.statistics, reference.statistics);
+      begin = end;
+    }
+    const TrackBuildResult whole = BuildTracks(pairs, options);
+    EXPECT_GT(whole.statistics.num_inconsistent_components, 0u);
+    EXPECT_GT(whole.statistics.num_tracks, 0u);
+  }
+}
+
+TEST(TracksTest, IncrementalBuildRefusesBadPairs) {
+  IncrementalTrackBuilder builder({{1, 10}, {2, 5}});
+  EXPECT_THROW(builder.AddPairs({Pair(1, 7, {{0, 0}})}), InputError);
+  EXPECT_THROW(builder.AddPairs({Pair(1, 2, {{9, 5}})}), InputError);
+}
+
 TEST(TracksTest, OptionsValidate) {
   TrackBuilderOptions options;
   EXPECT_TRUE(options.Check());

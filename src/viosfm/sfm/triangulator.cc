@@ -298,4 +298,57 @@ TriangulationStatistics TriangulateReconstruction(Reconstruction* reconstruction
   return stats;
 }
 
+std::vector<point3D_t> MergeTrackPoints(Reconstruction* reconstruction,
+                                        const std::vector<Track>& tracks,
+                                        const TriangulationOptions& options) {
+  VIOSFM_CHECK(reconstruction != nullptr);
+  VIOSFM_CHECK(options.Check()) << options.Validate();
+  std::vector<point3D_t> merged_into;
+  std::vector<std::pair<point3D_t, size_t>> point_counts;
+  for (const Track& track : tracks) {
+    point_counts.clear();
+    for (const TrackElement& element : track.elements) {
+      if (!reconstruction->ExistsImage(element.image_id)) continue;
+      const Image& image = reconstruction->GetImage(element.image_id);
+      if (element.point2D_idx >= image.points2D.size()) continue;
+      const point3D_t point3D_id = image.points2D[element.point2D_idx].point3D_id;
+      if (point3D_id == kInvalidPoint3DId) continue;
+      auto it = std::find_if(point_counts.begin(), point_counts.end(),
+                             [point3D_id](const auto& entry) { return entry.first == point3D_id; });
+      if (it == point_counts.end()) {
+        point_counts.emplace_back(point3D_id, 1);
+      } else {
+        ++it->second;
+      }
+    }
+    if (point_counts.size() < 2) continue;
+    std::sort(point_counts.begin(), point_counts.end(), [](const auto& a, const auto& b) {
+      return a.second != b.second ? a.second > b.second : a.first < b.first;
+    });
+    const point3D_t into = point_counts.front().first;
+    for (size_t k = 1; k < point_counts.size(); ++k) {
+      const point3D_t from = point_counts[k].first;
+      const Point3D& target = reconstruction->GetPoint3D(into);
+      const std::vector<TrackElement> moved = reconstruction->GetPoint3D(from).track;
+      const bool fits = std::all_of(moved.begin(), moved.end(), [&](const TrackElement& element) {
+        const bool image_seen =
+            std::any_of(target.track.begin(), target.track.end(),
+                        [&](const TrackElement& e) { return e.image_id == element.image_id; });
+        if (image_seen) return false;
+        const Image& image = reconstruction->GetImage(element.image_id);
+        if ((image.cam_from_world * target.xyz).z() <= 0.0) return false;
+        return ReprojectionErrorPx(reconstruction->GetCamera(image.camera_id),
+                                   image.cam_from_world, target.xyz,
+                                   image.points2D[element.point2D_idx].xy) <=
+               options.max_reprojection_error_px;
+      });
+      if (!fits) continue;
+      reconstruction->DeletePoint3D(from);
+      for (const TrackElement& element : moved) reconstruction->AddObservation(into, element);
+      merged_into.push_back(into);
+    }
+  }
+  return merged_into;
+}
+
 }  // namespace viosfm

@@ -120,4 +120,15 @@ TriangulationStatistics TriangulateReconstruction(Reconstruction* reconstruction
                                                   const std::vector<image_t>& image_ids,
                                                   const TriangulationOptions& options = {});
 
+// Joins the points a track's observations are split between (points made
+// from parts of a track before the matches that join them were known, as
+// when the mapper runs beside the verification): each other point of the
+// track goes into the point the track observes most often (smallest id on
+// ties), when none of its observations is in an image that point is seen
+// in already and each reprojects the point in front of its camera within
+// options.max_reprojection_error_px; otherwise it stays on its own.
+// Returns the points others were joined into, once per join.
+std::vector<point3D_t> MergeTrackPoints(Reconstruction* reconstruction, const std::vector<Track>& tracks,
+                        const TriangulationOptions& options = {});
+
 }  // namespace viosfm

@@ -255,5 +255,48 @@ TEST(TriangulatorTest, TriangulateReconstructionSkipsBadObservations) {
   EXPECT_TRUE(reconstruction.GetImage(9).points2D[1].HasPoint3D());
 }
 
+// Points made from the two halves of their tracks (images 1-5 and 6-10,
+// before the matches between images 5, 6 and 7 were known) are joined
+// once the whole tracks are known; a half that does not fit the other's
+// point stays on its own.
+TEST(TriangulatorTest, MergeTrackPointsJoinsTheHalvesOfATrack) {
+  const SyntheticScene scene = MakeSyntheticScene(10, 40, 10);
+  Reconstruction reconstruction = MakeSyntheticReconstruction(scene, 10);
+  std::vector<ImagePairMatches> halves;
+  for (image_t a = 1; a <= 10; ++a) {
+    for (image_t b = a + 1; b <= std::min<image_t>(10, a + 2); ++b) {
+      if ((a <= 5) != (b <= 5)) continue;
+      ImagePairMatches pair{a, b, {}};
+      for (size_t j = 0; j < scene.points.size(); ++j) {
+        pair.matches.push_back({static_cast<point2D_t>(j), static_cast<point2D_t>(j)});
+      }
+      halves.push_back(std::move(pair));
+    }
+  }
+  TriangulateReconstruction(&reconstruction, BuildTracks(halves).tracks,
+                            reconstruction.RegImageIds());
+  ASSERT_EQ(reconstruction.NumPoints3D(), 80u);
+  // Point 0's first half made wrong: its other half cannot join it.
+  const point3D_t wrong = reconstruction.GetImage(1).points2D[0].point3D_id;
+  reconstruction.GetPoint3D(wrong).xyz += Eigen::Vector3d(0.3, 0.0, 0.0);
+
+  const std::vector<point3D_t> merged_into =
+      MergeTrackPoints(&reconstruction, SceneTracks(scene));
+  EXPECT_EQ(merged_into.size(), 39u);
+  EXPECT_EQ(reconstruction.NumPoints3D(), 41u);
+  for (size_t j = 1; j < scene.points.size(); ++j) {
+    const point3D_t id = reconstruction.GetImage(1).points2D[j].point3D_id;
+    const Point3D& point3D = reconstruction.GetPoint3D(id);
+    EXPECT_EQ(point3D.track.size(), 10u);
+    EXPECT_EQ(reconstruction.GetImage(10).points2D[j].point3D_id, id);
+    EXPECT_LT((point3D.xyz - scene.points[j]).norm(), 1e-8);
+  }
+  EXPECT_NE(reconstruction.GetImage(10).points2D[0].point3D_id, wrong);
+  EXPECT_EQ(reconstruction.GetPoint3D(wrong).track.size(), 5u);
+  EXPECT_EQ(reconstruction.ComputeNumObservations(), 400u);
+  // Nothing left to join.
+  EXPECT_EQ(MergeTrackPoints(&reconstruction, SceneTracks(scene)).size(), 0u);
+}
+
 }  // namespace
 }  // namespace viosfm
