@@ -296,10 +296,10 @@ PipelineSummary RunPipeline(const PipelineOptions& requested) {
     streamed.emplace(input);
     PipelineOptions mapping_options = options;
     mapping_options.show_progress = false;  // the verification's progress bar is shown
-    streamed->result = std::async(std::launch::async, [&input, &sequence, &vio, mapping_options,
-                                                       &summary, &streamed] {
-      return MapStage(input, sequence, vio, mapping_options, &summary, &streamed->stream);
-    });
+    streamed->result = std::async(
+        std::launch::async, [&input, &sequence, &vio, mapping_options, &summary, &streamed] {
+          return MapStage(input, sequence, vio, mapping_options, &summary, &streamed->stream);
+        });
     VerificationResult result = VerifyPairsStage(
         frames, vio, options, &features.database,
         [&](std::vector<ImagePairMatches> accepted, timestamp_ns_t pending_from_ns) {

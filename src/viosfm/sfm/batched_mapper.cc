@@ -3,10 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
+#include <iterator>
 #include <limits>
 #include <memory>
 #include <optional>
-#include <iterator>
 #include <set>
 #include <sstream>
 #include <unordered_map>
@@ -241,7 +241,8 @@ void CompensateRollingShutterMotion(Reconstruction* reconstruction,
 void ValidateVerifiedPairs(const std::vector<MapperImage>& images,
                            const std::vector<ImagePairMatches>& pairs, size_t first_label) {
   std::unordered_map<image_t, size_t> keypoints_of_image;
-  for (const MapperImage& image : images) keypoints_of_image[image.image_id] = image.keypoints.size();
+  for (const MapperImage& image : images)
+    keypoints_of_image[image.image_id] = image.keypoints.size();
   for (size_t p = 0; p < pairs.size(); ++p) {
     const ImagePairMatches& pair = pairs[p];
     const auto it1 = keypoints_of_image.find(pair.image_id1);
@@ -315,8 +316,9 @@ std::string BatchedMapperSummary::ToString() const {
       << "  relative-pose priors: " << num_consecutive_priors << " consecutive, "
       << num_bridging_priors << " bridging, " << num_gyro_priors << " from the gyro\n"
       << "  " << tracks.Summary();
-  if (num_points_merged > 0) {
-    out << "; " << num_points_merged << " points joined as later pairs joined their tracks";
+  if (num_points_merged > 0 || num_observations_split_off > 0) {
+    out << "; as later pairs changed the tracks, " << num_points_merged << " points joined, "
+        << num_observations_split_off << " observations split off";
   }
   if (!final_ba.termination.empty()) out << "\n  final " << final_ba.ToString();
   return out.str();
@@ -990,7 +992,10 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
       build_tracks(taken);
       std::move(taken.begin(), taken.end(), std::back_inserter(streamed_pairs));
       build_priors();
-      // Points made from parts of tracks the new pairs joined.
+      // Points as the tracks are now: split where the new pairs split a
+      // track (a conflict they revealed), joined where they joined two.
+      summary.num_observations_split_off +=
+          static_cast<int>(SplitPointsByTracks(&reconstruction, tracks));
       const std::vector<point3D_t> merged =
           MergeTrackPoints(&reconstruction, tracks, options.triangulation);
       summary.num_points_merged += static_cast<int>(merged.size());

@@ -263,8 +263,11 @@ struct BatchedMapperSummary {
   int num_vio_segments = 0;         // VIO segments among the input frames
   int num_vio_segments_joined = 0;  // of those, with a posed frame
   // With the pairs streamed: points joined because later pairs joined
-  // their tracks (triangulator.h MergeTrackPoints).
+  // their tracks, and observations taken off points because later pairs
+  // split their tracks (triangulator.h MergeTrackPoints,
+  // SplitPointsByTracks).
   int num_points_merged = 0;
+  int num_observations_split_off = 0;
   double seconds_tracks = 0.0;
   double seconds_total = 0.0;
   std::string ToString() const;  // a few lines for the log

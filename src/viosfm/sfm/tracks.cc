@@ -388,7 +388,8 @@ void IncrementalTrackBuilder::AddPairs(const std::vector<ImagePairMatches>& pair
     for (const FeatureMatch& match : pair.matches) {
       if (match.point2D_idx1 >= size1 || match.point2D_idx2 >= size2) {
         throw InputError("tracks: pair (images " + std::to_string(pair.image_id1) + ", " +
-                         std::to_string(pair.image_id2) + ") matches a keypoint beyond its image's");
+                         std::to_string(pair.image_id2) +
+                         ") matches a keypoint beyond its image's");
       }
       const uint32_t u = NodeOf(pair.image_id1, match.point2D_idx1);
       const uint32_t v = NodeOf(pair.image_id2, match.point2D_idx2);

@@ -158,8 +158,8 @@ class IncrementalTrackBuilder {
   std::unordered_map<image_t, size_t> image_index_;
   // Per image, the node id of each keypoint (kNoNode until matched).
   std::vector<std::vector<uint32_t>> node_of_keypoint_;
-  std::vector<uint64_t> keys_;      // per node: image id << 32 | point2D_idx
-  std::vector<uint32_t> parent_;    // union-find over nodes
+  std::vector<uint64_t> keys_;                          // per node: image id << 32 | point2D_idx
+  std::vector<uint32_t> parent_;                        // union-find over nodes
   std::unordered_map<uint32_t, Component> components_;  // by root
   size_t num_pairs_ = 0;
   size_t num_input_matches_ = 0;

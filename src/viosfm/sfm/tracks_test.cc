@@ -242,20 +242,22 @@ TEST(TracksTest, IncrementalBuildIsTheBuildOfEveryPairSoFar) {
       pairs.push_back(pair);
     }
   }
-  pairs.push_back(pairs[5]);                  // a pair given twice
-  pairs.push_back(Pair(3, 3, {{1, 2}}));      // a self-match
+  pairs.push_back(pairs[5]);              // a pair given twice
+  pairs.push_back(Pair(3, 3, {{1, 2}}));  // a self-match
   std::shuffle(pairs.begin(), pairs.end(), random.engine());
   std::vector<std::pair<image_t, size_t>> num_keypoints;
   for (image_t i = 1; i <= kNumImages; ++i) num_keypoints.emplace_back(i, kNumPoints);
 
-  for (const TrackConflictPolicy policy : {TrackConflictPolicy::kSplit, TrackConflictPolicy::kDrop}) {
+  for (const TrackConflictPolicy policy :
+       {TrackConflictPolicy::kSplit, TrackConflictPolicy::kDrop}) {
     TrackBuilderOptions options;
     options.conflict_policy = policy;
     options.min_track_length = 3;
     IncrementalTrackBuilder builder(num_keypoints, options);
     std::vector<ImagePairMatches> so_far;
     for (size_t begin = 0; begin < pairs.size();) {
-      const size_t end = std::min(pairs.size(), begin + 1 + static_cast<size_t>(random.UniformInt(0, 9)));
+      const size_t end =
+          std::min(pairs.size(), begin + 1 + static_cast<size_t>(random.UniformInt(0, 9)));
       const std::vector<ImagePairMatches> handful(pairs.begin() + static_cast<ptrdiff_t>(begin),
                                                   pairs.begin() + static_cast<ptrdiff_t>(end));
       builder.AddPairs(handful);

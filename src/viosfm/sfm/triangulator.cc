@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <limits>
 #include <sstream>
+#include <unordered_map>
 #include <utility>
 
 #include "viosfm/geometry/triangulation.h"
@@ -337,9 +338,8 @@ std::vector<point3D_t> MergeTrackPoints(Reconstruction* reconstruction,
         if (image_seen) return false;
         const Image& image = reconstruction->GetImage(element.image_id);
         if ((image.cam_from_world * target.xyz).z() <= 0.0) return false;
-        return ReprojectionErrorPx(reconstruction->GetCamera(image.camera_id),
-                                   image.cam_from_world, target.xyz,
-                                   image.points2D[element.point2D_idx].xy) <=
+        return ReprojectionErrorPx(reconstruction->GetCamera(image.camera_id), image.cam_from_world,
+                                   target.xyz, image.points2D[element.point2D_idx].xy) <=
                options.max_reprojection_error_px;
       });
       if (!fits) continue;
@@ -349,6 +349,59 @@ std::vector<point3D_t> MergeTrackPoints(Reconstruction* reconstruction,
     }
   }
   return merged_into;
+}
+
+size_t SplitPointsByTracks(Reconstruction* reconstruction, const std::vector<Track>& tracks) {
+  VIOSFM_CHECK(reconstruction != nullptr);
+  constexpr size_t kNoTrack = SIZE_MAX;
+  // The track of every keypoint of the model's images.
+  std::unordered_map<image_t, std::vector<size_t>> track_of_keypoint;
+  for (const image_t image_id : reconstruction->ImageIds()) {
+    track_of_keypoint[image_id].assign(reconstruction->GetImage(image_id).points2D.size(),
+                                       kNoTrack);
+  }
+  for (size_t t = 0; t < tracks.size(); ++t) {
+    for (const TrackElement& element : tracks[t].elements) {
+      const auto it = track_of_keypoint.find(element.image_id);
+      if (it != track_of_keypoint.end() && element.point2D_idx < it->second.size()) {
+        it->second[element.point2D_idx] = t;
+      }
+    }
+  }
+  size_t num_removed = 0;
+  std::vector<std::pair<size_t, size_t>> track_counts;
+  for (const point3D_t point3D_id : reconstruction->Point3DIds()) {
+    const std::vector<TrackElement> observations = reconstruction->GetPoint3D(point3D_id).track;
+    track_counts.clear();
+    for (const TrackElement& element : observations) {
+      const size_t t = track_of_keypoint.at(element.image_id)[element.point2D_idx];
+      auto it = std::find_if(track_counts.begin(), track_counts.end(),
+                             [t](const auto& entry) { return entry.first == t; });
+      if (it == track_counts.end()) {
+        track_counts.emplace_back(t, 1);
+      } else {
+        ++it->second;
+      }
+    }
+    if (track_counts.size() == 1 && track_counts.front().first != kNoTrack) continue;
+    size_t keep = kNoTrack;
+    size_t best = 0;
+    for (const auto& [t, count] : track_counts) {
+      if (t != kNoTrack && (count > best || (count == best && t < keep))) {
+        keep = t;
+        best = count;
+      }
+    }
+    for (const TrackElement& element : observations) {
+      if (track_of_keypoint.at(element.image_id)[element.point2D_idx] == keep) continue;
+      // Deleting the last but one observation deletes the point: the rest
+      // is then unlinked already.
+      if (!reconstruction->ExistsPoint3D(point3D_id)) break;
+      reconstruction->DeleteObservation(element.image_id, element.point2D_idx);
+      ++num_removed;
+    }
+  }
+  return num_removed;
 }
 
 }  // namespace viosfm

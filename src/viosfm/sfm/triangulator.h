@@ -120,6 +120,14 @@ TriangulationStatistics TriangulateReconstruction(Reconstruction* reconstruction
                                                   const std::vector<image_t>& image_ids,
                                                   const TriangulationOptions& options = {});
 
+// Keeps each point within one track: a point whose observations lie in
+// several of `tracks` (made from a part of a track that later matches split
+// as a conflict, tracks.h) keeps those of the track holding most of them
+// (the smallest track index on ties) and loses the others, as it loses any
+// observation no track holds; a point left with fewer than two is deleted.
+// Returns the observations removed.
+size_t SplitPointsByTracks(Reconstruction* reconstruction, const std::vector<Track>& tracks);
+
 // Joins the points a track's observations are split between (points made
 // from parts of a track before the matches that join them were known, as
 // when the mapper runs beside the verification): each other point of the
@@ -128,7 +136,8 @@ TriangulationStatistics TriangulateReconstruction(Reconstruction* reconstruction
 // in already and each reprojects the point in front of its camera within
 // options.max_reprojection_error_px; otherwise it stays on its own.
 // Returns the points others were joined into, once per join.
-std::vector<point3D_t> MergeTrackPoints(Reconstruction* reconstruction, const std::vector<Track>& tracks,
-                        const TriangulationOptions& options = {});
+std::vector<point3D_t> MergeTrackPoints(Reconstruction* reconstruction,
+                                        const std::vector<Track>& tracks,
+                                        const TriangulationOptions& options = {});
 
 }  // namespace viosfm

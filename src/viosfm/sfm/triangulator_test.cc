@@ -280,8 +280,7 @@ TEST(TriangulatorTest, MergeTrackPointsJoinsTheHalvesOfATrack) {
   const point3D_t wrong = reconstruction.GetImage(1).points2D[0].point3D_id;
   reconstruction.GetPoint3D(wrong).xyz += Eigen::Vector3d(0.3, 0.0, 0.0);
 
-  const std::vector<point3D_t> merged_into =
-      MergeTrackPoints(&reconstruction, SceneTracks(scene));
+  const std::vector<point3D_t> merged_into = MergeTrackPoints(&reconstruction, SceneTracks(scene));
   EXPECT_EQ(merged_into.size(), 39u);
   EXPECT_EQ(reconstruction.NumPoints3D(), 41u);
   for (size_t j = 1; j < scene.points.size(); ++j) {
@@ -296,6 +295,38 @@ TEST(TriangulatorTest, MergeTrackPointsJoinsTheHalvesOfATrack) {
   EXPECT_EQ(reconstruction.ComputeNumObservations(), 400u);
   // Nothing left to join.
   EXPECT_EQ(MergeTrackPoints(&reconstruction, SceneTracks(scene)).size(), 0u);
+}
+
+// Points made from whole tracks, which later matches split into images 1-6
+// and 7-10: each keeps its observations in the larger part; an observation
+// no track holds goes too.
+TEST(TriangulatorTest, SplitPointsByTracksKeepsEachPointWithinOneTrack) {
+  const SyntheticScene scene = MakeSyntheticScene(10, 40, 11);
+  Reconstruction reconstruction = MakeSyntheticReconstruction(scene, 10);
+  TriangulateReconstruction(&reconstruction, SceneTracks(scene), reconstruction.RegImageIds());
+  ASSERT_EQ(reconstruction.NumPoints3D(), 40u);
+  std::vector<Track> split;
+  for (size_t j = 0; j < scene.points.size(); ++j) {
+    Track first;
+    Track second;
+    for (image_t id = 1; id <= 10; ++id) {
+      // Point 0's keypoint of image 3 is in no track.
+      if (j == 0 && id == 3) continue;
+      (id <= 6 ? first : second).elements.push_back({id, static_cast<point2D_t>(j)});
+    }
+    split.push_back(first);
+    split.push_back(second);
+  }
+  EXPECT_EQ(SplitPointsByTracks(&reconstruction, split), 40u * 4 + 1);
+  EXPECT_EQ(reconstruction.NumPoints3D(), 40u);
+  for (size_t j = 0; j < scene.points.size(); ++j) {
+    const point3D_t id = reconstruction.GetImage(1).points2D[j].point3D_id;
+    EXPECT_EQ(reconstruction.GetPoint3D(id).track.size(), j == 0 ? 5u : 6u);
+    EXPECT_FALSE(reconstruction.GetImage(7).points2D[j].HasPoint3D());
+  }
+  EXPECT_FALSE(reconstruction.GetImage(3).points2D[0].HasPoint3D());
+  // Consistent now: nothing more to split.
+  EXPECT_EQ(SplitPointsByTracks(&reconstruction, split), 0u);
 }
 
 }  // namespace

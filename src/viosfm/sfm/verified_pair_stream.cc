@@ -27,10 +27,10 @@ void VerifiedPairStream::Add(std::vector<ImagePairMatches> pairs, timestamp_ns_t
     const auto it1 = index_of_image_.find(pair.image_id1);
     const auto it2 = index_of_image_.find(pair.image_id2);
     if (it1 == index_of_image_.end() || it2 == index_of_image_.end()) {
-      throw InputError("verified pair (images " + std::to_string(pair.image_id1) + ", " +
-                       std::to_string(pair.image_id2) + ") refers to unknown image id " +
-                       std::to_string(it1 == index_of_image_.end() ? pair.image_id1
-                                                                   : pair.image_id2));
+      throw InputError(
+          "verified pair (images " + std::to_string(pair.image_id1) + ", " +
+          std::to_string(pair.image_id2) + ") refers to unknown image id " +
+          std::to_string(it1 == index_of_image_.end() ? pair.image_id1 : pair.image_id2));
     }
     first_frames.push_back(std::min(it1->second, it2->second));
   }

@@ -30,7 +30,9 @@ VerifiedPairStream MakeStream(size_t n) {
   return VerifiedPairStream(ids, stamps);
 }
 
-timestamp_ns_t StampOf(image_t id) { return static_cast<timestamp_ns_t>(id - 1) * 100'000'000; }
+timestamp_ns_t StampOf(image_t id) {
+  return static_cast<timestamp_ns_t>(id - 1) * 100'000'000;
+}
 
 ImagePairMatches Pair(image_t a, image_t b, size_t num_matches = 1) {
   ImagePairMatches pair{a, b, {}};
@@ -127,9 +129,8 @@ TEST(VerifiedPairStream, EveryPairTakenOnceWithItsEarlierFramesBatch) {
     for (const ImagePairMatches& pair : taken) got.emplace(pair.image_id1, pair.image_id2);
     EXPECT_EQ(got, expected) << "frames up to " << batch_end;
     // By earlier frame.
-    EXPECT_TRUE(std::is_sorted(taken.begin(), taken.end(), [&](const auto& x, const auto& y) {
-      return first(x) < first(y);
-    }));
+    EXPECT_TRUE(std::is_sorted(taken.begin(), taken.end(),
+                               [&](const auto& x, const auto& y) { return first(x) < first(y); }));
     num_taken += taken.size();
     batch_begin = batch_end;
   }
