@@ -1,5 +1,7 @@
 #include "viosfm/pipeline/pipeline_options.h"
 
+#include <algorithm>
+
 #include "viosfm/util/errors.h"
 #include "viosfm/util/string_util.h"
 
@@ -91,6 +93,9 @@ VerificationOptions PipelineOptions::EffectiveVerificationOptions() const {
   options.show_progress = show_progress;
   options.max_pose_time_difference_ns = max_vio_time_difference_ns;
   options.vio_uncertainty = vio_uncertainty;
+  // The mapper beside the verification gets its pairs batch by batch: small
+  // batches let it start on the first frames early.
+  if (stream_mapper) options.batch_size = std::min(options.batch_size, kStreamedVerificationBatch);
   return options;
 }
 

@@ -56,6 +56,11 @@ void ParseOptionText(const std::string& text, VioSource* source);
 std::string OptionText(const std::optional<SensorRig>& rig);
 void ParseOptionText(const std::string& text, std::optional<SensorRig>* rig);
 
+// Pairs a verification batch holds at most when the mapper runs beside it
+// (PipelineOptions::stream_mapper): about a third of a 50-frame batch's
+// pairs at N1 10, N2 5.
+inline constexpr int kStreamedVerificationBatch = 200;
+
 struct PipelineOptions {
   // EuRoC dataset (the folder containing mav0/, or mav0 itself) or a folder
   // of images (then image_folder must give the camera). Required.
@@ -132,7 +137,9 @@ struct PipelineOptions {
   // The mapper runs beside the verification: each batch is mapped once the
   // verification has passed its frames, with the pairs verified so far
   // (sfm/verified_pair_stream.h), instead of after every pair is verified.
-  // The final adjustment has every pair. Default false.
+  // The final adjustment has every pair. The verification then hands over
+  // its pairs at least every kStreamedVerificationBatch pairs
+  // (verification.batch_size at most that). Default false.
   bool stream_mapper = false;
   // The metric scale from the IMU (metric_scale.h), when the dataset has
   // one. Default true.
