@@ -2,8 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <limits>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <set>
 
@@ -439,6 +442,71 @@ TEST(VerificationDriver, ResumingAHalfVerifiedPairSetDecidesAsAnUninterruptedRun
   EXPECT_GT(resumed.summary.num_ransac_rejected, 0u);
   EXPECT_EQ(StoredGeometryPairIds(database), AcceptedPairIds(uninterrupted));
   EXPECT_EQ(database.NumMatchedImagePairs(), uninterrupted.decisions.size());
+}
+
+// The accepted pairs handed to a mapper beside the verification
+// (`on_verified`): every accepted pair once, with the inlier matches the
+// database holds, stored pairs of an earlier run included, and each after
+// the frontier the call before it promised (every later pair's frames at or
+// after that stamp); the last call closes the stream.
+TEST(VerificationDriver, OnVerifiedHandsOverTheAcceptedPairsBehindAFrontier) {
+  const Fixture& f = SharedFixture();
+  const Trajectory corrupted = CorruptPose(f.vio_body, 6);
+  VerificationOptions options = SmallOptions();
+  options.batch_size = 3;
+  const fs::path path = CopyFeatures(f, "streamed.db");
+  {
+    // An earlier run stored the consecutive pairs.
+    VerificationOptions first_part = options;
+    first_part.pairs.num_temporal_neighbors = 1;
+    first_part.pairs.num_retrieval_neighbors = 0;
+    ColmapDatabase database = ColmapDatabase::Open(path);
+    RunVerification(f.sequence, corrupted, &database, first_part);
+  }
+  ColmapDatabase database = ColmapDatabase::Open(path);
+  std::map<image_t, timestamp_ns_t> stamp_of;
+  for (const DatabaseImage& row : database.ReadAllImages()) {
+    for (const SequenceImage& image : f.sequence.images) {
+      if (DatabaseImageName(image) == row.name) stamp_of[row.image_id] = image.timestamp_ns;
+    }
+  }
+  std::vector<std::pair<ImagePairMatches, timestamp_ns_t>> handed;  // pair, frontier before it
+  std::vector<timestamp_ns_t> frontiers;
+  timestamp_ns_t frontier = std::numeric_limits<timestamp_ns_t>::min();
+  // Each image's VIO pose, as the trajectory overload finds it.
+  const std::vector<VioOdometer> odometers = ComputeVioOdometers(corrupted, {});
+  std::vector<std::optional<FrameVioPose>> poses(f.sequence.images.size());
+  for (size_t i = 0; i < poses.size(); ++i) {
+    const std::optional<size_t> index = NearestPoseIndex(
+        corrupted, f.sequence.images[i].timestamp_ns, options.max_pose_time_difference_ns);
+    ASSERT_TRUE(index.has_value());
+    poses[i] = FrameVioPose{corrupted.poses[*index].world_from_frame, odometers[*index]};
+  }
+  const VerificationResult result =
+      RunVerification(f.sequence, poses, &database, options, {},
+                      [&](std::vector<ImagePairMatches> accepted, timestamp_ns_t pending_from_ns) {
+                        for (ImagePairMatches& pair : accepted)
+                          handed.emplace_back(std::move(pair), frontier);
+                        frontiers.push_back(pending_from_ns);
+                        frontier = pending_from_ns;
+                      });
+  EXPECT_GT(result.summary.num_resumed, 0u);
+  ASSERT_GE(frontiers.size(), 3u);
+  EXPECT_TRUE(std::is_sorted(frontiers.begin(), frontiers.end()));
+  EXPECT_EQ(frontiers.back(), std::numeric_limits<timestamp_ns_t>::max());
+  std::set<image_pair_t> handed_ids;
+  for (const auto& [pair, frontier_before] : handed) {
+    EXPECT_TRUE(handed_ids.insert(ImagePairToPairId(pair.image_id1, pair.image_id2)).second);
+    EXPECT_GE(std::min(stamp_of.at(pair.image_id1), stamp_of.at(pair.image_id2)), frontier_before);
+    const FeatureMatches stored =
+        database.ReadTwoViewGeometry(pair.image_id1, pair.image_id2).inlier_matches;
+    ASSERT_EQ(pair.matches.size(), stored.size());
+    for (size_t m = 0; m < stored.size(); ++m) {
+      EXPECT_EQ(pair.matches[m].point2D_idx1, stored[m].point2D_idx1);
+      EXPECT_EQ(pair.matches[m].point2D_idx2, stored[m].point2D_idx2);
+    }
+  }
+  EXPECT_EQ(handed_ids, AcceptedPairIds(result));
 }
 
 }  // namespace
