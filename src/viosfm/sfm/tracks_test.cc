@@ -39,6 +39,20 @@ void AddAllPairs(const std::vector<image_t>& images, const std::vector<point2D_t
   }
 }
 
+// keypoint[j][i]: the keypoint index of scene point j in image i, a random
+// permutation of the points in each image.
+std::vector<std::vector<point2D_t>> RandomKeypoints(int num_points, int num_images,
+                                                    Random* random) {
+  std::vector<std::vector<point2D_t>> keypoint(num_points, std::vector<point2D_t>(num_images));
+  for (int i = 0; i < num_images; ++i) {
+    std::vector<point2D_t> indices(num_points);
+    for (int j = 0; j < num_points; ++j) indices[j] = static_cast<point2D_t>(j);
+    std::shuffle(indices.begin(), indices.end(), random->engine());
+    for (int j = 0; j < num_points; ++j) keypoint[j][i] = indices[j];
+  }
+  return keypoint;
+}
+
 TEST(TracksTest, BuildsExactTracksSortedWithHistogram) {
   const std::vector<ImagePairMatches> pairs = {
       Pair(2, 3, {{0, 5}, {1, 6}}),
@@ -148,13 +162,8 @@ TEST(TracksTest, OutputDoesNotDependOnPairOrderOrOrientation) {
   Random random(7);
   constexpr int kNumImages = 8;
   constexpr int kNumPoints = 60;
-  std::vector<std::vector<point2D_t>> keypoint(kNumPoints, std::vector<point2D_t>(kNumImages));
-  for (int i = 0; i < kNumImages; ++i) {
-    std::vector<point2D_t> indices(kNumPoints);
-    for (int j = 0; j < kNumPoints; ++j) indices[j] = static_cast<point2D_t>(j);
-    std::shuffle(indices.begin(), indices.end(), random.engine());
-    for (int j = 0; j < kNumPoints; ++j) keypoint[j][i] = indices[j];
-  }
+  const std::vector<std::vector<point2D_t>> keypoint =
+      RandomKeypoints(kNumPoints, kNumImages, &random);
   std::vector<ImagePairMatches> pairs;
   int num_wrong = 0;
   for (image_t a = 0; a < kNumImages; ++a) {
@@ -219,13 +228,8 @@ TEST(TracksTest, IncrementalBuildIsTheBuildOfEveryPairSoFar) {
   Random random(11);
   constexpr int kNumImages = 30;
   constexpr int kNumPoints = 80;
-  std::vector<std::vector<point2D_t>> keypoint(kNumPoints, std::vector<point2D_t>(kNumImages));
-  for (int i = 0; i < kNumImages; ++i) {
-    std::vector<point2D_t> indices(kNumPoints);
-    for (int j = 0; j < kNumPoints; ++j) indices[j] = static_cast<point2D_t>(j);
-    std::shuffle(indices.begin(), indices.end(), random.engine());
-    for (int j = 0; j < kNumPoints; ++j) keypoint[j][i] = indices[j];
-  }
+  const std::vector<std::vector<point2D_t>> keypoint =
+      RandomKeypoints(kNumPoints, kNumImages, &random);
   std::vector<ImagePairMatches> pairs;
   for (image_t a = 0; a < kNumImages; ++a) {
     for (image_t b = a + 1; b < kNumImages && b <= a + 4; ++b) {

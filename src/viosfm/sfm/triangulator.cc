@@ -70,6 +70,18 @@ Eigen::Vector3d RefinePoint(const std::vector<TriangulationView>& views,
   return point;
 }
 
+// Counts one more `id` in `counts` (id, count), in order of first sight.
+template <class Id>
+void CountId(Id id, std::vector<std::pair<Id, size_t>>* counts) {
+  auto it = std::find_if(counts->begin(), counts->end(),
+                         [id](const auto& entry) { return entry.first == id; });
+  if (it == counts->end()) {
+    counts->emplace_back(id, 1);
+  } else {
+    ++it->second;
+  }
+}
+
 }  // namespace
 
 std::string TriangulationOptions::Validate() const {
@@ -224,14 +236,7 @@ TriangulationStatistics TriangulateReconstruction(Reconstruction* reconstruction
           << "track element of image " << element.image_id << " out of range";
       const point3D_t point3D_id = image.points2D[element.point2D_idx].point3D_id;
       if (point3D_id != kInvalidPoint3DId) {
-        auto it =
-            std::find_if(point_counts.begin(), point_counts.end(),
-                         [point3D_id](const auto& entry) { return entry.first == point3D_id; });
-        if (it == point_counts.end()) {
-          point_counts.emplace_back(point3D_id, 1);
-        } else {
-          ++it->second;
-        }
+        CountId(point3D_id, &point_counts);
       } else if (is_allowed(element.image_id)) {
         candidates.push_back(element);
       }
@@ -313,14 +318,7 @@ std::vector<point3D_t> MergeTrackPoints(Reconstruction* reconstruction,
       const Image& image = reconstruction->GetImage(element.image_id);
       if (element.point2D_idx >= image.points2D.size()) continue;
       const point3D_t point3D_id = image.points2D[element.point2D_idx].point3D_id;
-      if (point3D_id == kInvalidPoint3DId) continue;
-      auto it = std::find_if(point_counts.begin(), point_counts.end(),
-                             [point3D_id](const auto& entry) { return entry.first == point3D_id; });
-      if (it == point_counts.end()) {
-        point_counts.emplace_back(point3D_id, 1);
-      } else {
-        ++it->second;
-      }
+      if (point3D_id != kInvalidPoint3DId) CountId(point3D_id, &point_counts);
     }
     if (point_counts.size() < 2) continue;
     std::sort(point_counts.begin(), point_counts.end(), [](const auto& a, const auto& b) {
@@ -374,14 +372,7 @@ size_t SplitPointsByTracks(Reconstruction* reconstruction, const std::vector<Tra
     const std::vector<TrackElement> observations = reconstruction->GetPoint3D(point3D_id).track;
     track_counts.clear();
     for (const TrackElement& element : observations) {
-      const size_t t = track_of_keypoint.at(element.image_id)[element.point2D_idx];
-      auto it = std::find_if(track_counts.begin(), track_counts.end(),
-                             [t](const auto& entry) { return entry.first == t; });
-      if (it == track_counts.end()) {
-        track_counts.emplace_back(t, 1);
-      } else {
-        ++it->second;
-      }
+      CountId(track_of_keypoint.at(element.image_id)[element.point2D_idx], &track_counts);
     }
     if (track_counts.size() == 1 && track_counts.front().first != kNoTrack) continue;
     size_t keep = kNoTrack;
