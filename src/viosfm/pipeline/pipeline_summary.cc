@@ -164,6 +164,12 @@ std::string PipelineSummaryToJson(const PipelineSummary& s) {
   json["observations"] = s.num_observations;
   json["mean_track_length"] = s.mean_track_length;
   json["mean_reprojection_error_px"] = s.mean_reprojection_error_px;
+  json["tracks"] = {{"tracks", s.mapper.tracks.num_tracks},
+                    {"observations", s.mapper.tracks.num_observations},
+                    {"inconsistent_components", s.mapper.tracks.num_inconsistent_components},
+                    {"refused_matches", s.mapper.tracks.num_refused_matches},
+                    {"points_joined", s.mapper.num_points_merged},
+                    {"observations_split_off", s.mapper.num_observations_split_off}};
   json["relative_pose_priors"] = {{"consecutive", s.mapper.num_consecutive_priors},
                                   {"bridging", s.mapper.num_bridging_priors},
                                   {"gyro", s.mapper.num_gyro_priors},

@@ -165,6 +165,10 @@ TEST(PipelineTest, MapperBesideTheVerificationGivesTheSameModel) {
   ASSERT_TRUE(f.summary.evaluation.has_value());
   EXPECT_LT(s.evaluation->ate_rmse_m, 0.9 * s.evaluation->vio_ate_rmse_m);
   EXPECT_LT(s.evaluation->ate_rmse_m, 1.25 * f.summary.evaluation->ate_rmse_m);
+  const nlohmann::json json =
+      nlohmann::json::parse(ReadTextFile(f.folder / "out_streamed" / "summary.json"));
+  EXPECT_EQ(json["tracks"]["points_joined"], s.mapper.num_points_merged);
+  EXPECT_EQ(json["tracks"]["observations_split_off"], s.mapper.num_observations_split_off);
   std::cerr << "streamed: ATE " << s.evaluation->ate_rmse_m << " m, every pair at once "
             << f.summary.evaluation->ate_rmse_m << " m\n";
 }
@@ -441,8 +445,8 @@ TEST(PipelineTest, SummaryJsonHasTheDocumentedKeys) {
   const nlohmann::json json = nlohmann::json::parse(ReadTextFile(f.out / "summary.json"));
   for (const char* key :
        {"viosfm_version", "dataset", "started_utc", "frames", "pairs", "points", "observations",
-        "mean_track_length", "mean_reprojection_error_px", "batches", "stages", "total_seconds",
-        "peak_memory_mb", "eval", "options_file", "fingerprint"}) {
+        "mean_track_length", "mean_reprojection_error_px", "tracks", "batches", "stages",
+        "total_seconds", "peak_memory_mb", "eval", "options_file", "fingerprint"}) {
     EXPECT_TRUE(json.contains(key)) << key;
   }
   EXPECT_EQ(json["viosfm_version"], ViosfmVersion());
@@ -455,6 +459,8 @@ TEST(PipelineTest, SummaryJsonHasTheDocumentedKeys) {
   }
   EXPECT_EQ(json["pairs"]["candidates"], s.verification.num_pairs);
   EXPECT_EQ(json["points"], s.num_points);
+  EXPECT_EQ(json["tracks"]["tracks"], s.mapper.tracks.num_tracks);
+  EXPECT_EQ(json["tracks"]["points_joined"], 0);  // the pairs were not streamed
   EXPECT_EQ(json["imu_factors"]["factors"], s.mapper.num_inertial_factors);
   EXPECT_EQ(json["imu_factors"]["message"], s.mapper.inertial_message);
   // 31-40 frames in batches of 10.
