@@ -321,6 +321,7 @@ BundleAdjustmentSummary BundleAdjust(Reconstruction* reconstruction,
   std::string error;
   VIOSFM_CHECK(solver_options.IsValid(&error)) << error;
 
+  const double seconds_before_solve = timer.ElapsedSeconds();
   ceres::Solver::Summary ceres_summary;
   ceres::Solve(solver_options, &problem, &ceres_summary);
 
@@ -342,7 +343,9 @@ BundleAdjustmentSummary BundleAdjust(Reconstruction* reconstruction,
   summary.mean_reprojection_error_after_px =
       UpdateReprojectionErrors(reconstruction, options.num_threads);
   summary.time_s = timer.ElapsedSeconds();
-  VIOSFM_LOG(DEBUG) << summary.ToString() << "; Ceres: linear solver "
+  VIOSFM_LOG(DEBUG) << summary.ToString() << "; before the solve (errors, problem built) "
+                    << seconds_before_solve << " s; Ceres: in all "
+                    << ceres_summary.total_time_in_seconds << " s, linear solver "
                     << ceres_summary.linear_solver_time_in_seconds << " s, Jacobians "
                     << ceres_summary.jacobian_evaluation_time_in_seconds << " s, residuals "
                     << ceres_summary.residual_evaluation_time_in_seconds << " s, preprocessing "
