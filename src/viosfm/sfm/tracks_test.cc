@@ -151,6 +151,27 @@ TEST(TracksTest, NonUniqueMatchInAPairIsSplitOff) {
   EXPECT_EQ(result.statistics.num_dropped_short, 1u);  // keypoint 1 of image 2 alone
 }
 
+// The pairs of images (counted from 0, ids from 1) at most `max_gap`
+// apart, in order, each with the matches `fill(a, b, &pair)` gives.
+template <class Fill>
+std::vector<ImagePairMatches> PairsWithin(int num_images, int max_gap, Fill&& fill) {
+  std::vector<ImagePairMatches> pairs;
+  for (image_t a = 0; a < static_cast<image_t>(num_images); ++a) {
+    for (image_t b = a + 1; b < static_cast<image_t>(num_images) && b <= a + max_gap; ++b) {
+      ImagePairMatches pair{a + 1, b + 1, {}};
+      fill(a, b, &pair);
+      pairs.push_back(std::move(pair));
+    }
+  }
+  return pairs;
+}
+
+// A match between two random keypoints of [0, num_points).
+FeatureMatch RandomMatch(int num_points, Random* random) {
+  return {static_cast<point2D_t>(random->UniformInt(0, num_points - 1)),
+          static_cast<point2D_t>(random->UniformInt(0, num_points - 1))};
+}
+
 void ExpectSameTracks(const std::vector<Track>& a, const std::vector<Track>& b) {
   ASSERT_EQ(a.size(), b.size());
   for (size_t i = 0; i < a.size(); ++i) EXPECT_EQ(a[i].elements, b[i].elements) << "track " << i;
@@ -164,19 +185,16 @@ TEST(TracksTest, OutputDoesNotDependOnPairOrderOrOrientation) {
   constexpr int kNumPoints = 60;
   const std::vector<std::vector<point2D_t>> keypoint =
       RandomKeypoints(kNumPoints, kNumImages, &random);
-  std::vector<ImagePairMatches> pairs;
   int num_wrong = 0;
-  for (image_t a = 0; a < kNumImages; ++a) {
-    for (image_t b = a + 1; b < kNumImages && b <= a + 3; ++b) {
-      ImagePairMatches pair{a + 1, b + 1, {}};
-      for (int j = 0; j < kNumPoints; ++j) pair.matches.push_back({keypoint[j][a], keypoint[j][b]});
-      for (int k = 0; k < 3 && num_wrong < 25; ++k, ++num_wrong) {
-        pair.matches.push_back({static_cast<point2D_t>(random.UniformInt(0, kNumPoints - 1)),
-                                static_cast<point2D_t>(random.UniformInt(0, kNumPoints - 1))});
-      }
-      pairs.push_back(pair);
-    }
-  }
+  const std::vector<ImagePairMatches> pairs =
+      PairsWithin(kNumImages, 3, [&](image_t a, image_t b, ImagePairMatches* pair) {
+        for (int j = 0; j < kNumPoints; ++j) {
+          pair->matches.push_back({keypoint[j][a], keypoint[j][b]});
+        }
+        for (int k = 0; k < 3 && num_wrong < 25; ++k, ++num_wrong) {
+          pair->matches.push_back(RandomMatch(kNumPoints, &random));
+        }
+      });
   const TrackBuildResult reference = BuildTracks(pairs);
   EXPECT_GT(reference.statistics.num_inconsistent_components, 0u);
   for (const Track& track : reference.tracks) {
@@ -230,22 +248,15 @@ TEST(TracksTest, IncrementalBuildIsTheBuildOfEveryPairSoFar) {
   constexpr int kNumPoints = 80;
   const std::vector<std::vector<point2D_t>> keypoint =
       RandomKeypoints(kNumPoints, kNumImages, &random);
-  std::vector<ImagePairMatches> pairs;
-  for (image_t a = 0; a < kNumImages; ++a) {
-    for (image_t b = a + 1; b < kNumImages && b <= a + 4; ++b) {
-      ImagePairMatches pair{a + 1, b + 1, {}};
-      for (int j = 0; j < kNumPoints; ++j) {
-        // Each point seen in a stretch of images; wrong matches now and then.
-        if ((j + a) % 9 == 0) continue;
-        pair.matches.push_back({keypoint[j][a], keypoint[j][b]});
-      }
-      if (a % 6 == 0 && b == a + 2) {
-        pair.matches.push_back({static_cast<point2D_t>(random.UniformInt(0, kNumPoints - 1)),
-                                static_cast<point2D_t>(random.UniformInt(0, kNumPoints - 1))});
-      }
-      pairs.push_back(pair);
-    }
-  }
+  std::vector<ImagePairMatches> pairs =
+      PairsWithin(kNumImages, 4, [&](image_t a, image_t b, ImagePairMatches* pair) {
+        for (int j = 0; j < kNumPoints; ++j) {
+          // Each point seen in a stretch of images; wrong matches now and then.
+          if ((j + a) % 9 == 0) continue;
+          pair->matches.push_back({keypoint[j][a], keypoint[j][b]});
+        }
+        if (a % 6 == 0 && b == a + 2) pair->matches.push_back(RandomMatch(kNumPoints, &random));
+      });
   pairs.push_back(pairs[5]);              // a pair given twice
   pairs.push_back(Pair(3, 3, {{1, 2}}));  // a self-match
   std::shuffle(pairs.begin(), pairs.end(), random.engine());
