@@ -66,16 +66,18 @@ TEST(VerifiedPairStream, TakesThePairsOfTheFramesPassed) {
 
 TEST(VerifiedPairStream, WaitsUntilTheFrontierPassesTheFrames) {
   VerifiedPairStream stream = MakeStream(4);
-  std::atomic<bool> added{false};
+  // Set before the second Add, whose lock orders it before the consumer's
+  // wake-up: the consumer sees it unless it returned on the first Add alone.
+  std::atomic<bool> second_add_started{false};
   std::thread producer([&] {
     std::this_thread::sleep_for(std::chrono::milliseconds(30));
     stream.Add({Pair(1, 2, 7)}, StampOf(2));  // frame 2 not passed yet
     std::this_thread::sleep_for(std::chrono::milliseconds(30));
+    second_add_started = true;
     stream.Add({Pair(2, 4, 9)}, StampOf(3));
-    added = true;
   });
   const std::vector<ImagePairMatches> taken = stream.TakeUntil(2);
-  EXPECT_TRUE(added);  // frame index 1 (id 2) is passed only by the second Add
+  EXPECT_TRUE(second_add_started);  // frame index 1 (id 2) is passed only by the second Add
   producer.join();
   ASSERT_EQ(taken.size(), 2u);
   EXPECT_EQ(taken[0].matches.size(), 7u);
