@@ -1,16 +1,21 @@
 // `viosfm eval`: absolute trajectory error and relative pose error of an
-// estimated trajectory against a reference (see eval/traj_eval.h).
+// estimated trajectory against a reference (see eval/traj_eval.h), and its
+// rotations against a dataset's gyro (eval/gyro_check.h).
 #include <iostream>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 
 #include "viosfm/cli/commands.h"
+#include "viosfm/eval/gyro_check.h"
 #include "viosfm/eval/report.h"
 #include "viosfm/eval/traj_eval.h"
+#include "viosfm/io/dataset.h"
 #include "viosfm/io/euroc.h"
 #include "viosfm/io/trajectory_io.h"
 #include "viosfm/util/errors.h"
+#include "viosfm/util/file_util.h"
 #include "viosfm/util/string_util.h"
 #include "viosfm/util/timestamp.h"
 
@@ -35,6 +40,13 @@ struct EvalArguments {
   std::string extrinsics_yaml;
   std::string cam_frame = "est";
   std::string json_path;
+  // The gyro check: the dataset whose IMU judges the estimate's rotations.
+  std::string gyro_dataset;
+  CalibrationFiles calibration;
+  double gyro_interval_s = 1.0;
+  bool gyro_raw = false;
+  std::string gyro_time_offset;  // empty: the calibration's
+  std::string gyro_est = "cam";
 };
 
 timestamp_ns_t ParseSecondsOption(const std::string& text, const std::string& option) {
@@ -52,7 +64,28 @@ Trajectory ReadInput(const std::string& path, const std::string& format_name,
   return ReadTrajectory(path, format);
 }
 
+// The dataset whose gyro judges the estimate, its time offset replaced by
+// --gyro-time-offset when given.
+Sequence ReadGyroDataset(const EvalArguments& args) {
+  DatasetReadOptions read_options;
+  read_options.calibration = args.calibration;
+  read_options.require_imu = true;
+  Sequence sequence = ReadDataset(args.gyro_dataset, read_options);
+  if (!args.gyro_time_offset.empty()) {
+    sequence.rig.cam_time_offset_ns =
+        ParseSecondsOption(args.gyro_time_offset, "--gyro-time-offset");
+  }
+  return sequence;
+}
+
 void RunEval(const EvalArguments& args) {
+  if (args.ref_path.empty() && args.gyro_dataset.empty()) {
+    throw InputError(
+        "give --ref (a reference trajectory), --gyro (a dataset with an IMU), or both");
+  }
+  if (!args.calibration.empty() && args.gyro_dataset.empty()) {
+    throw InputError("--calibration and --imu-calibration apply to --gyro's dataset: give --gyro");
+  }
   EvaluationOptions options;
   options.association = ParseAssociationMethod(args.association);
   options.max_dt_ns = ParseSecondsOption(args.max_dt, "--max-dt");
@@ -80,18 +113,51 @@ void RunEval(const EvalArguments& args) {
   if (const std::string error = options.Validate(); !error.empty()) {
     throw InputError("invalid options: " + error);
   }
+  GyroCheckOptions gyro_options;
+  gyro_options.interval_s = args.gyro_interval_s;
+  gyro_options.fit_bias = !args.gyro_raw;
+  if (const std::string error = gyro_options.Validate(); !error.empty()) {
+    throw InputError("invalid --gyro options: " + error);
+  }
 
+  // Everything read and checked before anything is printed or written.
+  std::optional<Sequence> gyro_dataset;
+  if (!args.gyro_dataset.empty()) gyro_dataset = ReadGyroDataset(args);
   EvaluationInputs inputs;
   inputs.est_path = args.est_path;
   inputs.ref_path = args.ref_path;
   const Trajectory est =
       ReadInput(args.est_path, args.est_format, args.colmap_prefix, &inputs.est_format);
-  const Trajectory ref =
-      ReadInput(args.ref_path, args.ref_format, args.colmap_prefix, &inputs.ref_format);
-  const EvaluationResult result = EvaluateTrajectories(est, ref, options);
-  std::cout << FormatEvaluationReport(result, options, inputs);
+  std::optional<Trajectory> ref;
+  if (!args.ref_path.empty()) {
+    ref = ReadInput(args.ref_path, args.ref_format, args.colmap_prefix, &inputs.ref_format);
+  }
+  std::optional<GyroCheckResult> gyro;
+  if (gyro_dataset) {
+    const Trajectory world_from_cam =
+        ToLower(args.gyro_est) == "body"
+            ? BodyToCameraTrajectory(est, gyro_dataset->rig.body_from_cam)
+            : est;
+    gyro = CheckRotationsAgainstGyro(world_from_cam, gyro_dataset->imu, gyro_dataset->rig,
+                                     gyro_options);
+  }
+  nlohmann::json json;
+  if (ref) {
+    const EvaluationResult result = EvaluateTrajectories(est, *ref, options);
+    std::cout << FormatEvaluationReport(result, options, inputs);
+    json = nlohmann::json::parse(EvaluationToJson(result, options, inputs));
+  } else {
+    json["inputs"] = {{"est_path", inputs.est_path}, {"est_format", inputs.est_format}};
+  }
+  if (gyro) {
+    std::cout << (ref ? "\n" : "") << FormatGyroCheck(*gyro);
+    json["gyro"] = nlohmann::json::parse(GyroCheckToJson(*gyro, gyro_options));
+    json["gyro"]["dataset"] = args.gyro_dataset;
+    json["gyro"]["est_poses"] = ToLower(args.gyro_est);
+  }
   if (!args.json_path.empty()) {
-    WriteEvaluationJson(args.json_path, result, options, inputs);
+    const std::string text = json.dump(2) + "\n";
+    WriteFileAtomically(args.json_path, [&text](std::ostream& out) { out << text; });
     std::cout << "wrote " << args.json_path << "\n";
   }
 }
@@ -105,9 +171,8 @@ void RegisterEval(CLI::App& app) {
   command
       ->add_option("--est", args->est_path, "Estimated trajectory (file, or COLMAP model folder)")
       ->required();
-  command
-      ->add_option("--ref", args->ref_path, "Reference trajectory (file, or COLMAP model folder)")
-      ->required();
+  command->add_option("--ref", args->ref_path,
+                      "Reference trajectory (file, or COLMAP model folder); needed unless --gyro");
   const auto formats = CLI::IsMember({"tum", "euroc", "kitti", "colmap"}, CLI::ignore_case);
   command
       ->add_option("--est-format", args->est_format, "tum, euroc, kitti or colmap (default: guess)")
@@ -152,6 +217,24 @@ void RegisterEval(CLI::App& app) {
       ->check(CLI::IsMember({"est", "ref", "both"}, CLI::ignore_case))
       ->capture_default_str();
   command->add_option("--json", args->json_path, "Write all numbers to this JSON file");
+  command->add_option("--gyro", args->gyro_dataset,
+                      "Dataset with an IMU (EuRoC folder): the estimate's relative rotations "
+                      "against its gyro's");
+  AddCalibrationOptions(command, &args->calibration);
+  command
+      ->add_option("--gyro-interval", args->gyro_interval_s,
+                   "s, compare the rotations of frames this far apart (intervals end to end)")
+      ->capture_default_str();
+  command->add_option("--gyro-time-offset", args->gyro_time_offset,
+                      "s, t_imu = t_cam + offset for --gyro (default: the calibration's; a "
+                      "run's own VIO writes its estimate in vio/vio_summary.txt)");
+  command->add_flag("--gyro-raw", args->gyro_raw,
+                    "The raw gyro (bias zero) instead of one bias fitted to the estimate");
+  command
+      ->add_option("--gyro-est", args->gyro_est,
+                   "--est holds camera poses (cam) or body (IMU) poses (body), for --gyro")
+      ->check(CLI::IsMember({"cam", "body"}, CLI::ignore_case))
+      ->capture_default_str();
   command->callback([args] { RunEval(*args); });
 }
 

@@ -59,6 +59,17 @@ expect_exit(2 "^error: --set time_offset.max_frame_gap: expected KEY=VALUE" vio
             "${WORK}/dataset" --out "${WORK}/out_set" --set time_offset.max_frame_gap)
 expect_exit(2 "^error: invalid vio options: .*max_frame_gap must be >= 1" vio "${WORK}/dataset"
             --out "${WORK}/out_set" --set time_offset.max_frame_gap=0)
+# eval: a reference or a gyro is needed; the gyro check names what it
+# could not compare and refuses a bad offset, before any output.
+file(WRITE "${WORK}/est.tum" "0.000001 0 0 0 0 0 0 1\n0.000002 0.1 0 0 0 0 0 1\n")
+expect_exit(2 "^error: give --ref \\(a reference trajectory\\), --gyro" eval --est "${WORK}/est.tum")
+expect_exit(2 "^error: gyro check: no interval of 1.0+ s between the trajectory's 2 frames"
+            eval --est "${WORK}/est.tum" --gyro "${WORK}/dataset" --json "${WORK}/gyro.json")
+expect_exit(2 "^error: --gyro-time-offset: expected decimal seconds, got 'abc'"
+            eval --est "${WORK}/est.tum" --gyro "${WORK}/dataset" --gyro-time-offset abc)
+if(EXISTS "${WORK}/gyro.json")
+  message(FATAL_ERROR "eval --gyro that failed left ${WORK}/gyro.json behind")
+endif()
 # run on a dataset that is not there: the error, and no output folder left.
 expect_exit(2 "^error: ${WORK}/absent: dataset folder not found" run "${WORK}/absent"
             --out "${WORK}/out_absent")

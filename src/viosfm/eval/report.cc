@@ -131,4 +131,29 @@ void WriteEvaluationJson(const std::filesystem::path& path, const EvaluationResu
   WriteFileAtomically(path, [&text](std::ostream& out) { out << text; });
 }
 
+std::string GyroCheckToJson(const GyroCheckResult& result, const GyroCheckOptions& options) {
+  nlohmann::json intervals = nlohmann::json::array();
+  for (const GyroCheckInterval& interval : result.intervals) {
+    intervals.push_back({{"from_ns", interval.from_ns},
+                         {"to_ns", interval.to_ns},
+                         {"gyro_angle_deg", interval.gyro_angle_deg},
+                         {"error_deg", interval.error_deg}});
+  }
+  const nlohmann::json json = {
+      {"options",
+       {{"interval_s", options.interval_s},
+        {"max_interval_factor", options.max_interval_factor},
+        {"fit_bias", options.fit_bias}}},
+      {"num_frames", result.num_frames},
+      {"num_intervals", result.intervals.size()},
+      {"num_without_imu", result.num_without_imu},
+      {"num_gaps", result.num_gaps},
+      {"bias_fitted", result.bias_fitted},
+      {"num_bias_intervals", result.num_bias_intervals},
+      {"gyro_bias_rad_s", {result.gyro_bias.x(), result.gyro_bias.y(), result.gyro_bias.z()}},
+      {"error_deg", StatisticsJson(result.error_deg)},
+      {"intervals", intervals}};
+  return json.dump(2) + "\n";
+}
+
 }  // namespace viosfm

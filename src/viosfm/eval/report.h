@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <string>
 
+#include "viosfm/eval/gyro_check.h"
 #include "viosfm/eval/traj_eval.h"
 
 namespace viosfm {
@@ -33,5 +34,12 @@ std::string EvaluationToJson(const EvaluationResult& result, const EvaluationOpt
 // Writes EvaluationToJson atomically.
 void WriteEvaluationJson(const std::filesystem::path& path, const EvaluationResult& result,
                          const EvaluationOptions& options, const EvaluationInputs& inputs);
+
+// The gyro check (gyro_check.h) as a JSON document:
+//  {"options": {"interval_s", "max_interval_factor", "fit_bias"},
+//   "num_frames", "num_intervals", "num_without_imu", "num_gaps",
+//   "bias_fitted", "num_bias_intervals", "gyro_bias_rad_s": [x, y, z], "error_deg": stats,
+//   "intervals": [{"from_ns", "to_ns", "gyro_angle_deg", "error_deg"}]}
+std::string GyroCheckToJson(const GyroCheckResult& result, const GyroCheckOptions& options);
 
 }  // namespace viosfm

@@ -1,0 +1,204 @@
+#include "viosfm/eval/gyro_check.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <memory>
+#include <numeric>
+#include <sstream>
+
+#include "viosfm/geometry/lie.h"
+#include "viosfm/sfm/gyro_priors.h"
+#include "viosfm/util/errors.h"
+#include "viosfm/vio/imu_preintegration.h"
+
+namespace viosfm {
+namespace {
+
+constexpr double kRadToDeg = 180.0 / M_PI;
+
+double AngleDeg(const Eigen::Quaterniond& rotation) {
+  return QuaternionLog(rotation.normalized()).norm() * kRadToDeg;
+}
+
+// The rotation noise of a frame of the checked trajectory, for the bias's
+// least squares (its value scales every pair alike: it does not move the
+// fit).
+constexpr double kFrameRotationSigmaRad = 0.001;
+
+}  // namespace
+
+std::string GyroCheckOptions::Validate() const {
+  if (!(interval_s > 0.0)) return "interval_s must be > 0";
+  if (!(max_interval_factor >= 1.0)) return "max_interval_factor must be >= 1";
+  return "";
+}
+
+GyroCheckResult CheckRotationsAgainstGyro(const Trajectory& world_from_cam,
+                                          const std::vector<ImuSample>& imu, const SensorRig& rig,
+                                          const GyroCheckOptions& options) {
+  if (const std::string error = options.Validate(); !error.empty()) {
+    throw InputError("gyro check: " + error);
+  }
+  if (!world_from_cam.has_timestamps) {
+    throw InputError("gyro check: the trajectory has no timestamps");
+  }
+  GyroCheckResult result;
+  result.num_frames = world_from_cam.size();
+  std::vector<size_t> order(world_from_cam.size());
+  std::iota(order.begin(), order.end(), size_t{0});
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+    return world_from_cam.poses[a].timestamp_ns < world_from_cam.poses[b].timestamp_ns;
+  });
+
+  // The intervals, end to end.
+  const auto interval_ns = static_cast<timestamp_ns_t>(std::llround(options.interval_s * 1e9));
+  const auto longest_ns = static_cast<timestamp_ns_t>(
+      std::llround(options.interval_s * options.max_interval_factor * 1e9));
+  struct Interval {
+    size_t from;  // indices into world_from_cam.poses
+    size_t to;
+    std::unique_ptr<ImuPreintegration> gyro;
+  };
+  std::vector<Interval> intervals;
+  size_t k = 0;
+  while (k < order.size()) {
+    const StampedPose& from = world_from_cam.poses[order[k]];
+    size_t next = k + 1;
+    while (next < order.size() &&
+           world_from_cam.poses[order[next]].timestamp_ns - from.timestamp_ns < interval_ns) {
+      ++next;
+    }
+    if (next == order.size()) break;
+    const StampedPose& to = world_from_cam.poses[order[next]];
+    if (to.timestamp_ns - from.timestamp_ns > longest_ns) {
+      ++result.num_gaps;
+    } else {
+      auto gyro = std::make_unique<ImuPreintegration>(Eigen::Vector3d::Zero(),
+                                                      Eigen::Vector3d::Zero(), rig.imu_noise);
+      if (gyro->IntegrateRange(imu, rig.CamToImuTime(from.timestamp_ns),
+                               rig.CamToImuTime(to.timestamp_ns))) {
+        intervals.push_back({order[k], order[next], std::move(gyro)});
+      } else {
+        ++result.num_without_imu;
+      }
+    }
+    k = next;
+  }
+  if (intervals.empty()) {
+    throw InputError("gyro check: no interval of " + std::to_string(options.interval_s) +
+                     " s between the trajectory's " + std::to_string(world_from_cam.size()) +
+                     " frames lies within the IMU's samples (" +
+                     std::to_string(result.num_without_imu) + " outside them, " +
+                     std::to_string(result.num_gaps) + " across gaps)");
+  }
+
+  const Eigen::Quaterniond cam_from_body = rig.body_from_cam.rotation.conjugate();
+  const auto world_from_body = [&](size_t index) {
+    return (world_from_cam.poses[index].world_from_frame.rotation * cam_from_body)
+        .normalized()
+        .toRotationMatrix();
+  };
+  // body_i_from_body_j from the trajectory, and its angle from the gyro's
+  // at a bias.
+  std::vector<Eigen::Quaterniond> trajectory_rotations;
+  for (const Interval& interval : intervals) {
+    trajectory_rotations.emplace_back(world_from_body(interval.from).transpose() *
+                                      world_from_body(interval.to));
+  }
+  const auto errors_at = [&](const Eigen::Vector3d& bias) {
+    std::vector<double> errors;
+    for (size_t i = 0; i < intervals.size(); ++i) {
+      const Eigen::Quaterniond gyro =
+          intervals[i].gyro->Corrected(bias, Eigen::Vector3d::Zero()).delta_R;
+      // The camera-IMU rotation turns the body's rotation error into the
+      // camera's without changing its angle.
+      errors.push_back(AngleDeg(gyro.conjugate() * trajectory_rotations[i]));
+    }
+    return errors;
+  };
+  result.num_bias_intervals = 0;
+  if (options.fit_bias) {
+    // Fitted to every interval, then again to those within three times the
+    // median error (and 0.05 degrees): a bend of the trajectory would
+    // otherwise be spread over the whole recording as a bias.
+    std::vector<bool> used(intervals.size(), true);
+    for (int round = 0; round < 3; ++round) {
+      std::vector<GyroPair> pairs;
+      for (size_t i = 0; i < intervals.size(); ++i) {
+        if (!used[i]) continue;
+        pairs.push_back({intervals[i].gyro.get(), world_from_body(intervals[i].from),
+                         world_from_body(intervals[i].to), 0});
+      }
+      result.gyro_bias =
+          EstimateGyroBiases(pairs, 1, kFrameRotationSigmaRad, rig.imu_noise).front();
+      result.num_bias_intervals = pairs.size();
+      const std::vector<double> errors = errors_at(result.gyro_bias);
+      std::vector<double> sorted = errors;
+      std::nth_element(sorted.begin(), sorted.begin() + static_cast<ptrdiff_t>(sorted.size() / 2),
+                       sorted.end());
+      const double threshold = std::max(3.0 * sorted[sorted.size() / 2], 0.05);
+      std::vector<bool> within(intervals.size());
+      for (size_t i = 0; i < errors.size(); ++i) within[i] = errors[i] <= threshold;
+      if (within == used) break;
+      used = within;
+    }
+    result.bias_fitted = true;
+  }
+
+  const std::vector<double> errors = errors_at(result.gyro_bias);
+  for (size_t i = 0; i < intervals.size(); ++i) {
+    GyroCheckInterval checked;
+    checked.from_ns = world_from_cam.poses[intervals[i].from].timestamp_ns;
+    checked.to_ns = world_from_cam.poses[intervals[i].to].timestamp_ns;
+    checked.gyro_angle_deg =
+        AngleDeg(intervals[i].gyro->Corrected(result.gyro_bias, Eigen::Vector3d::Zero()).delta_R);
+    checked.error_deg = errors[i];
+    result.intervals.push_back(checked);
+  }
+  result.error_deg = ComputeErrorStatistics(errors);
+  return result;
+}
+
+std::string FormatGyroCheck(const GyroCheckResult& result, size_t num_worst) {
+  std::ostringstream out;
+  out << std::fixed;
+  const timestamp_ns_t start = result.intervals.front().from_ns;
+  const auto seconds = [&](timestamp_ns_t t) { return static_cast<double>(t - start) * 1e-9; };
+  double mean_length = 0.0;
+  for (const GyroCheckInterval& interval : result.intervals) {
+    mean_length += seconds(interval.to_ns) - seconds(interval.from_ns);
+  }
+  mean_length /= static_cast<double>(result.intervals.size());
+  out << "rotations against the gyro: " << result.intervals.size() << " intervals of "
+      << std::setprecision(2) << mean_length << " s on average between " << result.num_frames
+      << " frames (" << result.num_without_imu << " not within the IMU's samples, "
+      << result.num_gaps << " across gaps not compared)\n";
+  out << "  gyro bias ";
+  if (result.bias_fitted) {
+    out << "fitted to " << result.num_bias_intervals << " of the intervals";
+  } else {
+    out << "zero (the raw gyro)";
+  }
+  out << ": [" << std::setprecision(5) << result.gyro_bias.x() << ", " << result.gyro_bias.y()
+      << ", " << result.gyro_bias.z() << "] rad/s\n";
+  const ErrorStatistics& s = result.error_deg;
+  out << "  error (deg): rmse " << std::setprecision(3) << s.rmse << ", mean " << s.mean
+      << ", median " << s.median << ", max " << s.max << "\n";
+  std::vector<size_t> worst(result.intervals.size());
+  std::iota(worst.begin(), worst.end(), size_t{0});
+  std::stable_sort(worst.begin(), worst.end(), [&](size_t a, size_t b) {
+    return result.intervals[a].error_deg > result.intervals[b].error_deg;
+  });
+  worst.resize(std::min(worst.size(), num_worst));
+  for (const size_t index : worst) {
+    const GyroCheckInterval& interval = result.intervals[index];
+    out << "  " << std::setprecision(2) << seconds(interval.from_ns) << " to "
+        << seconds(interval.to_ns) << " s: off by " << interval.error_deg << " deg (the gyro turns "
+        << interval.gyro_angle_deg << " deg)\n";
+  }
+  return out.str();
+}
+
+}  // namespace viosfm
