@@ -5,7 +5,12 @@
 # camera, sequential matching, the mapper without intrinsics refinement);
 # its largest model is Sim(3)-aligned to the VIO's camera trajectory and to
 # viosfm run's model, and the RMSE, the scale factor and the frames in
-# common are printed (`viosfm eval`, camera positions, nearest stamp).
+# common are printed (`viosfm eval`, camera positions, nearest stamp). Each
+# model's relative rotations over 1 s are then checked against the
+# recording's gyro (`viosfm eval --gyro`, eval/gyro_check.h), the one
+# independent judge of all three: at the camera-IMU time offset the VIO
+# estimated (time_offset_ns of vio_summary.txt beside the VIO trajectory,
+# else the calibration's).
 #
 # Usage: scripts/colmap-vs-vio-real.sh WORK_DIR VIO_TRAJECTORY_CAM_TUM [RUN_MODEL_DIR]
 #   VIO_TRAJECTORY_CAM_TUM: `viosfm vio`'s trajectory_cam.tum (or a run's
@@ -93,3 +98,21 @@ compare() {  # label reference
 }
 compare vio "$vio_cam"
 if [ -n "$run_model" ]; then compare run "$run_model"; fi
+
+offset=()
+summary=$(dirname "$vio_cam")/vio_summary.txt
+if [ -f "$summary" ]; then
+  ns=$(awk -F': ' '$1 == "time_offset_ns" { print $2 }' "$summary")
+  [ -n "$ns" ] && offset=("--gyro-time-offset=$(awk -v ns="$ns" 'BEGIN { printf "%.6f", ns * 1e-9 }')")
+fi
+gyro() {  # label trajectory
+  "$VIOSFM" --log-level warning eval --est "$2" --gyro "$DATA" \
+    --calibration "$DATA/calibration/camchain.yaml" "${offset[@]}" \
+    --json "$work/gyro_$1.json" > "$work/gyro_$1.txt"
+  echo "$1 against the gyro: $(jq -r '.gyro | "\(.num_intervals) intervals, error RMSE \(.error_deg.rmse * 1000 | round / 1000) deg (max \(.error_deg.max * 1000 | round / 1000))"' \
+    "$work/gyro_$1.json")"
+}
+echo "rotations over 1 s against the gyro (time offset: ${offset[*]:-as calibrated}):"
+gyro colmap "$work/model_txt"
+gyro vio "$vio_cam"
+if [ -n "$run_model" ]; then gyro run "$run_model"; fi
