@@ -333,6 +333,8 @@ PipelineSummary RunPipeline(const PipelineOptions& requested) {
   });
   summary.evaluation = evaluation.summary;
   summary.all_frames = evaluation.all_frames.counts;
+  summary.gyro_check = evaluation.gyro_check;
+  summary.gyro_check_message = evaluation.gyro_check_message;
 
   clock.Run([&] {
     WriteOutputsStage(options.output_folder, verification, reconstruction, frames, evaluation);

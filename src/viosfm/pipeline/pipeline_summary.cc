@@ -77,6 +77,15 @@ std::string PipelineSummary::ToString() const {
   } else {
     out << "ATE: no ground truth\n";
   }
+  if (gyro_check) {
+    out << std::setprecision(3) << "rotations against the gyro (" << gyro_check->num_intervals
+        << " intervals of 1 s; the model uses the gyro: consistency): RMSE " << gyro_check->rmse_deg
+        << " deg, median " << gyro_check->median_deg << ", max " << gyro_check->max_deg << " ("
+        << std::setprecision(2) << gyro_check->worst_from_s << " to " << gyro_check->worst_to_s
+        << " s)\n";
+  } else if (!gyro_check_message.empty()) {
+    out << "rotations against the gyro: " << gyro_check_message << "\n";
+  }
   out << "images: " << images.decodes << " decoded, " << images.reuses
       << " taken from the frame cache instead of decoded again, " << images.not_kept
       << " not kept for lack of room (cache peak " << std::setprecision(1)
@@ -208,6 +217,15 @@ std::string PipelineSummaryToJson(const PipelineSummary& s) {
   json["total_seconds"] = s.total_seconds;
   json["peak_memory_mb"] = s.peak_memory_mb;
   if (s.evaluation) json["eval"] = StatsJson(*s.evaluation);
+  if (s.gyro_check) {
+    const PipelineGyroCheck& g = *s.gyro_check;
+    json["gyro_check"] = {{"intervals", g.num_intervals},      {"rmse_deg", g.rmse_deg},
+                          {"median_deg", g.median_deg},        {"max_deg", g.max_deg},
+                          {"worst_from_s", g.worst_from_s},    {"worst_to_s", g.worst_to_s},
+                          {"time_offset_ns", g.time_offset_ns}};
+  } else {
+    json["gyro_check"] = {{"message", s.gyro_check_message}};
+  }
   json["options_file"] = "options.json";
   json["fingerprint"] = s.fingerprint;
   return json.dump(2);

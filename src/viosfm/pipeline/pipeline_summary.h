@@ -51,6 +51,22 @@ struct PipelineEvaluation {
   std::optional<MetricAccuracy> all_frames_metric;
 };
 
+// The model's rotations against the dataset's gyro (eval/gyro_check.h):
+// relative rotations over 1 s intervals, at the camera-IMU time offset the
+// run used. The model is made with the gyro (its priors,
+// sfm/gyro_priors.h), so this is its consistency with the gyro, not an
+// independent accuracy; with an IMU only.
+struct PipelineGyroCheck {
+  size_t num_intervals = 0;
+  double rmse_deg = 0.0;
+  double median_deg = 0.0;
+  double max_deg = 0.0;
+  // The worst interval, in seconds since the first compared frame.
+  double worst_from_s = 0.0;
+  double worst_to_s = 0.0;
+  timestamp_ns_t time_offset_ns = 0;  // t_imu = t_cam + offset
+};
+
 struct PipelineSummary {
   std::string dataset;
   // The hash of the run's fingerprint (run_fingerprint.h, RunFingerprint::Hash):
@@ -91,6 +107,10 @@ struct PipelineSummary {
   double mean_track_length = 0.0;
   double mean_reprojection_error_px = 0.0;
   std::optional<PipelineEvaluation> evaluation;  // with ground truth only
+  // With an IMU and at least one 1 s interval within it; else the message
+  // says why there is none.
+  std::optional<PipelineGyroCheck> gyro_check;
+  std::string gyro_check_message;
   // Image decodes of the run (io/frame_cache.h): each image the run reads
   // is decoded once unless the cache had no room for it (not_kept) or an
   // earlier run stored its features (decoded once more for the colours).

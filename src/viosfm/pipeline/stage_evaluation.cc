@@ -1,5 +1,8 @@
 #include "viosfm/pipeline/stage_evaluation.h"
 
+#include <algorithm>
+
+#include "viosfm/eval/gyro_check.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/logging.h"
 
@@ -39,6 +42,31 @@ TrajectoryEvaluation EvaluateStage(const Sequence& sequence, const SelectedFrame
   result.all_frames = PoseAllFrames(image_stamps, model_frames, vio.world_from_body, vio.segments,
                                     max_vio_time_difference_ns);
   VIOSFM_LOG(INFO) << "run: every image posed: " << result.all_frames.counts.ToString();
+  if (!sequence.has_imu()) {
+    result.gyro_check_message = "no IMU";
+  } else {
+    // The own VIO's rig holds the time offset it estimated; an external
+    // VIO's run uses the calibration's.
+    const SensorRig rig = vio.own_vio_rig.value_or(frames.sequence.rig);
+    try {
+      const GyroCheckResult check =
+          CheckRotationsAgainstGyro(result.estimated_cam, sequence.imu, rig, GyroCheckOptions{});
+      PipelineGyroCheck& g = result.gyro_check.emplace();
+      g.num_intervals = check.intervals.size();
+      g.rmse_deg = check.error_deg.rmse;
+      g.median_deg = check.error_deg.median;
+      g.max_deg = check.error_deg.max;
+      const auto worst =
+          std::max_element(check.intervals.begin(), check.intervals.end(),
+                           [](const auto& a, const auto& b) { return a.error_deg < b.error_deg; });
+      const timestamp_ns_t start = check.intervals.front().from_ns;
+      g.worst_from_s = static_cast<double>(worst->from_ns - start) * 1e-9;
+      g.worst_to_s = static_cast<double>(worst->to_ns - start) * 1e-9;
+      g.time_offset_ns = rig.cam_time_offset_ns;
+    } catch (const InputError& error) {
+      result.gyro_check_message = error.what();
+    }
+  }
   std::optional<MetricAccuracy> all_frames_metric;
 
   std::optional<EvaluationResult>& evaluation = result.estimate;

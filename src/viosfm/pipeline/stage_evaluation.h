@@ -3,7 +3,8 @@
 // with ground truth, their accuracy: the Sim(3)-aligned ATE
 // (eval/traj_eval.h) and the metric figures (eval/metric_accuracy.h) of the
 // estimate and of the input VIO on the same frames, and the metric figures
-// of the every-image trajectory.
+// of the every-image trajectory; with an IMU, the model's rotations against
+// the gyro (eval/gyro_check.h) at the time offset the run used.
 #pragma once
 
 #include <optional>
@@ -29,6 +30,10 @@ struct TrajectoryEvaluation {
   // Every image of the recording (all_frame_poses.h): the model's frames
   // and, between them, the VIO's relative motion.
   AllFramePoses all_frames;
+  // With an IMU and one interval within its samples at least; else the
+  // message says why there is none.
+  std::optional<PipelineGyroCheck> gyro_check;
+  std::string gyro_check_message;
 };
 
 // input.images[i] is frames.sequence.images[i] (LoadMapperInputStage).
