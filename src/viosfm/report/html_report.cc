@@ -333,6 +333,16 @@ void SummarySection(const RunData& run, Page* page) {
   } else {
     rows.push_back({"ATE, input VIO", "no ground truth"});
   }
+  if (Find(s, "gyro_check/rmse_deg")) {
+    rows.push_back({"rotations against the gyro over 1 s (deg; the model uses the gyro)",
+                    "RMSE " + Fixed(Number(s, "gyro_check/rmse_deg"), 3) + ", max " +
+                        Fixed(Number(s, "gyro_check/max_deg"), 3) + " (" +
+                        Fixed(Number(s, "gyro_check/worst_from_s"), 2) + " to " +
+                        Fixed(Number(s, "gyro_check/worst_to_s"), 2) + " s), " +
+                        Integer(Number(s, "gyro_check/intervals")) + " intervals"});
+  } else if (Find(s, "gyro_check/message")) {
+    rows.push_back({"rotations against the gyro", Text(s, "gyro_check/message")});
+  }
   rows.push_back({"total time (s)", Fixed(Number(s, "total_seconds"), 2)});
   rows.push_back({"peak memory (MB)", Fixed(Number(s, "peak_memory_mb"), 1)});
   page->KeyValueTable("summary-table", rows);

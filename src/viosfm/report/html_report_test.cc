@@ -150,6 +150,17 @@ nlohmann::ordered_json MakeSummary(bool with_eval) {
                  {"vio_ate_median_m", kVioAteMedian},
                  {"num_poses", kFramesRegistered}};
   }
+  if (with_eval) {
+    s["gyro_check"] = {{"intervals", 28},
+                       {"rmse_deg", 0.2741},
+                       {"median_deg", 0.222},
+                       {"max_deg", 0.6072},
+                       {"worst_from_s", 1.0904},
+                       {"worst_to_s", 2.1102},
+                       {"time_offset_ns", -47332495}};
+  } else {
+    s["gyro_check"] = {{"message", "no IMU"}};
+  }
   s["options_file"] = "options.json";
   return s;
 }
@@ -272,6 +283,9 @@ TEST(RenderRunReport, ShowsTheRunsNumbersAndFigures) {
   EXPECT_FALSE(Contains(outside, "href="));
   EXPECT_EQ(Count(outside, "http"), Count(outside, "xmlns=\"http://www.w3.org/2000/svg\""));
   EXPECT_FALSE(Contains(html, "no ground truth"));
+  EXPECT_TRUE(Contains(html,
+                       "<th>rotations against the gyro over 1 s (deg; the model uses the gyro)</th>"
+                       "<td class=\"num\">RMSE 0.274, max 0.607 (1.09 to 2.11 s), 28 intervals"));
   // Deterministic.
   EXPECT_EQ(html, RenderRunReport(fixture.run_dir));
 }
@@ -285,6 +299,7 @@ TEST(RenderRunReport, MissingOptionalFilesAreNamedInTheirSections) {
   const std::string html = RenderRunReport(run_dir);
   EXPECT_TRUE(Contains(html, "<th>ATE, viosfm</th><td class=\"num\">no ground truth</td>"));
   EXPECT_TRUE(Contains(html, "<th>ATE, input VIO</th><td class=\"num\">no ground truth</td>"));
+  EXPECT_TRUE(Contains(html, "<th>rotations against the gyro</th><td class=\"num\">no IMU</td>"));
   EXPECT_TRUE(Contains(html, "no ground truth: no absolute trajectory error"));
   EXPECT_TRUE(Contains(html, "no ground truth: the estimate and the input VIO are drawn"));
   EXPECT_TRUE(Contains(html, "no pair records"));
