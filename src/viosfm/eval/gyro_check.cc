@@ -23,8 +23,9 @@ double AngleDeg(const Eigen::Quaterniond& rotation) {
 }
 
 // The rotation noise of a frame of the checked trajectory, for the bias's
-// least squares (its value scales every pair alike: it does not move the
-// fit).
+// least squares. It dominates each pair's weight there, and the intervals
+// are of about equal length, so it weighs them almost alike whatever its
+// value.
 constexpr double kFrameRotationSigmaRad = 0.001;
 
 }  // namespace
@@ -118,7 +119,6 @@ GyroCheckResult CheckRotationsAgainstGyro(const Trajectory& world_from_cam,
     }
     return errors;
   };
-  result.num_bias_intervals = 0;
   if (options.fit_bias) {
     // Fitted to every interval, then again to those within three times the
     // median error (and 0.05 degrees): a bend of the trajectory would
