@@ -4,14 +4,11 @@
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
-#include <memory>
 #include <numeric>
 #include <sstream>
 
 #include "viosfm/geometry/lie.h"
-#include "viosfm/sfm/gyro_priors.h"
 #include "viosfm/util/errors.h"
-#include "viosfm/vio/imu_preintegration.h"
 
 namespace viosfm {
 namespace {
@@ -22,11 +19,92 @@ double AngleDeg(const Eigen::Quaterniond& rotation) {
   return QuaternionLog(rotation.normalized()).norm() * kRadToDeg;
 }
 
-// The rotation noise of a frame of the checked trajectory, for the bias's
-// least squares. It dominates each pair's weight there, and the intervals
-// are of about equal length, so it weighs them almost alike whatever its
-// value.
-constexpr double kFrameRotationSigmaRad = 0.001;
+// A longer gap between two gyro samples leaves an interval uncompared
+// (the IMU dropped out there).
+constexpr timestamp_ns_t kMaxGyroGapNs = 25'000'000;
+
+// The gyro's rate at `t` (linear between the samples around it; `after`
+// indexes the first sample at or after t).
+Eigen::Vector3d RateAt(const std::vector<ImuSample>& imu, size_t after, timestamp_ns_t t) {
+  if (imu[after].timestamp_ns == t || after == 0) return imu[after].gyro;
+  const ImuSample& a = imu[after - 1];
+  const ImuSample& b = imu[after];
+  const double u = static_cast<double>(t - a.timestamp_ns) /
+                   static_cast<double>(b.timestamp_ns - a.timestamp_ns);
+  return (1.0 - u) * a.gyro + u * b.gyro;
+}
+
+// The gyro's samples between two stamps on the IMU's clock, the rates at
+// the two ends interpolated; empty when the samples do not cover the
+// stretch or leave a gap longer than kMaxGyroGapNs in it.
+std::vector<ImuSample> GyroStretch(const std::vector<ImuSample>& imu, timestamp_ns_t from_ns,
+                                   timestamp_ns_t to_ns) {
+  if (imu.empty() || imu.front().timestamp_ns > from_ns || imu.back().timestamp_ns < to_ns) {
+    return {};
+  }
+  const auto by_time = [](const ImuSample& sample, timestamp_ns_t t) {
+    return sample.timestamp_ns < t;
+  };
+  size_t k =
+      static_cast<size_t>(std::lower_bound(imu.begin(), imu.end(), from_ns, by_time) - imu.begin());
+  std::vector<ImuSample> stretch;
+  stretch.push_back({from_ns, RateAt(imu, k, from_ns), Eigen::Vector3d::Zero()});
+  for (; k < imu.size() && imu[k].timestamp_ns < to_ns; ++k) {
+    if (imu[k].timestamp_ns > from_ns) stretch.push_back(imu[k]);
+  }
+  stretch.push_back({to_ns, RateAt(imu, k, to_ns), Eigen::Vector3d::Zero()});
+  for (size_t i = 1; i < stretch.size(); ++i) {
+    if (stretch[i].timestamp_ns - stretch[i - 1].timestamp_ns > kMaxGyroGapNs) return {};
+  }
+  return stretch;
+}
+
+// body_from_body_end: the body's rotation over the stretch, the gyro's rate
+// less `bias` integrated by the midpoint rule.
+Eigen::Quaterniond IntegrateGyro(const std::vector<ImuSample>& stretch,
+                                 const Eigen::Vector3d& bias) {
+  Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();
+  for (size_t i = 1; i < stretch.size(); ++i) {
+    const double dt =
+        static_cast<double>(stretch[i].timestamp_ns - stretch[i - 1].timestamp_ns) * 1e-9;
+    const Eigen::Vector3d rate = 0.5 * (stretch[i - 1].gyro + stretch[i].gyro) - bias;
+    rotation = (rotation * So3Exp(rate * dt)).normalized();
+  }
+  return rotation;
+}
+
+// The bias minimising the sum over the stretches of the squared rotation
+// vector between the gyro's rotation and the trajectory's, by Gauss-Newton
+// from zero (Jacobian by central differences; the bias is small, the
+// problem nearly linear).
+Eigen::Vector3d FitGyroBias(const std::vector<const std::vector<ImuSample>*>& stretches,
+                            const std::vector<Eigen::Quaterniond>& trajectory) {
+  const auto residual = [&](size_t i, const Eigen::Vector3d& bias) {
+    return QuaternionLog(
+        (IntegrateGyro(*stretches[i], bias).conjugate() * trajectory[i]).normalized());
+  };
+  Eigen::Vector3d bias = Eigen::Vector3d::Zero();
+  constexpr double kStep = 1e-5;  // rad/s
+  for (int iteration = 0; iteration < 5; ++iteration) {
+    Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+    for (size_t i = 0; i < stretches.size(); ++i) {
+      const Eigen::Vector3d r = residual(i, bias);
+      Eigen::Matrix3d jacobian;
+      for (int axis = 0; axis < 3; ++axis) {
+        const Eigen::Vector3d step = kStep * Eigen::Vector3d::Unit(axis);
+        jacobian.col(axis) = (residual(i, bias + step) - residual(i, bias - step)) / (2 * kStep);
+      }
+      normal += jacobian.transpose() * jacobian;
+      rhs -= jacobian.transpose() * r;
+    }
+    const Eigen::Vector3d delta = normal.ldlt().solve(rhs);
+    if (!delta.allFinite()) break;
+    bias += delta;
+    if (delta.norm() < 1e-9) break;
+  }
+  return bias;
+}
 
 }  // namespace
 
@@ -60,7 +138,7 @@ GyroCheckResult CheckRotationsAgainstGyro(const Trajectory& world_from_cam,
   struct Interval {
     size_t from;  // indices into world_from_cam.poses
     size_t to;
-    std::unique_ptr<ImuPreintegration> gyro;
+    std::vector<ImuSample> gyro;  // GyroStretch
   };
   std::vector<Interval> intervals;
   size_t k = 0;
@@ -76,10 +154,9 @@ GyroCheckResult CheckRotationsAgainstGyro(const Trajectory& world_from_cam,
     if (to.timestamp_ns - from.timestamp_ns > longest_ns) {
       ++result.num_gaps;
     } else {
-      auto gyro = std::make_unique<ImuPreintegration>(Eigen::Vector3d::Zero(),
-                                                      Eigen::Vector3d::Zero(), rig.imu_noise);
-      if (gyro->IntegrateRange(imu, rig.CamToImuTime(from.timestamp_ns),
-                               rig.CamToImuTime(to.timestamp_ns))) {
+      std::vector<ImuSample> gyro =
+          GyroStretch(imu, rig.CamToImuTime(from.timestamp_ns), rig.CamToImuTime(to.timestamp_ns));
+      if (!gyro.empty()) {
         intervals.push_back({order[k], order[next], std::move(gyro)});
       } else {
         ++result.num_without_imu;
@@ -111,8 +188,7 @@ GyroCheckResult CheckRotationsAgainstGyro(const Trajectory& world_from_cam,
   const auto errors_at = [&](const Eigen::Vector3d& bias) {
     std::vector<double> errors;
     for (size_t i = 0; i < intervals.size(); ++i) {
-      const Eigen::Quaterniond gyro =
-          intervals[i].gyro->Corrected(bias, Eigen::Vector3d::Zero()).delta_R;
+      const Eigen::Quaterniond gyro = IntegrateGyro(intervals[i].gyro, bias);
       // The camera-IMU rotation turns the body's rotation error into the
       // camera's without changing its angle.
       errors.push_back(AngleDeg(gyro.conjugate() * trajectory_rotations[i]));
@@ -125,15 +201,15 @@ GyroCheckResult CheckRotationsAgainstGyro(const Trajectory& world_from_cam,
     // otherwise be spread over the whole recording as a bias.
     std::vector<bool> used(intervals.size(), true);
     for (int round = 0; round < 3; ++round) {
-      std::vector<GyroPair> pairs;
+      std::vector<const std::vector<ImuSample>*> stretches;
+      std::vector<Eigen::Quaterniond> rotations;
       for (size_t i = 0; i < intervals.size(); ++i) {
         if (!used[i]) continue;
-        pairs.push_back({intervals[i].gyro.get(), world_from_body(intervals[i].from),
-                         world_from_body(intervals[i].to), 0});
+        stretches.push_back(&intervals[i].gyro);
+        rotations.push_back(trajectory_rotations[i]);
       }
-      result.gyro_bias =
-          EstimateGyroBiases(pairs, 1, kFrameRotationSigmaRad, rig.imu_noise).front();
-      result.num_bias_intervals = pairs.size();
+      result.gyro_bias = FitGyroBias(stretches, rotations);
+      result.num_bias_intervals = stretches.size();
       const std::vector<double> errors = errors_at(result.gyro_bias);
       std::vector<double> sorted = errors;
       std::nth_element(sorted.begin(), sorted.begin() + static_cast<ptrdiff_t>(sorted.size() / 2),
@@ -152,8 +228,7 @@ GyroCheckResult CheckRotationsAgainstGyro(const Trajectory& world_from_cam,
     GyroCheckInterval checked;
     checked.from_ns = world_from_cam.poses[intervals[i].from].timestamp_ns;
     checked.to_ns = world_from_cam.poses[intervals[i].to].timestamp_ns;
-    checked.gyro_angle_deg =
-        AngleDeg(intervals[i].gyro->Corrected(result.gyro_bias, Eigen::Vector3d::Zero()).delta_R);
+    checked.gyro_angle_deg = AngleDeg(IntegrateGyro(intervals[i].gyro, result.gyro_bias));
     checked.error_deg = errors[i];
     result.intervals.push_back(checked);
   }

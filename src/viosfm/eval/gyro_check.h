@@ -9,15 +9,17 @@
 // between frames about `interval_s` apart, from the trajectory, is compared
 // with the gyro's between the same stamps, expressed in the camera through
 // the camera-IMU rotation of the calibration and on the IMU's clock through
-// its time offset. The gyro's bias is one constant, fitted by least squares
-// to the trajectory's own relative rotations (sfm/gyro_priors.h's
-// EstimateGyroBiases, one window) and fitted again without the intervals
-// more than three times the median error off, so that a bend is not spread
-// over the recording as a bias; or it is taken as zero (the raw gyro). A
-// fitted bias can take up part of a slow, even turn of a bent trajectory
-// (three numbers for the whole recording), not a bend of a few seconds:
-// what remains is the trajectory's error, or the rig's (the camera-IMU
-// rotation, the time offset, rolling shutter) where the intervals share it.
+// its time offset. The gyro is integrated here (the midpoint rule on its
+// samples), not by the VIO's preintegration: the judge shares no code with
+// what it judges. Its bias is one constant, fitted by least squares to the
+// trajectory's own relative rotations and fitted again without the
+// intervals more than three times the median error off, so that a bend is
+// not spread over the recording as a bias; or it is taken as zero (the raw
+// gyro). A fitted bias can take up part of a slow, even turn of a bent
+// trajectory (three numbers for the whole recording), not a bend of a few
+// seconds: what remains is the trajectory's error, or the rig's (the
+// camera-IMU rotation, the time offset, rolling shutter) where the
+// intervals share it.
 //
 // The check judges a trajectory made without the gyro (COLMAP's, or any
 // images-only model) independently; a trajectory made with it (a VIO's,
@@ -76,8 +78,9 @@ struct GyroCheckResult {
 };
 
 // `world_from_cam`: camera poses (stamps on the camera's clock); `rig`
-// gives body_from_cam (body = IMU), the camera-IMU time offset and the
-// IMU's noise; `imu` in increasing time. Throws InputError if the options
+// gives body_from_cam (body = IMU) and the camera-IMU time offset; `imu` in
+// increasing time (an interval across a gap of more than 25 ms between its
+// samples is not compared). Throws InputError if the options
 // are invalid, the trajectory has no stamps, or not one interval lies
 // within the IMU's samples.
 GyroCheckResult CheckRotationsAgainstGyro(const Trajectory& world_from_cam,

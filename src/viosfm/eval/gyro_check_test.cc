@@ -150,6 +150,25 @@ TEST(GyroCheck, IntervalsOutsideTheImuOrAcrossGapsAreCountedNotCompared) {
   EXPECT_EQ(json["intervals"][0]["from_ns"], result.intervals[0].from_ns);
 }
 
+// The IMU silent for 50 ms at 3.2 s: the interval across the dropout is
+// not compared (its rotation would be a guess); the others are.
+TEST(GyroCheck, AnIntervalAcrossAnImuDropoutIsNotCompared) {
+  Recording recording = MakeRecording(6.0, Eigen::Vector3d::Zero(), 0.0);
+  std::vector<ImuSample> kept;
+  for (const ImuSample& sample : recording.imu) {
+    if (sample.timestamp_ns <= 3'200'000'000 || sample.timestamp_ns >= 3'250'000'000) {
+      kept.push_back(sample);
+    }
+  }
+  recording.imu = kept;
+  const GyroCheckResult result =
+      CheckRotationsAgainstGyro(recording.world_from_cam, recording.imu, recording.rig, {});
+  // 0.5-1.5, 1.5-2.5, 3.5-4.5, 4.5-5.5 compared; 2.5-3.5 not.
+  EXPECT_EQ(result.intervals.size(), 4u);
+  EXPECT_EQ(result.num_without_imu, 1u);
+  EXPECT_LT(result.error_deg.max, 0.01);
+}
+
 TEST(GyroCheck, BadInputIsRefusedWithWhatWasWrong) {
   Recording recording = MakeRecording(4.0, Eigen::Vector3d::Zero(), 0.0);
   GyroCheckOptions bad;
