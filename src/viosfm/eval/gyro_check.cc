@@ -125,6 +125,7 @@ GyroCheckResult CheckRotationsAgainstGyro(const Trajectory& world_from_cam,
   }
   GyroCheckResult result;
   result.num_frames = world_from_cam.size();
+  result.time_offset_ns = rig.cam_time_offset_ns;
   std::vector<size_t> order(world_from_cam.size());
   std::iota(order.begin(), order.end(), size_t{0});
   std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
@@ -249,7 +250,8 @@ std::string FormatGyroCheck(const GyroCheckResult& result, size_t num_worst) {
   out << "rotations against the gyro: " << result.intervals.size() << " intervals of "
       << std::setprecision(2) << mean_length << " s on average between " << result.num_frames
       << " frames (" << result.num_without_imu << " not within the IMU's samples, "
-      << result.num_gaps << " across gaps not compared)\n";
+      << result.num_gaps << " across gaps not compared), camera-IMU time offset "
+      << std::setprecision(1) << static_cast<double>(result.time_offset_ns) * 1e-6 << " ms\n";
   out << "  gyro bias ";
   if (result.bias_fitted) {
     out << "fitted to " << result.num_bias_intervals << " of the intervals";

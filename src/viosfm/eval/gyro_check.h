@@ -69,6 +69,7 @@ struct GyroCheckResult {
   // than max_interval_factor * interval_s.
   size_t num_without_imu = 0;
   size_t num_gaps = 0;
+  timestamp_ns_t time_offset_ns = 0;  // the rig's: t_imu = t_cam + offset
   bool bias_fitted = false;
   // The intervals the bias was fitted to: those within three times the
   // median error (and 0.05 degrees) of the fit to all, fitted again.

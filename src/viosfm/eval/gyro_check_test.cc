@@ -120,6 +120,8 @@ TEST(GyroCheck, TheTimeOffsetIsApplied) {
   const GyroCheckResult at_offset =
       CheckRotationsAgainstGyro(recording.world_from_cam, recording.imu, recording.rig, raw);
   EXPECT_LT(at_offset.error_deg.max, 0.01);
+  EXPECT_EQ(at_offset.time_offset_ns, 40'000'000);
+  EXPECT_THAT(FormatGyroCheck(at_offset), HasSubstr("camera-IMU time offset 40.0 ms"));
   recording.rig.cam_time_offset_ns = 0;
   const GyroCheckResult at_zero =
       CheckRotationsAgainstGyro(recording.world_from_cam, recording.imu, recording.rig, raw);
@@ -146,6 +148,7 @@ TEST(GyroCheck, IntervalsOutsideTheImuOrAcrossGapsAreCountedNotCompared) {
   const nlohmann::json json = nlohmann::json::parse(GyroCheckToJson(result, {}));
   EXPECT_EQ(json["num_intervals"], 3);
   EXPECT_EQ(json["num_gaps"], 1);
+  EXPECT_EQ(json["time_offset_ns"], 0);
   EXPECT_EQ(json["intervals"].size(), 3u);
   EXPECT_EQ(json["intervals"][0]["from_ns"], result.intervals[0].from_ns);
 }

@@ -148,6 +148,7 @@ std::string GyroCheckToJson(const GyroCheckResult& result, const GyroCheckOption
       {"num_intervals", result.intervals.size()},
       {"num_without_imu", result.num_without_imu},
       {"num_gaps", result.num_gaps},
+      {"time_offset_ns", result.time_offset_ns},
       {"bias_fitted", result.bias_fitted},
       {"num_bias_intervals", result.num_bias_intervals},
       {"gyro_bias_rad_s", {result.gyro_bias.x(), result.gyro_bias.y(), result.gyro_bias.z()}},

@@ -38,6 +38,7 @@ void WriteEvaluationJson(const std::filesystem::path& path, const EvaluationResu
 // The gyro check (gyro_check.h) as a JSON document:
 //  {"options": {"interval_s", "max_interval_factor", "fit_bias"},
 //   "num_frames", "num_intervals", "num_without_imu", "num_gaps",
+//   "time_offset_ns",
 //   "bias_fitted", "num_bias_intervals", "gyro_bias_rad_s": [x, y, z], "error_deg": stats,
 //   "intervals": [{"from_ns", "to_ns", "gyro_angle_deg", "error_deg"}]}
 std::string GyroCheckToJson(const GyroCheckResult& result, const GyroCheckOptions& options);
