@@ -20,6 +20,7 @@ void RegisterReport(CLI::App& app);
 void RegisterBenchReport(CLI::App& app);
 void RegisterConvert(CLI::App& app);
 void RegisterExport(CLI::App& app);
+void RegisterEmulateVio(CLI::App& app);
 
 // --calibration FILE and --imu-calibration FILE (Kalibr camchain.yaml and
 // imu.yaml, io/kalibr.h) of the subcommands that read a dataset's rig.

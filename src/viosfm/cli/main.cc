@@ -27,6 +27,7 @@ int main(int argc, char** argv) {
   viosfm::cli::RegisterEval(app);
   viosfm::cli::RegisterConvert(app);
   viosfm::cli::RegisterExport(app);
+  viosfm::cli::RegisterEmulateVio(app);
 
   try {
     app.parse(argc, argv);

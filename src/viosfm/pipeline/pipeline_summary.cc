@@ -116,6 +116,7 @@ std::string PipelineSummaryToJson(const PipelineSummary& s) {
                     {"vio_only", s.num_frames_vio_only},
                     {"unposed", s.num_frames_unposed},
                     {"reposed_from_images", s.mapper.num_reposed},
+                    {"reposed_after_adjustment", s.mapper.num_reposed_after_adjustment},
                     {"registered_without_vio", s.mapper.num_registered_without_vio}};
   json["all_frames"] = {{"images", s.all_frames.num_images},
                         {"from_model", s.all_frames.num_from_model},
@@ -164,6 +165,14 @@ std::string PipelineSummaryToJson(const PipelineSummary& s) {
     }
   }
   json["unposed_frames"] = unposed;
+  ordered_json vio_only = ordered_json::array();
+  for (const MapperFrameStatus& frame : s.mapper.frames) {
+    if (frame.source != FramePoseSource::kNone && !frame.supported) {
+      vio_only.push_back({{"image_id", frame.image_id},
+                          {"supporting_observations", frame.num_supporting_observations}});
+    }
+  }
+  json["vio_only_frames"] = vio_only;
   json["pairs"] = {{"candidates", s.verification.num_pairs},
                    {"accepted", s.verification.num_accepted},
                    {"vio_rejected", s.verification.num_vio_rejected},

@@ -309,7 +309,8 @@ std::string BatchedMapperSummary::ToString() const {
       << " s (tracks " << seconds_tracks << " s)\n"
       << "  frames: " << num_supported << " supported by the images, " << num_vio_only
       << " placed by the VIO only, " << num_unposed << " without a pose; " << num_reposed
-      << " re-posed from the images (VIO disagreed), " << num_registered_without_vio
+      << " re-posed from the images (VIO disagreed; " << num_reposed_after_adjustment
+      << " of them after an adjustment), " << num_registered_without_vio
       << " registered from the images without a VIO prediction, " << num_without_vio_pose
       << " without a VIO pose; VIO segments " << num_vio_segments_joined << " of "
       << num_vio_segments << " joined, " << num_vio_breaks << " VIO jump(s) found\n"
@@ -725,6 +726,92 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
     }
     return added;
   };
+  // A second look at the frames placed by the VIO alone that the images do
+  // not support: the gauge frame (placed where the VIO puts it, to fix the
+  // model's frame) and the frames registered before the model had points to
+  // check them (a first batch's) or too few. Where the VIO's relative pose
+  // to their neighbours was off, the triangulation took their observations
+  // for outliers and the adjustment had nothing to move them by. Against the
+  // adjusted model their 2D-3D matches are checked as try_register does: a
+  // PnP pose of at least min_reposing_inliers inliers within the drift the
+  // VIO model allows since the nearest registered frame replaces the pose
+  // the images do not support; then the frame's tracks are triangulated
+  // again so that its observations join the points. Returns how many frames
+  // were re-posed.
+  const auto recheck_vio_placed = [&]() -> size_t {
+    if (!registration.verify_with_images || !registration.recheck_after_adjustment) return 0;
+    std::vector<size_t> reposed;
+    for (const image_t image_id : registered) {
+      const size_t i = index_of_image.at(image_id);
+      if (frames[i].source != FramePoseSource::kVio) continue;
+      if (CountSupportingObservations(reconstruction, image_id,
+                                      registration.support_max_error_px) >=
+          registration.min_supporting_observations) {
+        continue;
+      }
+      const std::optional<size_t> reference = find_reference(i);
+      if (!reference) continue;
+      const FrameCorrespondences correspondences =
+          CollectFrameCorrespondences(reconstruction, tracks, tracks_of_image[i], image_id);
+      if (static_cast<int>(correspondences.size()) < registration.min_num_correspondences) continue;
+      const Rigid3d current = reconstruction.GetImage(image_id).cam_from_world;
+      const Camera& camera = reconstruction.GetCamera(input.images[i].camera_id);
+      AbsolutePoseOptions pnp = registration.pnp;
+      pnp.seed = registration.pnp.seed + image_id;
+      const AbsolutePoseResult result =
+          EstimateAbsolutePose(correspondences.points_normalized, correspondences.points_in_world,
+                               MeanFocalLength(camera), pnp, current);
+      const int pnp_inliers = result.success ? static_cast<int>(result.num_inliers) : 0;
+      const int current_inliers = static_cast<int>(result.num_predicted_inliers);
+      if (pnp_inliers < registration.min_reposing_inliers) continue;
+      if (current_inliers >= registration.pnp.min_num_inliers &&
+          static_cast<double>(current_inliers) >=
+              registration.min_predicted_inlier_ratio * pnp_inliers) {
+        continue;  // the images support the pose it has
+      }
+      const RelativePoseSigmas sigmas = LargestSigmas(RelativePoseCovariance(
+          options.vio_uncertainty, VioSampleOfImage(input.images[*reference]),
+          VioSampleOfImage(input.images[i])));
+      const double position_difference =
+          (ProjectionCenter(result.cam_from_world) - ProjectionCenter(current)).norm();
+      const double rotation_difference =
+          result.cam_from_world.rotation.angularDistance(current.rotation);
+      if (position_difference > registration.break_sigmas * sigmas.translation_m +
+                                    registration.break_min_translation_m ||
+          rotation_difference > registration.break_sigmas * sigmas.rotation_rad +
+                                    registration.break_min_rotation_rad) {
+        continue;  // beyond the VIO's drift: not a refinement
+      }
+      Image& image = reconstruction.GetImage(image_id);
+      image.cam_from_world = result.cam_from_world;
+      image.cam_from_world.rotation.normalize();
+      frames[i].source = FramePoseSource::kImagesReposed;
+      frames[i].num_correspondences = static_cast<int>(correspondences.size());
+      frames[i].num_predicted_inliers = current_inliers;
+      frames[i].num_pnp_inliers = pnp_inliers;
+      VIOSFM_LOG(DEBUG) << "batched mapper: " << DescribeImage(input.images[i])
+                        << " placed by the VIO and unsupported by the images, re-posed from "
+                        << pnp_inliers << " PnP inliers (" << current_inliers
+                        << " at its pose), moved " << position_difference << " m and "
+                        << rotation_difference << " rad";
+      reposed.push_back(i);
+    }
+    if (!reposed.empty()) {
+      std::vector<size_t> track_indices;
+      for (const size_t i : reposed) {
+        track_indices.insert(track_indices.end(), tracks_of_image[i].begin(),
+                             tracks_of_image[i].end());
+      }
+      std::sort(track_indices.begin(), track_indices.end());
+      track_indices.erase(std::unique(track_indices.begin(), track_indices.end()),
+                          track_indices.end());
+      std::vector<Track> subset;
+      for (const size_t t : track_indices) subset.push_back(tracks[t]);
+      note_changes(
+          TriangulateReconstruction(&reconstruction, subset, registered, options.triangulation));
+    }
+    return reposed.size();
+  };
   // The priors not crossing a VIO jump found so far (without the bridging
   // ones if `with_bridging` is false).
   const auto active_priors = [&](bool with_bridging) {
@@ -1073,9 +1160,15 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
             TriangulateReconstruction(&reconstruction, subset, registered, options.triangulation));
       }
     }
-    // 6. After the final bundle adjustment, the frames that only the final
-    // model allows to register, and another global adjustment.
-    if (last && retry_pending() > 0 && (options.ba_after_each_batch || options.final_global_ba)) {
+    // 6. The frames placed by the VIO alone that the adjusted model now
+    // re-poses (recheck_vio_placed); after the final bundle adjustment also
+    // the frames that only the final model allows to register, and then
+    // another global adjustment.
+    const size_t reposed_after_adjustment = recheck_vio_placed();
+    summary.num_reposed_after_adjustment += static_cast<int>(reposed_after_adjustment);
+    const size_t registered_late = last ? retry_pending() : 0;
+    if (last && reposed_after_adjustment + registered_late > 0 &&
+        (options.ba_after_each_batch || options.final_global_ba)) {
       summary.final_ba = adjust(0, true);
       FilterPoints(&reconstruction, options.filter, options.num_threads);
       if (options.retriangulate) {

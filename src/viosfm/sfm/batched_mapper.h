@@ -256,8 +256,12 @@ struct BatchedMapperSummary {
   int num_supported = 0;
   int num_vio_only = 0;
   int num_unposed = 0;
-  int num_without_vio_pose = 0;        // input frames without a VIO pose
-  int num_reposed = 0;                 // FramePoseSource::kImagesReposed
+  int num_without_vio_pose = 0;  // input frames without a VIO pose
+  int num_reposed = 0;           // FramePoseSource::kImagesReposed
+  // Of num_reposed, the frames placed by the VIO alone at first (the gauge
+  // frame, a first batch's) that the images re-posed once an adjustment had
+  // given them points to check against.
+  int num_reposed_after_adjustment = 0;
   int num_registered_without_vio = 0;  // FramePoseSource::kImagesWithoutVio
   int num_vio_breaks = 0;
   int num_vio_segments = 0;         // VIO segments among the input frames

@@ -177,4 +177,33 @@ EmulatedVio EmulateRealisticVio(const Trajectory& ground_truth,
   return vio;
 }
 
+EmulatedVio EmulateRealisticVioOnGrid(const Trajectory& ground_truth,
+                                      const RealisticVioOptions& options, double rate_hz) {
+  VIOSFM_CHECK_GE(ground_truth.size(), 2u);
+  VIOSFM_CHECK(rate_hz > 0.0 && std::isfinite(rate_hz));
+  const double step_ns = 1e9 / rate_hz;
+  Trajectory grid;
+  grid.has_timestamps = ground_truth.has_timestamps;
+  grid.poses.push_back(ground_truth.poses.front());
+  for (size_t k = 1; k < ground_truth.size(); ++k) {
+    const StampedPose& before = ground_truth.poses[k - 1];
+    const StampedPose& after = ground_truth.poses[k];
+    const timestamp_ns_t span = after.timestamp_ns - before.timestamp_ns;
+    VIOSFM_CHECK_GT(span, 0);
+    const int64_t steps =
+        std::max<int64_t>(1, static_cast<int64_t>(std::ceil(static_cast<double>(span) / step_ns)));
+    for (int64_t i = 1; i < steps; ++i) {
+      const double s = static_cast<double>(i) / static_cast<double>(steps);
+      Rigid3d pose;
+      pose.rotation = before.world_from_frame.rotation.slerp(s, after.world_from_frame.rotation);
+      pose.translation =
+          (1.0 - s) * before.world_from_frame.translation + s * after.world_from_frame.translation;
+      grid.poses.push_back(
+          {before.timestamp_ns + static_cast<timestamp_ns_t>(std::llround(s * span)), pose});
+    }
+    grid.poses.push_back(after);
+  }
+  return EmulateRealisticVio(grid, options);
+}
+
 }  // namespace viosfm

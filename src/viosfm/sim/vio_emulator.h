@@ -78,4 +78,15 @@ struct EmulatedVio {
 // walks grow per step). Stamps within a re-initialisation's gap have no pose.
 EmulatedVio EmulateRealisticVio(const Trajectory& ground_truth, const RealisticVioOptions& options);
 
+// The realistic VIO of a ground truth of any spacing (the photos of a
+// survey, keyframes seconds apart): the ground truth is interpolated (linear
+// positions, slerped rotations) on a grid of at least `rate_hz` that passes
+// through every one of its stamps, and the VIO emulated on that grid, as a
+// VIO gives its poses at its own rate. The result has a pose at every stamp
+// of the grid (none within a re-initialisation's gap), so at each stamp of
+// `ground_truth` too. `ground_truth` needs at least two poses with
+// increasing stamps (CHECK); rate_hz > 0.
+EmulatedVio EmulateRealisticVioOnGrid(const Trajectory& ground_truth,
+                                      const RealisticVioOptions& options, double rate_hz);
+
 }  // namespace viosfm

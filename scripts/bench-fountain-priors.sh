@@ -1,0 +1,196 @@
+#!/usr/bin/env bash
+# Real photos, a drifting VIO, metric ground truth: Strecha's fountain-P11
+# (11 photos of 3072x2048 with ground-truth cameras), each photo given a
+# stamp 1 s after the one before (keyframes of a walk along the facade), and
+# a VIO emulated on the ground truth (`viosfm emulate-vio`: the uncertainty
+# model's default drift and a 2 % scale error, at 20 Hz through the photos'
+# stamps). Every variant of the relative-pose priors is mapped from the
+# default run's stored matches, and COLMAP 3.8 reconstructs the same photos;
+# each trajectory's Sim(3) and SE(3) ATE against the ground truth.
+#
+#   SEEDS="0 1 2" DRIFTS="1 3" scripts/bench-fountain-priors.sh OUT
+#
+# DRIFTS multiplies the emulated VIO's drift, noise and scale error
+# (`--vio-drift`): 1 is the model the priors assume, 3 a VIO three times
+# worse than they assume (as an external VIO of unknown quality may be).
+#
+# VIOSFM_DATA_DIR (default ../shared/data beside the project) holds
+# strecha_fountain_p11. NO_COLMAP=1 skips COLMAP. The photos are read where
+# they are (a timestamps file lists them); nothing is copied.
+set -euo pipefail
+here=$(cd "$(dirname "$0")/.." && pwd)
+VIOSFM=${VIOSFM:-$here/build/src/viosfm/cli/viosfm}
+data=${VIOSFM_DATA_DIR:-$here/../shared/data}/strecha_fountain_p11
+out=${1:?usage: scripts/bench-fountain-priors.sh OUT}
+seeds=${SEEDS:-0 1 2}
+drifts=${DRIFTS:-1 3}
+if [ ! -d "$data/images" ]; then
+  echo "no $data/images (set VIOSFM_DATA_DIR to the folder holding strecha_fountain_p11)" >&2
+  exit 2
+fi
+mkdir -p "$out"
+out=$(cd "$out" && pwd)
+
+# Timestamps (1 s apart), the camera (K of the photos, no distortion) and the
+# ground truth as world_from_cam, its world turned so that z points up (the
+# photos are upright: up is minus the mean of the cameras' y axes), as a
+# gravity-aligned VIO's world would be.
+/usr/bin/python3 - "$data" "$out" <<'PY'
+import sys, os, numpy as np
+data, out = sys.argv[1], sys.argv[2]
+names = sorted(f[:-4] for f in os.listdir(os.path.join(data, "images")) if f.endswith(".jpg"))
+cams = []
+for n in names:
+    v = np.array(open(os.path.join(data, "gt_dense_cameras", n + ".jpg.camera")).read().split(), float)
+    K, R, C, wh = v[0:9].reshape(3, 3), v[12:21].reshape(3, 3), v[21:24], v[24:26]
+    cams.append((K, R, C, wh))
+up = -np.mean([R[:, 1] for _, R, _, _ in cams], axis=0)
+up /= np.linalg.norm(up)
+z = np.array([0.0, 0.0, 1.0])
+axis = np.cross(up, z)
+s, c = np.linalg.norm(axis), up @ z
+if s < 1e-12:
+    W = np.eye(3) if c > 0 else np.diag([1.0, -1.0, -1.0])
+else:
+    a = axis / s
+    A = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
+    W = np.eye(3) + s * A + (1 - c) * A @ A  # turns up onto z
+def quat(R):  # Hamilton, x y z w
+    w = np.sqrt(max(0.0, 1 + R[0, 0] + R[1, 1] + R[2, 2])) / 2
+    x = np.copysign(np.sqrt(max(0.0, 1 + R[0, 0] - R[1, 1] - R[2, 2])) / 2, R[2, 1] - R[1, 2])
+    y = np.copysign(np.sqrt(max(0.0, 1 - R[0, 0] + R[1, 1] - R[2, 2])) / 2, R[0, 2] - R[2, 0])
+    zq = np.copysign(np.sqrt(max(0.0, 1 - R[0, 0] - R[1, 1] + R[2, 2])) / 2, R[1, 0] - R[0, 1])
+    return x, y, zq, w
+with open(os.path.join(out, "timestamps.txt"), "w") as ts, \
+     open(os.path.join(out, "groundtruth_cam.tum"), "w") as gt:
+    gt.write("# timestamp tx ty tz qx qy qz qw (world z up)\n")
+    for i, (n, (K, R, C, wh)) in enumerate(zip(names, cams)):
+        t = i + 1
+        ts.write(f"{n}.jpg {t}.0\n")
+        Rw, Cw = W @ R, W @ C
+        gt.write(f"{t}.000000000 {Cw[0]:.9f} {Cw[1]:.9f} {Cw[2]:.9f} " + " ".join(f"{q:.12f}" for q in quat(Rw)) + "\n")
+K, _, _, wh = cams[0]
+with open(os.path.join(out, "camera.yaml"), "w") as f:
+    f.write(f"""%YAML:1.0
+sensor_type: camera
+comment: Strecha fountain-P11 (gt_dense_cameras K, no distortion)
+T_BS:
+  cols: 4
+  rows: 4
+  data: [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0]
+rate_hz: 1
+resolution: [{int(wh[0])}, {int(wh[1])}]
+camera_model: pinhole
+intrinsics: [{K[0,0]}, {K[1,1]}, {K[0,2]}, {K[1,2]}]
+distortion_model: radial-tangential
+distortion_coefficients: [0.0, 0.0, 0.0, 0.0]
+""")
+path = sum(np.linalg.norm(cams[i][2] - cams[i - 1][2]) for i in range(1, len(cams)))
+print(f"{len(names)} photos, path {path:.2f} m between the first and the last camera")
+PY
+
+ate() {  # estimate reference -> "sim3_mm se3_mm scale_error_percent" (scale error: 1 / the Sim(3) fit's - 1)
+  local j=$out/eval.tmp.json sim3 se3
+  "$VIOSFM" eval --est "$1" --ref "$2" --align sim3 --json "$j" > /dev/null 2>&1 || { echo "- - -"; return; }
+  sim3=$(jq -r '"\(.ate.translation_m.rmse) \(.alignment.scale)"' "$j")
+  "$VIOSFM" eval --est "$1" --ref "$2" --align se3 --json "$j" > /dev/null 2>&1 || { echo "- - -"; return; }
+  se3=$(jq -r '.ate.translation_m.rmse' "$j")
+  echo "$sim3 $se3" | awk '{ printf "%.2f %.2f %+.2f\n", 1000 * $1, 1000 * $3, 100 * (1 / $2 - 1) }'
+}
+
+run_flags=(--timestamps "$out/timestamps.txt" --camera-yaml "$out/camera.yaml" --vio-frame cam
+           --rate 0 --no-progress)
+for drift in $drifts; do
+for seed in $seeds; do
+  vio=$out/vio_d${drift}_s$seed.tum
+  [ -f "$vio" ] || "$VIOSFM" emulate-vio "$out/groundtruth_cam.tum" --seed "$seed" \
+    --vio-drift "$drift" --out "$vio" > "$out/emulate_d${drift}_s$seed.log" 2>&1
+  runs=$out/d${drift}_s$seed
+  mkdir -p "$runs"
+  if [ ! -f "$runs/default/summary.json" ]; then
+    "$VIOSFM" run "$data/images" --out "$runs/default" --vio-trajectory "$vio" \
+      "${run_flags[@]}" > "$runs/default.log" 2>&1
+  fi
+  for variant in no_rpc paper no_bridging; do
+    [ -f "$runs/$variant/summary.json" ] && continue
+    case $variant in
+      no_rpc) flags=(--no-rpc) ;;
+      paper) flags=(--prior-weighting paper) ;;
+      no_bridging) flags=(--no-bridging) ;;
+    esac
+    rm -rf "$runs/$variant"
+    mkdir -p "$runs/$variant"
+    cp "$runs/default/database.db" "$runs/default/options.json" "$runs/default/fingerprint.json" \
+      "$runs/$variant/"
+    "$VIOSFM" run "$data/images" --out "$runs/$variant" --vio-trajectory "$vio" \
+      "${run_flags[@]}" "${flags[@]}" > "$runs/$variant.log" 2>&1
+  done
+done
+done
+
+if [ "${NO_COLMAP:-0}" != 1 ] && [ ! -f "$out/colmap/sparse/0/images.bin" ]; then
+  rm -rf "$out/colmap"
+  mkdir -p "$out/colmap/sparse"
+  export QT_QPA_PLATFORM=offscreen
+  read -r fx fy cx cy < <(awk -F'[][, ]+' '/^intrinsics/ { print $2, $3, $4, $5 }' "$out/camera.yaml")
+  start=$(date +%s.%N)
+  colmap feature_extractor --database_path "$out/colmap/database.db" --image_path "$data/images" \
+    --ImageReader.camera_model PINHOLE --ImageReader.single_camera 1 \
+    --ImageReader.camera_params "$fx,$fy,$cx,$cy" --SiftExtraction.use_gpu 0 \
+    --SiftExtraction.num_threads "${THREADS:-2}" > "$out/colmap/log.txt" 2>&1
+  colmap exhaustive_matcher --database_path "$out/colmap/database.db" \
+    --SiftMatching.use_gpu 0 --SiftMatching.num_threads "${THREADS:-2}" >> "$out/colmap/log.txt" 2>&1
+  colmap mapper --database_path "$out/colmap/database.db" --image_path "$data/images" \
+    --output_path "$out/colmap/sparse" --Mapper.num_threads "${THREADS:-2}" \
+    --Mapper.ba_refine_focal_length 0 --Mapper.ba_refine_principal_point 0 \
+    --Mapper.ba_refine_extra_params 0 >> "$out/colmap/log.txt" 2>&1
+  echo "$(date +%s.%N) - $start" | bc > "$out/colmap/seconds.txt"
+fi
+
+{
+  echo "Sim(3) ATE / SE(3) ATE mm, scale error % (1 / the Sim(3) fit's scale - 1), against the ground truth"
+  echo
+  echo "| VIO drift | seed | input VIO | **default** | \`--no-rpc\` | paper weighting | \`--no-bridging\` | registered (default) |"
+  echo "|---|---|---|---|---|---|---|---|"
+  for drift in $drifts; do
+  for seed in $seeds; do
+    runs=$out/d${drift}_s$seed
+    read -r vs ve vsc <<< "$(ate "$out/vio_d${drift}_s$seed.tum" "$out/groundtruth_cam.tum")"
+    row="| $drift | $seed | $vs / $ve, $vsc"
+    for variant in default no_rpc paper no_bridging; do
+      read -r s e sc <<< "$(ate "$runs/$variant/trajectory_cam.tum" "$out/groundtruth_cam.tum")"
+      row="$row | $s / $e, $sc"
+    done
+    reg=$(jq -r '"\(.frames.registered) of \(.frames.selected)"' "$runs/default/summary.json" 2>/dev/null || echo -)
+    echo "$row | $reg |"
+  done
+  done
+  if [ -f "$out/colmap/sparse/0/images.bin" ]; then
+    # COLMAP's model as world_from_cam at the photos' stamps.
+    mkdir -p "$out/colmap/txt"
+    colmap model_converter --input_path "$out/colmap/sparse/0" --output_path "$out/colmap/txt" \
+      --output_type TXT > /dev/null 2>&1
+    /usr/bin/python3 - "$out" <<'PY'
+import sys, numpy as np
+out = sys.argv[1]
+stamps = dict(line.split() for line in open(f"{out}/timestamps.txt"))
+rows = []
+lines = [l for l in open(f"{out}/colmap/txt/images.txt") if not l.startswith("#")]
+for header in lines[0::2]:
+    v = header.split()
+    qw, qx, qy, qz, tx, ty, tz = map(float, v[1:8])
+    q = np.array([qw, qx, qy, qz]); w, x, y, z = q / np.linalg.norm(q)
+    R = np.array([[1-2*(y*y+z*z), 2*(x*y-z*w), 2*(x*z+y*w)], [2*(x*y+z*w), 1-2*(x*x+z*z), 2*(y*z-x*w)], [2*(x*z-y*w), 2*(y*z+x*w), 1-2*(x*x+y*y)]])
+    C = -R.T @ np.array([tx, ty, tz])
+    # world_from_cam rotation R^T: its quaternion is the conjugate
+    rows.append((float(stamps[v[9]]), C, (-x, -y, -z, w)))
+with open(f"{out}/colmap/trajectory_cam.tum", "w") as f:
+    for t, C, q in sorted(rows, key=lambda r: r[0]):
+        f.write(f"{t:.9f} {C[0]:.9f} {C[1]:.9f} {C[2]:.9f} " + " ".join(f"{c:.12f}" for c in q) + "\n")
+PY
+    read -r s e sc <<< "$(ate "$out/colmap/trajectory_cam.tum" "$out/groundtruth_cam.tum")"
+    echo
+    echo "COLMAP 3.8 (the same photos, exhaustive matching, K fixed): $(wc -l < "$out/colmap/trajectory_cam.tum") of 11 photos, Sim(3) ATE $s mm, $(awk '{ printf "%.0f", $1 }' "$out/colmap/seconds.txt") s"
+  fi
+} | tee "$out/table.md"
+rm -f "$out/eval.tmp.json"
