@@ -70,6 +70,24 @@ expect_exit(2 "^error: --gyro-time-offset: expected decimal seconds, got 'abc'"
 if(EXISTS "${WORK}/gyro.json")
   message(FATAL_ERROR "eval --gyro that failed left ${WORK}/gyro.json behind")
 endif()
+# emulate-vio: a ground truth it cannot drift along, refused by name, no
+# file written.
+file(WRITE "${WORK}/one.tum" "1.0 0 0 0 0 0 0 1\n")
+expect_exit(2 "^error: ${WORK}/one.tum: needs at least 2 poses, has 1" emulate-vio
+            "${WORK}/one.tum" --out "${WORK}/vio_one.tum")
+file(WRITE "${WORK}/back.tum" "2.0 0 0 0 0 0 0 1\n1.0 0.1 0 0 0 0 0 1\n")
+expect_exit(2 "^error: ${WORK}/back.tum:2: expected a timestamp not smaller" emulate-vio
+            "${WORK}/back.tum" --out "${WORK}/vio_back.tum")
+file(WRITE "${WORK}/same.tum" "1.0 0 0 0 0 0 0 1\n1.0 0.1 0 0 0 0 0 1\n")
+expect_exit(2 "^error: ${WORK}/same.tum: pose 2: stamps must increase" emulate-vio
+            "${WORK}/same.tum" --out "${WORK}/vio_same.tum")
+expect_exit(2 "^error: --rate must be > 0" emulate-vio "${WORK}/est.tum" --rate 0
+            --out "${WORK}/vio_rate.tum")
+foreach(name vio_one vio_back vio_same vio_rate)
+  if(EXISTS "${WORK}/${name}.tum")
+    message(FATAL_ERROR "emulate-vio that failed left ${WORK}/${name}.tum behind")
+  endif()
+endforeach()
 # run on a dataset that is not there: the error, and no output folder left.
 expect_exit(2 "^error: ${WORK}/absent: dataset folder not found" run "${WORK}/absent"
             --out "${WORK}/out_absent")
