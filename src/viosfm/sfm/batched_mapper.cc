@@ -564,6 +564,23 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
     return vio_poses[i]->rotation *
            ((ProjectionCenter(*vio_poses[after]) - ProjectionCenter(*vio_poses[before])) / span_s);
   };
+  // Whether `images_pose` lies beyond the drift the VIO model allows between
+  // frame i and its reference frame from `vio_pose` (break_sigmas standard
+  // deviations plus the floors, FrameRegistrationOptions); the distances
+  // through `position_difference` and `rotation_difference`.
+  const auto beyond_vio_drift = [&](size_t i, size_t reference, const Rigid3d& images_pose,
+                                    const Rigid3d& vio_pose, double* position_difference,
+                                    double* rotation_difference) {
+    const RelativePoseSigmas sigmas = LargestSigmas(
+        RelativePoseCovariance(options.vio_uncertainty, VioSampleOfImage(input.images[reference]),
+                               VioSampleOfImage(input.images[i])));
+    *position_difference = (ProjectionCenter(images_pose) - ProjectionCenter(vio_pose)).norm();
+    *rotation_difference = images_pose.rotation.angularDistance(vio_pose.rotation);
+    return *position_difference > registration.break_sigmas * sigmas.translation_m +
+                                      registration.break_min_translation_m ||
+           *rotation_difference > registration.break_sigmas * sigmas.rotation_rad +
+                                      registration.break_min_rotation_rad;
+  };
   const auto try_register = [&](size_t i) -> bool {
     MapperFrameStatus& status = frames[i];
     std::optional<Rigid3d> predicted;
@@ -621,18 +638,10 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
           }
           // How far the images' pose is from the VIO's, against the drift
           // the model allows between the frame and its reference.
-          const RelativePoseSigmas sigmas = LargestSigmas(RelativePoseCovariance(
-              options.vio_uncertainty, VioSampleOfImage(input.images[*reference]),
-              VioSampleOfImage(input.images[i])));
-          const double position_difference =
-              (ProjectionCenter(result.cam_from_world) - ProjectionCenter(*predicted)).norm();
-          const double rotation_difference =
-              result.cam_from_world.rotation.angularDistance(predicted->rotation);
+          double position_difference = 0.0, rotation_difference = 0.0;
           const bool beyond_drift =
-              position_difference > registration.break_sigmas * sigmas.translation_m +
-                                        registration.break_min_translation_m ||
-              rotation_difference > registration.break_sigmas * sigmas.rotation_rad +
-                                        registration.break_min_rotation_rad;
+              beyond_vio_drift(i, *reference, result.cam_from_world, *predicted,
+                               &position_difference, &rotation_difference);
           if (pnp_inliers >= registration.min_reposing_inliers && !beyond_drift) {
             // The images refine a drifted prediction.
             register_frame(i, result.cam_from_world, FramePoseSource::kImagesReposed);
@@ -677,6 +686,21 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
     changed_since_filter.insert(changed_since_filter.end(), triangulation.changed_point_ids.begin(),
                                 triangulation.changed_point_ids.end());
   };
+  // Triangulates (or extends) the tracks the given frames observe.
+  const auto triangulate_tracks_of = [&](const std::vector<size_t>& frame_indices) {
+    std::vector<size_t> track_indices;
+    for (const size_t i : frame_indices) {
+      track_indices.insert(track_indices.end(), tracks_of_image[i].begin(),
+                           tracks_of_image[i].end());
+    }
+    std::sort(track_indices.begin(), track_indices.end());
+    track_indices.erase(std::unique(track_indices.begin(), track_indices.end()),
+                        track_indices.end());
+    std::vector<Track> subset;
+    for (const size_t t : track_indices) subset.push_back(tracks[t]);
+    note_changes(
+        TriangulateReconstruction(&reconstruction, subset, registered, options.triangulation));
+  };
   // The points a filtering after a windowed adjustment must check: those
   // the window's images observe (the adjustment moved them or their
   // cameras) and those triangulated or extended since the last filtering.
@@ -710,18 +734,7 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
       if (!newly_registered.empty()) {
         changed = true;
         added += newly_registered.size();
-        std::vector<size_t> track_indices;
-        for (const size_t i : newly_registered) {
-          track_indices.insert(track_indices.end(), tracks_of_image[i].begin(),
-                               tracks_of_image[i].end());
-        }
-        std::sort(track_indices.begin(), track_indices.end());
-        track_indices.erase(std::unique(track_indices.begin(), track_indices.end()),
-                            track_indices.end());
-        std::vector<Track> subset;
-        for (const size_t t : track_indices) subset.push_back(tracks[t]);
-        note_changes(
-            TriangulateReconstruction(&reconstruction, subset, registered, options.triangulation));
+        triangulate_tracks_of(newly_registered);
       }
     }
     return added;
@@ -769,17 +782,9 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
               registration.min_predicted_inlier_ratio * pnp_inliers) {
         continue;  // the images support the pose it has
       }
-      const RelativePoseSigmas sigmas = LargestSigmas(RelativePoseCovariance(
-          options.vio_uncertainty, VioSampleOfImage(input.images[*reference]),
-          VioSampleOfImage(input.images[i])));
-      const double position_difference =
-          (ProjectionCenter(result.cam_from_world) - ProjectionCenter(current)).norm();
-      const double rotation_difference =
-          result.cam_from_world.rotation.angularDistance(current.rotation);
-      if (position_difference > registration.break_sigmas * sigmas.translation_m +
-                                    registration.break_min_translation_m ||
-          rotation_difference > registration.break_sigmas * sigmas.rotation_rad +
-                                    registration.break_min_rotation_rad) {
+      double position_difference = 0.0, rotation_difference = 0.0;
+      if (beyond_vio_drift(i, *reference, result.cam_from_world, current, &position_difference,
+                           &rotation_difference)) {
         continue;  // beyond the VIO's drift: not a refinement
       }
       Image& image = reconstruction.GetImage(image_id);
@@ -796,20 +801,7 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
                         << rotation_difference << " rad";
       reposed.push_back(i);
     }
-    if (!reposed.empty()) {
-      std::vector<size_t> track_indices;
-      for (const size_t i : reposed) {
-        track_indices.insert(track_indices.end(), tracks_of_image[i].begin(),
-                             tracks_of_image[i].end());
-      }
-      std::sort(track_indices.begin(), track_indices.end());
-      track_indices.erase(std::unique(track_indices.begin(), track_indices.end()),
-                          track_indices.end());
-      std::vector<Track> subset;
-      for (const size_t t : track_indices) subset.push_back(tracks[t]);
-      note_changes(
-          TriangulateReconstruction(&reconstruction, subset, registered, options.triangulation));
-    }
+    if (!reposed.empty()) triangulate_tracks_of(reposed);
     return reposed.size();
   };
   // The priors not crossing a VIO jump found so far (without the bridging
