@@ -20,6 +20,8 @@
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 VIOSFM=${VIOSFM:-$here/build/src/viosfm/cli/viosfm}
+# shellcheck source=lib/prior-variants.sh
+. "$here/scripts/lib/prior-variants.sh"
 data=${VIOSFM_DATA_DIR:-$here/../shared/data}/strecha_fountain_p11
 out=${1:?usage: scripts/bench-fountain-priors.sh OUT}
 seeds=${SEEDS:-0 1 2}
@@ -105,26 +107,8 @@ for seed in $seeds; do
   vio=$out/vio_d${drift}_s$seed.tum
   [ -f "$vio" ] || "$VIOSFM" emulate-vio "$out/groundtruth_cam.tum" --seed "$seed" \
     --vio-drift "$drift" --out "$vio" > "$out/emulate_d${drift}_s$seed.log" 2>&1
-  runs=$out/d${drift}_s$seed
-  mkdir -p "$runs"
-  if [ ! -f "$runs/default/summary.json" ]; then
-    "$VIOSFM" run "$data/images" --out "$runs/default" --vio-trajectory "$vio" \
-      "${run_flags[@]}" > "$runs/default.log" 2>&1
-  fi
-  for variant in no_rpc paper no_bridging; do
-    [ -f "$runs/$variant/summary.json" ] && continue
-    case $variant in
-      no_rpc) flags=(--no-rpc) ;;
-      paper) flags=(--prior-weighting paper) ;;
-      no_bridging) flags=(--no-bridging) ;;
-    esac
-    rm -rf "$runs/$variant"
-    mkdir -p "$runs/$variant"
-    cp "$runs/default/database.db" "$runs/default/options.json" "$runs/default/fingerprint.json" \
-      "$runs/$variant/"
-    "$VIOSFM" run "$data/images" --out "$runs/$variant" --vio-trajectory "$vio" \
-      "${run_flags[@]}" "${flags[@]}" > "$runs/$variant.log" 2>&1
-  done
+  map_prior_variants "$out/d${drift}_s$seed" "$data/images" --vio-trajectory "$vio" \
+    "${run_flags[@]}"
 done
 done
 

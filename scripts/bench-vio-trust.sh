@@ -24,6 +24,8 @@
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 VIOSFM=${VIOSFM:-$here/build/src/viosfm/cli/viosfm}
+# shellcheck source=lib/prior-variants.sh
+. "$here/scripts/lib/prior-variants.sh"
 out=${1:?usage: scripts/bench-vio-trust.sh OUT [CASE...]}
 shift
 cases=("$@")
@@ -49,26 +51,8 @@ for case in "${cases[@]}"; do
   fi
   rate_flags=(--rate 0)
   [ "$mode" != kf ] && rate_flags=(--rate "$mode")
-  runs=$out/runs/$name
-  mkdir -p "$runs"
-  if [ ! -f "$runs/default/summary.json" ]; then
-    "$VIOSFM" run "$seq" --out "$runs/default" --vio-trajectory "$seq/vio_emulated.tum" \
-      "${rate_flags[@]}" "${run_flags[@]}" > "$runs/default.log" 2>&1
-  fi
-  for variant in no_rpc paper no_bridging; do
-    [ -f "$runs/$variant/summary.json" ] && continue
-    case $variant in
-      no_rpc) flags=(--no-rpc) ;;
-      paper) flags=(--prior-weighting paper) ;;
-      no_bridging) flags=(--no-bridging) ;;
-    esac
-    rm -rf "$runs/$variant"
-    mkdir -p "$runs/$variant"
-    cp "$runs/default/database.db" "$runs/default/options.json" "$runs/default/fingerprint.json" \
-      "$runs/$variant/"
-    "$VIOSFM" run "$seq" --out "$runs/$variant" --vio-trajectory "$seq/vio_emulated.tum" \
-      "${rate_flags[@]}" "${run_flags[@]}" "${flags[@]}" > "$runs/$variant.log" 2>&1
-  done
+  map_prior_variants "$out/runs/$name" "$seq" --vio-trajectory "$seq/vio_emulated.tum" \
+    "${rate_flags[@]}" "${run_flags[@]}"
 done
 
 {
