@@ -827,6 +827,7 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
   std::vector<float> rolling_shutter_moves;
   // Bundle adjustment of the last registered images (all when window_begin
   // is 0), the gauge held.
+  int num_batch_adjustments = 0;
   const auto adjust = [&](size_t window_begin, bool global) {
     BundleAdjustmentSummary ba_summary;
     if (!is_registered[gauge_index]) return ba_summary;
@@ -835,7 +836,11 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
     const image_t held_neighbour =
         window_begin > 0 ? registered[window_begin - 1] : kInvalidImageId;
     BundleAdjustmentOptions batch_ba_options = ba_options;
-    if (!global && options.batch_ba_max_num_iterations > 0) {
+    // The first per-batch adjustment (no earlier one refined any pose) may
+    // run uncapped.
+    const bool first_adjustment = num_batch_adjustments++ == 0;
+    if (!global && options.batch_ba_max_num_iterations > 0 &&
+        !(first_adjustment && options.converge_first_batch_ba)) {
       batch_ba_options.max_num_iterations = options.batch_ba_max_num_iterations;
     }
     if (global && ba_options.linear_solver == BaLinearSolver::kAuto) {

@@ -259,6 +259,35 @@ TEST(BatchedMapperTest, CorrectsVioDrift) {
   EXPECT_EQ(NumMixedObservations(reconstruction, drift.sequence), 0u);
 }
 
+// The first batch's adjustment starts from poses placed by the drifting VIO
+// alone and points just triangulated from them; it runs to convergence while
+// the later batches' stay capped (with the option off, capped too).
+TEST(BatchedMapperTest, TheFirstBatchsAdjustmentConverges) {
+  const DriftCase& drift = Drift();
+  for (const bool converge : {true, false}) {
+    BatchedMapperOptions options = DriftOptions();
+    options.converge_first_batch_ba = converge;
+    const int cap = options.batch_ba_max_num_iterations;
+    ASSERT_LT(cap, options.ba.max_num_iterations);
+    BatchedMapperSummary summary;
+    RunBatchedMapper(drift.sequence.input, options, &summary);
+    ASSERT_EQ(summary.num_registered, 80);
+    ASSERT_EQ(summary.batches.size(), 4u);
+    RecordProperty(converge ? "first_batch_iterations" : "first_batch_iterations_capped",
+                   summary.batches[0].num_ba_iterations);
+    if (converge) {
+      // Measured: 6 iterations, to the function tolerance.
+      EXPECT_GT(summary.batches[0].num_ba_iterations, cap);
+      EXPECT_LE(summary.batches[0].num_ba_iterations, options.ba.max_num_iterations);
+    } else {
+      EXPECT_EQ(summary.batches[0].num_ba_iterations, cap);
+    }
+    for (size_t b = 1; b + 1 < summary.batches.size(); ++b) {
+      EXPECT_LE(summary.batches[b].num_ba_iterations, cap) << b;
+    }
+  }
+}
+
 // The VIO as drift states in the final adjustment (vio_drift_terms.h) on
 // the same drift: the consecutive priors give way to the states, and the
 // model stays well within the VIO's error, though behind the chain of
