@@ -1,7 +1,7 @@
 // The whole pipeline on a real handheld recording with its IMU:
 // ../shared/data/realsense_room_30s (see its README), 30 s of a RealSense
-// D435i carried through a weakly textured room, 545 images at about 18 Hz,
-// a 0.9 s static start. It has no ground truth; its gyro is the independent
+// camera carried through a weakly textured bedroom, 545 images at about
+// 18 Hz, a static start. It has no ground truth; its gyro is the independent
 // check: over 1 s the integrated gyro's rotation is a few hundredths of a
 // degree from the truth once its bias is fitted, and eval/gyro_check.h
 // integrates it with code of its own. `viosfm run --realtime` with the
