@@ -114,9 +114,9 @@ struct BatchedMapperOptions {
   // at 3 iterations, it left the real handheld recording's first 50 frames
   // unconverged, the points filtered after it depended on where three
   // iterations happened to stop, and with two threads' timing the later
-  // batches parted ways (final models 7.5 to 16 mm and up to 1.8 deg apart
-  // from the same matches; a bend of 1.2 deg against the gyro at 15 s in 3
-  // of 4 runs). Converged, three runs with one and two threads gave the same
+  // batches parted ways (final models 7.5 mm and 0.59 deg apart from the
+  // same matches; a bend of 1.2 deg against the gyro at 15 s in 3 of 4
+  // runs). Converged, three runs with one and two threads gave the same
   // model, 0.28 deg against the gyro, for about 1 s more of mapping
   // (docs/benchmarks.md "The first batch's adjustment converged").
   bool converge_first_batch_ba = true;
