@@ -1143,18 +1143,11 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
         TriangulateReconstruction(&reconstruction, tracks, registered, options.triangulation);
         all_changed_since_filter = true;
       } else {
-        std::vector<size_t> window_tracks;
+        std::vector<size_t> window_frames;
         for (size_t r = window_begin; r < registered.size(); ++r) {
-          const std::vector<size_t>& of_image = tracks_of_image[index_of_image.at(registered[r])];
-          window_tracks.insert(window_tracks.end(), of_image.begin(), of_image.end());
+          window_frames.push_back(index_of_image.at(registered[r]));
         }
-        std::sort(window_tracks.begin(), window_tracks.end());
-        window_tracks.erase(std::unique(window_tracks.begin(), window_tracks.end()),
-                            window_tracks.end());
-        std::vector<Track> subset;
-        for (const size_t t : window_tracks) subset.push_back(tracks[t]);
-        note_changes(
-            TriangulateReconstruction(&reconstruction, subset, registered, options.triangulation));
+        triangulate_tracks_of(window_frames);
       }
     }
     // 6. The frames placed by the VIO alone that the adjusted model now
