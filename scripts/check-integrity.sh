@@ -2,7 +2,8 @@
 # End-to-end integrity checks of `viosfm run` on a small simulated sequence
 # (docs/robustness.md, "Run integrity"), one line of results each:
 #   1. identical re-runs: two runs from scratch (--threads 1) give the same
-#      bytes (models, trajectories, PLY, summary.json without its timings);
+#      bytes (models, trajectories, PLY, summary.json without its timings),
+#      and so do two with --realtime;
 #   2. a second dataset (another seed: the same image names and stamps) into
 #      the first one's folder is refused and leaves it as it was; with
 #      --overwrite it is recomputed, as a run of it from scratch;
@@ -120,6 +121,15 @@ if result=$(compare "$WORK/ref" "$WORK/again"); then
   say "identical re-runs (--threads 1, two runs from scratch): $result"
 else
   fail "identical re-runs: $result"
+fi
+# The same with --realtime (guided matching, the windowed adjustments), its
+# two runs one after the other.
+run rt1 "$WORK/simA" "$WORK/rt1" --threads 1 --realtime || fail "--realtime run (log: $LOGS/rt1.log)"
+run rt2 "$WORK/simA" "$WORK/rt2" --threads 1 --realtime || fail "--realtime run (log: $LOGS/rt2.log)"
+if result=$(compare "$WORK/rt1" "$WORK/rt2"); then
+  say "identical re-runs (--realtime --threads 1, two runs from scratch): $result"
+else
+  fail "identical re-runs with --realtime: $result"
 fi
 
 # Stage durations of the reference run (s), for the kill points.

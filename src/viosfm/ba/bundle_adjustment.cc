@@ -132,23 +132,36 @@ BundleAdjustmentSummary BundleAdjust(Reconstruction* reconstruction,
 
   // Each registered image's pose as one parameter block (cost_functions.h)
   // and each point's position, copied into arrays in the order they enter
-  // the problem and back after the solve. The arrays never grow past their
+  // the problem and back after the solve; the caller's terms' blocks in
+  // the poses' array, after them. The arrays never grow past their
   // reserved size, so the blocks' addresses are stable, and they increase
   // in that order: Ceres orders the blocks of each group of
   // linear_solver_ordering by address, so the solve does not depend on
-  // where the reconstruction's memory happens to be.
-  std::vector<PoseParameters> pose_parameters;
-  pose_parameters.reserve(reconstruction->NumRegImages());
+  // where the reconstruction's or the caller's memory happens to be.
+  constexpr size_t kPoseSize = std::tuple_size_v<PoseParameters>;
+  const size_t max_num_poses = reconstruction->NumRegImages();
+  std::vector<double> pose_and_term_values(max_num_poses * kPoseSize +
+                                           (terms != nullptr ? terms->NumParameters() : 0));
+  double* const term_storage = pose_and_term_values.data() + max_num_poses * kPoseSize;
+  size_t num_poses = 0;
+  const auto pose_data = [&](size_t k) { return pose_and_term_values.data() + k * kPoseSize; };
+  const auto pose_of_block = [&](size_t k) {
+    PoseParameters values;
+    std::copy(pose_data(k), pose_data(k) + kPoseSize, values.begin());
+    return FromPoseParameters(values);
+  };
   std::vector<image_t> pose_image_ids;
   std::unordered_map<image_t, size_t> pose_index;
   const auto pose_block = [&](const Image& image) {
-    auto [it, inserted] = pose_index.try_emplace(image.image_id, pose_parameters.size());
+    auto [it, inserted] = pose_index.try_emplace(image.image_id, num_poses);
     if (inserted) {
-      VIOSFM_CHECK_LT(pose_parameters.size(), pose_parameters.capacity());
-      pose_parameters.push_back(ToPoseParameters(image.cam_from_world));
+      VIOSFM_CHECK_LT(num_poses, max_num_poses);
+      const PoseParameters values = ToPoseParameters(image.cam_from_world);
+      std::copy(values.begin(), values.end(), pose_data(num_poses));
       pose_image_ids.push_back(image.image_id);
+      ++num_poses;
     }
-    return pose_parameters[it->second].data();
+    return pose_data(it->second);
   };
   const std::vector<point3D_t> all_point_ids = reconstruction->Point3DIds();
   std::vector<Eigen::Vector3d> point_parameters;
@@ -239,19 +252,20 @@ BundleAdjustmentSummary BundleAdjust(Reconstruction* reconstruction,
   }
   std::vector<double*> term_blocks;
   if (terms != nullptr) {
-    term_blocks = terms->AddTo(&problem, [&](image_t image_id) -> double* {
-      if (!reconstruction->ExistsImage(image_id)) return nullptr;
-      const Image& image = reconstruction->GetImage(image_id);
-      return image.registered ? pose_block(image) : nullptr;
-    });
+    term_blocks = terms->AddTo(
+        &problem,
+        [&](image_t image_id) -> double* {
+          if (!reconstruction->ExistsImage(image_id)) return nullptr;
+          const Image& image = reconstruction->GetImage(image_id);
+          return image.registered ? pose_block(image) : nullptr;
+        },
+        term_storage);
   }
-  summary.num_images = static_cast<int>(pose_parameters.size());
+  summary.num_images = static_cast<int>(num_poses);
 
-  for (size_t k = 0; k < pose_parameters.size(); ++k) {
-    problem.SetManifold(pose_parameters[k].data(), CreatePoseManifold());
-    if (constant.count(pose_image_ids[k]) > 0) {
-      problem.SetParameterBlockConstant(pose_parameters[k].data());
-    }
+  for (size_t k = 0; k < num_poses; ++k) {
+    problem.SetManifold(pose_data(k), CreatePoseManifold());
+    if (constant.count(pose_image_ids[k]) > 0) problem.SetParameterBlockConstant(pose_data(k));
   }
   // (Only with refine_intrinsics are cameras parameter blocks.)
   for (const camera_t camera_id : cameras_in_problem) {
@@ -303,17 +317,15 @@ BundleAdjustmentSummary BundleAdjust(Reconstruction* reconstruction,
     default: solver_options.linear_solver_type = ceres::SPARSE_SCHUR; break;
   }
   if (!options.refine_intrinsics) {
-    // The points first (eliminated), then the poses: the ordering Ceres
-    // finds for a bundle adjustment problem, given instead of searched for in
-    // the problem's graph (which took half of Ceres' preprocessing, 0.1 s of
-    // each per-batch adjustment on a 100 s room). (With intrinsics, whose
-    // blocks live elsewhere, Ceres searches.)
+    // The points first (eliminated), then the poses and the caller's
+    // blocks: the ordering Ceres finds for a bundle adjustment problem,
+    // given instead of searched for in the problem's graph (which took half
+    // of Ceres' preprocessing, 0.1 s of each per-batch adjustment on a 100 s
+    // room). (With intrinsics, whose blocks live elsewhere, Ceres searches.)
     auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
     for (Eigen::Vector3d& xyz : point_parameters) ordering->AddElementToGroup(xyz.data(), 0);
-    for (size_t k = 0; k < pose_parameters.size(); ++k) {
-      if (constant.count(pose_image_ids[k]) == 0) {
-        ordering->AddElementToGroup(pose_parameters[k].data(), 1);
-      }
+    for (size_t k = 0; k < num_poses; ++k) {
+      if (constant.count(pose_image_ids[k]) == 0) ordering->AddElementToGroup(pose_data(k), 1);
     }
     for (double* block : term_blocks) ordering->AddElementToGroup(block, 1);
     if (ordering->NumGroups() == 2) solver_options.linear_solver_ordering = ordering;
@@ -325,11 +337,11 @@ BundleAdjustmentSummary BundleAdjust(Reconstruction* reconstruction,
   ceres::Solver::Summary ceres_summary;
   ceres::Solve(solver_options, &problem, &ceres_summary);
 
-  for (size_t k = 0; k < pose_parameters.size(); ++k) {
+  for (size_t k = 0; k < num_poses; ++k) {
     if (constant.count(pose_image_ids[k]) > 0) continue;
-    reconstruction->GetImage(pose_image_ids[k]).cam_from_world =
-        FromPoseParameters(pose_parameters[k]);
+    reconstruction->GetImage(pose_image_ids[k]).cam_from_world = pose_of_block(k);
   }
+  if (terms != nullptr) terms->TakeSolution(term_storage);
   for (size_t k = 0; k < point_ids_in_problem.size(); ++k) {
     reconstruction->GetPoint3D(point_ids_in_problem[k]).xyz = point_parameters[k];
   }

@@ -252,15 +252,29 @@ struct BundleAdjustmentSummary {
 // caller adds to an adjustment (sfm/inertial_terms.h: the IMU's): residual
 // blocks on the images' pose blocks and on parameter blocks of the caller's
 // own, which are solved with the poses (not eliminated with the points).
+//
+// The caller's blocks live in `storage`, which BundleAdjust gives them in
+// the array that holds the poses' blocks, after those: Ceres orders the
+// blocks of a group of its linear_solver_ordering by address, so blocks of
+// arrays of their own would be ordered by wherever the allocator put them,
+// and the sums of the solve with them (one run's model unlike the next).
 class BundleAdjustmentTerms {
  public:
   virtual ~BundleAdjustmentTerms() = default;
-  // Adds the terms to `problem`. pose_block(image_id) is the pose block
-  // (geometry/pose_parameters.h) of a registered image, nullptr for any
-  // other image. Returns the caller's own parameter blocks. Their values
-  // are the solution once BundleAdjust returns.
+  // The number of doubles of the caller's own parameter blocks, at most.
+  virtual size_t NumParameters() const = 0;
+  // Adds the terms to `problem`, the caller's own parameter blocks laid out
+  // in `storage` (NumParameters() doubles) and set to their current values.
+  // pose_block(image_id) is the pose block (geometry/pose_parameters.h) of
+  // a registered image, nullptr for any other image. Returns the caller's
+  // own parameter blocks.
   virtual std::vector<double*> AddTo(ceres::Problem* problem,
-                                     const std::function<double*(image_t)>& pose_block) = 0;
+                                     const std::function<double*(image_t)>& pose_block,
+                                     double* storage) = 0;
+  // Takes the values of its parameters from `storage` (the one AddTo was
+  // given), once the solve is done: they are the solution once BundleAdjust
+  // returns.
+  virtual void TakeSolution(const double* storage) = 0;
 };
 
 // The loss of a whitened term (a covariance-weighted prior, the gyro's, a

@@ -1,7 +1,9 @@
 #include "viosfm/ba/bundle_adjustment.h"
 
+#include <ceres/ceres.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <iostream>
 #include <vector>
@@ -236,6 +238,89 @@ TEST(BundleAdjust, RecoversPerturbedCamerasAndPoints) {
     ASSERT_GE(point3D.error, 0.0);
     ASSERT_LT(point3D.error, 3.0);
   }
+}
+
+// A caller's term: a free 3-vector tied to one image's pose block's
+// translation, recording where BundleAdjust put its block.
+class TranslationCopyTerms : public BundleAdjustmentTerms {
+ public:
+  explicit TranslationCopyTerms(image_t image_id) : image_id_(image_id) {}
+  size_t NumParameters() const override { return 3; }
+  std::vector<double*> AddTo(ceres::Problem* problem,
+                             const std::function<double*(image_t)>& pose_block,
+                             double* storage) override {
+    storage_ = storage;
+    std::fill(storage, storage + 3, 0.0);
+    problem->AddResidualBlock(new ceres::AutoDiffCostFunction<Cost, 3, 7, 3>(new Cost), nullptr,
+                              pose_block(image_id_), storage);
+    return {storage};
+  }
+  void TakeSolution(const double* storage) override {
+    taken_from_ = storage;
+    solution_ = Eigen::Vector3d(storage[0], storage[1], storage[2]);
+  }
+  const double* storage() const { return storage_; }
+  const double* taken_from() const { return taken_from_; }
+  const Eigen::Vector3d& solution() const { return solution_; }
+
+ private:
+  struct Cost {
+    template <typename T>
+    bool operator()(const T* pose, const T* copy, T* residuals) const {
+      for (int d = 0; d < 3; ++d) residuals[d] = copy[d] - pose[4 + d];
+      return true;
+    }
+  };
+  image_t image_id_;
+  double* storage_ = nullptr;
+  const double* taken_from_ = nullptr;
+  Eigen::Vector3d solution_ = Eigen::Vector3d::Zero();
+};
+
+// A caller's blocks are laid out right after the poses' blocks in one array
+// (Ceres orders a group's blocks by address: blocks elsewhere would be
+// ordered by wherever the allocator put them, and the solve's sums with
+// them, run to run), and the solution is handed back from there.
+TEST(BundleAdjust, CallersBlocksFollowThePosesInOneArrayAndTakeTheSolution) {
+  Scene scene = MakeScene();
+  BundleAdjustmentOptions options;
+  options.use_relative_pose_priors = false;
+  const image_t tied = scene.image_ids[5];
+  TranslationCopyTerms terms(tied);
+  std::vector<const double*> pose_blocks;
+  class Recorder : public BundleAdjustmentTerms {
+   public:
+    Recorder(TranslationCopyTerms* inner, std::vector<const double*>* blocks)
+        : inner_(inner), blocks_(blocks) {}
+    size_t NumParameters() const override { return inner_->NumParameters(); }
+    std::vector<double*> AddTo(ceres::Problem* problem,
+                               const std::function<double*(image_t)>& pose_block,
+                               double* storage) override {
+      for (image_t image_id = 1; image_id <= kNumCameras; ++image_id) {
+        blocks_->push_back(pose_block(image_id));
+      }
+      return inner_->AddTo(problem, pose_block, storage);
+    }
+    void TakeSolution(const double* storage) override { inner_->TakeSolution(storage); }
+
+   private:
+    TranslationCopyTerms* inner_;
+    std::vector<const double*>* blocks_;
+  } recorder(&terms, &pose_blocks);
+  const BundleAdjustmentSummary summary = BundleAdjust(
+      &scene.noisy, {}, {scene.image_ids.front(), scene.image_ids.back()}, options, &recorder);
+  ASSERT_TRUE(summary.usable);
+  ASSERT_EQ(pose_blocks.size(), static_cast<size_t>(kNumCameras));
+  const double* last_pose = *std::max_element(pose_blocks.begin(), pose_blocks.end());
+  for (const double* block : pose_blocks) ASSERT_NE(block, nullptr);
+  EXPECT_EQ(terms.storage(), last_pose + 7);
+  EXPECT_EQ(terms.taken_from(), terms.storage());
+  // The free copy follows the solved translation (its residual is zero at
+  // the optimum).
+  const Eigen::Vector3d translation = scene.noisy.GetImage(tied).cam_from_world.translation;
+  EXPECT_LT((terms.solution() - translation).norm(), 1e-6)
+      << terms.solution().transpose() << " against " << translation.transpose();
+  EXPECT_GT(translation.norm(), 0.1);
 }
 
 // With the relative-pose priors only the first pose needs to be held: the

@@ -60,15 +60,31 @@ Image CopyImageWithoutPoints(const Image& image) {
 class CombinedTerms : public BundleAdjustmentTerms {
  public:
   explicit CombinedTerms(std::vector<BundleAdjustmentTerms*> parts) : parts_(std::move(parts)) {}
+  size_t NumParameters() const override {
+    size_t size = 0;
+    for (const BundleAdjustmentTerms* part : parts_) {
+      if (part != nullptr) size += part->NumParameters();
+    }
+    return size;
+  }
   std::vector<double*> AddTo(ceres::Problem* problem,
-                             const std::function<double*(image_t)>& pose_block) override {
+                             const std::function<double*(image_t)>& pose_block,
+                             double* storage) override {
     std::vector<double*> blocks;
     for (BundleAdjustmentTerms* part : parts_) {
       if (part == nullptr) continue;
-      const std::vector<double*> added = part->AddTo(problem, pose_block);
+      const std::vector<double*> added = part->AddTo(problem, pose_block, storage);
       blocks.insert(blocks.end(), added.begin(), added.end());
+      storage += part->NumParameters();
     }
     return blocks;
+  }
+  void TakeSolution(const double* storage) override {
+    for (BundleAdjustmentTerms* part : parts_) {
+      if (part == nullptr) continue;
+      part->TakeSolution(storage);
+      storage += part->NumParameters();
+    }
   }
 
  private:

@@ -238,7 +238,7 @@ bool InertialTerms::Initialise(int num_threads) {
                                poses[factor->j].data(), velocity_[factor->j].data(),
                                biases_[window_[factor->i]].data(), scale_.data(), tilt_.data());
     }
-    AddBiasWalks(&problem);
+    AddBiasWalks(&problem, [&](int w) { return biases_[w].data(); });
     for (size_t k = 0; k < frames_.size(); ++k) {
       if (used_[k]) problem.SetParameterBlockConstant(poses[k].data());
     }
@@ -335,10 +335,28 @@ double InertialTerms::MedianWhitenedResidual(const Reconstruction& reconstructio
   return MedianWhitenedResidual(cam_from_world);
 }
 
+size_t InertialTerms::NumParameters() const {
+  return TiltOffset() + tilt_.size();
+}
+
 std::vector<double*> InertialTerms::AddTo(ceres::Problem* problem,
-                                          const std::function<double*(image_t)>& pose_block) {
+                                          const std::function<double*(image_t)>& pose_block,
+                                          double* storage) {
   std::vector<double*> blocks;
   if (!initialised_) return blocks;
+  for (size_t k = 0; k < velocity_.size(); ++k) {
+    std::copy(velocity_[k].begin(), velocity_[k].end(), storage + VelocityOffset(k));
+  }
+  for (size_t w = 0; w < biases_.size(); ++w) {
+    std::copy(biases_[w].begin(), biases_[w].end(), storage + BiasesOffset(static_cast<int>(w)));
+  }
+  std::copy(scale_.begin(), scale_.end(), storage + ScaleOffset());
+  std::copy(tilt_.begin(), tilt_.end(), storage + TiltOffset());
+  const auto velocity = [&](size_t k) { return storage + VelocityOffset(k); };
+  const auto biases = [&](int w) { return storage + BiasesOffset(w); };
+  double* const scale = storage + ScaleOffset();
+  double* const tilt = storage + TiltOffset();
+
   const Rigid3d cam_from_body = rig_.cam_from_body();
   std::vector<bool> velocity_added(frames_.size(), false);
   std::vector<bool> biases_added(biases_.size(), false);
@@ -349,31 +367,43 @@ std::vector<double*> InertialTerms::AddTo(ceres::Problem* problem,
     const int window = window_[factor->i];
     problem->AddResidualBlock(
         InertialCost::Create(factor->preintegration, cam_from_body, 1.0 / sigma_factor_), nullptr,
-        pose_i, velocity_[factor->i].data(), pose_j, velocity_[factor->j].data(),
-        biases_[window].data(), scale_.data(), tilt_.data());
+        pose_i, velocity(factor->i), pose_j, velocity(factor->j), biases(window), scale, tilt);
     for (const size_t k : {factor->i, factor->j}) {
-      if (!velocity_added[k]) blocks.push_back(velocity_[k].data());
+      if (!velocity_added[k]) blocks.push_back(velocity(k));
       velocity_added[k] = true;
     }
-    if (!biases_added[window]) blocks.push_back(biases_[window].data());
+    if (!biases_added[window]) blocks.push_back(biases(window));
     biases_added[window] = true;
   }
   if (!blocks.empty()) {
-    AddBiasWalks(problem);
-    blocks.push_back(scale_.data());
-    blocks.push_back(tilt_.data());
+    AddBiasWalks(problem, biases);
+    blocks.push_back(scale);
+    blocks.push_back(tilt);
   }
   return blocks;
 }
 
-void InertialTerms::AddBiasWalks(ceres::Problem* problem) {
+void InertialTerms::TakeSolution(const double* storage) {
+  if (!initialised_) return;
+  for (size_t k = 0; k < velocity_.size(); ++k) {
+    std::copy_n(storage + VelocityOffset(k), velocity_[k].size(), velocity_[k].begin());
+  }
+  for (size_t w = 0; w < biases_.size(); ++w) {
+    std::copy_n(storage + BiasesOffset(static_cast<int>(w)), biases_[w].size(), biases_[w].begin());
+  }
+  std::copy_n(storage + ScaleOffset(), scale_.size(), scale_.begin());
+  std::copy_n(storage + TiltOffset(), tilt_.size(), tilt_.begin());
+}
+
+void InertialTerms::AddBiasWalks(ceres::Problem* problem,
+                                 const std::function<double*(int)>& biases) const {
   int previous = -1;
   for (int w = 0; w < static_cast<int>(biases_.size()); ++w) {
-    if (!problem->HasParameterBlock(biases_[w].data())) continue;
+    if (!problem->HasParameterBlock(biases(w))) continue;
     if (previous >= 0) {
       problem->AddResidualBlock(
           BiasWalkCost::Create(rig_.imu_noise, window_start_s_[w] - window_start_s_[previous]),
-          nullptr, biases_[previous].data(), biases_[w].data());
+          nullptr, biases(previous), biases(w));
     }
     previous = w;
   }

@@ -150,8 +150,11 @@ class InertialTerms : public BundleAdjustmentTerms {
   // `num_threads`: Ceres' threads for that solve.
   bool Initialise(int num_threads = 2);
 
+  size_t NumParameters() const override;
   std::vector<double*> AddTo(ceres::Problem* problem,
-                             const std::function<double*(image_t)>& pose_block) override;
+                             const std::function<double*(image_t)>& pose_block,
+                             double* storage) override;
+  void TakeSolution(const double* storage) override;
 
   int num_factors() const { return static_cast<int>(factors_.size()); }
   // Metric lengths are scale() times the model's.
@@ -183,7 +186,15 @@ class InertialTerms : public BundleAdjustmentTerms {
   std::vector<InertialFrame> frames_;
   SensorRig rig_;
   InertialTermOptions options_;
-  void AddBiasWalks(ceres::Problem* problem);
+  // The bias walks between consecutive windows in `problem`, the biases
+  // of window w at biases(w).
+  void AddBiasWalks(ceres::Problem* problem, const std::function<double*(int)>& biases) const;
+  // Where AddTo lays out the parameters in its storage: every frame's
+  // velocity, every window's biases, the scale, the tilt.
+  size_t VelocityOffset(size_t k) const { return 3 * k; }
+  size_t BiasesOffset(int w) const { return 3 * velocity_.size() + 6 * static_cast<size_t>(w); }
+  size_t ScaleOffset() const { return 3 * velocity_.size() + 6 * biases_.size(); }
+  size_t TiltOffset() const { return ScaleOffset() + 1; }
   // The window whose biases stand for frame k (see gyro_bias).
   int BiasWindowOfFrame(size_t k) const;
 

@@ -108,8 +108,9 @@ void SolveWithPosesHeld(const std::vector<InertialFrame>& frames, InertialTerms*
     block_of[frame.image_id] = poses.back().data();
   }
   ceres::Problem problem;
-  const std::vector<double*> blocks =
-      terms->AddTo(&problem, [&](image_t image_id) { return block_of.at(image_id); });
+  std::vector<double> storage(terms->NumParameters());
+  const std::vector<double*> blocks = terms->AddTo(
+      &problem, [&](image_t image_id) { return block_of.at(image_id); }, storage.data());
   ASSERT_FALSE(blocks.empty());
   if (counts != nullptr) *counts = {blocks.size(), problem.NumResidualBlocks()};
   for (PoseParameters& pose : poses) {
@@ -121,6 +122,7 @@ void SolveWithPosesHeld(const std::vector<InertialFrame>& frames, InertialTerms*
   ceres::Solver::Summary summary;
   ceres::Solve(options, &problem, &summary);
   ASSERT_TRUE(summary.IsSolutionUsable()) << summary.BriefReport();
+  terms->TakeSolution(storage.data());
 }
 
 TEST(InertialTerms, RecoverTheModelsMetricScaleTiltVelocitiesAndBiases) {
@@ -180,7 +182,11 @@ TEST(InertialTerms, InflatedWhereTheRotationsDisagreeBeyondTheCovariance) {
   EXPECT_FALSE(refused.Initialise());
   EXPECT_NE(refused.Message().find("no IMU factors"), std::string::npos) << refused.Message();
   ceres::Problem problem;
-  EXPECT_TRUE(refused.AddTo(&problem, [](image_t) -> double* { return nullptr; }).empty());
+  std::vector<double> storage(refused.NumParameters());
+  EXPECT_TRUE(refused
+                  .AddTo(
+                      &problem, [](image_t) -> double* { return nullptr; }, storage.data())
+                  .empty());
   EXPECT_EQ(problem.NumResidualBlocks(), 0);
 }
 

@@ -129,8 +129,13 @@ VioDriftTerms::VioDriftTerms(std::vector<VioDriftFrame> frames, std::vector<VioD
   }
 }
 
+size_t VioDriftTerms::NumParameters() const {
+  return frames_.size() * std::tuple_size_v<PoseParameters>;
+}
+
 std::vector<double*> VioDriftTerms::AddTo(ceres::Problem* problem,
-                                          const std::function<double*(image_t)>& pose_block) {
+                                          const std::function<double*(image_t)>& pose_block,
+                                          double* storage) {
   const VioUncertaintyModel model = options_.vio_uncertainty.WithinSegment();
   const Eigen::Matrix<double, 6, 6> frame_sqrt_information = FrameSqrtInformation(model);
   states_.assign(frames_.size(), PoseParameters{});
@@ -138,6 +143,7 @@ std::vector<double*> VioDriftTerms::AddTo(ceres::Problem* problem,
   std::vector<double*> blocks;
   num_frame_terms_ = 0;
   num_drift_terms_ = 0;
+  const auto state = [&](size_t k) { return storage + k * std::tuple_size_v<PoseParameters>; };
   // A frame's state and its frame term, once; false if its image has no
   // pose block.
   const auto add_frame = [&](size_t k) {
@@ -150,13 +156,13 @@ std::vector<double*> VioDriftTerms::AddTo(ceres::Problem* problem,
     const Rigid3d vio_cam_from_vio_world = frames_[k].vio.world_from_cam.Inverse();
     // G = P^-1 V: the frame term starts at zero.
     states_[k] = ToPoseParameters(cam_from_world.Inverse() * vio_cam_from_vio_world);
+    std::copy(states_[k].begin(), states_[k].end(), state(k));
     problem->AddResidualBlock(
         new ceres::AutoDiffCostFunction<FrameCost, 6, 7, 7>(
             new FrameCost(vio_cam_from_vio_world, frame_sqrt_information)),
-        CreateWhitenedLoss(options_.prior_loss_scale, options_.image_noise_px), pose,
-        states_[k].data());
-    problem->SetManifold(states_[k].data(), CreatePoseManifold());
-    blocks.push_back(states_[k].data());
+        CreateWhitenedLoss(options_.prior_loss_scale, options_.image_noise_px), pose, state(k));
+    problem->SetManifold(state(k), CreatePoseManifold());
+    blocks.push_back(state(k));
     added[k] = true;
     ++num_frame_terms_;
     return true;
@@ -173,11 +179,17 @@ std::vector<double*> VioDriftTerms::AddTo(ceres::Problem* problem,
     problem->AddResidualBlock(
         new ceres::AutoDiffCostFunction<DriftCost, 6, 7, 7>(
             new DriftCost(second.world_from_cam.Inverse(), sqrt_information)),
-        CreateWhitenedLoss(options_.prior_loss_scale, options_.image_noise_px),
-        states_[link.first].data(), states_[link.second].data());
+        CreateWhitenedLoss(options_.prior_loss_scale, options_.image_noise_px), state(link.first),
+        state(link.second));
     ++num_drift_terms_;
   }
   return blocks;
+}
+
+void VioDriftTerms::TakeSolution(const double* storage) {
+  for (size_t k = 0; k < states_.size(); ++k) {
+    std::copy_n(storage + k * states_[k].size(), states_[k].size(), states_[k].begin());
+  }
 }
 
 }  // namespace viosfm

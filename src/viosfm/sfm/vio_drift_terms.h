@@ -95,8 +95,11 @@ class VioDriftTerms : public BundleAdjustmentTerms {
   // Frames whose image has no pose block are left out, and so are the links
   // touching them. Each state starts where its frame's term is zero (G_i =
   // P_i^-1 V_i).
+  size_t NumParameters() const override;
   std::vector<double*> AddTo(ceres::Problem* problem,
-                             const std::function<double*(image_t)>& pose_block) override;
+                             const std::function<double*(image_t)>& pose_block,
+                             double* storage) override;
+  void TakeSolution(const double* storage) override;
 
   int num_frame_terms() const { return num_frame_terms_; }
   int num_drift_terms() const { return num_drift_terms_; }

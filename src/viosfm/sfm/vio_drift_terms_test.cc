@@ -127,9 +127,11 @@ TEST(VioDriftTerms, TheVioIsTrustedOverSecondsAsItsModelSays) {
     if (k > 0) links.push_back({k - 1, k, 0});
   }
   VioDriftTerms terms(frames, links, options);
+  std::vector<double> storage(terms.NumParameters());
   const Eigen::Matrix<double, 6, 6> drift_states = ImpliedEndToEndCovariance(
       walk, [&](ceres::Problem* problem, std::vector<PoseParameters>& poses) {
-        return terms.AddTo(problem, [&](image_t image_id) { return poses[image_id - 1].data(); });
+        return terms.AddTo(
+            problem, [&](image_t image_id) { return poses[image_id - 1].data(); }, storage.data());
       });
   EXPECT_EQ(terms.num_frame_terms(), 101);
   EXPECT_EQ(terms.num_drift_terms(), 100);
