@@ -241,14 +241,19 @@ TEST(BundleAdjust, RecoversPerturbedCamerasAndPoints) {
 }
 
 // A caller's term: a free 3-vector tied to one image's pose block's
-// translation, recording where BundleAdjust put its block.
+// translation, recording where BundleAdjust put its block and the pose
+// blocks of images 1 to num_images.
 class TranslationCopyTerms : public BundleAdjustmentTerms {
  public:
-  explicit TranslationCopyTerms(image_t image_id) : image_id_(image_id) {}
+  TranslationCopyTerms(image_t image_id, int num_images)
+      : image_id_(image_id), num_images_(num_images) {}
   size_t NumParameters() const override { return 3; }
   std::vector<double*> AddTo(ceres::Problem* problem,
                              const std::function<double*(image_t)>& pose_block,
                              double* storage) override {
+    for (image_t image_id = 1; image_id <= static_cast<image_t>(num_images_); ++image_id) {
+      pose_blocks_.push_back(pose_block(image_id));
+    }
     storage_ = storage;
     std::fill(storage, storage + 3, 0.0);
     problem->AddResidualBlock(new ceres::AutoDiffCostFunction<Cost, 3, 7, 3>(new Cost), nullptr,
@@ -259,6 +264,7 @@ class TranslationCopyTerms : public BundleAdjustmentTerms {
     taken_from_ = storage;
     solution_ = Eigen::Vector3d(storage[0], storage[1], storage[2]);
   }
+  const std::vector<const double*>& pose_blocks() const { return pose_blocks_; }
   const double* storage() const { return storage_; }
   const double* taken_from() const { return taken_from_; }
   const Eigen::Vector3d& solution() const { return solution_; }
@@ -272,6 +278,8 @@ class TranslationCopyTerms : public BundleAdjustmentTerms {
     }
   };
   image_t image_id_;
+  int num_images_;
+  std::vector<const double*> pose_blocks_;
   double* storage_ = nullptr;
   const double* taken_from_ = nullptr;
   Eigen::Vector3d solution_ = Eigen::Vector3d::Zero();
@@ -286,33 +294,14 @@ TEST(BundleAdjust, CallersBlocksFollowThePosesInOneArrayAndTakeTheSolution) {
   BundleAdjustmentOptions options;
   options.use_relative_pose_priors = false;
   const image_t tied = scene.image_ids[5];
-  TranslationCopyTerms terms(tied);
-  std::vector<const double*> pose_blocks;
-  class Recorder : public BundleAdjustmentTerms {
-   public:
-    Recorder(TranslationCopyTerms* inner, std::vector<const double*>* blocks)
-        : inner_(inner), blocks_(blocks) {}
-    size_t NumParameters() const override { return inner_->NumParameters(); }
-    std::vector<double*> AddTo(ceres::Problem* problem,
-                               const std::function<double*(image_t)>& pose_block,
-                               double* storage) override {
-      for (image_t image_id = 1; image_id <= kNumCameras; ++image_id) {
-        blocks_->push_back(pose_block(image_id));
-      }
-      return inner_->AddTo(problem, pose_block, storage);
-    }
-    void TakeSolution(const double* storage) override { inner_->TakeSolution(storage); }
-
-   private:
-    TranslationCopyTerms* inner_;
-    std::vector<const double*>* blocks_;
-  } recorder(&terms, &pose_blocks);
+  TranslationCopyTerms terms(tied, kNumCameras);
   const BundleAdjustmentSummary summary = BundleAdjust(
-      &scene.noisy, {}, {scene.image_ids.front(), scene.image_ids.back()}, options, &recorder);
+      &scene.noisy, {}, {scene.image_ids.front(), scene.image_ids.back()}, options, &terms);
   ASSERT_TRUE(summary.usable);
+  const std::vector<const double*>& pose_blocks = terms.pose_blocks();
   ASSERT_EQ(pose_blocks.size(), static_cast<size_t>(kNumCameras));
-  const double* last_pose = *std::max_element(pose_blocks.begin(), pose_blocks.end());
   for (const double* block : pose_blocks) ASSERT_NE(block, nullptr);
+  const double* last_pose = *std::max_element(pose_blocks.begin(), pose_blocks.end());
   EXPECT_EQ(terms.storage(), last_pose + 7);
   EXPECT_EQ(terms.taken_from(), terms.storage());
   // The free copy follows the solved translation (its residual is zero at

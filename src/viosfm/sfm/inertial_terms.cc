@@ -335,6 +335,18 @@ double InertialTerms::MedianWhitenedResidual(const Reconstruction& reconstructio
   return MedianWhitenedResidual(cam_from_world);
 }
 
+template <typename Visit>
+void InertialTerms::ForEachParameterArray(Visit&& visit) {
+  for (size_t k = 0; k < velocity_.size(); ++k) {
+    visit(velocity_[k].data(), velocity_[k].size(), VelocityOffset(k));
+  }
+  for (size_t w = 0; w < biases_.size(); ++w) {
+    visit(biases_[w].data(), biases_[w].size(), BiasesOffset(static_cast<int>(w)));
+  }
+  visit(scale_.data(), scale_.size(), ScaleOffset());
+  visit(tilt_.data(), tilt_.size(), TiltOffset());
+}
+
 size_t InertialTerms::NumParameters() const {
   return TiltOffset() + tilt_.size();
 }
@@ -344,14 +356,9 @@ std::vector<double*> InertialTerms::AddTo(ceres::Problem* problem,
                                           double* storage) {
   std::vector<double*> blocks;
   if (!initialised_) return blocks;
-  for (size_t k = 0; k < velocity_.size(); ++k) {
-    std::copy(velocity_[k].begin(), velocity_[k].end(), storage + VelocityOffset(k));
-  }
-  for (size_t w = 0; w < biases_.size(); ++w) {
-    std::copy(biases_[w].begin(), biases_[w].end(), storage + BiasesOffset(static_cast<int>(w)));
-  }
-  std::copy(scale_.begin(), scale_.end(), storage + ScaleOffset());
-  std::copy(tilt_.begin(), tilt_.end(), storage + TiltOffset());
+  ForEachParameterArray([&](const double* own, size_t size, size_t offset) {
+    std::copy_n(own, size, storage + offset);
+  });
   const auto velocity = [&](size_t k) { return storage + VelocityOffset(k); };
   const auto biases = [&](int w) { return storage + BiasesOffset(w); };
   double* const scale = storage + ScaleOffset();
@@ -385,14 +392,8 @@ std::vector<double*> InertialTerms::AddTo(ceres::Problem* problem,
 
 void InertialTerms::TakeSolution(const double* storage) {
   if (!initialised_) return;
-  for (size_t k = 0; k < velocity_.size(); ++k) {
-    std::copy_n(storage + VelocityOffset(k), velocity_[k].size(), velocity_[k].begin());
-  }
-  for (size_t w = 0; w < biases_.size(); ++w) {
-    std::copy_n(storage + BiasesOffset(static_cast<int>(w)), biases_[w].size(), biases_[w].begin());
-  }
-  std::copy_n(storage + ScaleOffset(), scale_.size(), scale_.begin());
-  std::copy_n(storage + TiltOffset(), tilt_.size(), tilt_.begin());
+  ForEachParameterArray(
+      [&](double* own, size_t size, size_t offset) { std::copy_n(storage + offset, size, own); });
 }
 
 void InertialTerms::AddBiasWalks(ceres::Problem* problem,

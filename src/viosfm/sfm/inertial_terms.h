@@ -195,6 +195,9 @@ class InertialTerms : public BundleAdjustmentTerms {
   size_t BiasesOffset(int w) const { return 3 * velocity_.size() + 6 * static_cast<size_t>(w); }
   size_t ScaleOffset() const { return 3 * velocity_.size() + 6 * biases_.size(); }
   size_t TiltOffset() const { return ScaleOffset() + 1; }
+  // Calls visit(own values, size, offset in that storage) for every array.
+  template <typename Visit>
+  void ForEachParameterArray(Visit&& visit);
   // The window whose biases stand for frame k (see gyro_bias).
   int BiasWindowOfFrame(size_t k) const;
 

@@ -138,7 +138,6 @@ std::vector<double*> VioDriftTerms::AddTo(ceres::Problem* problem,
                                           double* storage) {
   const VioUncertaintyModel model = options_.vio_uncertainty.WithinSegment();
   const Eigen::Matrix<double, 6, 6> frame_sqrt_information = FrameSqrtInformation(model);
-  states_.assign(frames_.size(), PoseParameters{});
   std::vector<bool> added(frames_.size(), false);
   std::vector<double*> blocks;
   num_frame_terms_ = 0;
@@ -155,8 +154,9 @@ std::vector<double*> VioDriftTerms::AddTo(ceres::Problem* problem,
     const Rigid3d cam_from_world = FromPoseParameters(pose_values);
     const Rigid3d vio_cam_from_vio_world = frames_[k].vio.world_from_cam.Inverse();
     // G = P^-1 V: the frame term starts at zero.
-    states_[k] = ToPoseParameters(cam_from_world.Inverse() * vio_cam_from_vio_world);
-    std::copy(states_[k].begin(), states_[k].end(), state(k));
+    const PoseParameters start =
+        ToPoseParameters(cam_from_world.Inverse() * vio_cam_from_vio_world);
+    std::copy(start.begin(), start.end(), state(k));
     problem->AddResidualBlock(
         new ceres::AutoDiffCostFunction<FrameCost, 6, 7, 7>(
             new FrameCost(vio_cam_from_vio_world, frame_sqrt_information)),
@@ -186,10 +186,7 @@ std::vector<double*> VioDriftTerms::AddTo(ceres::Problem* problem,
   return blocks;
 }
 
-void VioDriftTerms::TakeSolution(const double* storage) {
-  for (size_t k = 0; k < states_.size(); ++k) {
-    std::copy_n(storage + k * states_[k].size(), states_[k].size(), states_[k].begin());
-  }
-}
+// The states are the adjustment's own: nothing reads them after it.
+void VioDriftTerms::TakeSolution(const double* /*storage*/) {}
 
 }  // namespace viosfm

@@ -115,7 +115,6 @@ class VioDriftTerms : public BundleAdjustmentTerms {
   std::vector<VioDriftFrame> frames_;
   std::vector<VioDriftLink> links_;
   VioDriftTermsOptions options_;
-  std::vector<PoseParameters> states_;  // world_from_vio_world per frame
   int num_frame_terms_ = 0;
   int num_drift_terms_ = 0;
 };
