@@ -136,6 +136,7 @@ void ApplyRealtimeSettings(PipelineOptions* options) {
   options->texture_probe.enable = true;
   options->mapper.ba.function_tolerance = 3e-5;
   options->mapper.ba.max_linear_solver_iterations = 100;
+  options->mapper.final_ba_max_refinements = 1;
 }
 
 }  // namespace viosfm

@@ -147,7 +147,8 @@ TEST(PipelineOptions, RealtimeSettingsChangeOnlyTheirOptions) {
       {"mapper.ba_window_max_held_views", "5"},
       {"texture_probe.enable", "true"},
       {"mapper.ba.function_tolerance", "3e-05"},
-      {"mapper.ba.max_linear_solver_iterations", "100"}};
+      {"mapper.ba.max_linear_solver_iterations", "100"},
+      {"mapper.final_ba_max_refinements", "1"}};
   EXPECT_EQ(changed, expected);
 }
 

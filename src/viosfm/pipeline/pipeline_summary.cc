@@ -195,6 +195,11 @@ std::string PipelineSummaryToJson(const PipelineSummary& s) {
   json["imu_factors"] = {{"factors", s.mapper.num_inertial_factors},
                          {"scale", s.mapper.inertial_scale},
                          {"message", s.mapper.inertial_message}};
+  json["final_adjustment"] = {{"refinements", s.mapper.num_final_ba_refinements},
+                              {"last_change", s.mapper.final_ba_last_change},
+                              {"observations", s.mapper.final_ba.num_observations},
+                              {"iterations", s.mapper.final_ba.num_iterations},
+                              {"seconds", s.mapper.final_ba.time_s}};
   ordered_json batches = ordered_json::array();
   for (const MapperBatchStatistics& batch : s.mapper.batches) {
     batches.push_back({{"index", batch.batch_index},

@@ -506,6 +506,9 @@ TEST(PipelineTest, SummaryJsonHasTheDocumentedKeys) {
   EXPECT_EQ(json["tracks"]["points_joined"], 0);  // the pairs were not streamed
   EXPECT_EQ(json["imu_factors"]["factors"], s.mapper.num_inertial_factors);
   EXPECT_EQ(json["imu_factors"]["message"], s.mapper.inertial_message);
+  EXPECT_EQ(json["final_adjustment"]["refinements"], s.mapper.num_final_ba_refinements);
+  EXPECT_EQ(json["final_adjustment"]["observations"], s.mapper.final_ba.num_observations);
+  EXPECT_GT(s.mapper.final_ba.num_observations, 0);
   // 31-40 frames in batches of 10.
   ASSERT_EQ(json["batches"].size(), s.mapper.batches.size());
   EXPECT_EQ(json["batches"].size(), (s.num_frames_selected + 9) / 10);

@@ -312,6 +312,8 @@ std::string BatchedMapperOptions::Validate() const {
   }
   if (std::string error = gyro.Validate(); !error.empty()) return "gyro." + error;
   if (std::string error = inertial.Validate(); !error.empty()) return "inertial." + error;
+  if (final_ba_max_refinements < 0) return "final_ba_max_refinements must be >= 0";
+  if (!(final_ba_refine_min_change >= 0.0)) return "final_ba_refine_min_change must be >= 0";
   if (num_threads < 1) return "num_threads must be >= 1";
   return "";
 }
@@ -337,7 +339,11 @@ std::string BatchedMapperSummary::ToString() const {
     out << "; as later pairs changed the tracks, " << num_points_merged << " points joined, "
         << num_observations_split_off << " observations split off";
   }
-  if (!final_ba.termination.empty()) out << "\n  final " << final_ba.ToString();
+  if (!final_ba.termination.empty()) {
+    out << "\n  final " << final_ba.ToString() << "\n  final adjustment refined "
+        << num_final_ba_refinements << " time(s); its filtering and re-triangulation then changed "
+        << std::setprecision(2) << 100.0 * final_ba_last_change << " % of the observations";
+  }
   return out.str();
 }
 
@@ -844,6 +850,18 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
   // Bundle adjustment of the last registered images (all when window_begin
   // is 0), the gauge held.
   int num_batch_adjustments = 0;
+  // Set once a global adjustment has left the IMU's factors out (the rig's
+  // rotations too far from the gyro, or the factors' scale beyond
+  // max_scale_change): the later global adjustments (refinements, frames
+  // re-posed after the final one) take the gyro's priors straight away.
+  bool inertial_declined = false;
+  // The inflation of the gyro's priors and of the IMU factors' covariance
+  // that the first global adjustment measured (gyro_priors.h,
+  // inertial_terms.h): a later one starts from a model those terms pulled
+  // toward the gyro, whose disagreement with it no longer measures the
+  // rig's, so it keeps at least that inflation.
+  double gyro_sigma_floor = 1.0;
+  double inertial_sigma_floor = 1.0;
   const auto adjust = [&](size_t window_begin, bool global) {
     BundleAdjustmentSummary ba_summary;
     if (!is_registered[gauge_index]) return ba_summary;
@@ -912,9 +930,11 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
       std::sort(frames.begin(), frames.end(), [](const GyroFrame& a, const GyroFrame& b) {
         return a.timestamp_ns < b.timestamp_ns;
       });
-      gyro_priors = MakeGyroPriors(frames, input.imu, input.rig, options.gyro);
+      gyro_priors =
+          MakeGyroPriors(frames, input.imu, input.rig, options.gyro, gyro_sigma_floor);
+      gyro_sigma_floor = gyro_priors->sigma_factor;
       const GyroPriors& gyro = *gyro_priors;
-      if (options.inertial.enabled && ba_options.use_relative_pose_priors) {
+      if (options.inertial.enabled && ba_options.use_relative_pose_priors && !inertial_declined) {
         // The IMU's factors, started from the gyro priors' bias fit (the
         // median of its windows'), in their place.
         Eigen::Vector3d gyro_bias = Eigen::Vector3d::Zero();
@@ -932,7 +952,8 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
         }
         inertial_terms = std::make_unique<InertialTerms>(inertial_frames, input.imu, input.rig,
                                                          gyro_bias, options.inertial);
-        if (inertial_terms->Initialise(options.num_threads)) {
+        if (inertial_terms->Initialise(options.num_threads, inertial_sigma_floor)) {
+          inertial_sigma_floor = inertial_terms->sigma_factor();
           summary.num_inertial_factors = inertial_terms->num_factors();
           // The IMU holds the stretches the images barely see, where the
           // bridging priors carried the VIO's drift over seconds: they no
@@ -946,6 +967,7 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
           VIOSFM_LOG(INFO) << "final bundle adjustment: " << summary.inertial_message
                            << "; the gyro's priors instead";
           inertial_terms.reset();
+          inertial_declined = true;
         }
       }
     }
@@ -1045,6 +1067,7 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
         reconstruction.GetCamera(camera_id) = camera;
       }
       inertial_terms.reset();
+      inertial_declined = true;
       summary.num_inertial_factors = 0;
       summary.inertial_message = message.str();
       use_gyro_priors();
@@ -1146,6 +1169,9 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
 
     // 5. Filtering and re-triangulation of the tracks left without a point.
     timer.Start();
+    // After the final adjustment: the share of the observations they change.
+    double final_change = 0.0;
+    const size_t observations_before_filter = global ? reconstruction.ComputeNumObservations() : 0;
     if (window_begin == 0 || all_changed_since_filter) {
       FilterPoints(&reconstruction, options.filter, options.num_threads);
     } else {
@@ -1154,9 +1180,16 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
     }
     changed_since_filter.clear();
     all_changed_since_filter = false;
+    if (global) {
+      final_change = static_cast<double>(observations_before_filter -
+                                         reconstruction.ComputeNumObservations());
+    }
     if (options.retriangulate) {
       if (window_begin == 0) {
-        TriangulateReconstruction(&reconstruction, tracks, registered, options.triangulation);
+        const TriangulationStatistics retriangulated =
+            TriangulateReconstruction(&reconstruction, tracks, registered, options.triangulation);
+        final_change += static_cast<double>(retriangulated.num_new_point_observations +
+                                            retriangulated.num_extension_observations);
         all_changed_since_filter = true;
       } else {
         std::vector<size_t> window_frames;
@@ -1173,14 +1206,40 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
     const size_t reposed_after_adjustment = recheck_vio_placed();
     summary.num_reposed_after_adjustment += static_cast<int>(reposed_after_adjustment);
     const size_t registered_late = last ? retry_pending() : 0;
-    if (last && reposed_after_adjustment + registered_late > 0 &&
-        (options.ba_after_each_batch || options.final_global_ba)) {
-      summary.final_ba = adjust(0, true);
-      FilterPoints(&reconstruction, options.filter, options.num_threads);
-      if (options.retriangulate) {
-        TriangulateReconstruction(&reconstruction, tracks, registered, options.triangulation);
-      }
+    if (global) {
+      final_change /= static_cast<double>(std::max<size_t>(1, reconstruction.ComputeNumObservations()));
     }
+    // Another global adjustment for the frames re-posed or registered after
+    // the final one, and while its filtering and re-triangulation change the
+    // model (final_ba_refine_min_change).
+    bool frames_changed = last && reposed_after_adjustment + registered_late > 0 &&
+                          (options.ba_after_each_batch || options.final_global_ba);
+    while (frames_changed || (global && final_change > options.final_ba_refine_min_change &&
+                              summary.num_final_ba_refinements < options.final_ba_max_refinements)) {
+      if (!frames_changed) {
+        ++summary.num_final_ba_refinements;
+        VIOSFM_LOG(INFO) << std::fixed << std::setprecision(2)
+                         << "final bundle adjustment: filtering and re-triangulation changed "
+                         << 100.0 * final_change << " % of the observations: refinement "
+                         << summary.num_final_ba_refinements << " of at most "
+                         << options.final_ba_max_refinements;
+      }
+      frames_changed = false;
+      summary.final_ba = adjust(0, true);
+      const size_t observations_before = reconstruction.ComputeNumObservations();
+      FilterPoints(&reconstruction, options.filter, options.num_threads);
+      final_change =
+          static_cast<double>(observations_before - reconstruction.ComputeNumObservations());
+      if (options.retriangulate) {
+        const TriangulationStatistics retriangulated =
+            TriangulateReconstruction(&reconstruction, tracks, registered, options.triangulation);
+        final_change += static_cast<double>(retriangulated.num_new_point_observations +
+                                            retriangulated.num_extension_observations);
+      }
+      final_change /=
+          static_cast<double>(std::max<size_t>(1, reconstruction.ComputeNumObservations()));
+    }
+    if (global) summary.final_ba_last_change = final_change;
     stats.seconds_filtering = timer.ElapsedSeconds();
 
     stats.num_registered_total = static_cast<int>(registered.size());

@@ -76,6 +76,18 @@ struct BatchedMapperOptions {
   bool ba_after_each_batch = true;
   // Final global bundle adjustment after the last batch. Default true.
   bool final_global_ba = true;
+  // The final adjustment's filtering and re-triangulation change the model's
+  // observations: points triangulated from the adjusted poses, observations
+  // added to points, observations filtered out. Observations attached after
+  // the last adjustment never moved a pose, and where the poses it started
+  // from were placed by a drifting VIO, those attached before it were
+  // chosen by their agreement with the VIO's poses. So while the filtering
+  // and re-triangulation change more than final_ba_refine_min_change of
+  // the model's observations, the final adjustment runs again, at most
+  // final_ba_max_refinements times (COLMAP's global refinements do the same:
+  // 0.0005 and 5). Defaults 0.01 and 3; 0 refinements: one final adjustment.
+  int final_ba_max_refinements = 3;
+  double final_ba_refine_min_change = 0.01;
   // The gyro's relative rotations in the final global bundle adjustment,
   // when the input has an IMU (BatchedMapperInput::imu).
   GyroPriorOptions gyro;
@@ -205,6 +217,14 @@ struct BatchedMapperOptions {
           self.ba_after_each_batch);
     visit({"final_global_ba", "a global bundle adjustment at the end", kRunOnly},
           self.final_global_ba);
+    visit({"final_ba_max_refinements",
+           "final BA run again at most this many times while re-triangulation changes the model",
+           kRunOnly},
+          self.final_ba_max_refinements);
+    visit({"final_ba_refine_min_change",
+           "share of the observations filtering and re-triangulation must change to refine",
+           kRunOnly},
+          self.final_ba_refine_min_change);
     visit({"num_threads", "worker threads", kRunOnly}, self.num_threads);
     visit({"show_progress", "progress bars", kRunOnly}, self.show_progress);
   }
@@ -247,7 +267,13 @@ struct MapperFrameStatus {
 struct BatchedMapperSummary {
   TrackStatistics tracks;
   std::vector<MapperBatchStatistics> batches;
+  // The last global adjustment (after the refinements, if any).
   BundleAdjustmentSummary final_ba;
+  // Times the final adjustment ran again for the model's change
+  // (BatchedMapperOptions::final_ba_refine_min_change), and the share of
+  // the observations the last one's filtering and re-triangulation changed.
+  int num_final_ba_refinements = 0;
+  double final_ba_last_change = 0.0;
   int num_images = 0;
   // Images registered in the model: every posed frame (num_supported +
   // num_vio_only below).

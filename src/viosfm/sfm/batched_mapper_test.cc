@@ -318,6 +318,60 @@ TEST(BatchedMapperTest, DriftStatesCorrectTheVioDrift) {
   EXPECT_LT(summary.mean_reprojection_error_px, 0.7);
 }
 
+// A drifting sequence mapped as one batch: every point is triangulated from
+// the VIO's poses, whose yaw here walks 15 mrad a frame (7 px between
+// consecutive frames at f = 500 px; the drift case above walks a third of
+// that), so the triangulation attaches mostly the observations that agree
+// with the VIO. The final adjustment moves the poses, and its filtering and
+// re-triangulation then attach about as many again: refined, the
+// adjustment runs again over them; without it they never move a pose.
+// Measured: 49 % of the observations changed after the first adjustment,
+// two refinements, Sim(3) RMSE 2.8 mm against 4.9 mm without (the VIO's
+// 51 mm), 12008 observations in the last adjustment against 6157.
+TEST(BatchedMapperTest, FinalAdjustmentRefinedWhileRetriangulationChangesTheModel) {
+  SyntheticSequenceOptions sequence_options = SmallSequenceOptions(80, 2);
+  sequence_options.step_m = 0.1;
+  SyntheticSequence sequence = MakeSyntheticSequence(sequence_options);
+  testing::VioDriftOptions drift_options;
+  drift_options.position_sigma_m = 0.003;
+  drift_options.yaw_sigma_rad = 0.015;
+  drift_options.seed = 7;
+  ApplyVioDrift(sequence.cams_from_world, drift_options, &sequence.input);
+  const std::vector<Rigid3d>& truth = sequence.cams_from_world;
+  BatchedMapperOptions options = QuietOptions(80);
+  options.vio_uncertainty = VioUncertaintyModel::Exact();  // the model of this drift
+  options.vio_uncertainty.yaw_per_sqrt_m = 0.015 / std::sqrt(0.1);
+  options.vio_uncertainty.position_per_sqrt_m = 0.003 / std::sqrt(0.1);
+  const double vio_rmse = CompareSim3(truth, VioPoses(sequence.input)).rmse_m;
+  BatchedMapperSummary refined_summary;
+  const Reconstruction refined = RunBatchedMapper(sequence.input, options, &refined_summary);
+  options.final_ba_max_refinements = 0;
+  BatchedMapperSummary once_summary;
+  const Reconstruction once = RunBatchedMapper(sequence.input, options, &once_summary);
+  ASSERT_EQ(refined_summary.num_registered, 80);
+  ASSERT_EQ(once_summary.num_registered, 80);
+  const double refined_rmse = CompareSim3(truth, RegisteredPoses(refined, 80)).rmse_m;
+  const double once_rmse = CompareSim3(truth, RegisteredPoses(once, 80)).rmse_m;
+  RecordProperty("vio_sim3_rmse_m", std::to_string(vio_rmse));
+  RecordProperty("refined_sim3_rmse_m", std::to_string(refined_rmse));
+  RecordProperty("once_sim3_rmse_m", std::to_string(once_rmse));
+  std::cout << "VIO Sim(3) RMSE " << vio_rmse << " m; refined "
+            << refined_summary.num_final_ba_refinements << " time(s): " << refined_rmse << " m, "
+            << refined_summary.final_ba.num_observations << " observations adjusted; once: "
+            << once_rmse << " m, " << once_summary.final_ba.num_observations
+            << " observations adjusted, then " << 100.0 * once_summary.final_ba_last_change
+            << " % changed\n";
+  EXPECT_EQ(once_summary.num_final_ba_refinements, 0);
+  // One adjustment leaves a model its re-triangulation changes by more than
+  // the threshold; refined, the last change is below it.
+  EXPECT_GT(once_summary.final_ba_last_change, options.final_ba_refine_min_change);
+  EXPECT_GE(refined_summary.num_final_ba_refinements, 1);
+  EXPECT_LE(refined_summary.final_ba_last_change, options.final_ba_refine_min_change);
+  EXPECT_GT(refined_summary.final_ba.num_observations, once_summary.final_ba.num_observations);
+  // Closer to the truth by at least a quarter.
+  EXPECT_LT(refined_rmse, 0.75 * once_rmse);
+}
+
 // The mapper beside the verification (verified_pair_stream.h): a producer
 // thread hands the pairs over as a verification would, ordered by their
 // earlier frame, a few at a time, with the frontier after each handful.

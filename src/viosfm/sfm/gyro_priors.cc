@@ -105,8 +105,10 @@ std::vector<Eigen::Vector3d> EstimateGyroBiases(const std::vector<GyroPair>& pai
 }
 
 GyroPriors MakeGyroPriors(const std::vector<GyroFrame>& frames, const std::vector<ImuSample>& imu,
-                          const SensorRig& rig, const GyroPriorOptions& options) {
+                          const SensorRig& rig, const GyroPriorOptions& options,
+                          double min_sigma_factor) {
   VIOSFM_CHECK(options.Check()) << options.Validate();
+  VIOSFM_CHECK_GE(min_sigma_factor, 1.0);
   GyroPriors result;
   for (size_t k = 1; k < frames.size(); ++k) {
     VIOSFM_CHECK_LT(frames[k - 1].timestamp_ns, frames[k].timestamp_ns);
@@ -213,7 +215,7 @@ GyroPriors MakeGyroPriors(const std::vector<GyroFrame>& frames, const std::vecto
   // the clock offset's, a rolling shutter), the priors' covariance is
   // inflated by the ratio (the a-posteriori variance factor, from the median
   // so that a stretch the VIO alone held does not count); never narrowed.
-  result.sigma_factor = std::max(1.0, result.median_whitened_residual / kMedianChi3);
+  result.sigma_factor = std::max(min_sigma_factor, result.median_whitened_residual / kMedianChi3);
   for (RelativePosePrior& prior : result.priors) {
     *prior.sqrt_information /= result.sigma_factor;
   }

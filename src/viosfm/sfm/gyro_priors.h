@@ -126,8 +126,12 @@ struct GyroPriors {
   std::string message;  // one line for the log
 };
 
-// `frames` in strictly increasing time; `imu` in increasing time.
+// `frames` in strictly increasing time; `imu` in increasing time. The
+// priors' sigma factor is at least `min_sigma_factor` (>= 1): a model that
+// earlier priors already pulled toward the gyro no longer measures how far
+// the rig is from it, so a later adjustment keeps the first one's factor.
 GyroPriors MakeGyroPriors(const std::vector<GyroFrame>& frames, const std::vector<ImuSample>& imu,
-                          const SensorRig& rig, const GyroPriorOptions& options);
+                          const SensorRig& rig, const GyroPriorOptions& options,
+                          double min_sigma_factor = 1.0);
 
 }  // namespace viosfm

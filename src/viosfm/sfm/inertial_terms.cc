@@ -218,7 +218,8 @@ double InertialTerms::tilt_rad() const {
   return std::hypot(tilt_[0], tilt_[1]);
 }
 
-bool InertialTerms::Initialise(int num_threads) {
+bool InertialTerms::Initialise(int num_threads, double min_sigma_factor) {
+  VIOSFM_CHECK_GE(min_sigma_factor, 1.0);
   if (factors_.size() < 2) {
     refusal_ = "the IMU covers too few frame pairs for its factors";
     return false;
@@ -273,7 +274,7 @@ bool InertialTerms::Initialise(int num_threads) {
   // adjustment removes (on the simulated two_floors walk the 9-D median
   // is 15.8 sigma with the poses held and 0.7 after the adjustment).
   median_whitened_rotation_residual_ = MedianWhitenedRotationResidual(cam_from_world);
-  sigma_factor_ = std::max(1.0, median_whitened_rotation_residual_ / kMedianChi3);
+  sigma_factor_ = std::max(min_sigma_factor, median_whitened_rotation_residual_ / kMedianChi3);
   if (sigma_factor_ > options_.max_sigma_factor) {
     std::ostringstream refusal;
     refusal << std::fixed << std::setprecision(2)

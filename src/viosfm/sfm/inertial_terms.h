@@ -147,8 +147,10 @@ class InertialTerms : public BundleAdjustmentTerms {
   // IMU disagree (see the top). Returns false (and the terms add nothing)
   // with fewer than two factors or an inflation beyond
   // InertialTermOptions::max_sigma_factor (Message() says which).
-  // `num_threads`: Ceres' threads for that solve.
-  bool Initialise(int num_threads = 2);
+  // `num_threads`: Ceres' threads for that solve. The inflation is at least
+  // `min_sigma_factor` (>= 1; see MakeGyroPriors: a later adjustment keeps
+  // the first one's).
+  bool Initialise(int num_threads = 2, double min_sigma_factor = 1.0);
 
   size_t NumParameters() const override;
   std::vector<double*> AddTo(ceres::Problem* problem,
