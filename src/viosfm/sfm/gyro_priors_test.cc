@@ -131,6 +131,19 @@ TEST(GyroPriors, InflatedWhereTheFramesDisagreeBeyondTheirCovariance) {
   // 0.5 mrad a frame: 0.7 mrad per axis between two frames, 3.5 sigmas.
   EXPECT_GT(disagreeing.sigma_factor, 2.0);
   EXPECT_NEAR(disagreeing.sigma_factor, disagreeing.median_whitened_residual / 1.5382, 1e-9);
+  // A later adjustment keeps the first one's inflation as a floor: frames
+  // that now agree with the gyro (pulled toward it) do not tighten the
+  // priors below it, and the priors are the agreeing ones' divided by it.
+  const GyroPriors floored = MakeGyroPriors(MakeFrames(30.0, rig, 0.00003, 0.0, 0.0, 0.0, 6), imu,
+                                            rig, {}, disagreeing.sigma_factor);
+  EXPECT_EQ(floored.sigma_factor, disagreeing.sigma_factor);
+  ASSERT_EQ(floored.priors.size(), agreeing.priors.size());
+  EXPECT_TRUE(floored.priors[0].sqrt_information->isApprox(
+      *agreeing.priors[0].sqrt_information / disagreeing.sigma_factor, 1e-12));
+  // Disagreeing more than the floor: the measured factor.
+  EXPECT_EQ(MakeGyroPriors(MakeFrames(30.0, rig, 0.0005, 0.0, 0.0, 0.0, 6), imu, rig, {}, 1.5)
+                .sigma_factor,
+            disagreeing.sigma_factor);
 }
 
 TEST(GyroPriors, HoldTheRotationAcrossAStretchTheImagesDoNotSupport) {

@@ -138,6 +138,10 @@ TEST(InertialTerms, RecoverTheModelsMetricScaleTiltVelocitiesAndBiases) {
   // The poses are exact: the rotations agree with the gyro as its noise
   // says, and nothing is inflated much.
   EXPECT_LT(terms.sigma_factor(), 1.3) << terms.Message();
+  // A later adjustment's floor (the first one's inflation) holds.
+  InertialTerms floored(frames, imu, rig, Eigen::Vector3d::Zero(), InertialTermOptions());
+  ASSERT_TRUE(floored.Initialise(2, 4.0));
+  EXPECT_EQ(floored.sigma_factor(), 4.0);
   SolveWithPosesHeld(frames, &terms);
   std::cout << terms.Message() << "\n";
   // With the IMU's noise, within the 0.5 % (one draw: 0.08 % off
