@@ -930,8 +930,7 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
       std::sort(frames.begin(), frames.end(), [](const GyroFrame& a, const GyroFrame& b) {
         return a.timestamp_ns < b.timestamp_ns;
       });
-      gyro_priors =
-          MakeGyroPriors(frames, input.imu, input.rig, options.gyro, gyro_sigma_floor);
+      gyro_priors = MakeGyroPriors(frames, input.imu, input.rig, options.gyro, gyro_sigma_floor);
       gyro_sigma_floor = gyro_priors->sigma_factor;
       const GyroPriors& gyro = *gyro_priors;
       if (options.inertial.enabled && ba_options.use_relative_pose_priors && !inertial_declined) {
@@ -1094,6 +1093,25 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
     return ba_summary;
   };
 
+  // Filters every point and re-triangulates every track; returns the share
+  // of the model's observations that changed (filtered out plus attached).
+  const auto filter_and_retriangulate_all = [&]() {
+    const size_t before = reconstruction.ComputeNumObservations();
+    FilterPoints(&reconstruction, options.filter, options.num_threads);
+    double changed = static_cast<double>(before - reconstruction.ComputeNumObservations());
+    changed_since_filter.clear();
+    all_changed_since_filter = false;
+    if (options.retriangulate) {
+      const TriangulationStatistics retriangulated =
+          TriangulateReconstruction(&reconstruction, tracks, registered, options.triangulation);
+      changed += static_cast<double>(retriangulated.num_new_point_observations +
+                                     retriangulated.num_extension_observations);
+      all_changed_since_filter = true;
+    }
+    return changed /
+           static_cast<double>(std::max<size_t>(1, reconstruction.ComputeNumObservations()));
+  };
+
   const size_t batch_size = static_cast<size_t>(options.batch_size);
   const size_t num_batches = (num_images + batch_size - 1) / batch_size;
   ProgressBar progress(
@@ -1171,27 +1189,18 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
     timer.Start();
     // After the final adjustment: the share of the observations they change.
     double final_change = 0.0;
-    const size_t observations_before_filter = global ? reconstruction.ComputeNumObservations() : 0;
-    if (window_begin == 0 || all_changed_since_filter) {
-      FilterPoints(&reconstruction, options.filter, options.num_threads);
+    if (window_begin == 0) {
+      final_change = filter_and_retriangulate_all();
     } else {
-      FilterPoints(&reconstruction, options.filter, points_to_filter(window_begin),
-                   options.num_threads);
-    }
-    changed_since_filter.clear();
-    all_changed_since_filter = false;
-    if (global) {
-      final_change = static_cast<double>(observations_before_filter -
-                                         reconstruction.ComputeNumObservations());
-    }
-    if (options.retriangulate) {
-      if (window_begin == 0) {
-        const TriangulationStatistics retriangulated =
-            TriangulateReconstruction(&reconstruction, tracks, registered, options.triangulation);
-        final_change += static_cast<double>(retriangulated.num_new_point_observations +
-                                            retriangulated.num_extension_observations);
-        all_changed_since_filter = true;
+      if (all_changed_since_filter) {
+        FilterPoints(&reconstruction, options.filter, options.num_threads);
       } else {
+        FilterPoints(&reconstruction, options.filter, points_to_filter(window_begin),
+                     options.num_threads);
+      }
+      changed_since_filter.clear();
+      all_changed_since_filter = false;
+      if (options.retriangulate) {
         std::vector<size_t> window_frames;
         for (size_t r = window_begin; r < registered.size(); ++r) {
           window_frames.push_back(index_of_image.at(registered[r]));
@@ -1206,16 +1215,14 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
     const size_t reposed_after_adjustment = recheck_vio_placed();
     summary.num_reposed_after_adjustment += static_cast<int>(reposed_after_adjustment);
     const size_t registered_late = last ? retry_pending() : 0;
-    if (global) {
-      final_change /= static_cast<double>(std::max<size_t>(1, reconstruction.ComputeNumObservations()));
-    }
     // Another global adjustment for the frames re-posed or registered after
     // the final one, and while its filtering and re-triangulation change the
     // model (final_ba_refine_min_change).
     bool frames_changed = last && reposed_after_adjustment + registered_late > 0 &&
                           (options.ba_after_each_batch || options.final_global_ba);
-    while (frames_changed || (global && final_change > options.final_ba_refine_min_change &&
-                              summary.num_final_ba_refinements < options.final_ba_max_refinements)) {
+    while (frames_changed ||
+           (global && final_change > options.final_ba_refine_min_change &&
+            summary.num_final_ba_refinements < options.final_ba_max_refinements)) {
       if (!frames_changed) {
         ++summary.num_final_ba_refinements;
         VIOSFM_LOG(INFO) << std::fixed << std::setprecision(2)
@@ -1226,18 +1233,7 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
       }
       frames_changed = false;
       summary.final_ba = adjust(0, true);
-      const size_t observations_before = reconstruction.ComputeNumObservations();
-      FilterPoints(&reconstruction, options.filter, options.num_threads);
-      final_change =
-          static_cast<double>(observations_before - reconstruction.ComputeNumObservations());
-      if (options.retriangulate) {
-        const TriangulationStatistics retriangulated =
-            TriangulateReconstruction(&reconstruction, tracks, registered, options.triangulation);
-        final_change += static_cast<double>(retriangulated.num_new_point_observations +
-                                            retriangulated.num_extension_observations);
-      }
-      final_change /=
-          static_cast<double>(std::max<size_t>(1, reconstruction.ComputeNumObservations()));
+      final_change = filter_and_retriangulate_all();
     }
     if (global) summary.final_ba_last_change = final_change;
     stats.seconds_filtering = timer.ElapsedSeconds();

@@ -357,10 +357,10 @@ TEST(BatchedMapperTest, FinalAdjustmentRefinedWhileRetriangulationChangesTheMode
   RecordProperty("once_sim3_rmse_m", std::to_string(once_rmse));
   std::cout << "VIO Sim(3) RMSE " << vio_rmse << " m; refined "
             << refined_summary.num_final_ba_refinements << " time(s): " << refined_rmse << " m, "
-            << refined_summary.final_ba.num_observations << " observations adjusted; once: "
-            << once_rmse << " m, " << once_summary.final_ba.num_observations
-            << " observations adjusted, then " << 100.0 * once_summary.final_ba_last_change
-            << " % changed\n";
+            << refined_summary.final_ba.num_observations
+            << " observations adjusted; once: " << once_rmse << " m, "
+            << once_summary.final_ba.num_observations << " observations adjusted, then "
+            << 100.0 * once_summary.final_ba_last_change << " % changed\n";
   EXPECT_EQ(once_summary.num_final_ba_refinements, 0);
   // One adjustment leaves a model its re-triangulation changes by more than
   // the threshold; refined, the last change is below it.
