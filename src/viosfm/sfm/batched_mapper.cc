@@ -1094,21 +1094,21 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
   };
 
   // Filters every point and re-triangulates every track; returns the share
-  // of the model's observations that changed (filtered out plus attached).
+  // of the model's observations that changed: those it left without a point
+  // plus those it attached that had none. An observation the filtering took
+  // out and the re-triangulation put back (one near the filter's threshold,
+  // its point deleted and triangulated again) is not a change: the
+  // adjustment had it.
   const auto filter_and_retriangulate_all = [&]() {
-    const size_t before = reconstruction.ComputeNumObservations();
+    const ObservedKeypoints before(reconstruction, registered);
     FilterPoints(&reconstruction, options.filter, options.num_threads);
-    double changed = static_cast<double>(before - reconstruction.ComputeNumObservations());
     changed_since_filter.clear();
     all_changed_since_filter = false;
     if (options.retriangulate) {
-      const TriangulationStatistics retriangulated =
-          TriangulateReconstruction(&reconstruction, tracks, registered, options.triangulation);
-      changed += static_cast<double>(retriangulated.num_new_point_observations +
-                                     retriangulated.num_extension_observations);
+      TriangulateReconstruction(&reconstruction, tracks, registered, options.triangulation);
       all_changed_since_filter = true;
     }
-    return changed /
+    return static_cast<double>(before.CountChanged(reconstruction)) /
            static_cast<double>(std::max<size_t>(1, reconstruction.ComputeNumObservations()));
   };
 

@@ -83,7 +83,9 @@ struct BatchedMapperOptions {
   // from were placed by a drifting VIO, those attached before it were
   // chosen by their agreement with the VIO's poses. So while the filtering
   // and re-triangulation change more than final_ba_refine_min_change of
-  // the model's observations, the final adjustment runs again, at most
+  // the model's observations (keypoints that gained or lost a point; one
+  // filtered out near the threshold and attached again is no change: the
+  // adjustment had it), the final adjustment runs again, at most
   // final_ba_max_refinements times (COLMAP's global refinements do the same:
   // 0.0005 and 5). Defaults 0.01 and 3; 0 refinements: one final adjustment.
   int final_ba_max_refinements = 3;

@@ -145,4 +145,28 @@ PointFilterStatistics FilterPoints(Reconstruction* reconstruction,
   return stats;
 }
 
+ObservedKeypoints::ObservedKeypoints(const Reconstruction& reconstruction,
+                                     std::vector<image_t> image_ids)
+    : image_ids_(std::move(image_ids)), observed_(image_ids_.size()) {
+  for (size_t r = 0; r < image_ids_.size(); ++r) {
+    const Image& image = reconstruction.GetImage(image_ids_[r]);
+    observed_[r].resize(image.points2D.size());
+    for (size_t k = 0; k < image.points2D.size(); ++k) {
+      observed_[r][k] = image.points2D[k].HasPoint3D() ? 1 : 0;
+    }
+  }
+}
+
+size_t ObservedKeypoints::CountChanged(const Reconstruction& reconstruction) const {
+  size_t changed = 0;
+  for (size_t r = 0; r < image_ids_.size(); ++r) {
+    const Image& image = reconstruction.GetImage(image_ids_[r]);
+    VIOSFM_CHECK_EQ(image.points2D.size(), observed_[r].size());
+    for (size_t k = 0; k < image.points2D.size(); ++k) {
+      changed += (image.points2D[k].HasPoint3D() ? 1 : 0) != observed_[r][k] ? 1 : 0;
+    }
+  }
+  return changed;
+}
+
 }  // namespace viosfm

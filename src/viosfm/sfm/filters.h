@@ -87,4 +87,20 @@ PointFilterStatistics FilterPoints(Reconstruction* reconstruction,
                                    const PointFilterOptions& options,
                                    const std::vector<point3D_t>& point3D_ids, int num_threads = 1);
 
+// Which keypoints of some images observe a 3D point, to measure what a
+// filtering and a re-triangulation changed since: CountChanged counts the
+// keypoints that observe a point and did not, or did and do not. A keypoint
+// whose observation was deleted and then attached again (to a point
+// triangulated anew, or to the same one) is not a change. The images must
+// still exist with the same keypoints (CHECK).
+class ObservedKeypoints {
+ public:
+  ObservedKeypoints(const Reconstruction& reconstruction, std::vector<image_t> image_ids);
+  size_t CountChanged(const Reconstruction& reconstruction) const;
+
+ private:
+  std::vector<image_t> image_ids_;
+  std::vector<std::vector<char>> observed_;
+};
+
 }  // namespace viosfm

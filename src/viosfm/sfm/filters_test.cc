@@ -200,6 +200,42 @@ TEST(FiltersTest, IgnoresObservationsInUnregisteredImages) {
   EXPECT_FALSE(reconstruction.GetImage(1).points2D[1].HasPoint3D());
 }
 
+TEST(FiltersTest, ObservedKeypointsCountWhatChangedNotWhatCameBack) {
+  InjectedScene injected = MakeInjectedScene();
+  Reconstruction& reconstruction = injected.reconstruction;
+  std::vector<image_t> image_ids;
+  for (image_t id = 1; id <= 10; ++id) image_ids.push_back(id);
+  const size_t observations_before = reconstruction.ComputeNumObservations();
+  const ObservedKeypoints before(reconstruction, image_ids);
+  EXPECT_EQ(before.CountChanged(reconstruction), 0u);
+
+  FilterPoints(&reconstruction, PointFilterOptions());
+  const size_t removed = observations_before - reconstruction.ComputeNumObservations();
+  // 15 injected, the far point's 2 and the weak point's 3.
+  EXPECT_EQ(removed, 20u);
+  EXPECT_EQ(before.CountChanged(reconstruction), removed);
+
+  // One of the injected observations put back on its point: no longer a
+  // change.
+  const auto [image_id, idx] = *injected.injected.begin();
+  point3D_t point_id = kInvalidPoint3DId;
+  for (image_t other = 1; other <= 10; ++other) {
+    const Point2D& point2D = reconstruction.GetImage(other).points2D[idx];
+    if (other != image_id && point2D.HasPoint3D()) point_id = point2D.point3D_id;
+  }
+  ASSERT_NE(point_id, kInvalidPoint3DId);
+  reconstruction.AddObservation(point_id, {image_id, idx});
+  EXPECT_EQ(before.CountChanged(reconstruction), removed - 1);
+
+  // A keypoint that observed nothing now observing a point: a change.
+  Point3D point3D;
+  point3D.xyz = Eigen::Vector3d(0.0, 0.0, 5.0);
+  point3D.track = {{1, 201}, {2, 201}};
+  ASSERT_FALSE(reconstruction.GetImage(1).points2D[201].HasPoint3D());
+  reconstruction.AddPoint3D(point3D);
+  EXPECT_EQ(before.CountChanged(reconstruction), removed + 1);
+}
+
 TEST(FiltersTest, OptionsValidate) {
   PointFilterOptions options;
   EXPECT_TRUE(options.Check());
