@@ -30,6 +30,10 @@ if [ ! -d "$data/images" ]; then
   echo "no $data/images (set VIOSFM_DATA_DIR to the folder holding strecha_fountain_p11)" >&2
   exit 2
 fi
+if ! /usr/bin/python3 -c 'import numpy' 2> /dev/null; then
+  echo "bench-fountain-priors.sh: needs numpy for /usr/bin/python3 (apt-get install python3-numpy, or VIOSFM_WITH_COLMAP=1 scripts/install-deps.sh)" >&2
+  exit 2
+fi
 mkdir -p "$out"
 out=$(cd "$out" && pwd)
 

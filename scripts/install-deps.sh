@@ -14,9 +14,11 @@ packages=(
   chromium  # headless, for the test that opens `viosfm report` pages
   python3  # scripts/check_transforms_json.py (standard library only)
 )
-# The baseline the benchmarks compare against (not needed to build or test).
+# The baseline the benchmarks compare against, and what the benchmark
+# scripts read their results with (jq; numpy in bench-fountain-priors.sh):
+# not needed to build or test.
 if [[ "${VIOSFM_WITH_COLMAP:-0}" == "1" ]]; then
-  packages+=(colmap sqlite3 time)
+  packages+=(colmap sqlite3 time jq python3-numpy)
 fi
 
 missing=()
