@@ -227,7 +227,8 @@ TEST(FiltersTest, ObservedKeypointsCountWhatChangedNotWhatCameBack) {
   reconstruction.AddObservation(point_id, {image_id, idx});
   EXPECT_EQ(before.CountChanged(reconstruction), removed - 1);
 
-  // A keypoint that observed nothing now observing a point: a change.
+  // Two keypoints that observed nothing now observing a new point: two
+  // changes.
   Point3D point3D;
   point3D.xyz = Eigen::Vector3d(0.0, 0.0, 5.0);
   point3D.track = {{1, 201}, {2, 201}};
