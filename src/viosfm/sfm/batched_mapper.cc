@@ -669,10 +669,29 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
             register_frame(i, result.cam_from_world, FramePoseSource::kImagesReposed);
             return true;
           }
+          // The images do not support the VIO's pose at all and strongly
+          // support one far beyond its drift: the VIO jumped, unless the
+          // frame's verified matches with the registered frames show the
+          // VIO's pose rather than the PnP's (then the 2D-3D matches are a
+          // look-alike place's, merged into its tracks by a wrong pair).
+          const auto jump_refuted = [&]() {
+            const image_t image_id = input.images[i].image_id;
+            const int by_images =
+                CountExplainedPairMatches(reconstruction, image_id, result.cam_from_world, pairs,
+                                          registration.support_max_error_px);
+            const int by_vio = CountExplainedPairMatches(reconstruction, image_id, *predicted,
+                                                         pairs, registration.support_max_error_px);
+            if (by_vio <= by_images) return false;
+            VIOSFM_LOG(INFO) << "batched mapper: " << DescribeImage(input.images[i])
+                             << ": the VIO's pose is " << position_difference << " m and "
+                             << rotation_difference << " rad off the images' (" << predicted_inliers
+                             << " of " << pnp_inliers << " 2D-3D inliers), but its matches with "
+                             << "the registered frames show the VIO's pose (" << by_vio
+                             << " of them against " << by_images << "): not a VIO jump";
+            return true;
+          };
           if (!prediction_supported && beyond_drift &&
-              pnp_inliers >= 2 * registration.min_reposing_inliers) {
-            // The images do not support the VIO's pose at all and strongly
-            // support one far beyond its drift: the VIO jumped.
+              pnp_inliers >= 2 * registration.min_reposing_inliers && !jump_refuted()) {
             is_break[std::max(i, *reference)] = 1;
             status.vio_break = true;
             VIOSFM_LOG(INFO) << "batched mapper: " << DescribeImage(input.images[i])

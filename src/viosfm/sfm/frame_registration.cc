@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "viosfm/geometry/epipolar.h"
+#include "viosfm/geometry/lie.h"
 #include "viosfm/sensor/camera_models.h"
 
 namespace viosfm {
@@ -59,6 +61,37 @@ FrameCorrespondences CollectFrameCorrespondences(const Reconstruction& reconstru
     result.points_in_world.push_back(reconstruction.GetPoint3D(point).xyz);
   }
   return result;
+}
+
+int CountExplainedPairMatches(const Reconstruction& reconstruction, image_t image_id,
+                              const Rigid3d& cam_from_world,
+                              const std::vector<ImagePairMatches>& pairs, double max_error_px) {
+  const Image& image = reconstruction.GetImage(image_id);
+  const Camera& camera = reconstruction.GetCamera(image.camera_id);
+  int count = 0;
+  for (const ImagePairMatches& pair : pairs) {
+    const bool first = pair.image_id1 == image_id;
+    if (!first && pair.image_id2 != image_id) continue;
+    const Image& other = reconstruction.GetImage(first ? pair.image_id2 : pair.image_id1);
+    if (!other.registered) continue;
+    const Camera& other_camera = reconstruction.GetCamera(other.camera_id);
+    // E maps the other image's normalised points to lines of this image's.
+    const Rigid3d cam_from_other = cam_from_world * other.cam_from_world.Inverse();
+    const Eigen::Vector3d& t = cam_from_other.translation;
+    if (!(t.norm() > 0.0)) continue;
+    const Eigen::Matrix3d essential =
+        Hat(t.normalized()) * cam_from_other.rotation.toRotationMatrix();
+    const double focal = MeanFocalLength(camera);
+    for (const FeatureMatch& match : pair.matches) {
+      const point2D_t own = first ? match.point2D_idx1 : match.point2D_idx2;
+      const point2D_t theirs = first ? match.point2D_idx2 : match.point2D_idx1;
+      const double squared =
+          SampsonError(essential, ImageToCam(other_camera, other.points2D[theirs].xy),
+                       ImageToCam(camera, image.points2D[own].xy));
+      if (std::sqrt(squared) * focal <= max_error_px) ++count;
+    }
+  }
+  return count;
 }
 
 int CountSupportingObservations(const Reconstruction& reconstruction, image_t image_id,

@@ -167,6 +167,97 @@ TEST(FrameRegistration, AJumpInsideASegmentIsFound) {
   EXPECT_LT(MaxCenterError(reconstruction, sequence), CleanMaxCenterError(60, 23) + 0.003);
 }
 
+// A look-alike place (repeated structure: a wrong pair merged into a
+// frame's tracks) is not a VIO jump. Frame 45's only 2D-3D matches come from
+// a wrong pair with frame 20: keypoints added where frame 20's points would
+// appear from a pose 1.3 m back and 0.3 m up, turned by 0.2 rad about its
+// optical axis (a look-alike of frame 20's view), so that PnP finds that pose with every match and
+// the VIO's (exact) pose has none. The pairs linking frames 40-59 to frames 0-39 are taken out, so
+// that at 45's registration its neighbours 40-44 (registered in the same batch) have no points yet;
+// its matches with them show the VIO's pose. Without that check the frame was taken for a VIO jump
+// and re-posed 1.3 m off, and the frames after it were predicted from there.
+TEST(FrameRegistration, ALookAlikePlaceIsNotAVioJump) {
+  SyntheticSequence sequence = Corridor(60, 25);
+  BatchedMapperInput& input = sequence.input;
+  std::erase_if(input.verified_pairs, [](const ImagePairMatches& pair) {
+    return (pair.image_id1 <= 40) != (pair.image_id2 <= 40);
+  });
+  const size_t frame = 45, look_alike_of = 20;
+  const Rigid3d& original = sequence.cams_from_world[look_alike_of];
+  const Eigen::Vector3d look_alike_center =
+      ProjectionCenter(sequence.cams_from_world[frame]) + Eigen::Vector3d(-1.3, 0.0, 0.3);
+  const Eigen::Quaterniond look_alike_rotation =
+      Eigen::Quaterniond(Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitZ())) * original.rotation;
+  const Rigid3d look_alike(look_alike_rotation, -(look_alike_rotation * look_alike_center));
+  ImagePairMatches wrong_pair;
+  wrong_pair.image_id1 = static_cast<image_t>(look_alike_of + 1);
+  wrong_pair.image_id2 = static_cast<image_t>(frame + 1);
+  MapperImage& image = input.images[frame];
+  for (size_t k = 0; k < sequence.point_of_keypoint[look_alike_of].size(); ++k) {
+    const Eigen::Vector3d& point = sequence.points[sequence.point_of_keypoint[look_alike_of][k]];
+    const std::optional<Eigen::Vector2d> pixel = Project(sequence.camera, look_alike * point);
+    if (!pixel || pixel->x() < 0.0 || pixel->y() < 0.0 || pixel->x() > 639.0 ||
+        pixel->y() > 479.0) {
+      continue;
+    }
+    FeatureKeypoint keypoint;
+    keypoint.x = static_cast<float>(pixel->x());
+    keypoint.y = static_cast<float>(pixel->y());
+    wrong_pair.matches.push_back(
+        {static_cast<point2D_t>(k), static_cast<point2D_t>(image.keypoints.size())});
+    image.keypoints.push_back(keypoint);
+  }
+  ASSERT_GT(wrong_pair.matches.size(), 100u);
+  input.verified_pairs.push_back(std::move(wrong_pair));
+  BatchedMapperSummary summary;
+  const Reconstruction reconstruction = RunBatchedMapper(input, Quiet(10), &summary);
+  // The look-alike's PnP pose is found and refused.
+  EXPECT_GT(summary.frames[frame].num_pnp_inliers, 100);
+  EXPECT_LT(summary.frames[frame].num_predicted_inliers, 15);
+  EXPECT_FALSE(summary.frames[frame].vio_break);
+  EXPECT_EQ(summary.num_vio_breaks, 0);
+  EXPECT_EQ(summary.num_registered, 60);
+  EXPECT_LT(CenterError(reconstruction, sequence, frame), 0.01);
+  EXPECT_LT(MaxCenterError(reconstruction, sequence), 0.02);
+}
+
+// The verified matches a pose of a frame explains: all of them at its true
+// pose; almost none at a pose turned half a turn or moved 0.5 m across the
+// baselines; all of a pair at a pose moved along its baseline (an epipolar
+// check cannot see how far along it the frame is).
+TEST(FrameRegistration, PairMatchesShowWhichPoseTheyWereTakenFrom) {
+  const testing::SyntheticScene scene = testing::MakeSyntheticScene(3, 200, 31);
+  Reconstruction reconstruction = testing::MakeSyntheticReconstruction(scene, 2);
+  std::vector<ImagePairMatches> pairs(2);
+  for (size_t p = 0; p < 2; ++p) {
+    pairs[p].image_id1 = static_cast<image_t>(p + 1);
+    pairs[p].image_id2 = 3;
+    for (point2D_t k = 0; k < 200; ++k) pairs[p].matches.push_back({k, k});
+  }
+  const Rigid3d& truth = scene.cams_from_world[2];
+  const auto explained = [&](const Rigid3d& pose) {
+    return CountExplainedPairMatches(reconstruction, 3, pose, pairs, 4.0);
+  };
+  EXPECT_EQ(explained(truth), 400);
+  const Rigid3d turned(
+      Eigen::Quaterniond(Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitY())) * truth.rotation,
+      truth.translation);
+  EXPECT_LT(explained(turned), 40);
+  const Eigen::Vector3d center = ProjectionCenter(truth);
+  const auto at = [&](const Eigen::Vector3d& moved) {
+    return Rigid3d(truth.rotation, -(truth.rotation * moved));
+  };
+  EXPECT_LT(explained(at(center + Eigen::Vector3d(0.0, 0.5, 0.0))), 40);
+  // 3 m further along the baseline from image 2: its matches with image 2
+  // cannot tell.
+  const Eigen::Vector3d along = (center - ProjectionCenter(scene.cams_from_world[1])).normalized();
+  EXPECT_EQ(CountExplainedPairMatches(reconstruction, 3, at(center + 3.0 * along), {pairs[1]}, 4.0),
+            200);
+  // The images not registered are not asked.
+  reconstruction.GetImage(1).registered = false;
+  EXPECT_EQ(explained(truth), 200);
+}
+
 // Frames without any VIO pose at the start (the VIO not yet initialised)
 // are registered from the images once the model reaches them; without
 // verification they cannot be, and are reported with a reason.
