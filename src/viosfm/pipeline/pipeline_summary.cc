@@ -55,7 +55,8 @@ std::string PipelineSummary::ToString() const {
   out << "VIO: " << num_vio_segments << " segment(s), " << mapper.num_vio_segments_joined
       << " joined; " << mapper.num_reposed << " frame(s) re-posed from the images, "
       << mapper.num_registered_without_vio << " registered from the images without a VIO pose, "
-      << mapper.num_vio_breaks << " VIO jump(s) found\n";
+      << mapper.num_vio_breaks << " VIO jump(s) found, " << mapper.num_vio_jumps_refused
+      << " refused by the frame's matches with its neighbours\n";
   if (!metric_scale.message.empty()) out << "metric scale: " << metric_scale.message << "\n";
   out << "pairs: " << verification.num_pairs << " candidates, " << verification.num_accepted
       << " accepted, " << verification.num_vio_rejected << " rejected by VIO, "
@@ -157,7 +158,8 @@ std::string PipelineSummaryToJson(const PipelineSummary& s) {
   json["vio"] = {{"segments", s.num_vio_segments},
                  {"segments_joined", s.mapper.num_vio_segments_joined},
                  {"segment_rule", s.vio_segment_rule},
-                 {"jumps_found", s.mapper.num_vio_breaks}};
+                 {"jumps_found", s.mapper.num_vio_breaks},
+                 {"jumps_refused", s.mapper.num_vio_jumps_refused}};
   ordered_json unposed = ordered_json::array();
   for (const MapperFrameStatus& frame : s.mapper.frames) {
     if (!frame.reason.empty()) {

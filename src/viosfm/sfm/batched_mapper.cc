@@ -331,7 +331,8 @@ std::string BatchedMapperSummary::ToString() const {
       << " of them after an adjustment), " << num_registered_without_vio
       << " registered from the images without a VIO prediction, " << num_without_vio_pose
       << " without a VIO pose; VIO segments " << num_vio_segments_joined << " of "
-      << num_vio_segments << " joined, " << num_vio_breaks << " VIO jump(s) found\n"
+      << num_vio_segments << " joined, " << num_vio_breaks << " VIO jump(s) found, "
+      << num_vio_jumps_refused << " refused by the frame's matches\n"
       << "  relative-pose priors: " << num_consecutive_priors << " consecutive, "
       << num_bridging_priors << " bridging, " << num_gyro_priors << " from the gyro\n"
       << "  " << tracks.Summary();
@@ -682,6 +683,7 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
             const int by_vio = CountExplainedPairMatches(reconstruction, image_id, *predicted,
                                                          pairs, registration.support_max_error_px);
             if (by_vio <= by_images) return false;
+            ++summary.num_vio_jumps_refused;
             VIOSFM_LOG(INFO) << "batched mapper: " << DescribeImage(input.images[i])
                              << ": the VIO's pose is " << position_difference << " m and "
                              << rotation_difference << " rad off the images' (" << predicted_inliers

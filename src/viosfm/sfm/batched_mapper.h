@@ -313,6 +313,10 @@ struct BatchedMapperSummary {
   int num_reposed_after_adjustment = 0;
   int num_registered_without_vio = 0;  // FramePoseSource::kImagesWithoutVio
   int num_vio_breaks = 0;
+  // Frames whose PnP pose looked like a VIO jump but whose verified matches
+  // with the registered frames showed the VIO's pose (a look-alike place's
+  // 2D-3D matches, FrameRegistrationOptions): their VIO pose stands.
+  int num_vio_jumps_refused = 0;
   int num_vio_segments = 0;         // VIO segments among the input frames
   int num_vio_segments_joined = 0;  // of those, with a posed frame
   // With the pairs streamed: points joined because later pairs joined

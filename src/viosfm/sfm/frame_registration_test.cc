@@ -162,6 +162,7 @@ TEST(FrameRegistration, AJumpInsideASegmentIsFound) {
   BatchedMapperSummary summary;
   const Reconstruction reconstruction = RunBatchedMapper(sequence.input, Quiet(10), &summary);
   EXPECT_EQ(summary.num_vio_breaks, 1);
+  EXPECT_EQ(summary.num_vio_jumps_refused, 0);  // its matches show the images' pose
   EXPECT_TRUE(summary.frames[30].vio_break);
   EXPECT_EQ(summary.num_supported, 60);
   EXPECT_LT(MaxCenterError(reconstruction, sequence), CleanMaxCenterError(60, 23) + 0.003);
@@ -216,6 +217,7 @@ TEST(FrameRegistration, ALookAlikePlaceIsNotAVioJump) {
   EXPECT_LT(summary.frames[frame].num_predicted_inliers, 15);
   EXPECT_FALSE(summary.frames[frame].vio_break);
   EXPECT_EQ(summary.num_vio_breaks, 0);
+  EXPECT_EQ(summary.num_vio_jumps_refused, 1);
   EXPECT_EQ(summary.num_registered, 60);
   EXPECT_LT(CenterError(reconstruction, sequence, frame), 0.01);
   EXPECT_LT(MaxCenterError(reconstruction, sequence), 0.02);
