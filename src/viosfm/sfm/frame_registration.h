@@ -44,8 +44,9 @@ struct FrameRegistrationOptions {
   //  - a PnP pose beyond that drift replaces the prediction only when the
   //    prediction has fewer than pnp.min_num_inliers inliers, the PnP pose
   //    at least twice min_reposing_inliers, and the frame's verified matches
-  //    with the registered frames do not show the prediction better than
-  //    the PnP pose (CountExplainedPairMatches, within support_max_error_px):
+  //    with the registered frames do not show the prediction clearly better
+  //    than the PnP pose (more than twice as many of them fitting it,
+  //    CountExplainedPairMatches within support_max_error_px):
   //    the VIO jumped (a reset the stamps do not show); no relative-pose
   //    prior crosses such a break and later frames are predicted from the
   //    images' pose;
