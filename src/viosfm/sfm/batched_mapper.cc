@@ -680,9 +680,10 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
           }
           // The images do not support the VIO's pose at all and strongly
           // support one far beyond its drift: the VIO jumped, unless the
-          // frame's verified matches with the registered frames show the
-          // VIO's pose rather than the PnP's (then the 2D-3D matches are a
-          // look-alike place's, merged into its tracks by a wrong pair).
+          // frame's verified matches with the registered frames clearly show
+          // the VIO's pose rather than the PnP's (kJumpRefutingMatchRatio;
+          // then the 2D-3D matches are a look-alike place's, merged into its
+          // tracks by a wrong pair).
           const auto jump_refuted = [&]() {
             const image_t image_id = input.images[i].image_id;
             const int by_images =

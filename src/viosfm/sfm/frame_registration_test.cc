@@ -169,14 +169,16 @@ TEST(FrameRegistration, AJumpInsideASegmentIsFound) {
 }
 
 // A look-alike place (repeated structure: a wrong pair merged into a
-// frame's tracks) is not a VIO jump. Frame 45's only 2D-3D matches come from
-// a wrong pair with frame 20: keypoints added where frame 20's points would
-// appear from a pose 1.3 m back and 0.3 m up, turned by 0.2 rad about its
-// optical axis (a look-alike of frame 20's view), so that PnP finds that pose with every match and
-// the VIO's (exact) pose has none. The pairs linking frames 40-59 to frames 0-39 are taken out, so
-// that at 45's registration its neighbours 40-44 (registered in the same batch) have no points yet;
-// its matches with them show the VIO's pose. Without that check the frame was taken for a VIO jump
-// and re-posed 1.3 m off, and the frames after it were predicted from there.
+// frame's tracks) is not a VIO jump. Frame 45's only 2D-3D matches come
+// from a wrong pair with frame 20: keypoints added where frame 20's points
+// would appear from a pose 1.3 m back and 0.3 m up, turned by 0.2 rad about
+// its optical axis (a look-alike of frame 20's view), so that PnP finds
+// that pose with every match and the VIO's (exact) pose has none. The pairs
+// linking frames 40-59 to frames 0-39 are taken out, so that at 45's
+// registration its neighbours 40-44 (registered in the same batch) have no
+// points yet; its matches with them show the VIO's pose. Without that check
+// the frame was taken for a VIO jump and re-posed 1.3 m off, and the frames
+// after it were predicted from there.
 TEST(FrameRegistration, ALookAlikePlaceIsNotAVioJump) {
   SyntheticSequence sequence = Corridor(60, 25);
   BatchedMapperInput& input = sequence.input;
