@@ -68,6 +68,7 @@ int CountExplainedPairMatches(const Reconstruction& reconstruction, image_t imag
                               const std::vector<ImagePairMatches>& pairs, double max_error_px) {
   const Image& image = reconstruction.GetImage(image_id);
   const Camera& camera = reconstruction.GetCamera(image.camera_id);
+  const double focal = MeanFocalLength(camera);
   int count = 0;
   for (const ImagePairMatches& pair : pairs) {
     const bool first = pair.image_id1 == image_id;
@@ -81,7 +82,6 @@ int CountExplainedPairMatches(const Reconstruction& reconstruction, image_t imag
     if (!(t.norm() > 0.0)) continue;
     const Eigen::Matrix3d essential =
         Hat(t.normalized()) * cam_from_other.rotation.toRotationMatrix();
-    const double focal = MeanFocalLength(camera);
     for (const FeatureMatch& match : pair.matches) {
       const point2D_t own = first ? match.point2D_idx1 : match.point2D_idx2;
       const point2D_t theirs = first ? match.point2D_idx2 : match.point2D_idx1;
