@@ -37,6 +37,7 @@ struct MatchArguments {
   double max_pose_time_difference_s = 0.005;
   double vio_max_gap_s = 1.0;
   bool fixed_band = false;
+  bool wide_band = false;
   VioUncertaintyArguments vio_uncertainty;
   std::string report;
   VerificationOptions options;
@@ -52,6 +53,7 @@ void RunMatch(MatchArguments args) {
   options.retrieval.num_threads = options.num_threads;
   options.vio_uncertainty = args.vio_uncertainty.Model();
   options.band_follows_drift = !args.fixed_band;
+  options.correct_within_drift = !args.wide_band;
   if (const std::string error = options.Validate(); !error.empty()) {
     throw InputError("invalid match options: " + error);
   }
@@ -136,8 +138,17 @@ void RegisterMatch(CLI::App& app) {
   command->add_option("--vio-frame", args->vio_frame, "Frame of the VIO poses: body or cam")
       ->capture_default_str();
   command->add_flag("--fixed-band", args->fixed_band,
-                    "The paper's fixed epipolar band T_EE for every pair, instead of one that "
-                    "follows the VIO's drift between the two frames");
+                    "The paper's test: the VIO's relative pose as it is, with the fixed "
+                    "epipolar band T_EE, instead of the pose first corrected by the matches "
+                    "within the VIO's expected drift between the two frames");
+  command->add_flag("--wide-band", args->wide_band,
+                    "Each match judged alone against the band the VIO's drift allows, instead "
+                    "of the VIO's pose first corrected by the matches within that drift");
+  command
+      ->add_option("--max-correction-sigmas", args->options.max_correction_sigmas,
+                   "Largest correction of the VIO's relative pose taken as its drift, "
+                   "Mahalanobis distance")
+      ->capture_default_str();
   command
       ->add_option("--vio-max-gap", args->vio_max_gap_s,
                    "The VIO trajectory is split into segments (no VIO prior across) at time "

@@ -34,6 +34,7 @@ struct RunArguments {
   std::string prior_weighting = "covariance";
   bool no_verify_registration = false;
   bool fixed_band = false;
+  bool wide_band = false;
   bool no_imu_scale = false;
   VioUncertaintyArguments vio_uncertainty;
   std::string timestamps;
@@ -71,6 +72,7 @@ void RunRun(RunArguments args) {
   options.mapper.ba.prior_weighting = ParsePriorWeighting(args.prior_weighting);
   options.mapper.registration.verify_with_images = !args.no_verify_registration;
   if (args.fixed_band) options.verification.band_follows_drift = false;
+  if (args.wide_band) options.verification.correct_within_drift = false;
   options.use_imu_scale = !args.no_imu_scale;
   options.image_folder.camera_yaml = args.bag.camera_yaml;
   options.rosbag = MakeRosbagOptions(args.bag, {});  // extract folder: OUT/bag
@@ -248,8 +250,12 @@ void RegisterRun(CLI::App& app) {
                     "Keep the VIO's metric scale instead of estimating it from the dataset's "
                     "IMU over the registered frames");
   command->add_flag("--fixed-band", args->fixed_band,
-                    "The paper's fixed epipolar band T_EE for every pair, instead of one "
-                    "that follows the VIO's drift between the two frames");
+                    "The paper's test: the VIO's relative pose as it is, with the fixed "
+                    "epipolar band T_EE, instead of the pose first corrected by the matches "
+                    "within the VIO's expected drift between the two frames");
+  command->add_flag("--wide-band", args->wide_band,
+                    "Each match judged alone against the band the VIO's drift allows, instead "
+                    "of the VIO's pose first corrected by the matches within that drift");
   command
       ->add_option("--vio-max-gap", args->vio_max_gap_s,
                    "A VIO trajectory file is split into segments (no relative pose across) "

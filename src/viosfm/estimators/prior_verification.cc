@@ -4,7 +4,9 @@
 #include <limits>
 #include <optional>
 
+#include "viosfm/estimators/essential_matrix.h"
 #include "viosfm/geometry/epipolar.h"
+#include "viosfm/geometry/lie.h"
 #include "viosfm/sensor/camera_models.h"
 #include "viosfm/util/errors.h"
 
@@ -172,6 +174,115 @@ DepthConsistencyResult CheckDepthConsistency(const Camera& camera1, const Camera
     result.inconsistent_ratio =
         static_cast<double>(result.num_inconsistent) / static_cast<double>(result.num_scored);
   }
+  return result;
+}
+
+namespace {
+
+// Two unit vectors spanning the plane orthogonal to the unit vector t.
+Eigen::Matrix<double, 3, 2> TangentPlane(const Eigen::Vector3d& t) {
+  const Eigen::Vector3d axis =
+      std::abs(t.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+  Eigen::Matrix<double, 3, 2> plane;
+  plane.col(0) = t.cross(axis).normalized();
+  plane.col(1) = t.cross(plane.col(0)).normalized();
+  return plane;
+}
+
+}  // namespace
+
+DriftCorrection CorrectRelativePoseWithinDrift(
+    const Camera& camera1, const Camera& camera2, const Rigid3d& cam2_from_cam1,
+    const Eigen::Matrix<double, 6, 6>& covariance,
+    const std::vector<Eigen::Vector2d>& points1_normalized,
+    const std::vector<Eigen::Vector2d>& points2_normalized, const FeatureMatches& matches,
+    double search_band_px, double max_mahalanobis, const PriorVerificationOptions& options) {
+  VIOSFM_CHECK(options.Check()) << options.Validate();
+  constexpr double kFinalScalePx = 2.0;  // the Cauchy scale at the end
+  constexpr double kKeypointSigmaPx = 1.0;
+  constexpr int kIterationsPerScale = 4;
+  DriftCorrection result;
+  result.cam2_from_cam1 = cam2_from_cam1;
+  const double baseline = cam2_from_cam1.translation.norm();
+  if (baseline < options.min_baseline_m || matches.size() < 5) return result;
+
+  // The prior on the 5 degrees of freedom: the rotation (camera 2's frame,
+  // as RelativePosePlus's increment) and the direction's step in the plane
+  // orthogonal to the VIO's translation direction.
+  const Eigen::Vector3d direction = cam2_from_cam1.translation / baseline;
+  const Eigen::Matrix<double, 3, 2> plane = TangentPlane(direction);
+  Eigen::Matrix<double, 5, 6> to_local = Eigen::Matrix<double, 5, 6>::Zero();
+  to_local.topLeftCorner<3, 3>().setIdentity();
+  to_local.bottomRightCorner<2, 3>() = plane.transpose() / baseline;
+  Eigen::Matrix<double, 5, 5> local_covariance = to_local * covariance * to_local.transpose();
+  local_covariance.diagonal().array() += 1e-12;  // a floor: never singular
+  const Eigen::Matrix<double, 5, 5> information = local_covariance.inverse();
+
+  std::vector<Eigen::Vector2d> points1, points2;
+  points1.reserve(matches.size());
+  points2.reserve(matches.size());
+  for (const FeatureMatch& match : matches) {
+    VIOSFM_CHECK_LT(match.point2D_idx1, points1_normalized.size());
+    VIOSFM_CHECK_LT(match.point2D_idx2, points2_normalized.size());
+    points1.push_back(points1_normalized[match.point2D_idx1]);
+    points2.push_back(points2_normalized[match.point2D_idx2]);
+  }
+  const double focal = 0.5 * (MeanFocalLength(camera1) + MeanFocalLength(camera2));
+  const double sigma = kKeypointSigmaPx / focal;
+
+  const Rigid3d start(cam2_from_cam1.rotation.normalized(), direction);
+  // The correction of `pose` from the VIO's in the prior's coordinates, and
+  // its derivative with respect to RelativePosePlus's step at `pose`.
+  auto deviation = [&](const Rigid3d& pose, Eigen::Matrix<double, 5, 5>* jacobian) {
+    Eigen::Matrix<double, 5, 1> d;
+    d.head<3>() = So3Log(pose.rotation * start.rotation.conjugate());
+    // The direction's angle from the VIO's, along its great circle (a
+    // reversed direction is half a turn away, not zero).
+    const Eigen::Vector2d across = plane.transpose() * pose.translation;
+    const double angle = std::atan2(across.norm(), pose.translation.dot(direction));
+    d.tail<2>() = across.norm() > 1e-15 ? Eigen::Vector2d(angle * across.normalized())
+                                        : Eigen::Vector2d(angle, 0.0);
+    if (jacobian != nullptr) {
+      jacobian->setZero();
+      jacobian->topLeftCorner<3, 3>().setIdentity();
+      jacobian->bottomRightCorner<2, 2>() = plane.transpose() * TangentPlane(pose.translation);
+    }
+    return d;
+  };
+
+  Rigid3d pose = start;
+  Eigen::VectorXd residuals;
+  Eigen::Matrix<double, Eigen::Dynamic, 5> jacobian;
+  for (double scale_px = std::max(search_band_px, kFinalScalePx);;
+       scale_px = std::max(0.5 * scale_px, kFinalScalePx)) {
+    const double scale = scale_px / focal;
+    for (int iteration = 0; iteration < kIterationsPerScale; ++iteration) {
+      RelativePoseSampsonResiduals(pose, points1, points2, &residuals, &jacobian);
+      Eigen::Matrix<double, 5, 5> normal = Eigen::Matrix<double, 5, 5>::Zero();
+      Eigen::Matrix<double, 5, 1> gradient = Eigen::Matrix<double, 5, 1>::Zero();
+      for (Eigen::Index i = 0; i < residuals.size(); ++i) {
+        const double u = residuals[i] / scale;
+        const double weight = 1.0 / (1.0 + u * u) / (sigma * sigma);
+        normal += weight * jacobian.row(i).transpose() * jacobian.row(i);
+        gradient += weight * residuals[i] * jacobian.row(i).transpose();
+      }
+      Eigen::Matrix<double, 5, 5> d_jacobian;
+      const Eigen::Matrix<double, 5, 1> d = deviation(pose, &d_jacobian);
+      normal += d_jacobian.transpose() * information * d_jacobian;
+      gradient += d_jacobian.transpose() * information * d;
+      const Eigen::Matrix<double, 5, 1> step = normal.ldlt().solve(-gradient);
+      if (!step.allFinite()) break;
+      pose = RelativePosePlus(pose, step);
+      if (step.norm() < 1e-10) break;
+    }
+    if (scale_px <= kFinalScalePx) break;
+  }
+  const Eigen::Matrix<double, 5, 1> d = deviation(pose, nullptr);
+  result.mahalanobis = std::sqrt(std::max(0.0, d.dot(information * d)));
+  result.rotation_rad = d.head<3>().norm();
+  if (!(result.mahalanobis <= max_mahalanobis)) return result;
+  result.corrected = true;
+  result.cam2_from_cam1 = Rigid3d(pose.rotation, baseline * pose.translation);
   return result;
 }
 

@@ -165,6 +165,42 @@ DepthConsistencyResult CheckDepthConsistency(const Camera& camera1, const Camera
                                              const FeatureMatches& matches,
                                              const PriorVerificationOptions& options);
 
+// The VIO's relative pose corrected by the matches, within the VIO's
+// expected drift between the two frames. A band wide enough for the drift
+// of far-apart frames (a loop's two visits) judges each match on its own,
+// so the drift's slack lets in matches no single pose explains: on a
+// corridor of identical doors, pairs 15 to 50 s apart facing opposite ways
+// whose matches lie on the radial epipolar lines of the walking direction
+// (benchmarks.md, VIO-aided verification). The drift is one rigid error
+// of the whole relative pose, though: this finds that one error, and the
+// pair is then judged with the fixed T_EE under the corrected pose.
+//
+// Starting from cam2_from_cam1 (the VIO's, metric), the rotation and the
+// translation's direction (the 5 degrees of freedom of the essential
+// matrix; the VIO's baseline length is kept) are refined by Gauss-Newton on
+// the Sampson errors of the matches under a Cauchy loss whose scale shrinks
+// from search_band_px (the band the drift allows) to kFinalScalePx, each
+// match weighed as 1 px keypoint noise, plus the correction's Mahalanobis
+// distance under `covariance` (the VIO model's 6x6 covariance of the
+// relative pose's residual [Log(R_E); t_E], scene/vio_uncertainty.h),
+// taken to the rotation and the translation's direction. A correction
+// farther than max_mahalanobis from the VIO's pose is not the VIO's drift:
+// the VIO's pose is returned unchanged. Below options.min_baseline_m (no
+// direction to correct) and with fewer than five matches nothing is done.
+struct DriftCorrection {
+  Rigid3d cam2_from_cam1;  // the corrected pose (or the input), metric
+  bool corrected = false;  // a correction within max_mahalanobis was found
+  // Of the correction found (also when rejected); NaN when nothing was done.
+  double mahalanobis = std::numeric_limits<double>::quiet_NaN();
+  double rotation_rad = std::numeric_limits<double>::quiet_NaN();
+};
+DriftCorrection CorrectRelativePoseWithinDrift(
+    const Camera& camera1, const Camera& camera2, const Rigid3d& cam2_from_cam1,
+    const Eigen::Matrix<double, 6, 6>& covariance,
+    const std::vector<Eigen::Vector2d>& points1_normalized,
+    const std::vector<Eigen::Vector2d>& points2_normalized, const FeatureMatches& matches,
+    double search_band_px, double max_mahalanobis, const PriorVerificationOptions& options);
+
 // The same from the VIO poses of the two frames and one camera rig
 // (body_from_cam shared by both images).
 PriorVerificationResult VerifyPairWithVioPoses(

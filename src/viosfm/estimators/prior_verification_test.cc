@@ -229,6 +229,149 @@ TEST(PriorVerification, CorrectPairWithVioNoiseIsAccepted) {
   EXPECT_LT(*std::max_element(exact.errors_px.begin(), exact.errors_px.end()), 5.0);
 }
 
+// The VIO's relative pose covariance with isotropic rotation and
+// translation sigmas (the residual [Log(R_E); t_E] of vio_uncertainty.h).
+Eigen::Matrix<double, 6, 6> IsotropicCovariance(double rotation_sigma_rad,
+                                                double translation_sigma_m) {
+  Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();
+  covariance.diagonal() << Eigen::Vector3d::Constant(rotation_sigma_rad * rotation_sigma_rad),
+      Eigen::Vector3d::Constant(translation_sigma_m * translation_sigma_m);
+  return covariance;
+}
+
+// A correct pair whose VIO pose has drifted by about 4 degrees and 0.1 to
+// 0.15 m (about two sigmas of its covariance), turned across the epipolar
+// lines: under the VIO's pose most matches lie farther than T_EE from them
+// and the fixed band rejects the pair. The correction within the drift
+// finds the relative pose the matches show, under which the fixed band
+// accepts it. (Two views of one wall 5 m away tell a small turn about the
+// vertical from a sideways step of the baseline's direction only to a few
+// tenths of a degree: the bound on the direction is looser.)
+TEST(DriftCorrection, ADriftedVioPoseIsCorrectedByTheMatches) {
+  const Camera camera = TestCamera();
+  Random random(7);
+  const std::vector<Eigen::Vector3d> scene = FloorScene(random);
+  const Rigid3d world_from_cam1 = LevelCamera(Eigen::Vector3d(0, 0, 1.5), 0.0);
+  const Rigid3d world_from_cam2 = LevelCamera(Eigen::Vector3d(0.8, 0.6, 1.5), 12.0 * kDegToRad);
+  const PairData data = MakeMatches(camera, scene, world_from_cam1, world_from_cam2,
+                                    Eigen::Vector3d::Zero(), 0.5, random);
+  ASSERT_GE(data.matches.size(), 100u);
+  const Rigid3d truth = world_from_cam2.Inverse() * world_from_cam1;
+  const Eigen::Matrix<double, 6, 6> covariance = IsotropicCovariance(2.0 * kDegToRad, 0.075);
+  const PriorVerificationOptions options;
+  // Rotation (camera 2's axes: x right, y down, z forward), degrees, and
+  // translation, m.
+  const std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> drifts = {
+      {{4.0, 0.0, 0.0}, {0.15, 0.0, 0.0}},
+      {{-4.5, 1.0, 0.0}, {0.0, -0.1, 0.0}},
+      {{2.0, 0.0, 4.0}, {0.0, 0.0, 0.15}},
+      {{-2.5, -1.0, -2.5}, {0.05, 0.1, -0.05}}};
+  for (size_t draw = 0; draw < drifts.size(); ++draw) {
+    const Rigid3d drift(So3Exp(drifts[draw].first * kDegToRad), drifts[draw].second);
+    const Rigid3d vio = drift * truth;
+    const PriorVerificationResult uncorrected =
+        VerifyPairWithPrior(camera, camera, vio, data.points1, data.points2, data.matches, options);
+    EXPECT_FALSE(uncorrected.accepted)
+        << "draw " << draw << " outliers " << uncorrected.outlier_ratio;
+
+    const DriftCorrection correction =
+        CorrectRelativePoseWithinDrift(camera, camera, vio, covariance, data.points1, data.points2,
+                                       data.matches, /*search_band_px=*/80.0,
+                                       /*max_mahalanobis=*/20.0, options);
+    ASSERT_TRUE(correction.corrected) << "draw " << draw;
+    EXPECT_LT(correction.mahalanobis, 6.0);
+    EXPECT_LT(testing::RotationErrorDeg(correction.cam2_from_cam1.rotation, truth.rotation), 0.5);
+    EXPECT_LT(testing::DirectionErrorDeg(correction.cam2_from_cam1.translation, truth.translation),
+              2.0);
+    // The VIO's baseline length is kept.
+    EXPECT_NEAR(correction.cam2_from_cam1.translation.norm(), vio.translation.norm(), 1e-9);
+    const PriorVerificationResult corrected =
+        VerifyPairWithPrior(camera, camera, correction.cam2_from_cam1, data.points1, data.points2,
+                            data.matches, options);
+    EXPECT_TRUE(corrected.accepted) << "draw " << draw;
+    EXPECT_EQ(corrected.num_outliers, 0);
+    // The matches' own noise is 0.5 px a keypoint.
+    EXPECT_LT(*std::max_element(corrected.errors_px.begin(), corrected.errors_px.end()), 3.0);
+  }
+}
+
+// Identical views a floor apart (camera 2 above camera 1, the VIO exact):
+// the matches fit camera 2 at camera 1's height, a baseline turned by about
+// 90 degrees from the VIO's vertical one. With the covariance of a long loop
+// (1 degree, 0.1 m) that is far beyond the drift: no correction is taken,
+// and the pair is rejected under the VIO's pose as before. Where camera 2
+// is straight above camera 1 (5 cm off), the matches show almost no
+// baseline and hardly tell its direction: the correction found is within
+// the drift, and the depth check under the VIO's metric baseline, which the
+// correction keeps, rejects the pair.
+TEST(DriftCorrection, IdenticalFloorsAreNotADrift) {
+  const Camera camera = TestCamera();
+  const Eigen::Vector3d floor_offset(0, 0, 3.5);
+  Random random(8);
+  const std::vector<Eigen::Vector3d> scene = FloorScene(random);
+  const Eigen::Matrix<double, 6, 6> covariance = IsotropicCovariance(1.0 * kDegToRad, 0.1);
+  const PriorVerificationOptions options;
+  for (const Eigen::Vector3d& shift :
+       {Eigen::Vector3d(0.8, 0.6, 0.0), Eigen::Vector3d(-0.5, 0.4, 0.0),
+        Eigen::Vector3d(0.05, -0.03, 0.0)}) {
+    const bool straight_above = shift.norm() < 0.1;
+    const Rigid3d world_from_cam1 = LevelCamera(Eigen::Vector3d(0, 0, 1.5), 0.0);
+    const Rigid3d world_from_cam2 =
+        LevelCamera(Eigen::Vector3d(0, 0, 1.5) + shift + floor_offset, 3.0 * kDegToRad);
+    const PairData data =
+        MakeMatches(camera, scene, world_from_cam1, world_from_cam2, floor_offset, 0.5, random);
+    ASSERT_GE(data.matches.size(), 100u);
+    const Rigid3d vio = world_from_cam2.Inverse() * world_from_cam1;
+    const DriftCorrection correction =
+        CorrectRelativePoseWithinDrift(camera, camera, vio, covariance, data.points1, data.points2,
+                                       data.matches, /*search_band_px=*/80.0,
+                                       /*max_mahalanobis=*/20.0, options);
+    std::cout << "identical floors, camera 2 shifted " << shift.transpose()
+              << " m: the correction the matches ask for is " << correction.mahalanobis
+              << " sigmas\n";
+    if (!straight_above) {
+      EXPECT_FALSE(correction.corrected);
+      EXPECT_GT(correction.mahalanobis, 20.0);
+      EXPECT_LT(correction.cam2_from_cam1.rotation.angularDistance(vio.rotation), 1e-12);
+      EXPECT_LT((correction.cam2_from_cam1.translation - vio.translation).norm(), 1e-12);
+    }
+    const PriorVerificationResult result =
+        VerifyPairWithPrior(camera, camera, correction.cam2_from_cam1, data.points1, data.points2,
+                            data.matches, options);
+    EXPECT_FALSE(result.accepted);
+    if (straight_above) {
+      EXPECT_NEAR(correction.cam2_from_cam1.translation.norm(), 3.5, 0.01);
+      EXPECT_TRUE(result.depth_rejected);
+    }
+  }
+}
+
+// Nothing to correct below the minimum baseline (no direction) or with
+// fewer than five matches.
+TEST(DriftCorrection, NothingIsCorrectedWithoutABaselineOrMatches) {
+  const Camera camera = TestCamera();
+  Random random(9);
+  const std::vector<Eigen::Vector3d> scene = FloorScene(random);
+  const Rigid3d world_from_cam1 = LevelCamera(Eigen::Vector3d(0, 0, 1.5), 0.0);
+  const Rigid3d world_from_cam2 = LevelCamera(Eigen::Vector3d(0.005, 0, 1.5), 5.0 * kDegToRad);
+  const PairData data = MakeMatches(camera, scene, world_from_cam1, world_from_cam2,
+                                    Eigen::Vector3d::Zero(), 0.5, random);
+  const Rigid3d vio = world_from_cam2.Inverse() * world_from_cam1;
+  const Eigen::Matrix<double, 6, 6> covariance = IsotropicCovariance(kDegToRad, 0.1);
+  const DriftCorrection small_baseline =
+      CorrectRelativePoseWithinDrift(camera, camera, vio, covariance, data.points1, data.points2,
+                                     data.matches, 80.0, 20.0, PriorVerificationOptions());
+  EXPECT_FALSE(small_baseline.corrected);
+  EXPECT_TRUE(std::isnan(small_baseline.mahalanobis));
+  const Rigid3d far(vio.rotation, Eigen::Vector3d(1.0, 0.0, 0.2));
+  const FeatureMatches four(data.matches.begin(), data.matches.begin() + 4);
+  const DriftCorrection few =
+      CorrectRelativePoseWithinDrift(camera, camera, far, covariance, data.points1, data.points2,
+                                     four, 80.0, 20.0, PriorVerificationOptions());
+  EXPECT_FALSE(few.corrected);
+  EXPECT_TRUE(std::isnan(few.mahalanobis));
+}
+
 // Pure rotation: F = K^-T [0]x R K^-1 = 0 and every epipolar line is
 // undefined, so the transfer error of H = K2 R K1^-1 is used instead.
 TEST(PriorVerification, PureRotationUsesInfiniteHomography) {

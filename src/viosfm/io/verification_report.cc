@@ -42,6 +42,7 @@ constexpr const char* kCsvHeader14 =
     "vio_rotation_only,vio_rejected,num_inliers,accepted,resumed,reason";
 constexpr const char* kCsvDepthColumns =
     ",vio_depth_applied,vio_depth_inconsistent_ratio,vio_depth_rejected";
+constexpr const char* kCsvCorrectionColumns = ",vio_correction_sigmas,vio_corrected";
 
 }  // namespace
 
@@ -52,7 +53,7 @@ void WritePairDecisionsCsv(const std::filesystem::path& path,
     RequireCsvName(path, d.name2);
   }
   WriteFileAtomically(path, [&decisions](std::ostream& out) {
-    out << kCsvHeader14 << kCsvDepthColumns << '\n';
+    out << kCsvHeader14 << kCsvDepthColumns << kCsvCorrectionColumns << '\n';
     out << std::fixed << std::setprecision(6);
     for (const PairDecision& d : decisions) {
       out << d.image_id1 << ',' << d.image_id2 << ',' << d.name1 << ',' << d.name2 << ','
@@ -62,7 +63,9 @@ void WritePairDecisionsCsv(const std::filesystem::path& path,
           << ',' << int{d.accepted} << ',' << int{d.resumed} << ',' << d.reason << ','
           << int{d.vio_depth_applied} << ',';
       WriteRatio(out, d.vio_depth_inconsistent_ratio);
-      out << ',' << int{d.vio_depth_rejected} << '\n';
+      out << ',' << int{d.vio_depth_rejected} << ',';
+      WriteRatio(out, d.vio_correction_sigmas);
+      out << ',' << int{d.vio_corrected} << '\n';
     }
   });
 }
@@ -83,6 +86,7 @@ void WriteVerificationJson(const std::filesystem::path& path, const Verification
   s["num_vio_depth_rejected"] = summary.num_vio_depth_rejected;
   s["num_ransac_rejected"] = summary.num_ransac_rejected;
   s["num_accepted"] = summary.num_accepted;
+  s["num_accepted_corrected"] = summary.num_accepted_corrected;
   s["seconds_total"] = summary.seconds_total;
   s["seconds_pair_generation"] = summary.seconds_pair_generation;
   s["seconds_loading"] = summary.seconds_loading;
@@ -114,6 +118,8 @@ void WriteVerificationJson(const std::filesystem::path& path, const Verification
     pair["vio_depth_applied"] = d.vio_depth_applied;
     pair["vio_depth_inconsistent_ratio"] = RatioJson(d.vio_depth_inconsistent_ratio);
     pair["vio_depth_rejected"] = d.vio_depth_rejected;
+    pair["vio_correction_sigmas"] = RatioJson(d.vio_correction_sigmas);
+    pair["vio_corrected"] = d.vio_corrected;
     pairs.push_back(std::move(pair));
   }
   const std::string text = json.dump(2);
@@ -139,9 +145,12 @@ std::vector<PairDecision> ReadPairDecisionsCsv(const std::filesystem::path& path
         num_fields = 14;
       } else if (line == header14 + kCsvDepthColumns) {
         num_fields = 17;
+      } else if (line == header14 + kCsvDepthColumns + kCsvCorrectionColumns) {
+        num_fields = 19;
       } else {
-        throw InputError(file, line_number,
-                         "expected the header '" + header14 + kCsvDepthColumns + "'");
+        throw InputError(
+            file, line_number,
+            "expected the header '" + header14 + kCsvDepthColumns + kCsvCorrectionColumns + "'");
       }
       continue;
     }
@@ -194,10 +203,14 @@ std::vector<PairDecision> ReadPairDecisionsCsv(const std::filesystem::path& path
     d.accepted = boolean(11, "accepted");
     d.resumed = boolean(12, "resumed");
     d.reason = std::string(fields[13]);
-    if (num_fields == 17) {
+    if (num_fields >= 17) {
       d.vio_depth_applied = boolean(14, "vio_depth_applied");
       d.vio_depth_inconsistent_ratio = ratio(15, "vio_depth_inconsistent_ratio");
       d.vio_depth_rejected = boolean(16, "vio_depth_rejected");
+    }
+    if (num_fields >= 19) {
+      d.vio_correction_sigmas = ratio(17, "vio_correction_sigmas");
+      d.vio_corrected = boolean(18, "vio_corrected");
     }
     decisions.push_back(std::move(d));
   }

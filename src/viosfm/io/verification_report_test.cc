@@ -28,6 +28,8 @@ std::vector<PairDecision> TwoDecisions() {
   accepted.num_inliers = 300;
   accepted.vio_depth_applied = true;
   accepted.vio_depth_inconsistent_ratio = 0.25;
+  accepted.vio_correction_sigmas = 1.5;
+  accepted.vio_corrected = true;
   accepted.accepted = true;
   accepted.reason = kPairAccepted;
   PairDecision rejected;
@@ -48,10 +50,12 @@ TEST(VerificationReport, CsvHasHeaderAndOneLinePerPair) {
   const std::string text = ReadTextFile(path);
   const std::vector<std::string_view> lines = Split(text, "\n", /*skip_empty=*/true);
   ASSERT_EQ(lines.size(), 3u);
-  EXPECT_EQ(Split(lines[0], ",", false).size(), 17u);
+  EXPECT_EQ(Split(lines[0], ",", false).size(), 19u);
   EXPECT_EQ(lines[1],
-            "1,2,100.png,200.png,temporal,321,1,0.125000,0,0,300,1,0,accepted,1,0.250000,0");
-  EXPECT_EQ(lines[2], "1,7,100.png,700.png,retrieval,40,0,nan,0,0,0,0,0,too_few_inliers,0,nan,0");
+            "1,2,100.png,200.png,temporal,321,1,0.125000,0,0,300,1,0,accepted,1,0.250000,0,"
+            "1.500000,1");
+  EXPECT_EQ(lines[2],
+            "1,7,100.png,700.png,retrieval,40,0,nan,0,0,0,0,0,too_few_inliers,0,nan,0,nan,0");
 }
 
 TEST(VerificationReport, CsvReadsBack) {
@@ -78,7 +82,10 @@ TEST(VerificationReport, CsvReadsBack) {
     EXPECT_EQ(read[k].reason, written[k].reason);
     EXPECT_EQ(read[k].vio_depth_applied, written[k].vio_depth_applied);
     EXPECT_EQ(read[k].vio_depth_rejected, written[k].vio_depth_rejected);
+    EXPECT_EQ(read[k].vio_corrected, written[k].vio_corrected);
   }
+  EXPECT_DOUBLE_EQ(read[0].vio_correction_sigmas, 1.5);
+  EXPECT_TRUE(std::isnan(read[1].vio_correction_sigmas));
   EXPECT_DOUBLE_EQ(read[0].vio_outlier_ratio, 0.125);
   EXPECT_DOUBLE_EQ(read[0].vio_depth_inconsistent_ratio, 0.25);
   EXPECT_TRUE(std::isnan(read[1].vio_outlier_ratio));

@@ -96,6 +96,7 @@ std::string VerificationOptions::Validate() const {
   }
   if (!(band_sigmas >= 0.0) || !std::isfinite(band_sigmas)) return "band_sigmas must be >= 0";
   if (!(band_depth_m > 0.0) || !std::isfinite(band_depth_m)) return "band_depth_m must be > 0";
+  if (!(max_correction_sigmas >= 0.0)) return "max_correction_sigmas must be >= 0";
   if (!(guided_band_px > 0.0) || !std::isfinite(guided_band_px)) {
     return "guided_band_px must be positive";
   }
@@ -112,8 +113,11 @@ std::vector<std::pair<std::string, std::string>> VerificationOptions::ToKeyValue
 std::string FormatVerificationSummary(const VerificationSummary& s) {
   std::ostringstream out;
   out << s.num_pairs << " pairs of " << s.num_images << " images (" << s.num_images_with_prior
-      << " with a VIO pose): " << s.num_accepted << " accepted, " << s.num_vio_rejected
-      << " rejected by VIO";
+      << " with a VIO pose): " << s.num_accepted << " accepted";
+  if (s.num_accepted_corrected > 0) {
+    out << " (" << s.num_accepted_corrected << " under the VIO's pose corrected within its drift)";
+  }
+  out << ", " << s.num_vio_rejected << " rejected by VIO";
   if (s.num_vio_depth_rejected > 0) out << " (" << s.num_vio_depth_rejected << " by depth)";
   out << ", " << s.num_ransac_rejected << " by RANSAC, " << s.num_no_matches << " without matches";
   if (s.num_pairs_without_prior > 0) out << "; " << s.num_pairs_without_prior << " RANSAC only";
@@ -418,6 +422,8 @@ VerificationResult RunVerification(const Sequence& sequence,
       if (decision.has_vio_prior && !matches.empty()) {
         timer.Start();
         PriorVerificationOptions prior = options.prior;
+        Rigid3d predicted = RelativePoseFromVio(*info1.world_from_body, *info2.world_from_body,
+                                                body_from_cam, body_from_cam);
         if (options.band_follows_drift) {
           const VioSample frame1{info1.timestamp_ns, *info1.world_from_body * body_from_cam,
                                  info1.odometer};
@@ -425,14 +431,27 @@ VerificationResult RunVerification(const Sequence& sequence,
                                  info2.odometer};
           const Rigid3d cam2_from_cam1 = RelativePoseFromVio(
               *info1.world_from_body, *info2.world_from_body, body_from_cam, body_from_cam);
-          prior.max_epipolar_error_px = DriftEpipolarBandPx(
-              RelativePoseCovariance(options.vio_uncertainty, frame1, frame2), cam2_from_cam1,
+          const Eigen::Matrix<double, 6, 6> covariance =
+              RelativePoseCovariance(options.vio_uncertainty, frame1, frame2);
+          const double band_px = DriftEpipolarBandPx(
+              covariance, cam2_from_cam1,
               0.5 * (MeanFocalLength(camera1) + MeanFocalLength(camera2)), options);
+          if (options.correct_within_drift) {
+            const DriftCorrection correction = CorrectRelativePoseWithinDrift(
+                camera1, camera2, cam2_from_cam1, covariance, data1.points_normalized,
+                data2.points_normalized, matches, band_px, options.max_correction_sigmas,
+                options.prior);
+            decision.vio_correction_sigmas = correction.mahalanobis;
+            decision.vio_corrected = correction.corrected;
+            predicted = correction.cam2_from_cam1;
+          } else {
+            prior.max_epipolar_error_px = band_px;
+          }
         }
         decision.vio_band_px = prior.max_epipolar_error_px;
-        const PriorVerificationResult check = VerifyPairWithVioPoses(
-            camera1, camera2, *info1.world_from_body, *info2.world_from_body, body_from_cam,
-            data1.points_normalized, data2.points_normalized, matches, prior);
+        const PriorVerificationResult check =
+            VerifyPairWithPrior(camera1, camera2, predicted, data1.points_normalized,
+                                data2.points_normalized, matches, prior);
         decision.vio_outlier_ratio = check.outlier_ratio;
         decision.vio_rotation_only = check.rotation_only;
         decision.vio_depth_applied = check.depth_applied;
@@ -530,6 +549,7 @@ VerificationResult RunVerification(const Sequence& sequence,
     if (decision.resumed) ++summary.num_resumed;
     if (decision.accepted) {
       ++summary.num_accepted;
+      if (decision.vio_corrected) ++summary.num_accepted_corrected;
     } else if (decision.reason == kPairNoMatches) {
       ++summary.num_no_matches;
     } else if (decision.vio_rejected) {

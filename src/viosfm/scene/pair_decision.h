@@ -25,10 +25,15 @@ struct PairDecision {
   int num_matches = 0;  // tentative (descriptor) matches
   // Both images have a VIO pose, so the VIO-prior check ran.
   bool has_vio_prior = false;
-  // The epipolar band of the EE test, pixels (T_EE, or wider where the VIO's
-  // drift between the frames allows: matching/verification_driver.h); NaN
-  // when the check did not run.
+  // The epipolar band of the EE test, pixels (T_EE; with the wide band,
+  // wider where the VIO's drift between the frames allows:
+  // matching/verification_driver.h); NaN when the check did not run.
   double vio_band_px = std::numeric_limits<double>::quiet_NaN();
+  // With the correction within the drift (matching/verification_driver.h):
+  // the Mahalanobis distance of the correction the matches asked for (NaN
+  // when none was sought), and whether it was within the drift and used.
+  double vio_correction_sigmas = std::numeric_limits<double>::quiet_NaN();
+  bool vio_corrected = false;
   // Outliers / matches under the VIO relative pose (the paper's EE test);
   // NaN when the check did not run.
   double vio_outlier_ratio = std::numeric_limits<double>::quiet_NaN();
@@ -71,8 +76,11 @@ struct VerificationSummary {
   size_t num_no_matches = 0;           // rejected: no tentative match
   size_t num_vio_rejected = 0;         // rejected by step 1 (VIO prior; EE or depth)
   size_t num_vio_depth_rejected = 0;   // of those, by the depth check
-  size_t num_ransac_rejected = 0;      // rejected by step 2 (too few RANSAC inliers)
-  size_t num_accepted = 0;             // accepted (geometry stored)
+  // Accepted pairs judged under the VIO's relative pose corrected by their
+  // matches within the VIO's drift (PairDecision::vio_corrected).
+  size_t num_accepted_corrected = 0;
+  size_t num_ransac_rejected = 0;  // rejected by step 2 (too few RANSAC inliers)
+  size_t num_accepted = 0;         // accepted (geometry stored)
   // Wall-clock seconds of the whole run and of its sequential parts.
   double seconds_total = 0.0;
   double seconds_pair_generation = 0.0;  // retrieval and pair generation
