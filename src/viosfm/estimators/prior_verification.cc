@@ -201,6 +201,7 @@ DriftCorrection CorrectRelativePoseWithinDrift(
   constexpr double kFinalScalePx = 2.0;  // the Cauchy scale at the end
   constexpr double kKeypointSigmaPx = 1.0;
   constexpr int kIterationsPerScale = 4;
+  constexpr size_t kMaxMatches = 256;     // evenly spread over the pair's matches
   DriftCorrection result;
   result.cam2_from_cam1 = cam2_from_cam1;
   const double baseline = cam2_from_cam1.translation.norm();
@@ -219,9 +220,11 @@ DriftCorrection CorrectRelativePoseWithinDrift(
   const Eigen::Matrix<double, 5, 5> information = local_covariance.inverse();
 
   std::vector<Eigen::Vector2d> points1, points2;
-  points1.reserve(matches.size());
-  points2.reserve(matches.size());
-  for (const FeatureMatch& match : matches) {
+  const size_t num_used = std::min(matches.size(), kMaxMatches);
+  points1.reserve(num_used);
+  points2.reserve(num_used);
+  for (size_t k = 0; k < num_used; ++k) {
+    const FeatureMatch& match = matches[k * matches.size() / num_used];
     VIOSFM_CHECK_LT(match.point2D_idx1, points1_normalized.size());
     VIOSFM_CHECK_LT(match.point2D_idx2, points2_normalized.size());
     points1.push_back(points1_normalized[match.point2D_idx1]);
@@ -273,7 +276,7 @@ DriftCorrection CorrectRelativePoseWithinDrift(
       const Eigen::Matrix<double, 5, 1> step = normal.ldlt().solve(-gradient);
       if (!step.allFinite()) break;
       pose = RelativePosePlus(pose, step);
-      if (step.norm() < 1e-10) break;
+      if (step.norm() < 1e-7) break;  // rad, and rad of the direction
     }
     if (scale_px <= kFinalScalePx) break;
   }

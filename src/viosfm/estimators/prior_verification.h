@@ -178,7 +178,8 @@ DepthConsistencyResult CheckDepthConsistency(const Camera& camera1, const Camera
 // Starting from cam2_from_cam1 (the VIO's, metric), the rotation and the
 // translation's direction (the 5 degrees of freedom of the essential
 // matrix; the VIO's baseline length is kept) are refined by Gauss-Newton on
-// the Sampson errors of the matches under a Cauchy loss whose scale shrinks
+// the Sampson errors of the matches (at most 256, evenly spread over
+// `matches`) under a Cauchy loss whose scale shrinks
 // from search_band_px (the band the drift allows) to kFinalScalePx, each
 // match weighed as 1 px keypoint noise, plus the correction's Mahalanobis
 // distance under `covariance` (the VIO model's 6x6 covariance of the

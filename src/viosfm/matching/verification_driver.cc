@@ -422,36 +422,41 @@ VerificationResult RunVerification(const Sequence& sequence,
       if (decision.has_vio_prior && !matches.empty()) {
         timer.Start();
         PriorVerificationOptions prior = options.prior;
-        Rigid3d predicted = RelativePoseFromVio(*info1.world_from_body, *info2.world_from_body,
-                                                body_from_cam, body_from_cam);
+        const Rigid3d cam2_from_cam1 = RelativePoseFromVio(
+            *info1.world_from_body, *info2.world_from_body, body_from_cam, body_from_cam);
+        std::optional<Eigen::Matrix<double, 6, 6>> covariance;
+        double drift_band_px = prior.max_epipolar_error_px;
         if (options.band_follows_drift) {
           const VioSample frame1{info1.timestamp_ns, *info1.world_from_body * body_from_cam,
                                  info1.odometer};
           const VioSample frame2{info2.timestamp_ns, *info2.world_from_body * body_from_cam,
                                  info2.odometer};
-          const Rigid3d cam2_from_cam1 = RelativePoseFromVio(
-              *info1.world_from_body, *info2.world_from_body, body_from_cam, body_from_cam);
-          const Eigen::Matrix<double, 6, 6> covariance =
-              RelativePoseCovariance(options.vio_uncertainty, frame1, frame2);
-          const double band_px = DriftEpipolarBandPx(
-              covariance, cam2_from_cam1,
+          covariance = RelativePoseCovariance(options.vio_uncertainty, frame1, frame2);
+          drift_band_px = DriftEpipolarBandPx(
+              *covariance, cam2_from_cam1,
               0.5 * (MeanFocalLength(camera1) + MeanFocalLength(camera2)), options);
-          if (options.correct_within_drift) {
-            const DriftCorrection correction = CorrectRelativePoseWithinDrift(
-                camera1, camera2, cam2_from_cam1, covariance, data1.points_normalized,
-                data2.points_normalized, matches, band_px, options.max_correction_sigmas,
-                options.prior);
-            decision.vio_correction_sigmas = correction.mahalanobis;
-            decision.vio_corrected = correction.corrected;
-            predicted = correction.cam2_from_cam1;
-          } else {
-            prior.max_epipolar_error_px = band_px;
-          }
+          if (!options.correct_within_drift) prior.max_epipolar_error_px = drift_band_px;
         }
         decision.vio_band_px = prior.max_epipolar_error_px;
-        const PriorVerificationResult check =
-            VerifyPairWithPrior(camera1, camera2, predicted, data1.points_normalized,
+        PriorVerificationResult check =
+            VerifyPairWithPrior(camera1, camera2, cam2_from_cam1, data1.points_normalized,
                                 data2.points_normalized, matches, prior);
+        // A pair the VIO's pose does not explain: judged again under the pose
+        // its matches show, if that is within the VIO's drift.
+        if (covariance && options.correct_within_drift && !check.accepted &&
+            !check.rotation_only) {
+          const DriftCorrection correction = CorrectRelativePoseWithinDrift(
+              camera1, camera2, cam2_from_cam1, *covariance, data1.points_normalized,
+              data2.points_normalized, matches, drift_band_px, options.max_correction_sigmas,
+              prior);
+          decision.vio_correction_sigmas = correction.mahalanobis;
+          if (correction.corrected) {
+            decision.vio_corrected = true;
+            check = VerifyPairWithPrior(camera1, camera2, correction.cam2_from_cam1,
+                                        data1.points_normalized, data2.points_normalized, matches,
+                                        prior);
+          }
+        }
         decision.vio_outlier_ratio = check.outlier_ratio;
         decision.vio_rotation_only = check.rotation_only;
         decision.vio_depth_applied = check.depth_applied;

@@ -86,11 +86,12 @@ struct VerificationOptions {
   // drifted a few decimetres. Default true; false: the fixed T_EE (the
   // paper).
   bool band_follows_drift = true;
-  // With band_follows_drift: the VIO's relative pose is first corrected by
-  // the matches within the VIO's expected drift between the two frames
+  // With band_follows_drift: a pair the VIO's relative pose does not
+  // explain under the fixed T_EE (step 1 would reject it) is judged again,
+  // with the same T_EE, under the VIO's pose corrected by its matches within
+  // the VIO's expected drift between the two frames
   // (CorrectRelativePoseWithinDrift, estimators/prior_verification.h: the
-  // drift's band only bounds the search), and the pair is then judged with
-  // the fixed T_EE under the corrected pose. Default true; false: each match
+  // drift's band only bounds the search). Default true; false: each match
   // is judged alone against the band the drift allows (the VIO's pose
   // uncorrected), which lets in pairs whose matches fit no one pose near the
   // VIO's (benchmarks.md, VIO-aided verification).

@@ -31,7 +31,9 @@ struct PairDecision {
   double vio_band_px = std::numeric_limits<double>::quiet_NaN();
   // With the correction within the drift (matching/verification_driver.h):
   // the Mahalanobis distance of the correction the matches asked for (NaN
-  // when none was sought), and whether it was within the drift and used.
+  // when none was sought: the VIO's pose explained the pair, or no
+  // correction was possible), and whether it was within the drift, so that
+  // the pair was judged under the corrected pose.
   double vio_correction_sigmas = std::numeric_limits<double>::quiet_NaN();
   bool vio_corrected = false;
   // Outliers / matches under the VIO relative pose (the paper's EE test);
