@@ -201,7 +201,7 @@ DriftCorrection CorrectRelativePoseWithinDrift(
   constexpr double kFinalScalePx = 2.0;  // the Cauchy scale at the end
   constexpr double kKeypointSigmaPx = 1.0;
   constexpr int kIterationsPerScale = 4;
-  constexpr size_t kMaxMatches = 256;     // evenly spread over the pair's matches
+  constexpr size_t kMaxMatches = 256;  // evenly spread over the pair's matches
   DriftCorrection result;
   result.cam2_from_cam1 = cam2_from_cam1;
   const double baseline = cam2_from_cam1.translation.norm();
