@@ -251,11 +251,12 @@ void RegisterRun(CLI::App& app) {
                     "IMU over the registered frames");
   command->add_flag("--fixed-band", args->fixed_band,
                     "The paper's test: the VIO's relative pose as it is, with the fixed "
-                    "epipolar band T_EE, instead of the pose first corrected by the matches "
-                    "within the VIO's expected drift between the two frames");
+                    "epipolar band T_EE (without it, a pair that pose does not explain is "
+                    "judged again under it corrected by the pair's matches within the VIO's "
+                    "expected drift between the two frames)");
   command->add_flag("--wide-band", args->wide_band,
                     "Each match judged alone against the band the VIO's drift allows, instead "
-                    "of the VIO's pose first corrected by the matches within that drift");
+                    "of the VIO's pose corrected by the matches within that drift");
   command
       ->add_option("--vio-max-gap", args->vio_max_gap_s,
                    "A VIO trajectory file is split into segments (no relative pose across) "

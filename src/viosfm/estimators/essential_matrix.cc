@@ -260,6 +260,13 @@ std::pair<Eigen::Vector3d, Eigen::Vector3d> TangentBasis(const Eigen::Vector3d& 
 
 }  // namespace
 
+Eigen::Matrix<double, 3, 2> DirectionTangentBasis(const Eigen::Vector3d& t) {
+  const auto [tangent1, tangent2] = TangentBasis(t);
+  Eigen::Matrix<double, 3, 2> basis;
+  basis << tangent1, tangent2;
+  return basis;
+}
+
 Rigid3d RelativePosePlus(const Rigid3d& pose, const Eigen::Matrix<double, 5, 1>& delta) {
   const Eigen::Vector3d& t = pose.translation;
   const auto [tangent1, tangent2] = TangentBasis(t);

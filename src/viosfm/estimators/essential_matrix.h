@@ -60,6 +60,10 @@ inline constexpr double kMaxCheiralityDepth = 1000.0;  // baselines
 // with (u1, u2) an orthonormal basis of the plane tangent to t.
 Rigid3d RelativePosePlus(const Rigid3d& pose, const Eigen::Matrix<double, 5, 1>& delta);
 
+// The orthonormal basis (u1, u2) of the plane tangent to the unit vector t
+// that RelativePosePlus steps along, as columns.
+Eigen::Matrix<double, 3, 2> DirectionTangentBasis(const Eigen::Vector3d& t);
+
 // Signed Sampson errors r_i = x2^T E x1 / sqrt(|(E x1)_12|^2 + |(E^T x2)_12|^2)
 // of the correspondences (normalised coordinates) under E = [t]x R of
 // cam2_from_cam1 (|t| = 1), and, if `jacobian` is not null, their

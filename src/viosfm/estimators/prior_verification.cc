@@ -177,20 +177,6 @@ DepthConsistencyResult CheckDepthConsistency(const Camera& camera1, const Camera
   return result;
 }
 
-namespace {
-
-// Two unit vectors spanning the plane orthogonal to the unit vector t.
-Eigen::Matrix<double, 3, 2> TangentPlane(const Eigen::Vector3d& t) {
-  const Eigen::Vector3d axis =
-      std::abs(t.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
-  Eigen::Matrix<double, 3, 2> plane;
-  plane.col(0) = t.cross(axis).normalized();
-  plane.col(1) = t.cross(plane.col(0)).normalized();
-  return plane;
-}
-
-}  // namespace
-
 DriftCorrection CorrectRelativePoseWithinDrift(
     const Camera& camera1, const Camera& camera2, const Rigid3d& cam2_from_cam1,
     const Eigen::Matrix<double, 6, 6>& covariance,
@@ -211,7 +197,7 @@ DriftCorrection CorrectRelativePoseWithinDrift(
   // as RelativePosePlus's increment) and the direction's step in the plane
   // orthogonal to the VIO's translation direction.
   const Eigen::Vector3d direction = cam2_from_cam1.translation / baseline;
-  const Eigen::Matrix<double, 3, 2> plane = TangentPlane(direction);
+  const Eigen::Matrix<double, 3, 2> plane = DirectionTangentBasis(direction);
   Eigen::Matrix<double, 5, 6> to_local = Eigen::Matrix<double, 5, 6>::Zero();
   to_local.topLeftCorner<3, 3>().setIdentity();
   to_local.bottomRightCorner<2, 3>() = plane.transpose() / baseline;
@@ -248,7 +234,8 @@ DriftCorrection CorrectRelativePoseWithinDrift(
     if (jacobian != nullptr) {
       jacobian->setZero();
       jacobian->topLeftCorner<3, 3>().setIdentity();
-      jacobian->bottomRightCorner<2, 2>() = plane.transpose() * TangentPlane(pose.translation);
+      jacobian->bottomRightCorner<2, 2>() =
+          plane.transpose() * DirectionTangentBasis(pose.translation);
     }
     return d;
   };
