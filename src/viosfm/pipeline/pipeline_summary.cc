@@ -59,7 +59,12 @@ std::string PipelineSummary::ToString() const {
       << " refused by the frame's matches with its neighbours\n";
   if (!metric_scale.message.empty()) out << "metric scale: " << metric_scale.message << "\n";
   out << "pairs: " << verification.num_pairs << " candidates, " << verification.num_accepted
-      << " accepted, " << verification.num_vio_rejected << " rejected by VIO, "
+      << " accepted";
+  if (verification.num_accepted_corrected > 0) {
+    out << " (" << verification.num_accepted_corrected
+        << " under the VIO's pose corrected within its drift)";
+  }
+  out << ", " << verification.num_vio_rejected << " rejected by VIO, "
       << verification.num_ransac_rejected << " by RANSAC, " << verification.num_no_matches
       << " without matches\n";
   out << "points: " << num_points << ", observations " << num_observations << ", mean track length "
@@ -177,6 +182,7 @@ std::string PipelineSummaryToJson(const PipelineSummary& s) {
   json["vio_only_frames"] = vio_only;
   json["pairs"] = {{"candidates", s.verification.num_pairs},
                    {"accepted", s.verification.num_accepted},
+                   {"accepted_corrected", s.verification.num_accepted_corrected},
                    {"vio_rejected", s.verification.num_vio_rejected},
                    {"ransac_rejected", s.verification.num_ransac_rejected},
                    {"no_matches", s.verification.num_no_matches}};
