@@ -96,6 +96,12 @@ expect_exit(2 "^error: ${WORK}/absent.bag: bag file not found" run "${WORK}/abse
 if(EXISTS "${WORK}/out_absent")
   message(FATAL_ERROR "run on an absent dataset left ${WORK}/out_absent behind")
 endif()
+# Two verification flags that exclude each other: refused before any work.
+expect_exit(2 "^error: --fixed-band and --wide-band exclude each other" run "${WORK}/dataset"
+            --out "${WORK}/out_bands" --fixed-band --wide-band)
+if(EXISTS "${WORK}/out_bands")
+  message(FATAL_ERROR "run with excluding flags left ${WORK}/out_bands behind")
+endif()
 # run --rolling-shutter-readout: a value that is not a number is refused,
 # naming the flag, before any work.
 expect_exit(2 "^error: --rolling-shutter-readout: option own_vio.rolling_shutter_readout_s: 'fast'"

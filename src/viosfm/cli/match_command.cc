@@ -36,8 +36,7 @@ struct MatchArguments {
   std::string pairs_mode = "temporal_retrieval";
   double max_pose_time_difference_s = 0.005;
   double vio_max_gap_s = 1.0;
-  bool fixed_band = false;
-  bool wide_band = false;
+  VerificationBandArguments band;
   VioUncertaintyArguments vio_uncertainty;
   std::string report;
   VerificationOptions options;
@@ -52,8 +51,7 @@ void RunMatch(MatchArguments args) {
   options.max_pose_time_difference_ns = SecondsToNs(args.max_pose_time_difference_s);
   options.retrieval.num_threads = options.num_threads;
   options.vio_uncertainty = args.vio_uncertainty.Model();
-  options.band_follows_drift = !args.fixed_band;
-  options.correct_within_drift = !args.wide_band;
+  args.band.ApplyTo(&options);
   if (const std::string error = options.Validate(); !error.empty()) {
     throw InputError("invalid match options: " + error);
   }
@@ -137,14 +135,7 @@ void RegisterMatch(CLI::App& app) {
                       "unless --vio-frame cam");
   command->add_option("--vio-frame", args->vio_frame, "Frame of the VIO poses: body or cam")
       ->capture_default_str();
-  command->add_flag("--fixed-band", args->fixed_band,
-                    "The paper's test: the VIO's relative pose as it is, with the fixed "
-                    "epipolar band T_EE (without it, a pair that pose does not explain is "
-                    "judged again under it corrected by the pair's matches within the VIO's "
-                    "expected drift between the two frames)");
-  command->add_flag("--wide-band", args->wide_band,
-                    "Each match judged alone against the band the VIO's drift allows, instead "
-                    "of the VIO's pose corrected by the matches within that drift");
+  AddVerificationBandOptions(command, &args->band);
   command
       ->add_option("--max-correction-sigmas", args->options.max_correction_sigmas,
                    "Largest correction of the VIO's relative pose taken as its drift, "

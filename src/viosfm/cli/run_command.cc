@@ -33,8 +33,7 @@ struct RunArguments {
   double vio_max_gap_s = 1.0;
   std::string prior_weighting = "covariance";
   bool no_verify_registration = false;
-  bool fixed_band = false;
-  bool wide_band = false;
+  VerificationBandArguments band;
   bool no_imu_scale = false;
   VioUncertaintyArguments vio_uncertainty;
   std::string timestamps;
@@ -71,8 +70,7 @@ void RunRun(RunArguments args) {
   options.vio_uncertainty = args.vio_uncertainty.Model();
   options.mapper.ba.prior_weighting = ParsePriorWeighting(args.prior_weighting);
   options.mapper.registration.verify_with_images = !args.no_verify_registration;
-  if (args.fixed_band) options.verification.band_follows_drift = false;
-  if (args.wide_band) options.verification.correct_within_drift = false;
+  args.band.ApplyTo(&options.verification);
   options.use_imu_scale = !args.no_imu_scale;
   options.image_folder.camera_yaml = args.bag.camera_yaml;
   options.rosbag = MakeRosbagOptions(args.bag, {});  // extract folder: OUT/bag
@@ -131,6 +129,7 @@ constexpr std::pair<const char*, const char*> kOptionFlags[] = {
     {"--bridge-max-matches", "mapper.bridge_max_matches"},
     {"--prior-loss-scale", "mapper.ba.prior_loss_scale"},
     {"--verification-batch", "verification.batch_size"},
+    {"--max-correction-sigmas", "verification.max_correction_sigmas"},
     {"--threads", "num_threads"},
     {"--seed", "seed"},
 };
@@ -249,14 +248,7 @@ void RegisterRun(CLI::App& app) {
   command->add_flag("--no-imu-scale", args->no_imu_scale,
                     "Keep the VIO's metric scale instead of estimating it from the dataset's "
                     "IMU over the registered frames");
-  command->add_flag("--fixed-band", args->fixed_band,
-                    "The paper's test: the VIO's relative pose as it is, with the fixed "
-                    "epipolar band T_EE (without it, a pair that pose does not explain is "
-                    "judged again under it corrected by the pair's matches within the VIO's "
-                    "expected drift between the two frames)");
-  command->add_flag("--wide-band", args->wide_band,
-                    "Each match judged alone against the band the VIO's drift allows, instead "
-                    "of the VIO's pose corrected by the matches within that drift");
+  AddVerificationBandOptions(command, &args->band);
   command
       ->add_option("--vio-max-gap", args->vio_max_gap_s,
                    "A VIO trajectory file is split into segments (no relative pose across) "

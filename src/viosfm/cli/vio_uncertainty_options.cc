@@ -14,6 +14,25 @@ VioUncertaintyModel VioUncertaintyArguments::Model() const {
   return model.Scaled(factor);
 }
 
+void VerificationBandArguments::ApplyTo(VerificationOptions* options) const {
+  if (fixed_band && wide_band) {
+    throw InputError("--fixed-band and --wide-band exclude each other");
+  }
+  if (fixed_band) options->band_follows_drift = false;
+  if (wide_band) options->correct_within_drift = false;
+}
+
+void AddVerificationBandOptions(CLI::App* command, VerificationBandArguments* arguments) {
+  command->add_flag("--fixed-band", arguments->fixed_band,
+                    "The paper's test: the VIO's relative pose as it is, with the fixed "
+                    "epipolar band T_EE (without it, a pair that pose does not explain is "
+                    "judged again under it corrected by the pair's matches within the VIO's "
+                    "expected drift between the two frames)");
+  command->add_flag("--wide-band", arguments->wide_band,
+                    "Each match judged alone against the band the VIO's drift allows, instead "
+                    "of the VIO's pose corrected by the matches within that drift");
+}
+
 void AddVioUncertaintyOptions(CLI::App* command, VioUncertaintyArguments* arguments) {
   VioUncertaintyModel& m = arguments->model;
   const std::string group = "VIO uncertainty (how far its relative poses are trusted)";

@@ -443,8 +443,7 @@ VerificationResult RunVerification(const Sequence& sequence,
                                 data2.points_normalized, matches, prior);
         // A pair the VIO's pose does not explain: judged again under the pose
         // its matches show, if that is within the VIO's drift.
-        if (covariance && options.correct_within_drift && !check.accepted &&
-            !check.rotation_only) {
+        if (covariance && options.correct_within_drift && !check.accepted && !check.rotation_only) {
           const DriftCorrection correction = CorrectRelativePoseWithinDrift(
               camera1, camera2, cam2_from_cam1, *covariance, data1.points_normalized,
               data2.points_normalized, matches, drift_band_px, options.max_correction_sigmas,
