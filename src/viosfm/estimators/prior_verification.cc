@@ -269,7 +269,6 @@ DriftCorrection CorrectRelativePoseWithinDrift(
   }
   const Eigen::Matrix<double, 5, 1> d = deviation(pose, nullptr);
   result.mahalanobis = std::sqrt(std::max(0.0, d.dot(information * d)));
-  result.rotation_rad = d.head<3>().norm();
   if (!(result.mahalanobis <= max_mahalanobis)) return result;
   result.corrected = true;
   result.cam2_from_cam1 = Rigid3d(pose.rotation, baseline * pose.translation);

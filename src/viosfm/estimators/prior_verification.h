@@ -193,7 +193,6 @@ struct DriftCorrection {
   bool corrected = false;  // a correction within max_mahalanobis was found
   // Of the correction found (also when rejected); NaN when nothing was done.
   double mahalanobis = std::numeric_limits<double>::quiet_NaN();
-  double rotation_rad = std::numeric_limits<double>::quiet_NaN();
 };
 DriftCorrection CorrectRelativePoseWithinDrift(
     const Camera& camera1, const Camera& camera2, const Rigid3d& cam2_from_cam1,
