@@ -239,6 +239,24 @@ Eigen::Matrix<double, 6, 6> IsotropicCovariance(double rotation_sigma_rad,
   return covariance;
 }
 
+// Matches of one floor's scene between a level camera at (0, 0, 1.5) and
+// one at `position2` turned by `yaw2` (0.5 px noise), and the true
+// cam2_from_cam1.
+struct FloorPair {
+  PairData data;
+  Rigid3d cam2_from_cam1;
+};
+FloorPair MakeFloorPair(const Camera& camera, uint64_t seed, const Eigen::Vector3d& position2,
+                        double yaw2) {
+  Random random(seed);
+  const std::vector<Eigen::Vector3d> scene = FloorScene(random);
+  const Rigid3d world_from_cam1 = LevelCamera(Eigen::Vector3d(0, 0, 1.5), 0.0);
+  const Rigid3d world_from_cam2 = LevelCamera(position2, yaw2);
+  return {MakeMatches(camera, scene, world_from_cam1, world_from_cam2, Eigen::Vector3d::Zero(), 0.5,
+                      random),
+          world_from_cam2.Inverse() * world_from_cam1};
+}
+
 // A correct pair whose VIO pose has drifted by about 4 degrees and 0.1 to
 // 0.15 m (about two sigmas of its covariance), turned across the epipolar
 // lines: under the VIO's pose most matches lie farther than T_EE from them
@@ -249,14 +267,10 @@ Eigen::Matrix<double, 6, 6> IsotropicCovariance(double rotation_sigma_rad,
 // tenths of a degree: the bound on the direction is looser.)
 TEST(DriftCorrection, ADriftedVioPoseIsCorrectedByTheMatches) {
   const Camera camera = TestCamera();
-  Random random(7);
-  const std::vector<Eigen::Vector3d> scene = FloorScene(random);
-  const Rigid3d world_from_cam1 = LevelCamera(Eigen::Vector3d(0, 0, 1.5), 0.0);
-  const Rigid3d world_from_cam2 = LevelCamera(Eigen::Vector3d(0.8, 0.6, 1.5), 12.0 * kDegToRad);
-  const PairData data = MakeMatches(camera, scene, world_from_cam1, world_from_cam2,
-                                    Eigen::Vector3d::Zero(), 0.5, random);
+  const FloorPair pair = MakeFloorPair(camera, 7, Eigen::Vector3d(0.8, 0.6, 1.5), 12.0 * kDegToRad);
+  const PairData& data = pair.data;
   ASSERT_GE(data.matches.size(), 100u);
-  const Rigid3d truth = world_from_cam2.Inverse() * world_from_cam1;
+  const Rigid3d& truth = pair.cam2_from_cam1;
   const Eigen::Matrix<double, 6, 6> covariance = IsotropicCovariance(2.0 * kDegToRad, 0.075);
   const PriorVerificationOptions options;
   // Rotation (camera 2's axes: x right, y down, z forward), degrees, and
@@ -350,13 +364,9 @@ TEST(DriftCorrection, IdenticalFloorsAreNotADrift) {
 // fewer than five matches.
 TEST(DriftCorrection, NothingIsCorrectedWithoutABaselineOrMatches) {
   const Camera camera = TestCamera();
-  Random random(9);
-  const std::vector<Eigen::Vector3d> scene = FloorScene(random);
-  const Rigid3d world_from_cam1 = LevelCamera(Eigen::Vector3d(0, 0, 1.5), 0.0);
-  const Rigid3d world_from_cam2 = LevelCamera(Eigen::Vector3d(0.005, 0, 1.5), 5.0 * kDegToRad);
-  const PairData data = MakeMatches(camera, scene, world_from_cam1, world_from_cam2,
-                                    Eigen::Vector3d::Zero(), 0.5, random);
-  const Rigid3d vio = world_from_cam2.Inverse() * world_from_cam1;
+  const FloorPair pair = MakeFloorPair(camera, 9, Eigen::Vector3d(0.005, 0, 1.5), 5.0 * kDegToRad);
+  const PairData& data = pair.data;
+  const Rigid3d& vio = pair.cam2_from_cam1;
   const Eigen::Matrix<double, 6, 6> covariance = IsotropicCovariance(kDegToRad, 0.1);
   const DriftCorrection small_baseline =
       CorrectRelativePoseWithinDrift(camera, camera, vio, covariance, data.points1, data.points2,
