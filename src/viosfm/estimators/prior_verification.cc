@@ -177,6 +177,48 @@ DepthConsistencyResult CheckDepthConsistency(const Camera& camera1, const Camera
   return result;
 }
 
+RelativePoseDrift::RelativePoseDrift(const Rigid3d& vio_cam2_from_cam1,
+                                     const Eigen::Matrix<double, 6, 6>& covariance)
+    : baseline_m_(vio_cam2_from_cam1.translation.norm()) {
+  VIOSFM_CHECK_GT(baseline_m_, 0.0) << "a relative pose without a baseline has no direction";
+  direction_ = vio_cam2_from_cam1.translation / baseline_m_;
+  rotation_ = vio_cam2_from_cam1.rotation.normalized();
+  plane_ = DirectionTangentBasis(direction_);
+  // The rotation as it is, the direction's step in the plane orthogonal to
+  // the VIO's direction (the translation's error across it, over the
+  // baseline).
+  Eigen::Matrix<double, 5, 6> to_local = Eigen::Matrix<double, 5, 6>::Zero();
+  to_local.topLeftCorner<3, 3>().setIdentity();
+  to_local.bottomRightCorner<2, 3>() = plane_.transpose() / baseline_m_;
+  Eigen::Matrix<double, 5, 5> local_covariance = to_local * covariance * to_local.transpose();
+  local_covariance.diagonal().array() += 1e-12;  // a floor: never singular
+  information_ = local_covariance.inverse();
+}
+
+Eigen::Matrix<double, 5, 1> RelativePoseDrift::Deviation(
+    const Rigid3d& pose, Eigen::Matrix<double, 5, 5>* jacobian) const {
+  Eigen::Matrix<double, 5, 1> d;
+  d.head<3>() = So3Log(pose.rotation * rotation_.conjugate());
+  // The direction's angle from the VIO's, along its great circle (a
+  // reversed direction is half a turn away, not zero).
+  const Eigen::Vector3d translation = pose.translation.normalized();
+  const Eigen::Vector2d across = plane_.transpose() * translation;
+  const double angle = std::atan2(across.norm(), translation.dot(direction_));
+  d.tail<2>() = across.norm() > 1e-15 ? Eigen::Vector2d(angle * across.normalized())
+                                      : Eigen::Vector2d(angle, 0.0);
+  if (jacobian != nullptr) {
+    jacobian->setZero();
+    jacobian->topLeftCorner<3, 3>().setIdentity();
+    jacobian->bottomRightCorner<2, 2>() = plane_.transpose() * DirectionTangentBasis(translation);
+  }
+  return d;
+}
+
+double RelativePoseDrift::Mahalanobis(const Rigid3d& pose) const {
+  const Eigen::Matrix<double, 5, 1> d = Deviation(pose, nullptr);
+  return std::sqrt(std::max(0.0, d.dot(information_ * d)));
+}
+
 DriftCorrection CorrectRelativePoseWithinDrift(
     const Camera& camera1, const Camera& camera2, const Rigid3d& cam2_from_cam1,
     const Eigen::Matrix<double, 6, 6>& covariance,
@@ -192,18 +234,7 @@ DriftCorrection CorrectRelativePoseWithinDrift(
   result.cam2_from_cam1 = cam2_from_cam1;
   const double baseline = cam2_from_cam1.translation.norm();
   if (baseline < options.min_baseline_m || matches.size() < 5) return result;
-
-  // The prior on the 5 degrees of freedom: the rotation (camera 2's frame,
-  // as RelativePosePlus's increment) and the direction's step in the plane
-  // orthogonal to the VIO's translation direction.
-  const Eigen::Vector3d direction = cam2_from_cam1.translation / baseline;
-  const Eigen::Matrix<double, 3, 2> plane = DirectionTangentBasis(direction);
-  Eigen::Matrix<double, 5, 6> to_local = Eigen::Matrix<double, 5, 6>::Zero();
-  to_local.topLeftCorner<3, 3>().setIdentity();
-  to_local.bottomRightCorner<2, 3>() = plane.transpose() / baseline;
-  Eigen::Matrix<double, 5, 5> local_covariance = to_local * covariance * to_local.transpose();
-  local_covariance.diagonal().array() += 1e-12;  // a floor: never singular
-  const Eigen::Matrix<double, 5, 5> information = local_covariance.inverse();
+  const RelativePoseDrift drift(cam2_from_cam1, covariance);
 
   std::vector<Eigen::Vector2d> points1, points2;
   const size_t num_used = std::min(matches.size(), kMaxMatches);
@@ -219,28 +250,7 @@ DriftCorrection CorrectRelativePoseWithinDrift(
   const double focal = 0.5 * (MeanFocalLength(camera1) + MeanFocalLength(camera2));
   const double sigma = kKeypointSigmaPx / focal;
 
-  const Rigid3d start(cam2_from_cam1.rotation.normalized(), direction);
-  // The correction of `pose` from the VIO's in the prior's coordinates, and
-  // its derivative with respect to RelativePosePlus's step at `pose`.
-  auto deviation = [&](const Rigid3d& pose, Eigen::Matrix<double, 5, 5>* jacobian) {
-    Eigen::Matrix<double, 5, 1> d;
-    d.head<3>() = So3Log(pose.rotation * start.rotation.conjugate());
-    // The direction's angle from the VIO's, along its great circle (a
-    // reversed direction is half a turn away, not zero).
-    const Eigen::Vector2d across = plane.transpose() * pose.translation;
-    const double angle = std::atan2(across.norm(), pose.translation.dot(direction));
-    d.tail<2>() = across.norm() > 1e-15 ? Eigen::Vector2d(angle * across.normalized())
-                                        : Eigen::Vector2d(angle, 0.0);
-    if (jacobian != nullptr) {
-      jacobian->setZero();
-      jacobian->topLeftCorner<3, 3>().setIdentity();
-      jacobian->bottomRightCorner<2, 2>() =
-          plane.transpose() * DirectionTangentBasis(pose.translation);
-    }
-    return d;
-  };
-
-  Rigid3d pose = start;
+  Rigid3d pose(cam2_from_cam1.rotation.normalized(), cam2_from_cam1.translation / baseline);
   Eigen::VectorXd residuals;
   Eigen::Matrix<double, Eigen::Dynamic, 5> jacobian;
   for (double scale_px = std::max(search_band_px, kFinalScalePx);;
@@ -257,9 +267,9 @@ DriftCorrection CorrectRelativePoseWithinDrift(
         gradient += weight * residuals[i] * jacobian.row(i).transpose();
       }
       Eigen::Matrix<double, 5, 5> d_jacobian;
-      const Eigen::Matrix<double, 5, 1> d = deviation(pose, &d_jacobian);
-      normal += d_jacobian.transpose() * information * d_jacobian;
-      gradient += d_jacobian.transpose() * information * d;
+      const Eigen::Matrix<double, 5, 1> d = drift.Deviation(pose, &d_jacobian);
+      normal += d_jacobian.transpose() * drift.information() * d_jacobian;
+      gradient += d_jacobian.transpose() * drift.information() * d;
       const Eigen::Matrix<double, 5, 1> step = normal.ldlt().solve(-gradient);
       if (!step.allFinite()) break;
       pose = RelativePosePlus(pose, step);
@@ -267,8 +277,7 @@ DriftCorrection CorrectRelativePoseWithinDrift(
     }
     if (scale_px <= kFinalScalePx) break;
   }
-  const Eigen::Matrix<double, 5, 1> d = deviation(pose, nullptr);
-  result.mahalanobis = std::sqrt(std::max(0.0, d.dot(information * d)));
+  result.mahalanobis = drift.Mahalanobis(pose);
   if (!(result.mahalanobis <= max_mahalanobis)) return result;
   result.corrected = true;
   result.cam2_from_cam1 = Rigid3d(pose.rotation, baseline * pose.translation);

@@ -165,6 +165,34 @@ DepthConsistencyResult CheckDepthConsistency(const Camera& camera1, const Camera
                                              const FeatureMatches& matches,
                                              const PriorVerificationOptions& options);
 
+// How far a relative pose (its rotation and its translation's direction,
+// the 5 degrees of freedom of an essential matrix) is from the VIO's, under
+// the VIO model's covariance of the relative pose (the 6x6 covariance of
+// its residual [Log(R_E); t_E], scene/vio_uncertainty.h) taken to those 5:
+// the rotation, and the translation's error across the VIO's direction over
+// the VIO's baseline. The VIO's pose needs a baseline (checked).
+class RelativePoseDrift {
+ public:
+  RelativePoseDrift(const Rigid3d& vio_cam2_from_cam1,
+                    const Eigen::Matrix<double, 6, 6>& covariance);
+  // The deviation of `pose` (any translation length but 0) from the VIO's:
+  // [Log(R R_vio^T); the direction's angle from the VIO's along its great
+  // circle, in the VIO direction's tangent plane], and its derivative with
+  // respect to RelativePosePlus's step at `pose` (when `jacobian` is given).
+  Eigen::Matrix<double, 5, 1> Deviation(const Rigid3d& pose,
+                                        Eigen::Matrix<double, 5, 5>* jacobian) const;
+  // The deviation's Mahalanobis distance.
+  double Mahalanobis(const Rigid3d& pose) const;
+  const Eigen::Matrix<double, 5, 5>& information() const { return information_; }
+
+ private:
+  double baseline_m_;
+  Eigen::Vector3d direction_;
+  Eigen::Quaterniond rotation_;
+  Eigen::Matrix<double, 3, 2> plane_;
+  Eigen::Matrix<double, 5, 5> information_;
+};
+
 // The VIO's relative pose corrected by the matches, within the VIO's
 // expected drift between the two frames. A band wide enough for the drift
 // of far-apart frames (a loop's two visits) judges each match on its own,
@@ -182,9 +210,7 @@ DepthConsistencyResult CheckDepthConsistency(const Camera& camera1, const Camera
 // `matches`) under a Cauchy loss whose scale shrinks
 // from search_band_px (the band the drift allows) to kFinalScalePx, each
 // match weighed as 1 px keypoint noise, plus the correction's Mahalanobis
-// distance under `covariance` (the VIO model's 6x6 covariance of the
-// relative pose's residual [Log(R_E); t_E], scene/vio_uncertainty.h),
-// taken to the rotation and the translation's direction. A correction
+// distance under `covariance` (RelativePoseDrift). A correction
 // farther than max_mahalanobis from the VIO's pose is not the VIO's drift:
 // the VIO's pose is returned unchanged. Below options.min_baseline_m (no
 // direction to correct) and with fewer than five matches nothing is done.

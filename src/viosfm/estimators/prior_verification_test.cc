@@ -602,3 +602,37 @@ TEST(PriorVerificationOptions, PaperDefaultsAndValidation) {
 
 }  // namespace
 }  // namespace viosfm
+
+namespace viosfm {
+namespace {
+
+// The drift's distance of a relative pose: zero at the VIO's own pose
+// (whatever its translation's length), one per standard deviation of the
+// covariance along a rotation axis or across the direction, and half a turn
+// of direction for a reversed translation.
+TEST(RelativePoseDrift, SigmasOfRotationAndDirection) {
+  const Rigid3d vio(
+      Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized())),
+      Eigen::Vector3d(0.0, 0.0, 2.0));
+  Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();
+  const double rotation_sigma = 0.01;     // rad
+  const double translation_sigma = 0.05;  // m: 0.025 rad of direction at 2 m
+  covariance.diagonal() << Eigen::Vector3d::Constant(rotation_sigma * rotation_sigma),
+      Eigen::Vector3d::Constant(translation_sigma * translation_sigma);
+  const RelativePoseDrift drift(vio, covariance);
+  EXPECT_NEAR(drift.Mahalanobis(vio), 0.0, 1e-9);
+  EXPECT_NEAR(drift.Mahalanobis(Rigid3d(vio.rotation, 7.0 * vio.translation)), 0.0, 1e-9);
+
+  const Eigen::Quaterniond turn(Eigen::AngleAxisd(3.0 * rotation_sigma, Eigen::Vector3d::UnitY()));
+  EXPECT_NEAR(drift.Mahalanobis(Rigid3d(turn * vio.rotation, vio.translation)), 3.0, 1e-6);
+
+  const double angle = 4.0 * translation_sigma / 2.0;  // 4 sigmas across the 2 m baseline
+  const Eigen::Vector3d tilted(std::sin(angle), 0.0, std::cos(angle));
+  EXPECT_NEAR(drift.Mahalanobis(Rigid3d(vio.rotation, tilted)), 4.0, 1e-6);
+
+  EXPECT_NEAR(drift.Mahalanobis(Rigid3d(vio.rotation, -vio.translation)),
+              M_PI / (translation_sigma / 2.0), 1e-6);
+}
+
+}  // namespace
+}  // namespace viosfm

@@ -43,6 +43,7 @@ constexpr const char* kCsvHeader14 =
 constexpr const char* kCsvDepthColumns =
     ",vio_depth_applied,vio_depth_inconsistent_ratio,vio_depth_rejected";
 constexpr const char* kCsvCorrectionColumns = ",vio_correction_sigmas,vio_corrected";
+constexpr const char* kCsvGuidedColumns = ",guided_band_px";
 
 }  // namespace
 
@@ -53,7 +54,7 @@ void WritePairDecisionsCsv(const std::filesystem::path& path,
     RequireCsvName(path, d.name2);
   }
   WriteFileAtomically(path, [&decisions](std::ostream& out) {
-    out << kCsvHeader14 << kCsvDepthColumns << kCsvCorrectionColumns << '\n';
+    out << kCsvHeader14 << kCsvDepthColumns << kCsvCorrectionColumns << kCsvGuidedColumns << '\n';
     out << std::fixed << std::setprecision(6);
     for (const PairDecision& d : decisions) {
       out << d.image_id1 << ',' << d.image_id2 << ',' << d.name1 << ',' << d.name2 << ','
@@ -65,7 +66,9 @@ void WritePairDecisionsCsv(const std::filesystem::path& path,
       WriteRatio(out, d.vio_depth_inconsistent_ratio);
       out << ',' << int{d.vio_depth_rejected} << ',';
       WriteRatio(out, d.vio_correction_sigmas);
-      out << ',' << int{d.vio_corrected} << '\n';
+      out << ',' << int{d.vio_corrected} << ',';
+      WriteRatio(out, d.guided_band_px);
+      out << '\n';
     }
   });
 }
@@ -120,6 +123,7 @@ void WriteVerificationJson(const std::filesystem::path& path, const Verification
     pair["vio_depth_rejected"] = d.vio_depth_rejected;
     pair["vio_correction_sigmas"] = RatioJson(d.vio_correction_sigmas);
     pair["vio_corrected"] = d.vio_corrected;
+    pair["guided_band_px"] = RatioJson(d.guided_band_px);
     pairs.push_back(std::move(pair));
   }
   const std::string text = json.dump(2);
@@ -147,10 +151,12 @@ std::vector<PairDecision> ReadPairDecisionsCsv(const std::filesystem::path& path
         num_fields = 17;
       } else if (line == header14 + kCsvDepthColumns + kCsvCorrectionColumns) {
         num_fields = 19;
+      } else if (line == header14 + kCsvDepthColumns + kCsvCorrectionColumns + kCsvGuidedColumns) {
+        num_fields = 20;
       } else {
-        throw InputError(
-            file, line_number,
-            "expected the header '" + header14 + kCsvDepthColumns + kCsvCorrectionColumns + "'");
+        throw InputError(file, line_number,
+                         "expected the header '" + header14 + kCsvDepthColumns +
+                             kCsvCorrectionColumns + kCsvGuidedColumns + "'");
       }
       continue;
     }
@@ -212,6 +218,7 @@ std::vector<PairDecision> ReadPairDecisionsCsv(const std::filesystem::path& path
       d.vio_correction_sigmas = ratio(17, "vio_correction_sigmas");
       d.vio_corrected = boolean(18, "vio_corrected");
     }
+    if (num_fields >= 20) d.guided_band_px = ratio(19, "guided_band_px");
     decisions.push_back(std::move(d));
   }
   if (line_number == 0) throw InputError(file, 1, "empty file: expected a header line");

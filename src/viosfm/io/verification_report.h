@@ -4,11 +4,12 @@
 //   image_id1,image_id2,name1,name2,source,num_matches,has_vio_prior,
 //   vio_outlier_ratio,vio_rotation_only,vio_rejected,num_inliers,accepted,
 //   resumed,reason,vio_depth_applied,vio_depth_inconsistent_ratio,
-//   vio_depth_rejected,vio_correction_sigmas,vio_corrected
-// booleans as 0/1, the ratios and the correction's sigmas with 6 decimals
-// or "nan" when the check did not run (or, for the depth ratio, did not
-// apply; for the sigmas, no correction was sought). The 14- and 17-column
-// forms of earlier versions are read too. Names are written as they are (database image
+//   vio_depth_rejected,vio_correction_sigmas,vio_corrected,guided_band_px
+// booleans as 0/1, the ratios, the correction's sigmas and the guided band
+// with 6 decimals or "nan" when the check did not run (or, for the depth
+// ratio, did not apply; for the sigmas, no correction was sought; for the
+// band, the pair was not matched in one). The 14-, 17- and 19-column forms
+// of earlier versions are read too. Names are written as they are (database image
 // names hold no comma; a name with a comma, quote or line break is an InputError).
 //
 // JSON: {"summary": {"database": path, counts and seconds},

@@ -30,6 +30,7 @@ std::vector<PairDecision> TwoDecisions() {
   accepted.vio_depth_inconsistent_ratio = 0.25;
   accepted.vio_correction_sigmas = 1.5;
   accepted.vio_corrected = true;
+  accepted.guided_band_px = 42.5;
   accepted.accepted = true;
   accepted.reason = kPairAccepted;
   PairDecision rejected;
@@ -50,12 +51,12 @@ TEST(VerificationReport, CsvHasHeaderAndOneLinePerPair) {
   const std::string text = ReadTextFile(path);
   const std::vector<std::string_view> lines = Split(text, "\n", /*skip_empty=*/true);
   ASSERT_EQ(lines.size(), 3u);
-  EXPECT_EQ(Split(lines[0], ",", false).size(), 19u);
+  EXPECT_EQ(Split(lines[0], ",", false).size(), 20u);
   EXPECT_EQ(lines[1],
             "1,2,100.png,200.png,temporal,321,1,0.125000,0,0,300,1,0,accepted,1,0.250000,0,"
-            "1.500000,1");
+            "1.500000,1,42.500000");
   EXPECT_EQ(lines[2],
-            "1,7,100.png,700.png,retrieval,40,0,nan,0,0,0,0,0,too_few_inliers,0,nan,0,nan,0");
+            "1,7,100.png,700.png,retrieval,40,0,nan,0,0,0,0,0,too_few_inliers,0,nan,0,nan,0,nan");
 }
 
 TEST(VerificationReport, CsvReadsBack) {
@@ -86,6 +87,8 @@ TEST(VerificationReport, CsvReadsBack) {
   }
   EXPECT_DOUBLE_EQ(read[0].vio_correction_sigmas, 1.5);
   EXPECT_TRUE(std::isnan(read[1].vio_correction_sigmas));
+  EXPECT_DOUBLE_EQ(read[0].guided_band_px, 42.5);
+  EXPECT_TRUE(std::isnan(read[1].guided_band_px));
   EXPECT_DOUBLE_EQ(read[0].vio_outlier_ratio, 0.125);
   EXPECT_DOUBLE_EQ(read[0].vio_depth_inconsistent_ratio, 0.25);
   EXPECT_TRUE(std::isnan(read[1].vio_outlier_ratio));
@@ -101,6 +104,19 @@ TEST(VerificationReport, CsvReadsBack) {
   ASSERT_EQ(old.size(), 1u);
   EXPECT_EQ(old[0].num_inliers, 20);
   EXPECT_FALSE(old[0].vio_depth_applied);
+
+  // The 19-column form written before the guided band was recorded.
+  WriteFileAtomically(folder / "old19.csv", [](std::ostream& out) {
+    out << "image_id1,image_id2,name1,name2,source,num_matches,has_vio_prior,vio_outlier_ratio,"
+           "vio_rotation_only,vio_rejected,num_inliers,accepted,resumed,reason,"
+           "vio_depth_applied,vio_depth_inconsistent_ratio,vio_depth_rejected,"
+           "vio_correction_sigmas,vio_corrected\n"
+           "3,4,a.png,b.png,temporal,50,1,0.500000,0,0,20,1,0,accepted,1,0.100000,0,2.000000,1\n";
+  });
+  const std::vector<PairDecision> old19 = ReadPairDecisionsCsv(folder / "old19.csv");
+  ASSERT_EQ(old19.size(), 1u);
+  EXPECT_TRUE(old19[0].vio_corrected);
+  EXPECT_TRUE(std::isnan(old19[0].guided_band_px));
 }
 
 TEST(VerificationReport, CsvReadErrorsNameLine) {

@@ -400,15 +400,41 @@ VerificationResult RunVerification(const Sequence& sequence,
       const Camera& camera1 = cameras.at(info1.camera_id);
       const Camera& camera2 = cameras.at(info2.camera_id);
       Timer timer;
+      // The VIO's relative pose, and with band_follows_drift its covariance
+      // and the epipolar band its drift allows.
+      Rigid3d cam2_from_cam1;
+      std::optional<Eigen::Matrix<double, 6, 6>> covariance;
+      double drift_band_px = options.prior.max_epipolar_error_px;
+      if (decision.has_vio_prior) {
+        cam2_from_cam1 = RelativePoseFromVio(*info1.world_from_body, *info2.world_from_body,
+                                             body_from_cam, body_from_cam);
+        if (options.band_follows_drift) {
+          const VioSample frame1{info1.timestamp_ns, *info1.world_from_body * body_from_cam,
+                                 info1.odometer};
+          const VioSample frame2{info2.timestamp_ns, *info2.world_from_body * body_from_cam,
+                                 info2.odometer};
+          covariance = RelativePoseCovariance(options.vio_uncertainty, frame1, frame2);
+          drift_band_px = DriftEpipolarBandPx(
+              *covariance, cam2_from_cam1,
+              0.5 * (MeanFocalLength(camera1) + MeanFocalLength(camera2)), options);
+        }
+        vio_seconds[thread] += timer.ElapsedSeconds();
+        timer.Start();
+      }
       if (!decision.resumed && !pair_work.reverified) {
         if (options.guided_matching && decision.has_vio_prior) {
-          const Rigid3d cam2_from_cam1 = RelativePoseFromVio(
-              *info1.world_from_body, *info2.world_from_body, body_from_cam, body_from_cam);
           const Eigen::Matrix3d fundamental = FundamentalFromRelativePose(
               cam2_from_cam1, CalibrationMatrix(camera1), CalibrationMatrix(camera2));
+          // The band the VIO's drift allows, so that the two visits of a
+          // loop keep their matches; step 1 then judges them under the fixed
+          // T_EE, and under the corrected pose.
+          GuidedMatchingOptions pair_guided = guided;
+          pair_guided.max_epipolar_distance_px =
+              std::max(options.guided_band_px, options.band_follows_drift ? drift_band_px : 0.0);
+          decision.guided_band_px = pair_guided.max_epipolar_distance_px;
           pair_work.matches =
               MatchDescriptorsGuided(*data1.stored_descriptors, *data2.stored_descriptors,
-                                     data1.points_px, data2.points_px, fundamental, guided);
+                                     data1.points_px, data2.points_px, fundamental, pair_guided);
         } else {
           pair_work.matches = MatchDescriptors(*data1.descriptors, *data2.descriptors, matching);
         }
@@ -422,20 +448,8 @@ VerificationResult RunVerification(const Sequence& sequence,
       if (decision.has_vio_prior && !matches.empty()) {
         timer.Start();
         PriorVerificationOptions prior = options.prior;
-        const Rigid3d cam2_from_cam1 = RelativePoseFromVio(
-            *info1.world_from_body, *info2.world_from_body, body_from_cam, body_from_cam);
-        std::optional<Eigen::Matrix<double, 6, 6>> covariance;
-        double drift_band_px = prior.max_epipolar_error_px;
-        if (options.band_follows_drift) {
-          const VioSample frame1{info1.timestamp_ns, *info1.world_from_body * body_from_cam,
-                                 info1.odometer};
-          const VioSample frame2{info2.timestamp_ns, *info2.world_from_body * body_from_cam,
-                                 info2.odometer};
-          covariance = RelativePoseCovariance(options.vio_uncertainty, frame1, frame2);
-          drift_band_px = DriftEpipolarBandPx(
-              *covariance, cam2_from_cam1,
-              0.5 * (MeanFocalLength(camera1) + MeanFocalLength(camera2)), options);
-          if (!options.correct_within_drift) prior.max_epipolar_error_px = drift_band_px;
+        if (covariance && !options.correct_within_drift) {
+          prior.max_epipolar_error_px = drift_band_px;
         }
         decision.vio_band_px = prior.max_epipolar_error_px;
         PriorVerificationResult check =

@@ -117,11 +117,20 @@ struct VerificationOptions {
   // whose drift is small).
   double band_depth_m = 2.0;
   // Match inside the band of the VIO epipolar lines instead of by brute force
-  // (pairs with a prior only). Default false. With it the matches agree with
-  // the prior by construction, so step 1 rejects nothing and only RANSAC
-  // decides.
+  // (pairs with a prior only). Default false. With band_follows_drift the
+  // band is as wide as the VIO's drift between the two frames allows
+  // (DriftEpipolarBandPx, at least guided_band_px), so that the two visits
+  // of a loop keep their matches, and step 1 judges them as it judges
+  // brute-force matches (with the correction within the drift). With the
+  // fixed band (band_follows_drift false) the matches agree with the VIO's
+  // pose by construction, so step 1 rejects nothing and only RANSAC
+  // decides: on the simulated two floors that accepts pairs of the
+  // identical floors, which the band of the drift rejects (benchmarks.md,
+  // VIO-aided verification).
   bool guided_matching = false;
-  // Half width of the guided-matching band, pixels. Default 20 (T_EE).
+  // Half width of the guided-matching band, pixels: the band of pairs whose
+  // drift allows less, or of every pair with band_follows_drift false.
+  // Default 20 (T_EE).
   double guided_band_px = 20.0;
   // Step 2: RANSAC (Sampson error 4 px, >= 15 inliers, confidence 0.999).
   TwoViewGeometryOptions geometry;

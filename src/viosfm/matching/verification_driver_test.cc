@@ -301,11 +301,9 @@ TEST(VerificationDriver, VioPriorRejectsACorruptedPoseThatRansacAccepts) {
 // rejects them; corrected within the drift by their matches, they are
 // accepted under the fixed band. Pairs on one side of the drift are
 // accepted either way.
-TEST(VerificationDriver, PairsAcrossADriftAreJudgedUnderTheCorrectedPose) {
-  const Fixture& f = SharedFixture();
-  const size_t num_images = f.sequence.images.size();
-  ASSERT_GE(num_images, 12u);
-  const size_t first_drifted = 7;
+// The fixture's VIO turned by 8 degrees of pitch about frame first_drifted
+// - 1 from frame first_drifted on.
+Trajectory PitchedFrom(const Fixture& f, size_t first_drifted) {
   Trajectory drifted = f.vio_body;
   const Rigid3d& pivot = f.vio_body.poses.at(first_drifted - 1).world_from_frame;
   const Rigid3d drift_about_pivot =
@@ -316,9 +314,33 @@ TEST(VerificationDriver, PairsAcrossADriftAreJudgedUnderTheCorrectedPose) {
   for (size_t k = first_drifted; k < drifted.size(); ++k) {
     drifted.poses[k].world_from_frame = drift_about_pivot * drifted.poses[k].world_from_frame;
   }
+  return drifted;
+}
+
+// The options of the drift tests: the model's tilt rate 0.2 rad / sqrt(s).
+VerificationOptions DriftOptions() {
   VerificationOptions options = SmallOptions();
   options.pairs.num_temporal_neighbors = 4;
   options.vio_uncertainty.tilt_per_sqrt_s = 0.2;
+  return options;
+}
+
+// The sequence's image index of a database image name.
+size_t ImageIndex(const Fixture& f, const std::string& name) {
+  for (size_t k = 0; k < f.sequence.images.size(); ++k) {
+    if (DatabaseImageName(f.sequence.images[k]) == name) return k;
+  }
+  ADD_FAILURE() << name;
+  return 0;
+}
+
+TEST(VerificationDriver, PairsAcrossADriftAreJudgedUnderTheCorrectedPose) {
+  const Fixture& f = SharedFixture();
+  const size_t num_images = f.sequence.images.size();
+  ASSERT_GE(num_images, 12u);
+  const size_t first_drifted = 7;
+  const Trajectory drifted = PitchedFrom(f, first_drifted);
+  const VerificationOptions options = DriftOptions();
   VerificationOptions paper = options;
   paper.band_follows_drift = false;
 
@@ -333,13 +355,7 @@ TEST(VerificationDriver, PairsAcrossADriftAreJudgedUnderTheCorrectedPose) {
     uncorrected = RunVerification(f.sequence, drifted, &database, paper);
   }
   ASSERT_EQ(corrected.decisions.size(), uncorrected.decisions.size());
-  const auto index = [&](const std::string& name) {
-    for (size_t k = 0; k < num_images; ++k) {
-      if (DatabaseImageName(f.sequence.images[k]) == name) return k;
-    }
-    ADD_FAILURE() << name;
-    return size_t{0};
-  };
+  const auto index = [&](const std::string& name) { return ImageIndex(f, name); };
   int num_across = 0;
   int num_across_rejected_by_paper = 0;
   for (size_t i = 0; i < corrected.decisions.size(); ++i) {
@@ -368,6 +384,63 @@ TEST(VerificationDriver, PairsAcrossADriftAreJudgedUnderTheCorrectedPose) {
   EXPECT_GE(num_across_rejected_by_paper, num_across / 2);
   EXPECT_GT(corrected.summary.num_accepted_corrected, 0u);
   EXPECT_EQ(uncorrected.summary.num_accepted_corrected, 0u);
+}
+
+// Guided matching inside the band the VIO's drift allows: the pairs across
+// the drift keep their matches, which the fixed band around the VIO's lines
+// loses, and are accepted under the corrected pose with about the inliers
+// brute-force matching finds. Pairs on one side of the drift are matched in
+// the fixed band, the drift between them being small.
+TEST(VerificationDriver, GuidedMatchingFollowsTheDrift) {
+  const Fixture& f = SharedFixture();
+  const size_t first_drifted = 7;
+  const Trajectory drifted = PitchedFrom(f, first_drifted);
+  VerificationOptions options = DriftOptions();
+  VerificationOptions guided = options;
+  guided.guided_matching = true;
+  VerificationOptions guided_fixed = guided;
+  guided_fixed.band_follows_drift = false;
+  const auto run = [&](const VerificationOptions& run_options, const std::string& name) {
+    ColmapDatabase database = ColmapDatabase::Open(CopyFeatures(f, name));
+    return RunVerification(f.sequence, drifted, &database, run_options);
+  };
+  const VerificationResult brute = run(options, "guided_brute.db");
+  const VerificationResult drift_band = run(guided, "guided_drift.db");
+  const VerificationResult fixed_band = run(guided_fixed, "guided_fixed.db");
+  ASSERT_EQ(brute.decisions.size(), drift_band.decisions.size());
+  ASSERT_EQ(brute.decisions.size(), fixed_band.decisions.size());
+  int num_across = 0;
+  int inliers_brute = 0;
+  int inliers_drift_band = 0;
+  int inliers_fixed_band = 0;
+  for (size_t i = 0; i < brute.decisions.size(); ++i) {
+    const PairDecision& b = brute.decisions[i];
+    const PairDecision& d = drift_band.decisions[i];
+    const PairDecision& x = fixed_band.decisions[i];
+    ASSERT_EQ(b.image_id1, d.image_id1);
+    ASSERT_EQ(b.image_id2, d.image_id2);
+    if (!b.accepted || b.num_inliers < 100) continue;  // too little overlap to say anything
+    const bool across =
+        (ImageIndex(f, b.name1) < first_drifted) != (ImageIndex(f, b.name2) < first_drifted);
+    EXPECT_DOUBLE_EQ(x.guided_band_px, guided.guided_band_px);
+    if (!across) {
+      EXPECT_TRUE(d.accepted) << d.name1 << " " << d.name2;
+      continue;
+    }
+    ++num_across;
+    EXPECT_GT(d.guided_band_px, 2.0 * guided.guided_band_px) << d.name1 << " " << d.name2;
+    EXPECT_TRUE(d.accepted) << d.name1 << " " << d.name2;
+    EXPECT_TRUE(d.vio_corrected) << d.name1 << " " << d.name2;
+    inliers_brute += b.num_inliers;
+    inliers_drift_band += d.num_inliers;
+    inliers_fixed_band += x.num_inliers;
+  }
+  std::cout << num_across << " pairs across the drift: inliers " << inliers_brute
+            << " (brute force), " << inliers_drift_band << " (the drift's band), "
+            << inliers_fixed_band << " (the fixed band)\n";
+  EXPECT_GE(num_across, 4);
+  EXPECT_GE(inliers_drift_band, 0.9 * inliers_brute);
+  EXPECT_LT(inliers_fixed_band, 0.5 * inliers_brute);
 }
 
 TEST(VerificationDriver, ImagesWithoutVioPoseFallBackToRansac) {

@@ -29,6 +29,11 @@ struct PairDecision {
   // wider where the VIO's drift between the frames allows:
   // matching/verification_driver.h); NaN when the check did not run.
   double vio_band_px = std::numeric_limits<double>::quiet_NaN();
+  // With guided matching: the half width of the band around the VIO's
+  // epipolar lines the pair was matched in, pixels (wider than
+  // guided_band_px where the VIO's drift between the frames allows); NaN
+  // when the pair was matched by brute force or not matched again.
+  double guided_band_px = std::numeric_limits<double>::quiet_NaN();
   // With the correction within the drift (matching/verification_driver.h):
   // the Mahalanobis distance of the correction the matches asked for (NaN
   // when none was sought: the VIO's pose explained the pair, or no
