@@ -137,6 +137,7 @@ void ApplyRealtimeSettings(PipelineOptions* options) {
   options->mapper.ba.function_tolerance = 3e-5;
   options->mapper.ba.max_linear_solver_iterations = 100;
   options->mapper.final_ba_max_refinements = 1;
+  options->mapper.final_ba_refine_min_change = 0.02;
 }
 
 }  // namespace viosfm

@@ -120,7 +120,7 @@ TEST(PipelineOptions, DescriptionsCoverEveryKeyWithAHelp) {
   for (const auto& [key, value] : bag.ToKeyValues()) EXPECT_EQ(keys.count(key), 1u) << key;
 }
 
-// The real-time settings change exactly their seven options, every other one
+// The real-time settings change exactly their options, every other one
 // keeps the paper's default, and the result is valid.
 TEST(PipelineOptions, RealtimeSettingsChangeOnlyTheirOptions) {
   PipelineOptions options;
@@ -148,7 +148,8 @@ TEST(PipelineOptions, RealtimeSettingsChangeOnlyTheirOptions) {
       {"texture_probe.enable", "true"},
       {"mapper.ba.function_tolerance", "3e-05"},
       {"mapper.ba.max_linear_solver_iterations", "100"},
-      {"mapper.final_ba_max_refinements", "1"}};
+      {"mapper.final_ba_max_refinements", "1"},
+      {"mapper.final_ba_refine_min_change", "0.02"}};
   EXPECT_EQ(changed, expected);
 }
 
