@@ -17,10 +17,17 @@
 #     corrected by the matches within its drift, then the fixed band);
 #  3. viosfm check-pairs against the simulator's ground truth;
 #  4. drift sweep: the emulated VIO regenerated (--no-images, same seed, so
-#     the same motion) with --vio-drift X, and the three VIO-aided variants
+#     the same motion) with --vio-drift X, and the four VIO-aided variants
 #     re-verified with it (the VIO model's rates at their defaults: the
 #     verification is not told the drift); prints drift -> accepted wrong,
-#     correct kept %. Earlier versions' default was the wide band.
+#     correct kept %. Earlier versions' default was the wide band. Then
+#     guided matching (--guided-matching, part of --realtime), which matches
+#     from the features again with the drifted VIO: in the fixed band of
+#     20 px around its epipolar lines (--fixed-band; the band of every pair
+#     before 2026-11-29) and in the band its drift allows (the default);
+#     prints drift -> accepted correct, accepted wrong, correct kept % for
+#     brute force (the default re-verified above) and both, and the wall
+#     clock of each match.
 # Prints Markdown tables; everything is kept in WORK_DIR.
 #
 # Usage: scripts/eval-verification.sh [WORK_DIR]
@@ -134,6 +141,40 @@ for scenario in $SCENARIOS; do
     w=$(row x "$wide_line" | awk -F'|' '{print $3 "|" $4}')
     d=$(row x "$depth_line" | awk -F'|' '{print $3 "|" $4}')
     echo "| $drift | $end_error |$p|$f|$w|$d|"
+    for variant in guided_fixed guided_drift; do
+      extra=(--guided-matching)
+      [ "$variant" = guided_fixed ] && extra+=(--fixed-band)
+      cp "$dir/features.db" "$dir/drift_${drift}_$variant.db"
+      /usr/bin/time -f "%e" -o "$dir/drift_${drift}_$variant.time" \
+        "$VIOSFM" match "$seq" --database "$dir/drift_${drift}_$variant.db" \
+        --vio-trajectory "$dseq/vio_emulated.tum" --n1 "$N1" --n2 "$N2" --threads "$THREADS" \
+        --seed "$SEED" --report "$dir/drift_${drift}_$variant" "${extra[@]}" \
+        > "$dir/drift_${drift}_$variant.log" 2>&1
+    done
+    "$VIOSFM" check-pairs "$seq" --report "$dir/drift_${drift}_depth" \
+      --report "$dir/drift_${drift}_guided_fixed" --report "$dir/drift_${drift}_guided_drift" \
+      > "$dir/drift_${drift}_guided_check.txt" 2> "$dir/drift_${drift}_guided_check.log"
+  done
+
+  echo
+  echo "### $scenario: guided matching with the VIO drifted (correct kept: of brute force's)"
+  echo
+  echo "| drift | brute force (default): accepted correct | accepted wrong | guided, 20 px band: accepted correct | accepted wrong | correct kept | guided, the drift's band (default): accepted correct | accepted wrong | correct kept | match s: 20 px band, drift's band |"
+  echo "|---|---|---|---|---|---|---|---|---|---|"
+  for drift in $DRIFTS; do
+    cells=""
+    for variant in depth guided_fixed guided_drift; do
+      line=$(grep "^| drift_${drift}_$variant " "$dir/drift_${drift}_guided_check.txt")
+      correct=$(echo "$line" | awk -F'|' '{gsub(/ /, "", $6); print $6}')
+      wrong=$(echo "$line" | awk -F'|' '{gsub(/ /, "", $7); print $7}')
+      kept=$(echo "$line" | awk -F'|' '{print $9}' | sed 's/^ *//; s/ *$//')
+      if [ "$variant" = depth ]; then
+        cells+=" $correct | $wrong |"
+      else
+        cells+=" $correct | $wrong | $kept |"
+      fi
+    done
+    echo "| $drift |$cells $(cat "$dir/drift_${drift}_guided_fixed.time"), $(cat "$dir/drift_${drift}_guided_drift.time") |"
   done
 done
 echo
