@@ -103,6 +103,7 @@ void RunRun(RunArguments args) {
                    << ", max " << options.sift.max_num_features << " features, "
                    << (options.texture_probe.enable ? "rate and features by texture, " : "")
                    << (options.verification.guided_matching ? "guided matching, " : "")
+                   << (options.stream ? "streamed, " : "")
                    << (options.verification.use_vio_prior ? "VIO prior" : "RANSAC only") << ", "
                    << (options.mapper.ba.use_relative_pose_priors
                            ? std::string("RPC, ") +
@@ -195,6 +196,11 @@ void RegisterRun(CLI::App& app) {
       "paper's settings are more accurate and far slower; flags given with it override it, "
       "--rate and --max-features the texture's choice too)");
   AddOptionFlags(command, &args->options);
+  command->add_flag("--stream", args->options.stream,
+                    "The run as one stream: the VIO, the features, the verification and the "
+                    "mapper overlap, each frame's pairs with the frames before it verified as it "
+                    "comes and each batch mapped once its frames are in (retrieval among earlier "
+                    "frames only; a streamed run starts afresh, it does not resume)");
   // The camera's readout is one fact with two uses: viosfm's own VIO, and
   // the keypoints' compensation when the VIO is external.
   command

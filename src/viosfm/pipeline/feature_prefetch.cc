@@ -19,12 +19,13 @@ constexpr int kNiceness = 10;
 
 FeaturePrefetch::FeaturePrefetch(std::vector<std::filesystem::path> paths,
                                  const SiftOptions& options, const Camera& camera,
-                                 FrameCache* frames, size_t max_bytes)
+                                 FrameCache* frames, size_t max_bytes, bool wait_when_full)
     : paths_(std::move(paths)),
       options_(options),
       camera_(camera),
       frames_(frames),
-      max_bytes_(max_bytes) {
+      max_bytes_(max_bytes),
+      wait_when_full_(wait_when_full) {
   VIOSFM_CHECK(frames_ != nullptr);
   thread_ = std::thread([this] { Follow(); });
 }
@@ -34,7 +35,11 @@ FeaturePrefetch::~FeaturePrefetch() {
 }
 
 void FeaturePrefetch::Finish() {
-  stop_ = true;
+  {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    stop_ = true;
+  }
+  changed_.notify_all();
   frames_->StopWaiting();
   if (thread_.joinable()) thread_.join();
 }
@@ -43,6 +48,15 @@ void FeaturePrefetch::Follow() {
   // Below the VIO's priority: the VIO is what the run waits for, this
   // thread only fills the core it leaves idle (Linux: per thread).
   setpriority(PRIO_PROCESS, static_cast<id_t>(gettid()), kNiceness);
+  FollowPaths();
+  {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    done_ = true;
+  }
+  changed_.notify_all();
+}
+
+void FeaturePrefetch::FollowPaths() {
   for (const std::filesystem::path& path : paths_) {
     if (stop_) return;
     Extracted extracted;
@@ -64,13 +78,26 @@ void FeaturePrefetch::Follow() {
     extracted.bytes = extracted.features.keypoints.size() * sizeof(FeatureKeypoint) +
                       static_cast<size_t>(extracted.features.descriptors.size()) +
                       extracted.grey_values.size();
-    std::lock_guard<std::mutex> lock(mutex_);
+    std::unique_lock<std::mutex> lock(mutex_);
     held_bytes_ += extracted.bytes;
     peak_bytes_ = std::max(peak_bytes_.load(), held_bytes_);
     extracted_.emplace(path, std::move(extracted));
     ++num_extracted_;
-    if (held_bytes_ >= max_bytes_) return;  // the rest stays in the frame cache
+    changed_.notify_all();
+    if (held_bytes_ >= max_bytes_) {
+      if (!wait_when_full_) return;  // the rest stays in the frame cache
+      changed_.wait(lock, [&] { return held_bytes_ < max_bytes_ || stop_; });
+    }
   }
+}
+
+bool FeaturePrefetch::WaitAndTake(const std::filesystem::path& path, ImageFeatures* features,
+                                  std::vector<uint8_t>* grey_values) {
+  {
+    std::unique_lock<std::mutex> lock(mutex_);
+    changed_.wait(lock, [&] { return done_ || extracted_.count(path) > 0; });
+  }
+  return Take(path, features, grey_values);
 }
 
 bool FeaturePrefetch::Take(const std::filesystem::path& path, ImageFeatures* features,
@@ -82,6 +109,7 @@ bool FeaturePrefetch::Take(const std::filesystem::path& path, ImageFeatures* fea
   *grey_values = std::move(it->second.grey_values);
   held_bytes_ -= it->second.bytes;
   extracted_.erase(it);
+  changed_.notify_all();
   return true;
 }
 

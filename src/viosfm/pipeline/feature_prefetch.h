@@ -19,6 +19,7 @@
 #pragma once
 
 #include <atomic>
+#include <condition_variable>
 #include <cstdint>
 #include <filesystem>
 #include <map>
@@ -39,8 +40,12 @@ class FeaturePrefetch {
   // from `frames` once read (FrameCache::TakeAfterRead), until it holds
   // `max_bytes` of features, a frame is not the camera's size or cannot be
   // read (left to the features stage, which reports it), or Finish.
+  // With `wait_when_full` (a consumer that takes every frame in order, the
+  // streamed run) the thread waits at `max_bytes` until the consumer has
+  // taken some, instead of stopping there.
   FeaturePrefetch(std::vector<std::filesystem::path> paths, const SiftOptions& options,
-                  const Camera& camera, FrameCache* frames, size_t max_bytes);
+                  const Camera& camera, FrameCache* frames, size_t max_bytes,
+                  bool wait_when_full = false);
   ~FeaturePrefetch();  // Finish
   FeaturePrefetch(const FeaturePrefetch&) = delete;
   FeaturePrefetch& operator=(const FeaturePrefetch&) = delete;
@@ -55,6 +60,11 @@ class FeaturePrefetch {
   bool Take(const std::filesystem::path& path, ImageFeatures* features,
             std::vector<uint8_t>* grey_values);
 
+  // Take, once the thread has extracted `path` or stopped before it (then
+  // false: the caller extracts it). Thread-safe.
+  bool WaitAndTake(const std::filesystem::path& path, ImageFeatures* features,
+                   std::vector<uint8_t>* grey_values);
+
   size_t num_extracted() const { return num_extracted_; }  // after Finish: final
   size_t peak_bytes() const { return peak_bytes_; }        // most held at once
 
@@ -65,13 +75,17 @@ class FeaturePrefetch {
     size_t bytes = 0;
   };
   void Follow();
+  void FollowPaths();
 
   const std::vector<std::filesystem::path> paths_;
   const SiftOptions options_;
   const Camera camera_;
   FrameCache* const frames_;
   const size_t max_bytes_;
+  const bool wait_when_full_;
   std::mutex mutex_;
+  std::condition_variable changed_;
+  bool done_ = false;  // the thread has stopped
   std::map<std::filesystem::path, Extracted> extracted_;
   size_t held_bytes_ = 0;
   std::atomic<size_t> num_extracted_{0};

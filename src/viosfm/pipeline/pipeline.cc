@@ -1,11 +1,6 @@
 #include "viosfm/pipeline/pipeline.h"
 
-#include <malloc.h>
-#include <sys/resource.h>
-
 #include <algorithm>
-#include <chrono>
-#include <ctime>
 #include <future>
 #include <iomanip>
 #include <iterator>
@@ -16,6 +11,7 @@
 
 #include "viosfm/io/dataset.h"
 #include "viosfm/pipeline/feature_prefetch.h"
+#include "viosfm/pipeline/run_common.h"
 #include "viosfm/pipeline/run_fingerprint.h"
 #include "viosfm/pipeline/run_folder.h"
 #include "viosfm/pipeline/stage_colors.h"
@@ -27,6 +23,7 @@
 #include "viosfm/pipeline/stage_outputs.h"
 #include "viosfm/pipeline/stage_verification.h"
 #include "viosfm/pipeline/stage_vio.h"
+#include "viosfm/pipeline/stream_pipeline.h"
 #include "viosfm/pipeline/texture_probe.h"
 #include "viosfm/sfm/verified_pair_stream.h"
 #include "viosfm/util/errors.h"
@@ -37,81 +34,9 @@ namespace viosfm {
 namespace {
 
 // The stage names, in order (summary.json "stages").
-constexpr const char* kStageNames[] = {"read_dataset", "vio",          "select_frames", "features",
-                                       "verification", "load_matches", "mapper",        "colors",
-                                       "evaluation",   "write_outputs"};
-constexpr int kNumStages = static_cast<int>(std::size(kStageNames));
-
-// Pixels of decoded frames held between the VIO and feature extraction
-// (io/frame_cache.h): 512 MiB, about 1480 frames of 752 x 480; frames past it
-// are decoded again when their features are extracted.
-constexpr size_t kFrameCacheBytes = size_t{512} << 20;
-// Features extracted beside viosfm's own VIO (feature_prefetch.h) held until
-// the features stage writes them: 256 MiB, about 1700 frames of 1000
-// features, 200 of 8192; the rest are extracted by the features stage.
-constexpr size_t kFeaturePrefetchBytes = size_t{256} << 20;
-
-std::string UtcNow() {
-  const std::time_t now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
-  std::tm tm{};
-  gmtime_r(&now, &tm);
-  char buffer[32];
-  std::strftime(buffer, sizeof(buffer), "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return buffer;
-}
-
-double PeakMemoryMb() {
-  rusage usage{};
-  if (getrusage(RUSAGE_SELF, &usage) != 0) return 0.0;
-  return static_cast<double>(usage.ru_maxrss) / 1024.0;  // Linux: kilobytes
-}
-
-// Gives the memory freed by a stage back to the system. The decoded frames
-// the VIO handed to feature extraction (up to kFrameCacheBytes) and the
-// verification's descriptors are freed by then, but glibc keeps freed heap
-// pages for reuse, and the mapper's final bundle adjustment (about 0.4 MB
-// a frame) does not fit in them: without this, a 2400-frame run's peak was
-// the two added up (bench/realtime.sh, docs/benchmarks.md "Real time").
-void ReturnFreedMemory() {
-#ifdef __GLIBC__
-  malloc_trim(0);
-#endif
-}
-
-// Runs the stages in order, recording each one's wall-clock and CPU time
-// and logging a heading for it.
-class StageClock {
- public:
-  explicit StageClock(std::vector<PipelineStageTime>* stages) : stages_(stages) {}
-
-  template <class Stage>
-  auto Run(Stage&& stage) {
-    const std::string name = kStageNames[index_];
-    ++index_;
-    VIOSFM_LOG(INFO) << "run [" << index_ << "/" << kNumStages << "] " << name;
-    Timer timer;
-    timer.Start();
-    const double cpu_start = ProcessCpuSeconds();
-    if constexpr (std::is_void_v<decltype(stage())>) {
-      stage();
-      End(name, timer.ElapsedSeconds(), ProcessCpuSeconds() - cpu_start);
-    } else {
-      auto result = stage();
-      End(name, timer.ElapsedSeconds(), ProcessCpuSeconds() - cpu_start);
-      return result;
-    }
-  }
-
- private:
-  void End(const std::string& name, double seconds, double cpu_seconds) {
-    stages_->push_back({name, seconds, cpu_seconds});
-    VIOSFM_LOG(INFO) << "run [" << index_ << "/" << kNumStages << "] " << name << ": " << std::fixed
-                     << std::setprecision(2) << seconds << " s (" << cpu_seconds << " s of CPU)";
-  }
-
-  std::vector<PipelineStageTime>* stages_;
-  int index_ = 0;
-};
+const std::vector<std::string> kStageNames = {
+    "read_dataset", "vio",    "select_frames", "features",   "verification",
+    "load_matches", "mapper", "colors",        "evaluation", "write_outputs"};
 
 // The mapper running beside the verification (PipelineOptions::
 // stream_mapper): the stream of verified pairs it reads and its result. If
@@ -145,57 +70,10 @@ struct StreamedMapping {
   std::future<Reconstruction> result;
 };
 
-// Frames or features (texture_probe.h): the frame rate and the feature
-// count of a textured recording, settled before anything is extracted. The
-// probed frames stay in `frame_cache` for the VIO.
-void ResolveRateByTexture(const Sequence& sequence, FrameCache* frame_cache,
-                          PipelineOptions* options, PipelineSummary* summary) {
-  const TextureProbeOptions& probe = options->texture_probe;
-  if (probe.enable) {
-    std::vector<size_t> candidates;
-    if (!FrameSelectionUsesTrajectory(sequence, options->frame_selection)) {
-      // Frames selected at both rates (all the lower rate's frames when
-      // the camera runs at the higher rate): the cache keeps the probed
-      // frames for the features stage whatever it decides (a frame it
-      // releases before the VIO reads it is decoded twice). A short
-      // recording has fewer of them to probe.
-      candidates = SelectFrames(sequence, options->frame_selection, nullptr).kept;
-      FrameSelectionOptions textured_selection = options->frame_selection;
-      textured_selection.target_rate_hz = probe.target_rate_hz;
-      const std::vector<size_t> textured = SelectFrames(sequence, textured_selection, nullptr).kept;
-      std::vector<size_t> both;
-      std::set_intersection(candidates.begin(), candidates.end(), textured.begin(), textured.end(),
-                            std::back_inserter(both));
-      if (!both.empty()) candidates = std::move(both);
-    } else {
-      for (size_t k = 0; k < sequence.images.size(); ++k) candidates.push_back(k);
-    }
-    summary->texture_probe =
-        ProbeTexture(sequence, candidates, options->EffectiveSiftOptions(), probe, frame_cache);
-    std::ostringstream message;
-    message << summary->texture_probe.ToString(probe);
-    if (summary->texture_probe.textured) {
-      double& rate = options->frame_selection.target_rate_hz;
-      rate = rate > 0.0 ? std::min(rate, probe.target_rate_hz) : probe.target_rate_hz;
-      int& features = options->sift.max_num_features;
-      features = std::max(features, probe.max_num_features);
-      message << "; fewer frames with more features: " << rate << " Hz, " << features
-              << " features a frame";
-    } else if (summary->texture_probe.probed) {
-      message << "; the rate and the feature count as set";
-    }
-    message << " (" << std::fixed << std::setprecision(1) << summary->texture_probe.seconds
-            << " s)";
-    summary->texture_probe_message = message.str();
-    VIOSFM_LOG(INFO) << "run: texture " << summary->texture_probe_message;
-  }
-  summary->frame_rate_hz = options->frame_selection.target_rate_hz;
-  summary->max_num_features = options->sift.max_num_features;
-}
-
 }  // namespace
 
 PipelineSummary RunPipeline(const PipelineOptions& requested) {
+  if (requested.stream) return RunStreamPipeline(requested);
   // The options as asked for, until the texture probe settles the frame
   // rate and the feature count.
   PipelineOptions options = requested;
@@ -208,7 +86,7 @@ PipelineSummary RunPipeline(const PipelineOptions& requested) {
   summary.started_utc = UtcNow();
   summary.dataset = options.dataset.string();
   summary.output_folder = options.output_folder;
-  StageClock clock(&summary.stages);
+  StageClock clock(&summary.stages, kStageNames);
   const std::string vio_name = options.vio_source || options.vio_trajectory.empty()
                                    ? std::string("the VIO")
                                    : options.vio_trajectory.string();

@@ -47,6 +47,11 @@ std::string PipelineOptions::Validate() const {
     return "imu_scale." + error;
   }
   if (num_threads < 1) return "num_threads must be >= 1";
+  if (stream_vocabulary_frames < 1) return "stream_vocabulary_frames must be >= 1";
+  if (stream && stream_mapper) return "stream and stream_mapper: the stream maps beside anyway";
+  if (stream && verification.pairs.mode == PairMode::kPairList) {
+    return "stream: pairs.mode pair_list is not streamed";
+  }
   if (const std::string error = calibration.Validate(); !error.empty()) {
     return "calibration." + error;
   }

@@ -141,6 +141,16 @@ struct PipelineOptions {
   // its pairs at least every kStreamedVerificationBatch pairs
   // (verification.batch_size at most that). Default false.
   bool stream_mapper = false;
+  // The run as one stream (stream_pipeline.h): the VIO, the features, the
+  // verification and the mapper overlap, each frame taken on as soon as the
+  // VIO has settled its pose, its pairs with the frames before it verified,
+  // and each batch mapped once its frames are in. Default false.
+  bool stream = false;
+  // Streamed: the retrieval's vocabulary tree is trained on the first this
+  // many selected frames' descriptors (a batch run trains it on the whole
+  // recording), unless verification.retrieval.vocabulary_path gives one
+  // (retrieval/incremental_retrieval.h); >= 1. Default 100.
+  int stream_vocabulary_frames = 100;
   // The metric scale from the IMU (metric_scale.h), when the dataset has
   // one. Default true.
   bool use_imu_scale = true;
@@ -248,6 +258,12 @@ struct PipelineOptions {
     VisitOptionGroup({"mapper", "", kRunOnly}, self.mapper, visit);
     visit({"stream_mapper", "the mapper runs beside the verification, batch by batch", kRunOnly},
           self.stream_mapper);
+    visit({"stream", "the run as one stream: VIO, features, verification and mapper overlap",
+           kRunOnly},
+          self.stream);
+    visit({"stream_vocabulary_frames",
+           "streamed: the first frames the retrieval's vocabulary is trained on", kRunOnly},
+          self.stream_vocabulary_frames);
     visit({"use_imu_scale", "the metric scale from the IMU", kRunOnly}, self.use_imu_scale);
     VisitOptionGroup({"imu_scale", "", kRunOnly}, self.imu_scale, visit);
     visit({"num_threads", "worker threads of every stage", kRunOnly}, self.num_threads);

@@ -104,6 +104,12 @@ std::string PipelineSummary::ToString() const {
   double cpu_seconds = 0.0;
   for (const PipelineStageTime& stage : stages) cpu_seconds += stage.cpu_seconds;
   out << "), CPU " << cpu_seconds << " s, peak memory " << peak_memory_mb << " MB\n";
+  if (stream.streamed) {
+    out << "stream: the VIO done after " << stream.vio_seconds << " s, the verification after "
+        << stream.verification_seconds << " s (" << stream.verification_busy_seconds
+        << " s of it verifying), the mapper after " << stream.mapper_seconds << " s; "
+        << stream.seconds_after_last_frame << " s from the last frame's features to the model\n";
+  }
   out << "output: " << output_folder.string()
       << " (model/, model_txt/, points.ply, trajectory_body.tum, "
          "trajectory_body_all_frames.tum, summary.json)";
@@ -231,6 +237,15 @@ std::string PipelineSummaryToJson(const PipelineSummary& s) {
         {{"name", stage.name}, {"seconds", stage.seconds}, {"cpu_seconds", stage.cpu_seconds}});
   }
   json["stages"] = stages;
+  if (s.stream.streamed) {
+    json["stream"] = {{"vio_seconds", s.stream.vio_seconds},
+                      {"verification_seconds", s.stream.verification_seconds},
+                      {"verification_busy_seconds", s.stream.verification_busy_seconds},
+                      {"mapper_seconds", s.stream.mapper_seconds},
+                      {"features_beside_vio", s.stream.num_features_beside},
+                      {"seconds_after_last_frame", s.stream.seconds_after_last_frame},
+                      {"vocabulary_frames", s.stream.num_vocabulary_frames}};
+  }
   json["images"] = {{"decoded", s.images.decodes},
                     {"reused", s.images.reuses},
                     {"not_kept", s.images.not_kept},

@@ -67,6 +67,31 @@ struct PipelineGyroCheck {
   timestamp_ns_t time_offset_ns = 0;  // t_imu = t_cam + offset
 };
 
+// A streamed run (stream_pipeline.h): its stages overlapped, so each
+// one's busy time instead of one after the other, and how long the model
+// took once the last frame had come.
+struct PipelineStreamSummary {
+  bool streamed = false;
+  // Wall clock from the stream's start until the VIO had processed every
+  // frame (own VIO), until the verification had decided every pair, and
+  // until the mapper ended.
+  double vio_seconds = 0.0;
+  double verification_seconds = 0.0;
+  double mapper_seconds = 0.0;
+  // Of the verification's, the seconds it spent matching and verifying
+  // pairs (the rest it waited for the VIO and the features).
+  double verification_busy_seconds = 0.0;
+  // Frames whose features were extracted beside the VIO (the rest by the
+  // verification's thread itself).
+  size_t num_features_beside = 0;
+  // From the last frame's features to the mapper's end: what a run that
+  // follows a recording takes once the recording ends.
+  double seconds_after_last_frame = 0.0;
+  // The retrieval's vocabulary: trained on the first frames (how many), or
+  // loaded from a file.
+  size_t num_vocabulary_frames = 0;
+};
+
 struct PipelineSummary {
   std::string dataset;
   // The hash of the run's fingerprint (run_fingerprint.h, RunFingerprint::Hash):
@@ -117,6 +142,7 @@ struct PipelineSummary {
   FrameCache::Counts images;
   size_t frame_cache_max_bytes = 0;
   std::vector<PipelineStageTime> stages;
+  PipelineStreamSummary stream;  // a streamed run only
   double total_seconds = 0.0;
   double peak_memory_mb = 0.0;  // getrusage ru_maxrss
 

@@ -76,11 +76,17 @@ Reconstruction MapStage(const BatchedMapperInput& input, const Sequence& sequenc
                         PipelineSummary* summary, VerifiedPairStream* stream) {
   Reconstruction reconstruction =
       RunBatchedMapper(input, options.EffectiveMapperOptions(), &summary->mapper, stream);
+  FinishMapping(sequence, vio, options, summary, &reconstruction);
+  return reconstruction;
+}
+
+void FinishMapping(const Sequence& sequence, const VioPoses& vio, const PipelineOptions& options,
+                   PipelineSummary* summary, Reconstruction* reconstruction) {
   VIOSFM_LOG(INFO) << "run: mapper " << summary->mapper.ToString();
   if (options.use_imu_scale) {
     summary->metric_scale = ApplyImuMetricScale(
         sequence, vio.own_vio_rig.value_or(sequence.rig), options.vio_uncertainty.scale_sigma,
-        options.imu_scale, &reconstruction, summary->mapper.inertial_scale);
+        options.imu_scale, reconstruction, summary->mapper.inertial_scale);
     if (summary->metric_scale.vio_scale_refuted) {
       VIOSFM_LOG(WARNING) << "run: metric scale: " << summary->metric_scale.message;
     } else {
@@ -90,16 +96,15 @@ Reconstruction MapStage(const BatchedMapperInput& input, const Sequence& sequenc
   summary->num_frames_registered = static_cast<size_t>(summary->mapper.num_supported);
   summary->num_frames_vio_only = static_cast<size_t>(summary->mapper.num_vio_only);
   summary->num_frames_unposed = static_cast<size_t>(summary->mapper.num_unposed);
-  for (size_t i = 0; i < summary->mapper.frames.size(); ++i) {
-    const MapperFrameStatus& frame = summary->mapper.frames[i];
+  for (const MapperFrameStatus& frame : summary->mapper.frames) {
     if (frame.reason.empty()) continue;
-    VIOSFM_LOG(WARNING) << "run: no pose for " << input.images[i].name << ": " << frame.reason;
+    VIOSFM_LOG(WARNING) << "run: no pose for " << reconstruction->GetImage(frame.image_id).name
+                        << ": " << frame.reason;
   }
-  summary->num_points = reconstruction.NumPoints3D();
-  summary->num_observations = reconstruction.ComputeNumObservations();
-  summary->mean_track_length = reconstruction.ComputeMeanTrackLength();
-  summary->mean_reprojection_error_px = UpdateReprojectionErrors(&reconstruction);
-  return reconstruction;
+  summary->num_points = reconstruction->NumPoints3D();
+  summary->num_observations = reconstruction->ComputeNumObservations();
+  summary->mean_track_length = reconstruction->ComputeMeanTrackLength();
+  summary->mean_reprojection_error_px = UpdateReprojectionErrors(reconstruction);
 }
 
 }  // namespace viosfm

@@ -34,4 +34,9 @@ Reconstruction MapStage(const BatchedMapperInput& input, const Sequence& sequenc
                         const VioPoses& vio, const PipelineOptions& options,
                         PipelineSummary* summary, VerifiedPairStream* stream = nullptr);
 
+// MapStage after the mapper (summary->mapper holds its summary): the
+// metric scale and the summary's frame counts and model figures.
+void FinishMapping(const Sequence& sequence, const VioPoses& vio, const PipelineOptions& options,
+                   PipelineSummary* summary, Reconstruction* reconstruction);
+
 }  // namespace viosfm

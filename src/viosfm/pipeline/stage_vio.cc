@@ -17,7 +17,8 @@ namespace fs = std::filesystem;
 
 // viosfm's own VIO on the sequence: every posed frame, a new segment after
 // every stretch without a pose.
-VioPoses RunOwnVio(const Sequence& sequence, const PipelineOptions& options, FrameCache* frames) {
+VioPoses RunOwnVio(const Sequence& sequence, const PipelineOptions& options, FrameCache* frames,
+                   const VioProgressCallback& on_progress) {
   if (!sequence.has_imu()) {
     throw InputError(sequence.root.string(), 0,
                      "no VIO poses: the dataset has no IMU for viosfm's own VIO; pass "
@@ -26,7 +27,7 @@ VioPoses RunOwnVio(const Sequence& sequence, const PipelineOptions& options, Fra
   VIOSFM_LOG(INFO) << "run: no VIO trajectory given: running viosfm's own VIO";
   VioOptions vio_options = options.own_vio;
   vio_options.show_progress = vio_options.show_progress && options.show_progress;
-  const VioResult result = RunVio(sequence, vio_options, frames);
+  const VioResult result = RunVio(sequence, vio_options, frames, on_progress);
   WriteVioResult(options.output_folder / "vio", result);
   // Every frame the VIO gives a pose (tracking, IMU-only, or held at a
   // static start), in the VIO's own segments: a reset it re-localised stays
@@ -63,33 +64,9 @@ VioPoses RunOwnVio(const Sequence& sequence, const PipelineOptions& options, Fra
   rig.cam_time_offset_ns = result.summary.time_offset.offset_ns;
   rig.imu_noise = result.summary.imu_noise.used;
   poses.own_vio_rig = rig;
-  const TimeOffsetEstimate& time_offset = result.summary.time_offset;
-  if (options.own_vio.rolling_shutter_readout_s > 0.0) {
-    poses.rolling_shutter_readout_s = options.own_vio.rolling_shutter_readout_s;
-    poses.rolling_shutter_source = "given to the own VIO";
-  } else if (time_offset.readout_estimated && time_offset.rolling_shutter_cost_px > 0.0) {
-    const double evidence =
-        time_offset.global_shutter_cost_px / time_offset.rolling_shutter_cost_px;
-    std::ostringstream source;
-    source << std::fixed << std::setprecision(2)
-           << "the own VIO's estimate; its residual as a global shutter " << evidence
-           << " times the one with the readout";
-    if (evidence >= options.min_readout_evidence) {
-      poses.rolling_shutter_readout_s = time_offset.readout_s;
-      poses.rolling_shutter_source = source.str();
-    } else {
-      poses.rolling_shutter_source =
-          source.str() + ", under rolling_shutter.min_readout_evidence: not used";
-      VIOSFM_LOG(INFO) << "run: the own VIO estimated a rolling-shutter readout of "
-                       << std::setprecision(1) << std::fixed << time_offset.readout_s * 1e3
-                       << " ms, but the images' evidence for it is weak (" << source.str()
-                       << ", under rolling_shutter.min_readout_evidence " << std::setprecision(2)
-                       << options.min_readout_evidence
-                       << "): the keypoints are taken as from a global shutter";
-    }
-  } else {
-    poses.rolling_shutter_source = "the own VIO: a global shutter explains the images";
-  }
+  const OwnVioReadout readout = OwnVioRollingShutter(options, result.summary.time_offset, true);
+  poses.rolling_shutter_readout_s = readout.readout_s;
+  poses.rolling_shutter_source = readout.source;
   poses.segment_rule =
       "the own VIO's segments (a new one after every reset it did not re-localise)";
   VIOSFM_LOG(INFO) << "run: own VIO: " << poses.world_from_body.size() << " of "
@@ -100,6 +77,39 @@ VioPoses RunOwnVio(const Sequence& sequence, const PipelineOptions& options, Fra
 }
 
 }  // namespace
+
+OwnVioReadout OwnVioRollingShutter(const PipelineOptions& options,
+                                   const TimeOffsetEstimate& time_offset, bool log) {
+  OwnVioReadout readout;
+  if (options.own_vio.rolling_shutter_readout_s > 0.0) {
+    readout.readout_s = options.own_vio.rolling_shutter_readout_s;
+    readout.source = "given to the own VIO";
+  } else if (time_offset.readout_estimated && time_offset.rolling_shutter_cost_px > 0.0) {
+    const double evidence =
+        time_offset.global_shutter_cost_px / time_offset.rolling_shutter_cost_px;
+    std::ostringstream source;
+    source << std::fixed << std::setprecision(2)
+           << "the own VIO's estimate; its residual as a global shutter " << evidence
+           << " times the one with the readout";
+    if (evidence >= options.min_readout_evidence) {
+      readout.readout_s = time_offset.readout_s;
+      readout.source = source.str();
+    } else {
+      readout.source = source.str() + ", under rolling_shutter.min_readout_evidence: not used";
+      if (log) {
+        VIOSFM_LOG(INFO) << "run: the own VIO estimated a rolling-shutter readout of "
+                         << std::setprecision(1) << std::fixed << time_offset.readout_s * 1e3
+                         << " ms, but the images' evidence for it is weak (" << source.str()
+                         << ", under rolling_shutter.min_readout_evidence " << std::setprecision(2)
+                         << options.min_readout_evidence
+                         << "): the keypoints are taken as from a global shutter";
+      }
+    }
+  } else {
+    readout.source = "the own VIO: a global shutter explains the images";
+  }
+  return readout;
+}
 
 Trajectory ReadVioTrajectoryFile(const fs::path& path, TrajectoryFormat format, VioFrame frame,
                                  const Rigid3d& body_from_cam) {
@@ -126,11 +136,11 @@ Trajectory LoadVioTrajectory(const Sequence& sequence, const PipelineOptions& op
                                sequence.rig.body_from_cam);
 }
 
-VioPoses LoadVioPoses(const Sequence& sequence, const PipelineOptions& options,
-                      FrameCache* frames) {
+VioPoses LoadVioPoses(const Sequence& sequence, const PipelineOptions& options, FrameCache* frames,
+                      const VioProgressCallback& on_progress) {
   VioPoses poses;
   if (!options.vio_source && options.vio_trajectory.empty()) {
-    poses = RunOwnVio(sequence, options, frames);
+    poses = RunOwnVio(sequence, options, frames, on_progress);
   } else {
     poses.world_from_body = LoadVioTrajectory(sequence, options);
     poses.rolling_shutter_readout_s = options.rolling_shutter_readout_s;

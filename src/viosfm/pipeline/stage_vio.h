@@ -23,6 +23,7 @@
 #include "viosfm/io/frame_cache.h"
 #include "viosfm/pipeline/pipeline_options.h"
 #include "viosfm/scene/vio_uncertainty.h"
+#include "viosfm/vio/odometry.h"
 
 namespace viosfm {
 
@@ -61,8 +62,21 @@ Trajectory LoadVioTrajectory(const Sequence& sequence, const PipelineOptions& op
 // The VIO poses as the options say (viosfm's own VIO without a source or
 // file, else LoadVioTrajectory) with their segments and odometers.
 // viosfm's own VIO reads the images through `frames` (kept there for the
-// features stage) when given.
+// features stage) when given, and reports its progress to `on_progress`
+// (vio/odometry.h RunVio) when given.
 VioPoses LoadVioPoses(const Sequence& sequence, const PipelineOptions& options,
-                      FrameCache* frames = nullptr);
+                      FrameCache* frames = nullptr, const VioProgressCallback& on_progress = {});
+
+// The rolling-shutter readout the structure-from-motion stages take from
+// viosfm's own VIO (VioPoses::rolling_shutter_readout_s): the one it was
+// given, or its estimate (with the time offset) when the images' evidence
+// reaches PipelineOptions::min_readout_evidence; 0 otherwise. `log`: say
+// so when an estimate is too weak to use.
+struct OwnVioReadout {
+  double readout_s = 0.0;
+  std::string source;  // for the log
+};
+OwnVioReadout OwnVioRollingShutter(const PipelineOptions& options,
+                                   const TimeOffsetEstimate& time_offset, bool log);
 
 }  // namespace viosfm

@@ -348,10 +348,13 @@ std::string BatchedMapperSummary::ToString() const {
   return out.str();
 }
 
-void ValidateBatchedMapperInput(const BatchedMapperInput& input) {
-  if (input.images.empty()) throw InputError(kInputLabel, 0, "no images to reconstruct");
+namespace {
+
+// The input's cameras: valid ids, unique, with their model's parameters;
+// returns their ids. Throws InputError naming the first problem.
+std::unordered_set<camera_t> ValidateCameras(const std::vector<Camera>& cameras) {
   std::unordered_set<camera_t> camera_ids;
-  for (const Camera& camera : input.cameras) {
+  for (const Camera& camera : cameras) {
     if (camera.camera_id == kInvalidCameraId) {
       throw InputError(kInputLabel, 0, "a camera has the invalid camera id");
     }
@@ -365,44 +368,74 @@ void ValidateBatchedMapperInput(const BatchedMapperInput& input) {
                            " parameters, not those of its model");
     }
   }
-  std::unordered_map<image_t, size_t> keypoints_of_image;
-  std::unordered_set<std::string> names;
-  for (size_t i = 0; i < input.images.size(); ++i) {
-    const MapperImage& image = input.images[i];
-    if (image.image_id == kInvalidImageId) {
-      throw InputError(kInputLabel, 0, "image " + std::to_string(i) + " has the invalid image id");
-    }
-    if (!keypoints_of_image.emplace(image.image_id, image.keypoints.size()).second) {
-      throw InputError(kInputLabel, 0, "duplicate image id " + std::to_string(image.image_id));
-    }
-    if (image.name.empty()) {
-      throw InputError(kInputLabel, 0, DescribeImage(image) + " has an empty name");
-    }
-    if (!names.insert(image.name).second) {
-      throw InputError(kInputLabel, 0, "duplicate image name '" + image.name + "'");
-    }
-    if (camera_ids.count(image.camera_id) == 0) {
-      throw InputError(
-          kInputLabel, 0,
-          DescribeImage(image) + " refers to unknown camera id " + std::to_string(image.camera_id));
-    }
-    if (i > 0 && image.timestamp_ns <= input.images[i - 1].timestamp_ns) {
-      throw InputError(kInputLabel, 0,
-                       "images not in strictly increasing time order: " + DescribeImage(image) +
-                           " at " + FormatNsAsSeconds(image.timestamp_ns) + " s follows " +
-                           DescribeImage(input.images[i - 1]) + " at " +
-                           FormatNsAsSeconds(input.images[i - 1].timestamp_ns) + " s");
-    }
-    if (image.vio_cam_from_world && !IsFinitePose(*image.vio_cam_from_world)) {
-      throw InputError(kInputLabel, 0,
-                       DescribeImage(image) + " has a non-finite or zero-rotation VIO pose");
+  return camera_ids;
+}
+
+// The images of the input as they come (all at once, or a batch at a time):
+// each checked against the cameras and the images before it.
+class ImageValidator {
+ public:
+  explicit ImageValidator(std::unordered_set<camera_t> camera_ids)
+      : camera_ids_(std::move(camera_ids)) {}
+
+  // images[from, size): InputError naming the first problem.
+  void Check(const std::vector<MapperImage>& images, size_t from) {
+    for (size_t i = from; i < images.size(); ++i) {
+      const MapperImage& image = images[i];
+      if (image.image_id == kInvalidImageId) {
+        throw InputError(kInputLabel, 0,
+                         "image " + std::to_string(i) + " has the invalid image id");
+      }
+      if (!image_ids_.insert(image.image_id).second) {
+        throw InputError(kInputLabel, 0, "duplicate image id " + std::to_string(image.image_id));
+      }
+      if (image.name.empty()) {
+        throw InputError(kInputLabel, 0, DescribeImage(image) + " has an empty name");
+      }
+      if (!names_.insert(image.name).second) {
+        throw InputError(kInputLabel, 0, "duplicate image name '" + image.name + "'");
+      }
+      if (camera_ids_.count(image.camera_id) == 0) {
+        throw InputError(kInputLabel, 0,
+                         DescribeImage(image) + " refers to unknown camera id " +
+                             std::to_string(image.camera_id));
+      }
+      if (i > 0 && image.timestamp_ns <= images[i - 1].timestamp_ns) {
+        throw InputError(kInputLabel, 0,
+                         "images not in strictly increasing time order: " + DescribeImage(image) +
+                             " at " + FormatNsAsSeconds(image.timestamp_ns) + " s follows " +
+                             DescribeImage(images[i - 1]) + " at " +
+                             FormatNsAsSeconds(images[i - 1].timestamp_ns) + " s");
+      }
+      if (image.vio_cam_from_world && !IsFinitePose(*image.vio_cam_from_world)) {
+        throw InputError(kInputLabel, 0,
+                         DescribeImage(image) + " has a non-finite or zero-rotation VIO pose");
+      }
+      any_vio_pose_ = any_vio_pose_ || image.vio_cam_from_world.has_value();
     }
   }
-  if (std::none_of(input.images.begin(), input.images.end(),
-                   [](const MapperImage& image) { return image.vio_cam_from_world.has_value(); })) {
-    throw InputError(kInputLabel, 0,
-                     "no image has a VIO pose (the VIO gives the world frame and the scale)");
+  // Some image has a VIO pose: InputError otherwise.
+  void CheckAnyVioPose() const {
+    if (!any_vio_pose_) {
+      throw InputError(kInputLabel, 0,
+                       "no image has a VIO pose (the VIO gives the world frame and the scale)");
+    }
   }
+
+ private:
+  std::unordered_set<camera_t> camera_ids_;
+  std::unordered_set<image_t> image_ids_;
+  std::unordered_set<std::string> names_;
+  bool any_vio_pose_ = false;
+};
+
+}  // namespace
+
+void ValidateBatchedMapperInput(const BatchedMapperInput& input) {
+  if (input.images.empty()) throw InputError(kInputLabel, 0, "no images to reconstruct");
+  ImageValidator validator(ValidateCameras(input.cameras));
+  validator.Check(input.images, 0);
+  validator.CheckAnyVioPose();
   ValidateVerifiedPairs(input.images, input.verified_pairs, 0);
 }
 
@@ -419,14 +452,25 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
                                 BatchedMapperSummary* summary_out, VerifiedPairStream* stream) {
   const Timer total_timer;
   if (!options.Check()) throw InputError("batched mapper options: " + options.Validate());
-  ValidateBatchedMapperInput(input);
+  // The frames come from the stream, a batch at a time (frames_streamed),
+  // or are all in the input.
+  const bool frames_streamed = stream != nullptr && !stream->frames_up_front();
+  std::optional<ImageValidator> streamed_validator;
   if (stream != nullptr) {
     VIOSFM_CHECK(input.verified_pairs.empty()) << "verified pairs given and streamed";
-    VIOSFM_CHECK_EQ(stream->num_frames(), input.images.size());
+    if (frames_streamed) {
+      VIOSFM_CHECK(input.images.empty()) << "frames given and streamed";
+      streamed_validator.emplace(ValidateCameras(input.cameras));
+    } else {
+      VIOSFM_CHECK_EQ(stream->num_frames(), input.images.size());
+    }
   }
+  if (!frames_streamed) ValidateBatchedMapperInput(input);
+  std::vector<MapperImage> streamed_images;
+  const std::vector<MapperImage>& images = frames_streamed ? streamed_images : input.images;
+  // The frames known so far: all of them unless streamed.
+  size_t num_images = images.size();
   BatchedMapperSummary summary;
-  const size_t num_images = input.images.size();
-  summary.num_images = static_cast<int>(num_images);
   const FrameRegistrationOptions& registration = options.registration;
 
   // 1. Tracks, and the tracks of each image: of every verified pair or,
@@ -435,17 +479,11 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
   std::vector<ImagePairMatches> streamed_pairs;
   const std::vector<ImagePairMatches>& pairs = stream ? streamed_pairs : input.verified_pairs;
   std::unordered_map<image_t, size_t> index_of_image;
-  for (size_t i = 0; i < num_images; ++i) index_of_image[input.images[i].image_id] = i;
   std::vector<Track> tracks;
-  std::vector<std::vector<size_t>> tracks_of_image(num_images);
+  std::vector<std::vector<size_t>> tracks_of_image;
   std::optional<IncrementalTrackBuilder> track_builder;
-  if (stream != nullptr) {
-    std::vector<std::pair<image_t, size_t>> num_keypoints;
-    for (const MapperImage& image : input.images) {
-      num_keypoints.emplace_back(image.image_id, image.keypoints.size());
-    }
-    track_builder.emplace(num_keypoints, options.tracks);
-  }
+  if (stream != nullptr)
+    track_builder.emplace(std::vector<std::pair<image_t, size_t>>{}, options.tracks);
   // The tracks of every pair, or, streamed, of those taken so far, the
   // `new_pairs` among them just taken.
   const auto build_tracks = [&](const std::vector<ImagePairMatches>& new_pairs) {
@@ -467,41 +505,72 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
     }
     summary.seconds_tracks += timer.ElapsedSeconds();
   };
+
+  // The model: all images, unregistered, with their keypoints; per image
+  // its VIO pose and its registration state. Streamed frames join as their
+  // batch is taken.
+  Reconstruction reconstruction;
+  for (const Camera& camera : input.cameras) reconstruction.AddCamera(camera);
+  std::vector<std::optional<Rigid3d>> vio_poses;
+  std::set<int> segments;
+  std::vector<MapperFrameStatus>& frames = summary.frames;
+  // A break at frame k (the VIO jumped between k and the frame before it)
+  // ends a run of frames whose VIO poses can be chained.
+  std::vector<char> is_break;
+  std::vector<char> is_registered;
+  // The first frame with a VIO pose: placed where the VIO puts it, held in
+  // every adjustment (the gauge); num_images until there is one.
+  size_t gauge_index = std::numeric_limits<size_t>::max();
+  image_t gauge_image = kInvalidImageId;
+  // Images [num_images, images.size()) join the model.
+  const auto add_images = [&]() {
+    for (size_t i = num_images; i < images.size(); ++i) {
+      const MapperImage& input_image = images[i];
+      index_of_image[input_image.image_id] = i;
+      if (track_builder)
+        track_builder->AddImage(input_image.image_id, input_image.keypoints.size());
+      vio_poses.emplace_back();
+      if (input_image.vio_cam_from_world) {
+        vio_poses[i] = *input_image.vio_cam_from_world;
+        vio_poses[i]->rotation.normalize();
+        segments.insert(input_image.vio_odometer.segment);
+        if (gauge_image == kInvalidImageId) {
+          gauge_index = i;
+          gauge_image = input_image.image_id;
+        }
+      } else {
+        ++summary.num_without_vio_pose;
+      }
+      Image image;
+      image.image_id = input_image.image_id;
+      image.camera_id = input_image.camera_id;
+      image.name = input_image.name;
+      image.timestamp_ns = input_image.timestamp_ns;
+      image.cam_from_world = vio_poses[i].value_or(Rigid3d());
+      image.points2D.resize(input_image.keypoints.size());
+      for (size_t j = 0; j < input_image.keypoints.size(); ++j) {
+        image.points2D[j].xy =
+            Eigen::Vector2d(input_image.keypoints[j].x, input_image.keypoints[j].y);
+      }
+      reconstruction.AddImage(std::move(image));
+      frames.emplace_back();
+      frames.back().image_id = input_image.image_id;
+      is_break.push_back(0);
+      is_registered.push_back(0);
+    }
+    num_images = images.size();
+    tracks_of_image.resize(num_images);
+    summary.num_images = static_cast<int>(num_images);
+    summary.num_vio_segments = static_cast<int>(segments.size());
+  };
+  num_images = 0;
+  add_images();
   Timer timer;
   if (stream == nullptr) {
     build_tracks(pairs);
     VIOSFM_LOG(INFO) << "batched mapper: " << num_images << " images, " << pairs.size()
                      << " verified pairs; " << summary.tracks.Summary();
   }
-
-  // The model: all images, unregistered, with their keypoints.
-  Reconstruction reconstruction;
-  for (const Camera& camera : input.cameras) reconstruction.AddCamera(camera);
-  std::vector<std::optional<Rigid3d>> vio_poses(num_images);
-  std::set<int> segments;
-  for (size_t i = 0; i < num_images; ++i) {
-    const MapperImage& input_image = input.images[i];
-    if (input_image.vio_cam_from_world) {
-      vio_poses[i] = *input_image.vio_cam_from_world;
-      vio_poses[i]->rotation.normalize();
-      segments.insert(input_image.vio_odometer.segment);
-    } else {
-      ++summary.num_without_vio_pose;
-    }
-    Image image;
-    image.image_id = input_image.image_id;
-    image.camera_id = input_image.camera_id;
-    image.name = input_image.name;
-    image.timestamp_ns = input_image.timestamp_ns;
-    image.cam_from_world = vio_poses[i].value_or(Rigid3d());
-    image.points2D.resize(input_image.keypoints.size());
-    for (size_t j = 0; j < input_image.keypoints.size(); ++j) {
-      image.points2D[j].xy =
-          Eigen::Vector2d(input_image.keypoints[j].x, input_image.keypoints[j].y);
-    }
-    reconstruction.AddImage(std::move(image));
-  }
-  summary.num_vio_segments = static_cast<int>(segments.size());
 
   // Relative-pose priors (none without the relative-pose term: the w/o RPC
   // ablation), of the pairs known (built again with the tracks when
@@ -516,7 +585,7 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
     prior_options.bridge_max_matches = options.bridge_max_matches;
     prior_options.weighting = options.ba.prior_weighting;
     prior_options.vio_uncertainty = options.vio_uncertainty;
-    all_priors = MakeRelativePosePriors(input.images, pairs, prior_options);
+    all_priors = MakeRelativePosePriors(images, pairs, prior_options);
     consecutive_pairs.clear();
     for (size_t p = 0; p < all_priors.priors.size(); ++p) {
       if (!all_priors.bridging[p]) {
@@ -527,23 +596,12 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
     summary.num_consecutive_priors = all_priors.num_consecutive;
     summary.num_bridging_priors = all_priors.num_bridging;
   };
-  build_priors();
+  if (!frames_streamed) build_priors();
 
-  // Registration state. A break at frame k (the VIO jumped between k and the
-  // frame before it) ends a run of frames whose VIO poses can be chained.
-  std::vector<MapperFrameStatus>& frames = summary.frames;
-  frames.resize(num_images);
-  for (size_t i = 0; i < num_images; ++i) frames[i].image_id = input.images[i].image_id;
-  std::vector<char> is_break(num_images, 0);
-  std::vector<char> is_registered(num_images, 0);
-  const size_t gauge_index = static_cast<size_t>(
-      std::find_if(vio_poses.begin(), vio_poses.end(),
-                   [](const std::optional<Rigid3d>& pose) { return pose.has_value(); }) -
-      vio_poses.begin());
-  const image_t gauge_image = input.images[gauge_index].image_id;
+  // Registration state.
   const auto same_run = [&](size_t i, size_t j) {
     if (!vio_poses[i] || !vio_poses[j] ||
-        input.images[i].vio_odometer.segment != input.images[j].vio_odometer.segment) {
+        images[i].vio_odometer.segment != images[j].vio_odometer.segment) {
       return false;
     }
     for (size_t k = std::min(i, j) + 1; k <= std::max(i, j); ++k) {
@@ -566,7 +624,7 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
   std::vector<image_t> registered;  // in order of registration
   std::vector<size_t> newly_registered;
   const auto register_frame = [&](size_t i, const Rigid3d& cam_from_world, FramePoseSource source) {
-    Image& image = reconstruction.GetImage(input.images[i].image_id);
+    Image& image = reconstruction.GetImage(images[i].image_id);
     image.cam_from_world = cam_from_world;
     image.cam_from_world.rotation.normalize();
     image.registered = true;
@@ -583,15 +641,14 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
     if (!vio_poses[i]) return std::nullopt;
     const auto neighbour = [&](size_t j) {
       return j < num_images && vio_poses[j] &&
-             input.images[j].vio_odometer.segment == input.images[i].vio_odometer.segment &&
-             std::abs(input.images[j].timestamp_ns - input.images[i].timestamp_ns) <=
+             images[j].vio_odometer.segment == images[i].vio_odometer.segment &&
+             std::abs(images[j].timestamp_ns - images[i].timestamp_ns) <=
                  kRollingShutterVelocityMaxGapNs;
     };
     const size_t before = i > 0 && neighbour(i - 1) ? i - 1 : i;
     const size_t after = neighbour(i + 1) ? i + 1 : i;
     if (before == after) return std::nullopt;
-    const double span_s =
-        NsToSeconds(input.images[after].timestamp_ns - input.images[before].timestamp_ns);
+    const double span_s = NsToSeconds(images[after].timestamp_ns - images[before].timestamp_ns);
     return vio_poses[i]->rotation *
            ((ProjectionCenter(*vio_poses[after]) - ProjectionCenter(*vio_poses[before])) / span_s);
   };
@@ -602,9 +659,8 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
   const auto beyond_vio_drift = [&](size_t i, size_t reference, const Rigid3d& images_pose,
                                     const Rigid3d& vio_pose, double* position_difference,
                                     double* rotation_difference) {
-    const RelativePoseSigmas sigmas = LargestSigmas(
-        RelativePoseCovariance(options.vio_uncertainty, VioSampleOfImage(input.images[reference]),
-                               VioSampleOfImage(input.images[i])));
+    const RelativePoseSigmas sigmas = LargestSigmas(RelativePoseCovariance(
+        options.vio_uncertainty, VioSampleOfImage(images[reference]), VioSampleOfImage(images[i])));
     *position_difference = (ProjectionCenter(images_pose) - ProjectionCenter(vio_pose)).norm();
     *rotation_difference = images_pose.rotation.angularDistance(vio_pose.rotation);
     return *position_difference > registration.break_sigmas * sigmas.translation_m +
@@ -621,19 +677,19 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
         predicted = *vio_poses[i];
       } else if ((reference = find_reference(i))) {
         predicted = *vio_poses[i] * vio_poses[*reference]->Inverse() *
-                    reconstruction.GetImage(input.images[*reference].image_id).cam_from_world;
+                    reconstruction.GetImage(images[*reference].image_id).cam_from_world;
       }
     }
     if (registration.verify_with_images && i != gauge_index) {
       FrameCorrespondences correspondences = CollectFrameCorrespondences(
-          reconstruction, tracks, tracks_of_image[i], input.images[i].image_id);
+          reconstruction, tracks, tracks_of_image[i], images[i].image_id);
       // A rolling shutter's motion share: each observation moved to where
       // the predicted camera at the stamp sees its point (the points'
       // depths from the model, the velocity from the VIO).
       const std::optional<Eigen::Vector3d> velocity =
           input.rolling_shutter_readout_s > 0.0 && predicted ? vio_cam_velocity(i) : std::nullopt;
       if (velocity) {
-        const Camera& camera = reconstruction.GetCamera(input.images[i].camera_id);
+        const Camera& camera = reconstruction.GetCamera(images[i].camera_id);
         for (size_t c = 0; c < correspondences.size(); ++c) {
           const Eigen::Vector3d in_cam = *predicted * correspondences.points_in_world[c];
           const double offset_s =
@@ -646,9 +702,9 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
       }
       status.num_correspondences = static_cast<int>(correspondences.size());
       if (static_cast<int>(correspondences.size()) >= registration.min_num_correspondences) {
-        const Camera& camera = reconstruction.GetCamera(input.images[i].camera_id);
+        const Camera& camera = reconstruction.GetCamera(images[i].camera_id);
         AbsolutePoseOptions pnp = registration.pnp;
-        pnp.seed = registration.pnp.seed + input.images[i].image_id;
+        pnp.seed = registration.pnp.seed + images[i].image_id;
         const AbsolutePoseResult result =
             EstimateAbsolutePose(correspondences.points_normalized, correspondences.points_in_world,
                                  MeanFocalLength(camera), pnp, predicted);
@@ -685,7 +741,7 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
           // then the 2D-3D matches are a look-alike place's, merged into its
           // tracks by a wrong pair).
           const auto jump_refuted = [&]() {
-            const image_t image_id = input.images[i].image_id;
+            const image_t image_id = images[i].image_id;
             const int by_images =
                 CountExplainedPairMatches(reconstruction, image_id, result.cam_from_world, pairs,
                                           registration.support_max_error_px);
@@ -693,7 +749,7 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
                                                          pairs, registration.support_max_error_px);
             if (by_vio <= kJumpRefutingMatchRatio * by_images) return false;
             ++summary.num_vio_jumps_refused;
-            VIOSFM_LOG(INFO) << "batched mapper: " << DescribeImage(input.images[i])
+            VIOSFM_LOG(INFO) << "batched mapper: " << DescribeImage(images[i])
                              << ": the VIO's pose is " << position_difference << " m and "
                              << rotation_difference << " rad off the images' (" << predicted_inliers
                              << " of " << pnp_inliers << " 2D-3D inliers), but its matches with "
@@ -705,7 +761,7 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
               pnp_inliers >= 2 * registration.min_reposing_inliers && !jump_refuted()) {
             is_break[std::max(i, *reference)] = 1;
             status.vio_break = true;
-            VIOSFM_LOG(INFO) << "batched mapper: " << DescribeImage(input.images[i])
+            VIOSFM_LOG(INFO) << "batched mapper: " << DescribeImage(images[i])
                              << ": the VIO's pose is " << position_difference << " m and "
                              << rotation_difference << " rad off the images' (" << predicted_inliers
                              << " of " << pnp_inliers
@@ -820,7 +876,7 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
           CollectFrameCorrespondences(reconstruction, tracks, tracks_of_image[i], image_id);
       if (static_cast<int>(correspondences.size()) < registration.min_num_correspondences) continue;
       const Rigid3d current = reconstruction.GetImage(image_id).cam_from_world;
-      const Camera& camera = reconstruction.GetCamera(input.images[i].camera_id);
+      const Camera& camera = reconstruction.GetCamera(images[i].camera_id);
       AbsolutePoseOptions pnp = registration.pnp;
       pnp.seed = registration.pnp.seed + image_id;
       const AbsolutePoseResult result =
@@ -846,7 +902,7 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
       frames[i].num_correspondences = static_cast<int>(correspondences.size());
       frames[i].num_predicted_inliers = current_inliers;
       frames[i].num_pnp_inliers = pnp_inliers;
-      VIOSFM_LOG(DEBUG) << "batched mapper: " << DescribeImage(input.images[i])
+      VIOSFM_LOG(DEBUG) << "batched mapper: " << DescribeImage(images[i])
                         << " placed by the VIO and unsupported by the images, re-posed from "
                         << pnp_inliers << " PnP inliers (" << current_inliers
                         << " at its pose), moved " << position_difference << " m and "
@@ -894,7 +950,7 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
   double inertial_sigma_floor = 1.0;
   const auto adjust = [&](size_t window_begin, bool global) {
     BundleAdjustmentSummary ba_summary;
-    if (!is_registered[gauge_index]) return ba_summary;
+    if (gauge_image == kInvalidImageId || !is_registered[gauge_index]) return ba_summary;
     std::unique_ptr<InertialTerms> inertial_terms;
     const std::vector<image_t> free_images(registered.begin() + window_begin, registered.end());
     const image_t held_neighbour =
@@ -922,7 +978,7 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
     if (input.rolling_shutter_readout_s > 0.0) {
       std::vector<std::pair<timestamp_ns_t, image_t>> stamped;
       for (const image_t image_id : registered) {
-        stamped.emplace_back(input.images[index_of_image.at(image_id)].timestamp_ns, image_id);
+        stamped.emplace_back(images[index_of_image.at(image_id)].timestamp_ns, image_id);
       }
       CompensateRollingShutterMotion(
           &reconstruction, std::move(stamped), input.rolling_shutter_readout_s,
@@ -951,7 +1007,7 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
       // with the biases the current rotations give (gyro_priors.h).
       std::vector<GyroFrame> frames;
       for (const image_t image_id : registered) {
-        frames.push_back({image_id, input.images[index_of_image.at(image_id)].timestamp_ns,
+        frames.push_back({image_id, images[index_of_image.at(image_id)].timestamp_ns,
                           reconstruction.GetImage(image_id).cam_from_world,
                           CountSupportingObservations(reconstruction, image_id,
                                                       registration.support_max_error_px) >=
@@ -1039,7 +1095,7 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
       const auto frame_index = [&](image_t image_id) {
         const auto [it, inserted] = frame_of_image.emplace(image_id, frames.size());
         if (inserted) {
-          frames.push_back({image_id, VioSampleOfImage(input.images[index_of_image.at(image_id)])});
+          frames.push_back({image_id, VioSampleOfImage(images[index_of_image.at(image_id)])});
         }
         return it->second;
       };
@@ -1143,25 +1199,31 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
   };
 
   const size_t batch_size = static_cast<size_t>(options.batch_size);
-  const size_t num_batches = (num_images + batch_size - 1) / batch_size;
-  ProgressBar progress(
-      "batched mapping", static_cast<int64_t>(num_batches),
-      options.show_progress ? ProgressBar::Mode::kAuto : ProgressBar::Mode::kNever);
-  for (size_t b = 0; b < num_batches; ++b) {
+  // Streamed frames: as many batches as the stream brings.
+  const size_t num_batches = frames_streamed ? 0 : (num_images + batch_size - 1) / batch_size;
+  ProgressBar progress("batched mapping", static_cast<int64_t>(num_batches),
+                       options.show_progress && !frames_streamed ? ProgressBar::Mode::kAuto
+                                                                 : ProgressBar::Mode::kNever);
+  for (size_t b = 0; frames_streamed || b < num_batches; ++b) {
     const Timer batch_timer;
-    const bool last = b + 1 == num_batches;
+    bool last = b + 1 == num_batches;
     const size_t begin = b * batch_size;
-    const size_t end = std::min(num_images, begin + batch_size);
-    MapperBatchStatistics stats;
-    stats.batch_index = static_cast<int>(b);
-    stats.num_images = static_cast<int>(end - begin);
+    size_t end = std::min(num_images, begin + batch_size);
     if (stream != nullptr) {
-      // The pairs of the batch's frames and those before it: complete once
-      // the verification has passed the batch.
-      std::vector<ImagePairMatches> taken = stream->TakeUntil(end);
-      ValidateVerifiedPairs(input.images, taken, streamed_pairs.size());
-      build_tracks(taken);
-      std::move(taken.begin(), taken.end(), std::back_inserter(streamed_pairs));
+      // The batch's frames (streamed) and the pairs among them and the frames
+      // before them: complete once the verification has passed the batch.
+      VerifiedPairStream::Taken taken = stream->Take(begin + batch_size);
+      if (frames_streamed) {
+        const size_t first_new = streamed_images.size();
+        std::move(taken.frames.begin(), taken.frames.end(), std::back_inserter(streamed_images));
+        streamed_validator->Check(streamed_images, first_new);
+        add_images();
+        end = num_images;
+        last = taken.last;
+      }
+      ValidateVerifiedPairs(images, taken.pairs, streamed_pairs.size());
+      build_tracks(taken.pairs);
+      std::move(taken.pairs.begin(), taken.pairs.end(), std::back_inserter(streamed_pairs));
       build_priors();
       // Points as the tracks are now: split where the new pairs split a
       // track (a conflict they revealed), joined where they joined two.
@@ -1172,10 +1234,17 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
       summary.num_points_merged += static_cast<int>(merged.size());
       changed_since_filter.insert(changed_since_filter.end(), merged.begin(), merged.end());
       if (last) {
+        if (frames_streamed) {
+          if (num_images == 0) throw InputError(kInputLabel, 0, "no images to reconstruct");
+          streamed_validator->CheckAnyVioPose();
+        }
         VIOSFM_LOG(INFO) << "batched mapper: " << num_images << " images, " << pairs.size()
                          << " verified pairs (streamed); " << summary.tracks.Summary();
       }
     }
+    MapperBatchStatistics stats;
+    stats.batch_index = static_cast<int>(b);
+    stats.num_images = static_cast<int>(end - begin);
 
     // 2. Registration: each frame by its VIO pose relative to the latest
     // registered frame of its VIO segment, checked against the images.
@@ -1272,9 +1341,10 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
     stats.num_points_total = static_cast<int>(reconstruction.NumPoints3D());
     stats.mean_reprojection_error_px = MeanReprojectionError(reconstruction, options.num_threads);
     stats.seconds_total = batch_timer.ElapsedSeconds();
-    VIOSFM_LOG(INFO) << std::fixed << std::setprecision(3) << "batch " << b + 1 << "/"
-                     << num_batches << ": images " << stats.num_registered_total << " (+"
-                     << stats.num_images << "), points " << stats.num_points_total << " (+"
+    VIOSFM_LOG(INFO) << std::fixed << std::setprecision(3) << "batch " << b + 1
+                     << (frames_streamed ? std::string() : "/" + std::to_string(num_batches))
+                     << ": images " << stats.num_registered_total << " (+" << stats.num_images
+                     << "), points " << stats.num_points_total << " (+"
                      << triangulation.num_points_added << " new), reprojection error "
                      << stats.mean_reprojection_error_px << " px, BA over "
                      << stats.num_ba_free_images << " images " << stats.seconds_ba << " s ("
@@ -1283,6 +1353,7 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
                      << " s";
     summary.batches.push_back(stats);
     progress.Update();
+    if (last) break;
   }
   progress.Finish();
 
@@ -1290,7 +1361,7 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
   std::set<int> joined_segments;
   for (size_t i = 0; i < num_images; ++i) {
     MapperFrameStatus& status = frames[i];
-    const MapperImage& input_image = input.images[i];
+    const MapperImage& input_image = images[i];
     if (is_registered[i]) {
       status.num_supporting_observations = CountSupportingObservations(
           reconstruction, input_image.image_id, registration.support_max_error_px);

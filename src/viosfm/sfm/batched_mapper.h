@@ -342,11 +342,17 @@ void ValidateBatchedMapperInput(const BatchedMapperInput& input);
 // InputError for invalid options, images not in time order, an unknown
 // camera id, or a match indexing a keypoint that does not exist.
 // With a `stream` (input.verified_pairs then empty), the verified pairs come
-// from it while the mapper runs: before each batch the mapper takes those of
-// the batch's frames and the frames before them, waiting for the
+// from it while the mapper runs: before each batch the mapper takes those
+// among the batch's frames and the frames before them, waiting for the
 // verification to pass the batch, and builds the tracks and the priors
 // again (verified_pair_stream.h); the last batch, and so the final
-// adjustment, has every pair. Rethrows the stream's failure.
+// adjustment, has every pair. A stream without its frames up front brings
+// the frames too (input.images then empty): the mapper takes a batch of
+// them at a time, as many batches as the stream holds frames, each frame
+// checked as ValidateBatchedMapperInput checks the input's; input.imu may
+// then be filled by the stream's producer until it closes the stream (the
+// mapper reads it only after the last batch is taken, in the final
+// adjustment). Rethrows the stream's failure.
 Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
                                 const BatchedMapperOptions& options,
                                 BatchedMapperSummary* summary = nullptr,

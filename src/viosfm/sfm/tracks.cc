@@ -342,10 +342,14 @@ IncrementalTrackBuilder::IncrementalTrackBuilder(
     : options_(options) {
   VIOSFM_CHECK(options_.Check()) << options_.Validate();
   for (const auto& [image_id, num_keypoints] : num_keypoints_of_image) {
-    VIOSFM_CHECK(image_index_.emplace(image_id, node_of_keypoint_.size()).second)
-        << "image " << image_id << " listed twice";
-    node_of_keypoint_.emplace_back(num_keypoints, kNoNode);
+    AddImage(image_id, num_keypoints);
   }
+}
+
+void IncrementalTrackBuilder::AddImage(image_t image_id, size_t num_keypoints) {
+  VIOSFM_CHECK(image_index_.emplace(image_id, node_of_keypoint_.size()).second)
+      << "image " << image_id << " listed twice";
+  node_of_keypoint_.emplace_back(num_keypoints, kNoNode);
 }
 
 uint32_t IncrementalTrackBuilder::NodeOf(image_t image_id, point2D_t point2D_idx) {

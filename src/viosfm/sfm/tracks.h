@@ -137,6 +137,8 @@ class IncrementalTrackBuilder {
   IncrementalTrackBuilder(const std::vector<std::pair<image_t, size_t>>& num_keypoints_of_image,
                           const TrackBuilderOptions& options = {});
 
+  // One more image the pairs may name (CHECK: not listed before).
+  void AddImage(image_t image_id, size_t num_keypoints);
   void AddPairs(const std::vector<ImagePairMatches>& pair_matches);
   TrackBuildResult Result() const;
 

@@ -224,6 +224,15 @@ ImuState VisualInertialOdometry::PropagateBack(const ImuState& state, timestamp_
   return earlier;
 }
 
+std::optional<timestamp_ns_t> VisualInertialOdometry::FirstUnsettledFrameNs() const {
+  std::optional<timestamp_ns_t> first = undecided_reset_ns_;
+  if (!moving_start_frames_.empty()) {
+    const timestamp_ns_t held_ns = moving_start_frames_.front().first;
+    first = first ? std::min(*first, held_ns) : held_ns;
+  }
+  return first;
+}
+
 void VisualInertialOdometry::FinishMovingStart() {
   if (!moving_start_pending_) return;
   PoseMovingStart(window_->initialized() ? window_->States() : std::vector<ImuState>());
@@ -449,10 +458,12 @@ VioFrameResult VisualInertialOdometry::ProcessFrame(const FrameFeatures& feature
       reset.message = estimate.message;
       summary_.resets.push_back(reset);
       relocalization_pending_ = false;
+      undecided_reset_ns_ = features.timestamp_ns;
       init_keyframes_.clear();
     } else if (relocalization_pending_ && NsToSeconds(frame.timestamp_ns - restart_ns_) >=
                                               options_.window.relocalization_window_s) {
       relocalization_pending_ = false;
+      undecided_reset_ns_.reset();
       VioReset& reset = summary_.resets.back();
       reset.relocalized = window_->relocalized();
       reset.num_map_points = window_->num_relocalization_observations();
@@ -533,7 +544,8 @@ VioFrameResult VisualInertialOdometry::ProcessFrame(const FrameFeatures& feature
   return result;
 }
 
-VioResult RunVio(const Sequence& sequence, const VioOptions& options, FrameCache* frames) {
+VioResult RunVio(const Sequence& sequence, const VioOptions& options, FrameCache* frames,
+                 const VioProgressCallback& on_progress) {
   if (const std::string error = options.Validate(); !error.empty()) {
     throw InputError("invalid VIO options: " + error);
   }
@@ -655,7 +667,24 @@ VioResult RunVio(const Sequence& sequence, const VioOptions& options, FrameCache
   // propagated to; they end the run, counted and reported.
   const timestamp_ns_t last_imu_ns = sequence.imu.back().timestamp_ns;
   size_t num_beyond_imu = 0;
-  // States found for earlier frames once a moving start is initialised.
+  // Segments: a reset that did not re-localise starts a new one at its lost
+  // frame. Given to the frames as they settle (their reset decided).
+  int segment = 0;
+  size_t next_reset = 0;
+  size_t num_settled = 0;
+  const auto settle = [&](size_t until) {
+    const std::vector<VioReset>& resets = vio.summary().resets;
+    for (; num_settled < until; ++num_settled) {
+      VioFrameResult& frame = result.frames[num_settled];
+      if (frame.status == VioStatus::kLost && next_reset < resets.size()) {
+        if (!resets[next_reset].relocalized) ++segment;
+        ++next_reset;
+      }
+      frame.segment = segment;
+    }
+  };
+  // States found for earlier frames once a moving start is initialised;
+  // then what has settled is reported.
   const auto pose_moving_start = [&] {
     for (const auto& [camera_ns, state] : vio.TakeMovingStartStates()) {
       for (auto frame = result.frames.rbegin(); frame != result.frames.rend(); ++frame) {
@@ -664,6 +693,16 @@ VioResult RunVio(const Sequence& sequence, const VioOptions& options, FrameCache
         frame->has_pose = true;
         break;
       }
+    }
+    const std::optional<timestamp_ns_t> unsettled_ns = vio.FirstUnsettledFrameNs();
+    size_t until = num_settled;
+    while (until < result.frames.size() &&
+           (!unsettled_ns || result.frames[until].timestamp_ns < *unsettled_ns)) {
+      ++until;
+    }
+    settle(until);
+    if (on_progress) {
+      on_progress({&result.frames, num_settled, &time_offset, &vio.summary().imu_noise, false});
     }
   };
   for (const FrameFeatures& features : startup) {
@@ -689,6 +728,7 @@ VioResult RunVio(const Sequence& sequence, const VioOptions& options, FrameCache
   }
   vio.FinishMovingStart();
   pose_moving_start();
+  settle(result.frames.size());
   progress.Finish();
   result.summary = vio.summary();
   VioSummary& summary = result.summary;
@@ -700,16 +740,6 @@ VioResult RunVio(const Sequence& sequence, const VioOptions& options, FrameCache
                         << FormatNsAsSeconds(last_imu_ns, 3)
                         << " s on the IMU clock, camera-IMU offset "
                         << NsToSeconds(rig.cam_time_offset_ns) * 1e3 << " ms): no pose for them";
-  }
-  // Segments: a reset that did not re-localise starts a new one at its lost frame.
-  int segment = 0;
-  size_t next_reset = 0;
-  for (VioFrameResult& frame : result.frames) {
-    if (frame.status == VioStatus::kLost && next_reset < summary.resets.size()) {
-      if (!summary.resets[next_reset].relocalized) ++segment;
-      ++next_reset;
-    }
-    frame.segment = segment;
   }
   summary.num_segments = segment + 1;
   summary.num_imu_gaps = num_imu_gaps;
@@ -755,6 +785,10 @@ VioResult RunVio(const Sequence& sequence, const VioOptions& options, FrameCache
                    << ", imu_only " << summary.status_counts[2] << ", lost "
                    << summary.status_counts[3] << "), " << summary.num_keyframes
                    << " keyframes, CPU " << summary.cpu_seconds << " s: " << summary.message;
+  if (on_progress) {
+    on_progress(
+        {&result.frames, result.frames.size(), &summary.time_offset, &summary.imu_noise, true});
+  }
   return result;
 }
 

@@ -23,7 +23,9 @@
 #include <array>
 #include <deque>
 #include <filesystem>
+#include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <unordered_map>
 #include <utility>
@@ -504,6 +506,12 @@ class VisualInertialOdometry {
   // Poses the moving start's frames now if that is still pending (the
   // caller's last frame was processed; see PoseMovingStart).
   void FinishMovingStart();
+  // The camera stamp of the first frame returned so far whose pose or
+  // segment may still change: the frames of a moving start held until it is
+  // posed (TakeMovingStartStates), and the frames from a reset whose
+  // re-localisation is not decided yet (VioReset::relocalized); none: every
+  // frame returned is final.
+  std::optional<timestamp_ns_t> FirstUnsettledFrameNs() const;
 
   // The summary so far (the caller sets the timings).
   const VioSummary& summary() const { return summary_; }
@@ -554,6 +562,9 @@ class VisualInertialOdometry {
   // The restart after the last reset, while its re-localisation is pending.
   bool relocalization_pending_ = false;
   timestamp_ns_t restart_ns_ = 0;
+  // The camera stamp of the last reset's lost frame while its
+  // re-localisation is not decided.
+  std::optional<timestamp_ns_t> undecided_reset_ns_;
 };
 
 // cam_now_from_cam_prev: the gyro's rotation between two camera stamps
@@ -563,11 +574,33 @@ Eigen::Quaterniond GyroRotationPrior(const SensorRig& rig, const std::vector<Imu
                                      const Eigen::Vector3d& gyro_bias, timestamp_ns_t from_ns,
                                      timestamp_ns_t to_ns);
 
+// What RunVio has done so far, reported after every frame it processes
+// (for a run that consumes the poses as they come, pipeline/stream_pipeline.h).
+struct VioProgress {
+  // Every frame processed so far, in order (as VioResult::frames will hold
+  // them, moving-start poses given as they are found).
+  const std::vector<VioFrameResult>* frames = nullptr;
+  // frames[0, num_settled) are final: their state, has_pose and segment no
+  // longer change (VisualInertialOdometry::FirstUnsettledFrameNs).
+  size_t num_settled = 0;
+  // The camera-IMU time offset (and rolling-shutter readout) the frames are
+  // processed with: settled before the first frame is.
+  const TimeOffsetEstimate* time_offset = nullptr;
+  // The IMU noise the window uses (VioSummary::imu_noise).
+  const ImuNoiseCheck* imu_noise = nullptr;
+  // The last report: every frame processed and settled.
+  bool finished = false;
+};
+using VioProgressCallback = std::function<void(const VioProgress&)>;
+
 // Runs the VIO over a sequence: every image is read once, tracked, and
 // processed. Images are read through `frames` when given (each kept there
-// for a later stage, io/frame_cache.h), else from their files. Throws
-// InputError if the sequence has no IMU or the options are invalid.
-VioResult RunVio(const Sequence& sequence, const VioOptions& options, FrameCache* frames = nullptr);
+// for a later stage, io/frame_cache.h), else from their files. With
+// `on_progress`, it is called on the calling thread after every processed
+// frame and once at the end. Throws InputError if the sequence has no IMU
+// or the options are invalid.
+VioResult RunVio(const Sequence& sequence, const VioOptions& options, FrameCache* frames = nullptr,
+                 const VioProgressCallback& on_progress = {});
 
 // Writes into `folder` (created if needed), each file atomically:
 //   trajectory_body.tum, trajectory_cam.tum   TUM, every frame
