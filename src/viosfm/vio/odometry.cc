@@ -544,60 +544,71 @@ VioFrameResult VisualInertialOdometry::ProcessFrame(const FrameFeatures& feature
   return result;
 }
 
-VioResult RunVio(const Sequence& sequence, const VioOptions& options, FrameCache* frames,
-                 const VioProgressCallback& on_progress) {
-  if (const std::string error = options.Validate(); !error.empty()) {
-    throw InputError("invalid VIO options: " + error);
-  }
-  if (!sequence.has_imu()) {
-    throw InputError(sequence.root.string(), 0, "VIO needs an IMU stream (mav0/imu0/data.csv)");
-  }
-  if (sequence.images.empty()) throw InputError(sequence.root.string(), 0, "no images");
-  const double cpu_start = ProcessCpuSeconds();
+// IMU a frame waits for beyond its stamp (IMU clock) before it is tracked:
+// the gyro's rotation prior, the rolling-shutter rates and the
+// preintegration up to it need the samples around it.
+constexpr timestamp_ns_t kImuLeadNs = 50'000'000;
+
+struct VioRunner::State {
+  SensorRig rig;
+  VioOptions options;
+  FrameCache* frames = nullptr;
+  std::optional<timestamp_ns_t> last_frame_ns;
+  VioProgressCallback on_progress;
+  double cpu_start = 0.0;
   Timer timer;
-  // Samples the IMU dropped: said once, bridged in the preintegration.
-  size_t num_imu_gaps = 0;
-  timestamp_ns_t longest_gap_ns = 0;
-  timestamp_ns_t longest_gap_at_ns = 0;
-  for (size_t i = 1; i < sequence.imu.size(); ++i) {
-    const timestamp_ns_t gap_ns = sequence.imu[i].timestamp_ns - sequence.imu[i - 1].timestamp_ns;
-    if (gap_ns > kMaxImuStepNs) ++num_imu_gaps;
-    if (gap_ns > longest_gap_ns) {
-      longest_gap_ns = gap_ns;
-      longest_gap_at_ns = sequence.imu[i - 1].timestamp_ns;
-    }
-  }
-  if (num_imu_gaps > 0) {
-    VIOSFM_LOG(WARNING) << "vio: the IMU stream has " << num_imu_gaps
-                        << " gap(s) between samples longer than " << NsToSeconds(kMaxImuStepNs)
-                        << " s (the longest " << FormatNsAsSeconds(longest_gap_ns, 3)
-                        << " s, after "
-                        << FormatNsAsSeconds(longest_gap_at_ns - sequence.imu.front().timestamp_ns,
-                                             2)
-                        << " s of it): bridged by readings interpolated linearly";
-  }
-  size_t num_frames = sequence.images.size();
-  if (options.max_frames > 0) num_frames = std::min(num_frames, size_t(options.max_frames));
+
+  std::vector<ImuSample> imu;
+  std::vector<SequenceImage> images;
+  size_t num_frames_limit = std::numeric_limits<size_t>::max();  // options.max_frames
+  size_t next = 0;                                               // the next image to track
 
   VioResult result;
-  result.body_from_cam = sequence.rig.body_from_cam;
-  SensorRig rig = sequence.rig;
-  FeatureTracker tracker(sequence.rig.camera, options.tracker);
-  ProgressBar progress(
-      "vio", static_cast<int64_t>(num_frames),
-      options.show_progress ? ProgressBar::Mode::kAuto : ProgressBar::Mode::kNever);
-  result.frames.reserve(num_frames);
+  FeatureTracker tracker;
+  std::unique_ptr<ProgressBar> progress;
   // The previous frame's observations as tracked, for the rolling-shutter
   // correction's image velocities.
   std::optional<FrameFeatures> previous_tracked;
   // The readout the observations are corrected with: the one given, or the
   // one estimated with the time offset (the startup frames then stay as
   // tracked until the estimate, and are corrected after it).
-  double readout_s = options.rolling_shutter_readout_s;
-  const bool estimate_readout =
-      options.time_offset.estimate && options.time_offset.estimate_readout && readout_s == 0.0;
-  const auto read_and_track = [&](size_t k, const std::optional<Eigen::Quaterniond>& prior) {
-    const SequenceImage& image = sequence.images[k];
+  double readout_s = 0.0;
+  bool estimate_readout = false;
+  // The camera-IMU time offset, from the first frames that rotate enough
+  // (they are tracked with the calibration's offset for the gyro prior and
+  // kept until the estimate is made), and the frames tracked before the
+  // window starts.
+  std::vector<FrameFeatures> startup;
+  bool time_offset_done = false;
+  double rotation_deg = 0.0;
+  TimeOffsetEstimate time_offset;
+  std::unique_ptr<VisualInertialOdometry> vio;
+  size_t num_beyond_imu = 0;
+  // Segments: a reset that did not re-localise starts a new one at its lost
+  // frame. Given to the frames as they settle (their reset decided).
+  int segment = 0;
+  size_t next_reset = 0;
+  size_t num_settled = 0;
+
+  State(const SensorRig& rig_in, const VioOptions& options_in, FrameCache* frames_in,
+        std::optional<timestamp_ns_t> last_in, VioProgressCallback callback)
+      : rig(rig_in),
+        options(options_in),
+        frames(frames_in),
+        last_frame_ns(last_in),
+        on_progress(std::move(callback)),
+        tracker(rig_in.camera, options_in.tracker) {
+    readout_s = options.rolling_shutter_readout_s;
+    estimate_readout =
+        options.time_offset.estimate && options.time_offset.estimate_readout && readout_s == 0.0;
+    time_offset.offset_ns = time_offset.calibration_offset_ns = rig.cam_time_offset_ns;
+    time_offset.message = "the calibration's camera-IMU time offset (not estimated)";
+    time_offset_done = !options.time_offset.estimate;
+    if (options.max_frames > 0) num_frames_limit = static_cast<size_t>(options.max_frames);
+  }
+
+  FrameFeatures ReadAndTrack(size_t k, const std::optional<Eigen::Quaterniond>& prior) {
+    const SequenceImage& image = images[k];
     FrameFeatures features =
         frames != nullptr
             ? tracker.Track(image.timestamp_ns, *frames->Read(image.path, /*keep=*/true), prior)
@@ -606,74 +617,15 @@ VioResult RunVio(const Sequence& sequence, const VioOptions& options, FrameCache
       FrameFeatures tracked = features;
       CorrectRollingShutter(previous_tracked ? &*previous_tracked : nullptr, readout_s,
                             static_cast<int>(rig.camera.height),
-                            CamAngularRate(rig, sequence.imu, image.timestamp_ns), &features);
+                            CamAngularRate(rig, imu, image.timestamp_ns), &features);
       previous_tracked = std::move(tracked);
     }
-    progress.Update();
+    progress->Update();
     return features;
-  };
-
-  // The camera-IMU time offset, from the first frames that rotate enough
-  // (they are tracked with the calibration's offset for the gyro prior and
-  // kept until the estimate is made).
-  std::vector<FrameFeatures> startup;
-  TimeOffsetEstimate time_offset;
-  time_offset.offset_ns = time_offset.calibration_offset_ns = rig.cam_time_offset_ns;
-  time_offset.message = "the calibration's camera-IMU time offset (not estimated)";
-  size_t k = 0;
-  if (options.time_offset.estimate) {
-    double rotation_deg = 0.0;
-    for (; k < num_frames; ++k) {
-      std::optional<Eigen::Quaterniond> prior;
-      if (options.gyro_rotation_prior && k > 0) {
-        prior =
-            GyroRotationPrior(rig, sequence.imu, Eigen::Vector3d::Zero(),
-                              sequence.images[k - 1].timestamp_ns, sequence.images[k].timestamp_ns);
-      }
-      startup.push_back(read_and_track(k, prior));
-      if (startup.size() >= 2) {
-        rotation_deg += GyroRotationSumDeg({startup[startup.size() - 2], startup.back()},
-                                           sequence.imu, rig.cam_time_offset_ns);
-      }
-      if (rotation_deg >= options.time_offset.target_rotation_deg ||
-          NsToSeconds(startup.back().timestamp_ns - startup.front().timestamp_ns) >=
-              options.time_offset.max_wait_s) {
-        ++k;
-        break;
-      }
-    }
-    time_offset =
-        EstimateTimeOffset(startup, sequence.imu, rig.body_from_cam, rig.cam_time_offset_ns,
-                           MeanFocalLength(rig.camera), options.time_offset,
-                           estimate_readout ? static_cast<int>(rig.camera.height) : 0);
-    VIOSFM_LOG(INFO) << "vio: " << time_offset.message;
-    rig.cam_time_offset_ns = time_offset.offset_ns;
-    if (time_offset.readout_estimated) {
-      // The startup frames, tracked uncorrected, corrected now (at the
-      // estimated offset), and the frames after them as they come.
-      readout_s = time_offset.readout_s;
-      if (!startup.empty()) previous_tracked = startup.back();
-      for (size_t i = startup.size(); i-- > 0;) {
-        CorrectRollingShutter(
-            i > 0 ? &startup[i - 1] : nullptr, readout_s, static_cast<int>(rig.camera.height),
-            CamAngularRate(rig, sequence.imu, startup[i].timestamp_ns), &startup[i]);
-      }
-    }
   }
-  time_offset.readout_s = readout_s;
-  VisualInertialOdometry vio(rig, sequence.imu, sequence.images.front().timestamp_ns,
-                             sequence.images[num_frames - 1].timestamp_ns, options);
-  // Frames the IMU does not reach (after the time offset) cannot be
-  // propagated to; they end the run, counted and reported.
-  const timestamp_ns_t last_imu_ns = sequence.imu.back().timestamp_ns;
-  size_t num_beyond_imu = 0;
-  // Segments: a reset that did not re-localise starts a new one at its lost
-  // frame. Given to the frames as they settle (their reset decided).
-  int segment = 0;
-  size_t next_reset = 0;
-  size_t num_settled = 0;
-  const auto settle = [&](size_t until) {
-    const std::vector<VioReset>& resets = vio.summary().resets;
+
+  void Settle(size_t until) {
+    const std::vector<VioReset>& resets = vio->summary().resets;
     for (; num_settled < until; ++num_settled) {
       VioFrameResult& frame = result.frames[num_settled];
       if (frame.status == VioStatus::kLost && next_reset < resets.size()) {
@@ -682,11 +634,12 @@ VioResult RunVio(const Sequence& sequence, const VioOptions& options, FrameCache
       }
       frame.segment = segment;
     }
-  };
+  }
+
   // States found for earlier frames once a moving start is initialised;
   // then what has settled is reported.
-  const auto pose_moving_start = [&] {
-    for (const auto& [camera_ns, state] : vio.TakeMovingStartStates()) {
+  void PoseMovingStart() {
+    for (const auto& [camera_ns, state] : vio->TakeMovingStartStates()) {
       for (auto frame = result.frames.rbegin(); frame != result.frames.rend(); ++frame) {
         if (frame->timestamp_ns != camera_ns) continue;
         frame->state = state;
@@ -694,62 +647,246 @@ VioResult RunVio(const Sequence& sequence, const VioOptions& options, FrameCache
         break;
       }
     }
-    const std::optional<timestamp_ns_t> unsettled_ns = vio.FirstUnsettledFrameNs();
+    const std::optional<timestamp_ns_t> unsettled_ns = vio->FirstUnsettledFrameNs();
     size_t until = num_settled;
     while (until < result.frames.size() &&
            (!unsettled_ns || result.frames[until].timestamp_ns < *unsettled_ns)) {
       ++until;
     }
-    settle(until);
+    Settle(until);
     if (on_progress) {
-      on_progress({&result.frames, num_settled, &time_offset, &vio.summary().imu_noise, false});
+      on_progress({&result.frames, num_settled, &time_offset, &vio->summary().imu_noise, false});
     }
-  };
-  for (const FrameFeatures& features : startup) {
-    if (rig.CamToImuTime(features.timestamp_ns) > last_imu_ns) {
-      ++num_beyond_imu;
-      continue;
-    }
-    result.frames.push_back(vio.ProcessFrame(features));
-    pose_moving_start();
   }
-  for (; k < num_frames; ++k) {
-    if (rig.CamToImuTime(sequence.images[k].timestamp_ns) > last_imu_ns) {
-      num_beyond_imu += num_frames - k;
+
+  void Process(const FrameFeatures& features) {
+    result.frames.push_back(vio->ProcessFrame(features));
+    PoseMovingStart();
+  }
+
+  // The IMU reaches frame k (or the data has ended).
+  bool ImuReaches(size_t k, bool ended) const {
+    return ended || (!imu.empty() && imu.back().timestamp_ns >=
+                                         rig.CamToImuTime(images[k].timestamp_ns) + kImuLeadNs);
+  }
+
+  // Whether the window may start: the last frame is known (the whole
+  // recording), the data has ended, or the IMU has decided the static start
+  // (see VioRunner).
+  bool StaticStartDecided(bool ended) const {
+    if (last_frame_ns || ended || !options.use_static_init) return true;
+    if (imu.empty() || images.empty()) return false;
+    const StaticInitOptions& static_init = options.static_init;
+    const timestamp_ns_t first_image = rig.CamToImuTime(images.front().timestamp_ns);
+    const timestamp_ns_t from =
+        std::max(imu.front().timestamp_ns, first_image - SecondsToNs(static_init.lookback_s));
+    const timestamp_ns_t to = imu.back().timestamp_ns;
+    const StaticInitResult detected =
+        DetectStaticStart(imu, std::min(from, first_image), to, static_init);
+    if (detected.status == StaticInitStatus::kNotEnoughData) return false;
+    if (detected.status == StaticInitStatus::kNotStatic) return true;
+    // Ended by motion, not by the data: the data go on well past it.
+    return detected.end_ns + SecondsToNs(2.0 * static_init.window_s + static_init.motion_margin_s) <
+           to;
+  }
+
+  void EstimateTheTimeOffset() {
+    time_offset = EstimateTimeOffset(startup, imu, rig.body_from_cam, rig.cam_time_offset_ns,
+                                     MeanFocalLength(rig.camera), options.time_offset,
+                                     estimate_readout ? static_cast<int>(rig.camera.height) : 0);
+    time_offset_done = true;
+    VIOSFM_LOG(INFO) << "vio: " << time_offset.message;
+    rig.cam_time_offset_ns = time_offset.offset_ns;
+    if (time_offset.readout_estimated) {
+      // The startup frames, tracked uncorrected, corrected now (at the
+      // estimated offset), and the frames after them as they come.
+      readout_s = time_offset.readout_s;
+      if (!startup.empty()) previous_tracked = startup.back();
+      for (size_t i = startup.size(); i-- > 0;) {
+        CorrectRollingShutter(i > 0 ? &startup[i - 1] : nullptr, readout_s,
+                              static_cast<int>(rig.camera.height),
+                              CamAngularRate(rig, imu, startup[i].timestamp_ns), &startup[i]);
+      }
+    }
+  }
+
+  void StartWindow(bool ended) {
+    time_offset.readout_s = readout_s;
+    const timestamp_ns_t last_ns = last_frame_ns ? *last_frame_ns : images.back().timestamp_ns;
+    vio = std::make_unique<VisualInertialOdometry>(rig, imu, images.front().timestamp_ns, last_ns,
+                                                   options);
+    // Frames the IMU does not reach (after the time offset) cannot be
+    // propagated to; at the end they are counted and reported.
+    const timestamp_ns_t last_imu_ns = imu.back().timestamp_ns;
+    for (const FrameFeatures& features : startup) {
+      if (ended && rig.CamToImuTime(features.timestamp_ns) > last_imu_ns) {
+        ++num_beyond_imu;
+        continue;
+      }
+      Process(features);
+    }
+    startup.clear();
+  }
+};
+
+VioRunner::VioRunner(const SensorRig& rig, const VioOptions& options, FrameCache* frames,
+                     std::optional<timestamp_ns_t> last_frame_ns, VioProgressCallback on_progress,
+                     size_t expected_frames) {
+  if (const std::string error = options.Validate(); !error.empty()) {
+    throw InputError("invalid VIO options: " + error);
+  }
+  state_ = std::make_unique<State>(rig, options, frames, last_frame_ns, std::move(on_progress));
+  State& s = *state_;
+  s.cpu_start = ProcessCpuSeconds();
+  s.result.body_from_cam = rig.body_from_cam;
+  s.result.frames.reserve(expected_frames);
+  s.progress = std::make_unique<ProgressBar>(
+      "vio", static_cast<int64_t>(expected_frames),
+      options.show_progress ? ProgressBar::Mode::kAuto : ProgressBar::Mode::kNever);
+}
+
+VioRunner::~VioRunner() = default;
+
+size_t VioRunner::num_processed() const {
+  return state_->result.frames.size();
+}
+
+void VioRunner::AddImu(const std::vector<ImuSample>& samples) {
+  State& s = *state_;
+  for (const ImuSample& sample : samples) {
+    if (!s.imu.empty() && sample.timestamp_ns <= s.imu.back().timestamp_ns) {
+      throw InputError("vio: IMU sample at " + FormatNsAsSeconds(sample.timestamp_ns) +
+                       " s does not follow the last one, at " +
+                       FormatNsAsSeconds(s.imu.back().timestamp_ns) + " s");
+    }
+    s.imu.push_back(sample);
+  }
+  Step(/*ended=*/false);
+}
+
+void VioRunner::AddImage(const SequenceImage& image) {
+  State& s = *state_;
+  if (!s.images.empty() && image.timestamp_ns <= s.images.back().timestamp_ns) {
+    throw InputError(image.path.string(), 0,
+                     "vio: frame at " + FormatNsAsSeconds(image.timestamp_ns) +
+                         " s does not follow the last one, at " +
+                         FormatNsAsSeconds(s.images.back().timestamp_ns) + " s");
+  }
+  s.images.push_back(image);
+  Step(/*ended=*/false);
+}
+
+void VioRunner::Step(bool ended) {
+  State& s = *state_;
+  const size_t num_frames = std::min(s.images.size(), s.num_frames_limit);
+  // The frames before the window starts: the time offset's startup, then
+  // (a recording that is still being made) until the static start is
+  // decided.
+  while (s.vio == nullptr) {
+    if (s.time_offset_done && !s.images.empty() && s.imu.size() >= 1 &&
+        s.StaticStartDecided(ended)) {
+      s.StartWindow(ended);
       break;
     }
+    if (s.next >= num_frames || !s.ImuReaches(s.next, ended)) return;
+    const size_t k = s.next++;
     std::optional<Eigen::Quaterniond> prior;
-    if (options.gyro_rotation_prior && k > 0) {
-      prior = vio.GyroRotationPrior(sequence.images[k - 1].timestamp_ns,
-                                    sequence.images[k].timestamp_ns);
+    if (s.options.gyro_rotation_prior && k > 0) {
+      prior = GyroRotationPrior(s.rig, s.imu, Eigen::Vector3d::Zero(), s.images[k - 1].timestamp_ns,
+                                s.images[k].timestamp_ns);
     }
-    result.frames.push_back(vio.ProcessFrame(read_and_track(k, prior)));
-    pose_moving_start();
+    s.startup.push_back(s.ReadAndTrack(k, prior));
+    if (s.time_offset_done) continue;
+    if (s.startup.size() >= 2) {
+      s.rotation_deg += GyroRotationSumDeg({s.startup[s.startup.size() - 2], s.startup.back()},
+                                           s.imu, s.rig.cam_time_offset_ns);
+    }
+    if (s.rotation_deg < s.options.time_offset.target_rotation_deg &&
+        NsToSeconds(s.startup.back().timestamp_ns - s.startup.front().timestamp_ns) <
+            s.options.time_offset.max_wait_s) {
+      continue;
+    }
+    s.EstimateTheTimeOffset();
+  }
+  const timestamp_ns_t last_imu_ns = s.imu.back().timestamp_ns;
+  for (; s.next < num_frames; ++s.next) {
+    const size_t k = s.next;
+    if (ended && s.rig.CamToImuTime(s.images[k].timestamp_ns) > last_imu_ns) {
+      s.num_beyond_imu += num_frames - k;
+      s.next = num_frames;
+      break;
+    }
+    if (!s.ImuReaches(k, ended)) return;
+    std::optional<Eigen::Quaterniond> prior;
+    if (s.options.gyro_rotation_prior && k > 0) {
+      prior = s.vio->GyroRotationPrior(s.images[k - 1].timestamp_ns, s.images[k].timestamp_ns);
+    }
+    s.Process(s.ReadAndTrack(k, prior));
+  }
+}
+
+VioResult VioRunner::Finish(const std::filesystem::path& root) {
+  State& s = *state_;
+  if (s.imu.empty())
+    throw InputError(root.string(), 0, "VIO needs an IMU stream (mav0/imu0/data.csv)");
+  if (s.images.empty()) throw InputError(root.string(), 0, "no images");
+  Step(/*ended=*/true);
+  if (s.vio == nullptr) {
+    // Every frame in the startup: the offset from what they show.
+    if (!s.time_offset_done) s.EstimateTheTimeOffset();
+    s.StartWindow(/*ended=*/true);
+  }
+  VisualInertialOdometry& vio = *s.vio;
+  VioResult& result = s.result;
+  const std::vector<ImuSample>& imu = s.imu;
+  const size_t num_frames = std::min(s.images.size(), s.num_frames_limit);
+  // Samples the IMU dropped: said once, bridged in the preintegration.
+  size_t num_imu_gaps = 0;
+  timestamp_ns_t longest_gap_ns = 0;
+  timestamp_ns_t longest_gap_at_ns = 0;
+  for (size_t i = 1; i < imu.size(); ++i) {
+    const timestamp_ns_t gap_ns = imu[i].timestamp_ns - imu[i - 1].timestamp_ns;
+    if (gap_ns > kMaxImuStepNs) ++num_imu_gaps;
+    if (gap_ns > longest_gap_ns) {
+      longest_gap_ns = gap_ns;
+      longest_gap_at_ns = imu[i - 1].timestamp_ns;
+    }
+  }
+  if (num_imu_gaps > 0) {
+    VIOSFM_LOG(WARNING) << "vio: the IMU stream has " << num_imu_gaps
+                        << " gap(s) between samples longer than " << NsToSeconds(kMaxImuStepNs)
+                        << " s (the longest " << FormatNsAsSeconds(longest_gap_ns, 3)
+                        << " s, after "
+                        << FormatNsAsSeconds(longest_gap_at_ns - imu.front().timestamp_ns, 2)
+                        << " s of it): bridged by readings interpolated linearly";
   }
   vio.FinishMovingStart();
-  pose_moving_start();
-  settle(result.frames.size());
-  progress.Finish();
+  s.PoseMovingStart();
+  s.Settle(result.frames.size());
+  s.progress->Finish();
   result.summary = vio.summary();
   VioSummary& summary = result.summary;
-  summary.time_offset = time_offset;
-  summary.num_frames_beyond_imu = num_beyond_imu;
-  if (num_beyond_imu > 0) {
-    VIOSFM_LOG(WARNING) << "vio: the last " << num_beyond_imu
+  summary.time_offset = s.time_offset;
+  summary.num_frames_beyond_imu = s.num_beyond_imu;
+  const timestamp_ns_t last_imu_ns = imu.back().timestamp_ns;
+  if (s.num_beyond_imu > 0) {
+    VIOSFM_LOG(WARNING) << "vio: the last " << s.num_beyond_imu
                         << " frame(s) lie after the last IMU sample ("
                         << FormatNsAsSeconds(last_imu_ns, 3)
                         << " s on the IMU clock, camera-IMU offset "
-                        << NsToSeconds(rig.cam_time_offset_ns) * 1e3 << " ms): no pose for them";
+                        << NsToSeconds(s.rig.cam_time_offset_ns) * 1e3 << " ms): no pose for them";
   }
-  summary.num_segments = segment + 1;
+  summary.num_segments = s.segment + 1;
   summary.num_imu_gaps = num_imu_gaps;
   summary.longest_imu_gap_s = NsToSeconds(longest_gap_ns);
   summary.num_frames_without_pose = static_cast<size_t>(
       std::count_if(result.frames.begin(), result.frames.end(),
                     [](const VioFrameResult& frame) { return !frame.has_pose; }));
-  summary.cpu_seconds = ProcessCpuSeconds() - cpu_start;
-  summary.wall_seconds = timer.ElapsedSeconds();
+  summary.cpu_seconds = ProcessCpuSeconds() - s.cpu_start;
+  summary.wall_seconds = s.timer.ElapsedSeconds();
 
+  const SequenceImage& first_image = s.images.front();
+  const SequenceImage& last_image = s.images[num_frames - 1];
   std::ostringstream message;
   if (summary.static_init.is_static()) {
     message << "static start detected (" << std::fixed << std::setprecision(2)
@@ -759,12 +896,10 @@ VioResult RunVio(const Sequence& sequence, const VioOptions& options, FrameCache
   }
   if (summary.visual_initialized) {
     message << "visual-inertial tracking from "
-            << FormatNsAsSeconds(summary.first_tracking_ns - sequence.images.front().timestamp_ns,
-                                 2)
+            << FormatNsAsSeconds(summary.first_tracking_ns - first_image.timestamp_ns, 2)
             << " s after the first image";
   } else if (summary.static_init.is_static() &&
-             sequence.rig.CamToImuTime(sequence.images[num_frames - 1].timestamp_ns) <=
-                 summary.static_init.end_ns) {
+             s.rig.CamToImuTime(last_image.timestamp_ns) <= summary.static_init.end_ns) {
     message << "not enough motion to initialise the visual part (the platform stays static)";
   } else {
     message << "the visual part was never initialised (not enough motion or landmarks)";
@@ -785,11 +920,29 @@ VioResult RunVio(const Sequence& sequence, const VioOptions& options, FrameCache
                    << ", imu_only " << summary.status_counts[2] << ", lost "
                    << summary.status_counts[3] << "), " << summary.num_keyframes
                    << " keyframes, CPU " << summary.cpu_seconds << " s: " << summary.message;
-  if (on_progress) {
-    on_progress(
+  if (s.on_progress) {
+    s.on_progress(
         {&result.frames, result.frames.size(), &summary.time_offset, &summary.imu_noise, true});
   }
-  return result;
+  return std::move(result);
+}
+
+VioResult RunVio(const Sequence& sequence, const VioOptions& options, FrameCache* frames,
+                 const VioProgressCallback& on_progress) {
+  if (const std::string error = options.Validate(); !error.empty()) {
+    throw InputError("invalid VIO options: " + error);
+  }
+  if (!sequence.has_imu()) {
+    throw InputError(sequence.root.string(), 0, "VIO needs an IMU stream (mav0/imu0/data.csv)");
+  }
+  if (sequence.images.empty()) throw InputError(sequence.root.string(), 0, "no images");
+  size_t num_frames = sequence.images.size();
+  if (options.max_frames > 0) num_frames = std::min(num_frames, size_t(options.max_frames));
+  VioRunner runner(sequence.rig, options, frames, sequence.images[num_frames - 1].timestamp_ns,
+                   on_progress, num_frames);
+  runner.AddImu(sequence.imu);
+  for (size_t k = 0; k < num_frames; ++k) runner.AddImage(sequence.images[k]);
+  return runner.Finish(sequence.root);
 }
 
 std::string FormatVioSummary(const VioSummary& summary) {

@@ -593,6 +593,49 @@ struct VioProgress {
 };
 using VioProgressCallback = std::function<void(const VioProgress&)>;
 
+// The VIO over a recording whose frames and IMU samples arrive as it runs
+// (a recording being written, `viosfm run --follow`): RunVio one step at a
+// time. Each frame is tracked and processed once the IMU reaches it (50 ms
+// beyond its stamp on the IMU clock); the first frames wait for the
+// camera-IMU time offset's estimate, as in RunVio, and, when the last
+// frame's stamp is not known up front, until the IMU has decided the static
+// start (its static interval ended by motion, or no static start: the
+// window is then started from what the IMU shows, as RunVio does from the
+// whole recording's IMU; the IMU noise is checked on the samples up to
+// then). Given the whole sequence (last_frame_ns known, Finish called after
+// adding everything) it is RunVio, result for result.
+class VioRunner {
+ public:
+  // `rig`: the recording's. `last_frame_ns`: the last frame's camera stamp
+  // when known (a whole recording), else none. Throws InputError for
+  // invalid options.
+  // `expected_frames`: for the progress bar (0: unknown).
+  VioRunner(const SensorRig& rig, const VioOptions& options, FrameCache* frames,
+            std::optional<timestamp_ns_t> last_frame_ns, VioProgressCallback on_progress = {},
+            size_t expected_frames = 0);
+  ~VioRunner();
+  VioRunner(const VioRunner&) = delete;
+  VioRunner& operator=(const VioRunner&) = delete;
+
+  // Samples after every sample added before (InputError otherwise), then
+  // whatever they allow is processed.
+  void AddImu(const std::vector<ImuSample>& samples);
+  // The next frame (after every frame added before: InputError otherwise),
+  // then whatever the IMU allows is processed.
+  void AddImage(const SequenceImage& image);
+  // No more data: every frame is processed (those after the IMU's last
+  // sample are counted, without a pose), the summary made. Throws
+  // InputError without images or IMU.
+  VioResult Finish(const std::filesystem::path& root);
+
+  size_t num_processed() const;
+
+ private:
+  struct State;
+  void Step(bool ended);
+  std::unique_ptr<State> state_;
+};
+
 // Runs the VIO over a sequence: every image is read once, tracked, and
 // processed. Images are read through `frames` when given (each kept there
 // for a later stage, io/frame_cache.h), else from their files. With

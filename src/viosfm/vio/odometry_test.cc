@@ -217,6 +217,76 @@ TEST(RunVio, MovingStartFramesArePosedOnceInitialised) {
 // The first 4.7 s of EuRoC V1_01_easy: the platform stands still. The
 // static start gives gravity and the gyro bias; the state is held (no
 // drift) and the visual part is reported as not initialised.
+// A recording fed to the VIO as a recorder writes it (VioRunner without
+// the last frame's stamp): each image once the IMU has passed its stamp by
+// a few samples, the IMU in chunks. Every frame is reported settled once,
+// never changed after, and the result is RunVio's over the whole recording:
+// with a static start the static interval is decided once motion ends it,
+// so the window starts as RunVio starts it, pose for pose (measured
+// identical); without one (a start in motion) the IMU's noise is checked on
+// the samples seen so far, so the poses may differ slightly (measured 0 m).
+void ExpectFedLikeRunVio(const SmallRoom& room, double max_difference_m) {
+  const VioOptions options = SmallRoomVioOptions();
+  const VioResult whole = RunVio(room.sequence, options);
+  std::vector<VioFrameResult> reported;
+  size_t reports = 0;
+  VioRunner runner(room.sequence.rig, options, nullptr, std::nullopt,
+                   [&](const VioProgress& progress) {
+                     ++reports;
+                     ASSERT_GE(progress.num_settled, reported.size());
+                     // Frames settled before are as they were.
+                     for (size_t k = 0; k < reported.size(); ++k) {
+                       ASSERT_EQ((*progress.frames)[k].state.world_from_body.translation,
+                                 reported[k].state.world_from_body.translation);
+                       ASSERT_EQ((*progress.frames)[k].segment, reported[k].segment);
+                     }
+                     for (size_t k = reported.size(); k < progress.num_settled; ++k) {
+                       reported.push_back((*progress.frames)[k]);
+                     }
+                   });
+  const std::vector<ImuSample>& imu = room.sequence.imu;
+  size_t next_sample = 0;
+  for (const SequenceImage& image : room.sequence.images) {
+    std::vector<ImuSample> chunk;
+    while (next_sample < imu.size() &&
+           imu[next_sample].timestamp_ns <= image.timestamp_ns + 15'000'000) {
+      chunk.push_back(imu[next_sample++]);
+    }
+    runner.AddImu(chunk);
+    runner.AddImage(image);
+  }
+  runner.AddImu(
+      std::vector<ImuSample>(imu.begin() + static_cast<ptrdiff_t>(next_sample), imu.end()));
+  const VioResult fed = runner.Finish(room.folder);
+  EXPECT_GT(reports, room.sequence.images.size() / 2);
+  ASSERT_EQ(fed.frames.size(), whole.frames.size());
+  ASSERT_EQ(reported.size(), fed.frames.size());
+  double largest_m = 0.0;
+  for (size_t k = 0; k < fed.frames.size(); ++k) {
+    EXPECT_EQ(fed.frames[k].has_pose, whole.frames[k].has_pose) << k;
+    EXPECT_EQ(fed.frames[k].segment, whole.frames[k].segment) << k;
+    EXPECT_EQ(reported[k].state.world_from_body.translation,
+              fed.frames[k].state.world_from_body.translation)
+        << k;
+    largest_m = std::max(largest_m, (fed.frames[k].state.world_from_body.translation -
+                                     whole.frames[k].state.world_from_body.translation)
+                                        .norm());
+  }
+  std::cout << "fed as recorded: " << fed.frames.size() << " frames, " << reports
+            << " reports, largest difference from RunVio " << largest_m << " m\n";
+  EXPECT_LE(largest_m, max_difference_m);
+  EXPECT_EQ(fed.summary.static_init.is_static(), whole.summary.static_init.is_static());
+  EXPECT_EQ(fed.summary.num_resets, whole.summary.num_resets);
+}
+
+TEST(VioRunner, ARecordingFedAsItIsMadeGivesRunViosPoses) {
+  ExpectFedLikeRunVio(SimulateSmallRoom(7.0, 2.0, 3, "vio_fed_static"), 0.0);
+}
+
+TEST(VioRunner, AMovingStartFedAsItIsMade) {
+  ExpectFedLikeRunVio(SimulateSmallRoom(6.0, 0.0, 5, "vio_fed_moving"), 0.005);
+}
+
 TEST(RunVio, EurocStaticMicro) {
   VIOSFM_REQUIRE_DATASET(root, "euroc_v101_static_micro");
   const Sequence sequence = ReadEurocDataset(root);
