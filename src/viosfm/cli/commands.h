@@ -19,6 +19,7 @@ void RegisterRun(CLI::App& app);
 void RegisterReport(CLI::App& app);
 void RegisterBenchReport(CLI::App& app);
 void RegisterConvert(CLI::App& app);
+void RegisterReplay(CLI::App& app);
 void RegisterExport(CLI::App& app);
 void RegisterEmulateVio(CLI::App& app);
 

@@ -26,6 +26,7 @@ int main(int argc, char** argv) {
   viosfm::cli::RegisterBenchReport(app);
   viosfm::cli::RegisterEval(app);
   viosfm::cli::RegisterConvert(app);
+  viosfm::cli::RegisterReplay(app);
   viosfm::cli::RegisterExport(app);
   viosfm::cli::RegisterEmulateVio(app);
 

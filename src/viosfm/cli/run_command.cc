@@ -103,7 +103,9 @@ void RunRun(RunArguments args) {
                    << ", max " << options.sift.max_num_features << " features, "
                    << (options.texture_probe.enable ? "rate and features by texture, " : "")
                    << (options.verification.guided_matching ? "guided matching, " : "")
-                   << (options.stream ? "streamed, " : "")
+                   << (options.follow   ? "followed as recorded, "
+                       : options.stream ? "streamed, "
+                                        : "")
                    << (options.verification.use_vio_prior ? "VIO prior" : "RANSAC only") << ", "
                    << (options.mapper.ba.use_relative_pose_priors
                            ? std::string("RPC, ") +
@@ -201,6 +203,25 @@ void RegisterRun(CLI::App& app) {
                     "mapper overlap, each frame's pairs with the frames before it verified as it "
                     "comes and each batch mapped once its frames are in (retrieval among earlier "
                     "frames only; a streamed run starts afresh, it does not resume)");
+  command->add_flag(
+      "--follow", args->options.follow,
+      "The dataset is a EuRoC folder being recorded: follow it as it grows (its rows as they "
+      "are appended, viosfm's own VIO), the model after every batch in OUT/live/, the final "
+      "model once nothing was appended for --follow-idle seconds (implies --stream)");
+  command
+      ->add_option(
+          "--follow-idle",
+          [args](const CLI::results_t& results) {
+            try {
+              SetOptionFromText(args->options, "follow_idle_s", results.front());
+            } catch (const InputError& error) {
+              throw InputError(std::string("--follow-idle: ") + error.what());
+            }
+            return true;
+          },
+          "Seconds of silence after which a followed recording has ended (option follow_idle_s)")
+      ->default_str("3")
+      ->expected(1);
   // The camera's readout is one fact with two uses: viosfm's own VIO, and
   // the keypoints' compensation when the VIO is external.
   command

@@ -179,28 +179,58 @@ EurocImuCalibration ReadEurocImuYaml(const fs::path& yaml_path) {
   return calibration;
 }
 
+SequenceImage ParseEurocImageRow(const fs::path& csv, int64_t line,
+                                 const std::vector<std::string_view>& fields,
+                                 const fs::path& image_folder) {
+  if (fields.size() != 2) {
+    throw InputError(csv.string(), line,
+                     "expected 2 comma-separated fields (timestamp [ns], filename), got " +
+                         std::to_string(fields.size()));
+  }
+  SequenceImage image;
+  image.timestamp_ns = ParseStampField(csv, line, fields[0]);
+  if (fields[1].empty()) throw InputError(csv.string(), line, "expected a filename in column 2");
+  if (!IsPathInsideFolder(fields[1])) {
+    throw InputError(csv.string(), line,
+                     "image filename " + Quoted(fields[1]) +
+                         " must be a relative path inside the image folder " +
+                         image_folder.string() + " (not absolute, no '..')");
+  }
+  image.path = image_folder / std::string(fields[1]);
+  return image;
+}
+
+ImuSample ParseEurocImuRow(const fs::path& csv, int64_t line,
+                           const std::vector<std::string_view>& fields) {
+  if (fields.size() != 7) {
+    throw InputError(csv.string(), line,
+                     "expected 7 comma-separated fields (timestamp [ns], w_x, w_y, w_z [rad/s], "
+                     "a_x, a_y, a_z [m/s^2]), got " +
+                         std::to_string(fields.size()));
+  }
+  ImuSample sample;
+  sample.timestamp_ns = ParseStampField(csv, line, fields[0]);
+  for (int i = 0; i < 3; ++i) {
+    sample.gyro[i] = ParseNumberField(csv, line, 1 + i, fields[1 + i]);
+    sample.accel[i] = ParseNumberField(csv, line, 4 + i, fields[4 + i]);
+  }
+  return sample;
+}
+
+void CheckEurocStampIncreasing(const fs::path& csv, int64_t line, timestamp_ns_t stamp,
+                               const std::optional<timestamp_ns_t>& previous,
+                               int64_t previous_line) {
+  CheckIncreasing(csv, line, stamp, previous, previous_line);
+}
+
 std::vector<SequenceImage> ReadEurocImageList(const fs::path& csv, const fs::path& image_folder,
                                               bool check_images_exist) {
   std::vector<SequenceImage> images;
   std::optional<timestamp_ns_t> previous;
   int64_t previous_line = 0;
   ForEachCsvRow(csv, "EuRoC image list", [&](int64_t line, const auto& fields) {
-    if (fields.size() != 2) {
-      throw InputError(csv.string(), line,
-                       "expected 2 comma-separated fields (timestamp [ns], filename), got " +
-                           std::to_string(fields.size()));
-    }
-    SequenceImage image;
-    image.timestamp_ns = ParseStampField(csv, line, fields[0]);
+    SequenceImage image = ParseEurocImageRow(csv, line, fields, image_folder);
     CheckIncreasing(csv, line, image.timestamp_ns, previous, previous_line);
-    if (fields[1].empty()) throw InputError(csv.string(), line, "expected a filename in column 2");
-    if (!IsPathInsideFolder(fields[1])) {
-      throw InputError(csv.string(), line,
-                       "image filename " + Quoted(fields[1]) +
-                           " must be a relative path inside the image folder " +
-                           image_folder.string() + " (not absolute, no '..')");
-    }
-    image.path = image_folder / std::string(fields[1]);
     if (check_images_exist && !fs::is_regular_file(image.path)) {
       throw InputError(
           csv.string(), line,
@@ -219,19 +249,8 @@ std::vector<ImuSample> ReadEurocImu(const fs::path& csv) {
   std::optional<timestamp_ns_t> previous;
   int64_t previous_line = 0;
   ForEachCsvRow(csv, "EuRoC IMU file", [&](int64_t line, const auto& fields) {
-    if (fields.size() != 7) {
-      throw InputError(csv.string(), line,
-                       "expected 7 comma-separated fields (timestamp [ns], w_x, w_y, w_z [rad/s], "
-                       "a_x, a_y, a_z [m/s^2]), got " +
-                           std::to_string(fields.size()));
-    }
-    ImuSample sample;
-    sample.timestamp_ns = ParseStampField(csv, line, fields[0]);
+    const ImuSample sample = ParseEurocImuRow(csv, line, fields);
     CheckIncreasing(csv, line, sample.timestamp_ns, previous, previous_line);
-    for (int i = 0; i < 3; ++i) {
-      sample.gyro[i] = ParseNumberField(csv, line, 1 + i, fields[1 + i]);
-      sample.accel[i] = ParseNumberField(csv, line, 4 + i, fields[4 + i]);
-    }
     samples.push_back(sample);
     previous = sample.timestamp_ns;
     previous_line = line;
@@ -269,31 +288,54 @@ std::vector<fs::path> EurocDatasetFiles(const fs::path& root, const EurocReadOpt
   return files;
 }
 
+fs::path EurocMav0Folder(const fs::path& root, const EurocReadOptions& options) {
+  if (fs::is_directory(root / "mav0")) return root / "mav0";
+  if (fs::is_directory(root / options.cam_name)) return root;
+  throw InputError(root.string(), 0,
+                   "expected a EuRoC ASL folder: one containing mav0/, or mav0/ itself (with " +
+                       options.cam_name + "/)");
+}
+
+SensorRig ReadEurocRig(const fs::path& mav0, const EurocReadOptions& options,
+                       Rigid3d* body_from_imu) {
+  SensorRig rig;
+  const fs::path cam_folder = mav0 / options.cam_name;
+  RequireFolder(cam_folder, "camera folder");
+  const EurocCameraCalibration camera = ReadEurocCameraYaml(cam_folder / "sensor.yaml");
+  rig.camera = camera.camera;
+  rig.body_from_cam = camera.body_from_cam;
+  rig.camera_rate_hz = camera.rate_hz;
+  *body_from_imu = Rigid3d();
+  const fs::path imu_folder = mav0 / options.imu_name;
+  if (fs::exists(imu_folder) || options.require_imu) {
+    RequireFolder(imu_folder, "IMU folder");
+    const EurocImuCalibration imu = ReadEurocImuYaml(imu_folder / "sensor.yaml");
+    rig.imu_noise = imu.noise;
+    *body_from_imu = imu.body_from_imu;
+    if (!IsIdentity(*body_from_imu)) {
+      VIOSFM_LOG(WARNING) << imu_folder / "sensor.yaml"
+                          << ": T_BS is not the identity; camera extrinsics and ground-truth "
+                             "poses are re-expressed in the IMU frame";
+      rig.body_from_cam = body_from_imu->Inverse() * rig.body_from_cam;
+    }
+  }
+  return rig;
+}
+
 Sequence ReadEurocDataset(const fs::path& root, const EurocReadOptions& options) {
   if (const std::string problem = options.Validate(); !problem.empty()) {
     throw InputError("EuRoC read options: " + problem);
   }
   RequireFolder(root, "EuRoC dataset folder");
-  fs::path mav0;
-  if (fs::is_directory(root / "mav0")) {
-    mav0 = root / "mav0";
-  } else if (fs::is_directory(root / options.cam_name)) {
-    mav0 = root;
-  } else {
-    throw InputError(root.string(), 0,
-                     "expected a EuRoC ASL folder: one containing mav0/, or mav0/ itself (with " +
-                         options.cam_name + "/)");
-  }
+  const fs::path mav0 = EurocMav0Folder(root, options);
 
   Sequence sequence;
   sequence.root = root;
+  // The body frame of a Sequence is the IMU frame.
+  Rigid3d body_from_imu;
+  sequence.rig = ReadEurocRig(mav0, options, &body_from_imu);
 
   const fs::path cam_folder = mav0 / options.cam_name;
-  RequireFolder(cam_folder, "camera folder");
-  const EurocCameraCalibration camera = ReadEurocCameraYaml(cam_folder / "sensor.yaml");
-  sequence.rig.camera = camera.camera;
-  sequence.rig.body_from_cam = camera.body_from_cam;
-  sequence.rig.camera_rate_hz = camera.rate_hz;
   if (options.check_images_exist) RequireFolder(cam_folder / "data", "image folder");
   sequence.images =
       ReadEurocImageList(cam_folder / "data.csv", cam_folder / "data", options.check_images_exist);
@@ -301,22 +343,9 @@ Sequence ReadEurocDataset(const fs::path& root, const EurocReadOptions& options)
     sequence.rig.camera_rate_hz = EstimateFrameRateHz(sequence.images);  // no rate_hz in the yaml
   }
 
-  // The body frame of a Sequence is the IMU frame.
-  Rigid3d body_from_imu;
   const fs::path imu_folder = mav0 / options.imu_name;
   if (fs::exists(imu_folder) || options.require_imu) {
-    RequireFolder(imu_folder, "IMU folder");
-    const EurocImuCalibration imu = ReadEurocImuYaml(imu_folder / "sensor.yaml");
-    sequence.rig.imu_noise = imu.noise;
-    body_from_imu = imu.body_from_imu;
     sequence.imu = ReadEurocImu(imu_folder / "data.csv");
-    if (!IsIdentity(body_from_imu)) {
-      VIOSFM_LOG(WARNING) << imu_folder / "sensor.yaml"
-                          << ": T_BS is not the identity; camera extrinsics and ground-truth "
-                             "poses are re-expressed in the IMU frame";
-      sequence.rig.body_from_cam = body_from_imu.Inverse() * sequence.rig.body_from_cam;
-    }
-
     const fs::path imu_csv = imu_folder / "data.csv";
     const ImuCoverage coverage = CheckImuCoverage(sequence);
     if (!coverage.overlaps) {

@@ -40,8 +40,11 @@
 // is one) and what was expected.
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "viosfm/scene/sequence.h"
@@ -104,6 +107,20 @@ std::vector<SequenceImage> ReadEurocImageList(const std::filesystem::path& csv,
 // Reads imu0/data.csv rows (7 columns, see above).
 std::vector<ImuSample> ReadEurocImu(const std::filesystem::path& csv);
 
+// One data row of each list, as the readers above parse it (`fields`: the
+// line split at commas, trimmed; InputError naming csv and line). The
+// order of the stamps is the caller's to check (CheckEurocStampIncreasing).
+SequenceImage ParseEurocImageRow(const std::filesystem::path& csv, int64_t line,
+                                 const std::vector<std::string_view>& fields,
+                                 const std::filesystem::path& image_folder);
+ImuSample ParseEurocImuRow(const std::filesystem::path& csv, int64_t line,
+                           const std::vector<std::string_view>& fields);
+// InputError naming csv and line unless `stamp` follows `previous` (of
+// previous_line), as the readers above require.
+void CheckEurocStampIncreasing(const std::filesystem::path& csv, int64_t line, timestamp_ns_t stamp,
+                               const std::optional<timestamp_ns_t>& previous,
+                               int64_t previous_line);
+
 struct EurocReadOptions {
   // The camera sub-folder of mav0/. Default "cam0".
   std::string cam_name = "cam0";
@@ -127,6 +144,18 @@ struct EurocReadOptions {
   std::string Validate() const;
   bool Check() const { return Validate().empty(); }
 };
+
+// The mav0 folder of `root` (root/mav0, or root itself when it is mav0 and
+// holds options.cam_name): InputError naming root otherwise.
+std::filesystem::path EurocMav0Folder(const std::filesystem::path& root,
+                                      const EurocReadOptions& options);
+// The camera and IMU calibration of a EuRoC folder as ReadEurocDataset
+// reads them (the camera's sensor.yaml, the IMU's when its folder exists
+// or options.require_imu; the body frame is the IMU's): a rig whose
+// camera_rate_hz is the yaml's rate_hz or 0. `body_from_imu`: the IMU's
+// T_BS (identity without IMU).
+SensorRig ReadEurocRig(const std::filesystem::path& mav0, const EurocReadOptions& options,
+                       Rigid3d* body_from_imu);
 
 // `root` is the folder that contains mav0/, or the mav0 folder itself.
 Sequence ReadEurocDataset(const std::filesystem::path& root, const EurocReadOptions& options = {});

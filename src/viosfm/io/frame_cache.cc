@@ -30,7 +30,7 @@ std::shared_ptr<const GreyImage> FrameCache::Fetch(const fs::path& path, bool ke
   std::lock_guard<std::mutex> lock(mutex_);
   ++counts_.decodes;
   if (mark_read && read_.insert(path).second) read_done_.notify_all();
-  if (keep && (!filtered_ || wanted_.count(path) > 0)) {
+  if (keep && (!filtered_ || wanted_.count(path) > 0) && released_.count(path) == 0) {
     const size_t bytes = image->pixels.size();
     if (held_bytes_ + bytes <= max_bytes_) {
       if (held_.emplace(path, image).second) held_bytes_ += bytes;
@@ -87,6 +87,15 @@ void FrameCache::RetainOnly(const std::vector<fs::path>& paths) {
       it = held_.erase(it);
     }
   }
+}
+
+void FrameCache::Release(const fs::path& path) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  released_.insert(path);
+  const auto it = held_.find(path);
+  if (it == held_.end()) return;
+  held_bytes_ -= it->second->pixels.size();
+  held_.erase(it);
 }
 
 FrameCache::Counts FrameCache::counts() const {

@@ -53,6 +53,10 @@ class FrameCache {
   // Releases every held image whose path is not in `paths`, and from now on
   // keeps only images in `paths` (the frames a later stage will take).
   void RetainOnly(const std::vector<std::filesystem::path>& paths);
+  // Releases the held copy of `path`, if any, and keeps none of it later (a
+  // frame no later stage takes: a recording's frames are decided one by one
+  // as it grows, some before the reader has read them).
+  void Release(const std::filesystem::path& path);
 
   Counts counts() const;
   size_t max_bytes() const { return max_bytes_; }
@@ -64,8 +68,9 @@ class FrameCache {
   const size_t max_bytes_;
   mutable std::mutex mutex_;
   std::map<std::filesystem::path, std::shared_ptr<const GreyImage>> held_;
-  bool filtered_ = false;                   // RetainOnly was called
-  std::set<std::filesystem::path> wanted_;  // then: the only paths kept
+  bool filtered_ = false;                     // RetainOnly was called
+  std::set<std::filesystem::path> wanted_;    // then: the only paths kept
+  std::set<std::filesystem::path> released_;  // Release: never kept
   size_t held_bytes_ = 0;
   Counts counts_;
   std::set<std::filesystem::path> read_;  // paths Read so far

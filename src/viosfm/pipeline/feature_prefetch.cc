@@ -19,8 +19,10 @@ constexpr int kNiceness = 10;
 
 FeaturePrefetch::FeaturePrefetch(std::vector<std::filesystem::path> paths,
                                  const SiftOptions& options, const Camera& camera,
-                                 FrameCache* frames, size_t max_bytes, bool wait_when_full)
+                                 FrameCache* frames, size_t max_bytes, bool wait_when_full,
+                                 bool more_paths)
     : paths_(std::move(paths)),
+      paths_closed_(!more_paths),
       options_(options),
       camera_(camera),
       frames_(frames),
@@ -56,9 +58,32 @@ void FeaturePrefetch::Follow() {
   changed_.notify_all();
 }
 
+void FeaturePrefetch::AddPath(const std::filesystem::path& path) {
+  {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    VIOSFM_CHECK(!paths_closed_) << "a path added after ClosePaths";
+    paths_.push_back(path);
+  }
+  changed_.notify_all();
+}
+
+void FeaturePrefetch::ClosePaths() {
+  {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    paths_closed_ = true;
+  }
+  changed_.notify_all();
+}
+
 void FeaturePrefetch::FollowPaths() {
-  for (const std::filesystem::path& path : paths_) {
-    if (stop_) return;
+  for (size_t index = 0;; ++index) {
+    std::filesystem::path path;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      changed_.wait(lock, [&] { return stop_ || index < paths_.size() || paths_closed_; });
+      if (stop_ || index >= paths_.size()) return;
+      path = paths_[index];
+    }
     Extracted extracted;
     try {
       const std::shared_ptr<const GreyImage> pixels = frames_->TakeAfterRead(path);

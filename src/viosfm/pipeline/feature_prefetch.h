@@ -43,12 +43,19 @@ class FeaturePrefetch {
   // With `wait_when_full` (a consumer that takes every frame in order, the
   // streamed run) the thread waits at `max_bytes` until the consumer has
   // taken some, instead of stopping there.
+  // With `more_paths`, paths come after these too (AddPath), until
+  // ClosePaths: the frames of a recording that grows.
   FeaturePrefetch(std::vector<std::filesystem::path> paths, const SiftOptions& options,
                   const Camera& camera, FrameCache* frames, size_t max_bytes,
-                  bool wait_when_full = false);
+                  bool wait_when_full = false, bool more_paths = false);
   ~FeaturePrefetch();  // Finish
   FeaturePrefetch(const FeaturePrefetch&) = delete;
   FeaturePrefetch& operator=(const FeaturePrefetch&) = delete;
+
+  // One more path to follow, after those given (with more_paths).
+  void AddPath(const std::filesystem::path& path);
+  // No more paths come (with more_paths).
+  void ClosePaths();
 
   // The reader is done: the thread finishes the frame it is on and stops
   // (the features stage, on every core, extracts the rest); joins it.
@@ -77,7 +84,8 @@ class FeaturePrefetch {
   void Follow();
   void FollowPaths();
 
-  const std::vector<std::filesystem::path> paths_;
+  std::vector<std::filesystem::path> paths_;  // under mutex_ with more_paths
+  bool paths_closed_ = true;
   const SiftOptions options_;
   const Camera camera_;
   FrameCache* const frames_;

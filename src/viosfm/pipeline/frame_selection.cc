@@ -427,4 +427,82 @@ FrameSelection SelectFrames(const Sequence& sequence, const FrameSelectionOption
   return selection;
 }
 
+GrowingFrameSelection::GrowingFrameSelection(const FrameSelectionOptions& options)
+    : options_(options) {
+  if (const std::string error = options.Validate(); !error.empty()) {
+    throw InputError("frame selection options: " + error);
+  }
+  double lag_s = 2.0 * options.static_window_s + options.imu_lowpass_s;
+  if (options.target_rate_hz > 0.0) lag_s += 2.0 / options.target_rate_hz;
+  lag_ns_ = SecondsToNs(lag_s);
+}
+
+std::vector<size_t> GrowingFrameSelection::Update(const Sequence& so_far, size_t* decided_until) {
+  std::vector<size_t> selected;
+  *decided_until = decided_;
+  if (so_far.images.empty()) return selected;
+  timestamp_ns_t latest_ns = so_far.images.back().timestamp_ns;
+  if (so_far.has_imu()) latest_ns = std::min(latest_ns, so_far.imu.back().timestamp_ns);
+  // The frames far enough behind the latest data.
+  size_t until = decided_;
+  while (until < so_far.images.size() && so_far.images[until].timestamp_ns + lag_ns_ < latest_ns) {
+    ++until;
+  }
+  if (until == decided_) return selected;
+  const FrameSelection selection = SelectFrames(so_far, options_);
+  if (!selection.ok()) return selected;  // static so far: nothing to take yet
+  // A trailing pause may be the static end: held until it is not.
+  if (selection.motion_end_ns < so_far.images.back().timestamp_ns) {
+    while (until > decided_ && so_far.images[until - 1].timestamp_ns > selection.motion_end_ns) {
+      --until;
+    }
+  }
+  for (const size_t k : selection.kept) {
+    if (k >= decided_ && k < until) selected.push_back(k);
+  }
+  decided_ = until;
+  taken_.insert(taken_.end(), selected.begin(), selected.end());
+  *decided_until = decided_;
+  return selected;
+}
+
+std::vector<size_t> GrowingFrameSelection::Finish(const Sequence& whole,
+                                                  FrameSelection* selection) {
+  *selection = SelectFrames(whole, options_);
+  std::vector<size_t> selected;
+  if (!selection->ok()) {
+    selection->kept = taken_;
+    return selected;
+  }
+  size_t not_taken = 0;
+  size_t taken_extra = 0;
+  for (const size_t k : selection->kept) {
+    if (k >= decided_) {
+      selected.push_back(k);
+    } else if (!std::binary_search(taken_.begin(), taken_.end(), k)) {
+      ++not_taken;  // kept by the whole recording, not taken as it grew
+    }
+  }
+  for (const size_t k : taken_) {
+    if (!std::binary_search(selection->kept.begin(), selection->kept.end(), k)) {
+      ++taken_extra;  // taken as it grew, not kept by the whole
+      selection->decisions[k] = FrameDecision::kKept;
+    }
+  }
+  std::vector<size_t> kept = taken_;
+  kept.insert(kept.end(), selected.begin(), selected.end());
+  if (not_taken + taken_extra > 0) {
+    VIOSFM_LOG(WARNING) << "frame selection: as the recording grew, " << not_taken
+                        << " frame(s) that the whole recording's selection keeps were left out "
+                           "(not reconstructed) and "
+                        << taken_extra
+                        << " it leaves out were taken (reconstructed): decided before the "
+                           "data after them came";
+  }
+  selection->kept = std::move(kept);
+  taken_.insert(taken_.end(), selected.begin(), selected.end());
+  decided_ = whole.images.size();
+  return selected;
+}
+
 }  // namespace viosfm

@@ -157,4 +157,38 @@ bool FrameSelectionUsesTrajectory(const Sequence& sequence, const FrameSelection
 FrameSelection SelectFrames(const Sequence& sequence, const FrameSelectionOptions& options,
                             const Trajectory* trajectory = nullptr);
 
+// The frames of a recording that grows (`viosfm run --follow`), selected as
+// SelectFrames selects them from the whole recording: a frame is decided
+// once the images and the IMU go on `Lag()` beyond it (two static windows,
+// the IMU's low-pass and two frame periods of the target rate: what its
+// static-start, static-end and downsampling decisions look at), SelectFrames
+// then running on the recording so far. A pause that may yet be the
+// recording's static end is held until the motion goes on or the
+// recording ends.
+class GrowingFrameSelection {
+ public:
+  // InputError for invalid options.
+  explicit GrowingFrameSelection(const FrameSelectionOptions& options);
+
+  // The recording so far (every image and IMU sample up to now). Returns
+  // the frames selected since the last call (indices into its images, in
+  // order), and in `decided_until` how many of its first images are
+  // decided (selected or not).
+  std::vector<size_t> Update(const Sequence& so_far, size_t* decided_until);
+  // The whole recording: the frames selected since the last call, and in
+  // `selection` SelectFrames' selection of it, its `kept` those taken as it
+  // grew and these (SelectFrames of the whole recording takes the same; a
+  // frame taken as it grew that the whole would not keep stays, with a
+  // warning naming how many).
+  std::vector<size_t> Finish(const Sequence& whole, FrameSelection* selection);
+
+  timestamp_ns_t Lag() const { return lag_ns_; }
+
+ private:
+  FrameSelectionOptions options_;
+  timestamp_ns_t lag_ns_ = 0;
+  size_t decided_ = 0;         // images [0, decided_) decided
+  std::vector<size_t> taken_;  // the frames selected so far
+};
+
 }  // namespace viosfm

@@ -144,6 +144,46 @@ TEST(SelectFrames, TrimsBothEndsButNotAPauseInTheMiddle) {
   EXPECT_GT(selection.Count(FrameDecision::kStaticEnd), 95u);
 }
 
+// The recording of the test above as it is made, a frame and 1/30 s of
+// IMU at a time: the frames selected as it grows are those SelectFrames
+// keeps from the whole recording (the pause in the middle kept, the static
+// end not), each taken within the lag and a frame after its stamp; the
+// static end leaves nothing for the end to take.
+TEST(GrowingFrameSelection, TakesWhatTheWholeRecordingKeeps) {
+  const Sequence whole = SyntheticImuSequence(30.0, 12.0, 3.0, 8.5, 5.0, 6.5);
+  const FrameSelectionOptions options;
+  const FrameSelection expected = SelectFrames(whole, options);
+  GrowingFrameSelection growing(options);
+  Sequence so_far;
+  size_t next_sample = 0;
+  std::vector<size_t> taken;
+  double latest_delay_s = 0.0;
+  for (const SequenceImage& image : whole.images) {
+    while (next_sample < whole.imu.size() &&
+           whole.imu[next_sample].timestamp_ns <= image.timestamp_ns) {
+      so_far.imu.push_back(whole.imu[next_sample++]);
+    }
+    so_far.images.push_back(image);
+    size_t decided = 0;
+    for (const size_t k : growing.Update(so_far, &decided)) {
+      taken.push_back(k);
+      latest_delay_s =
+          std::max(latest_delay_s, NsToSeconds(image.timestamp_ns - whole.images[k].timestamp_ns));
+    }
+    EXPECT_LE(decided, so_far.images.size());
+  }
+  const size_t before_end = taken.size();
+  FrameSelection selection;
+  for (const size_t k : growing.Finish(whole, &selection)) taken.push_back(k);
+  EXPECT_EQ(taken, expected.kept);
+  EXPECT_EQ(selection.kept, expected.kept);
+  EXPECT_EQ(before_end, taken.size());
+  EXPECT_LE(latest_delay_s, NsToSeconds(growing.Lag()) + 1.0 / 30.0 + 1e-6);
+  std::cout << "as it grew: " << taken.size() << " frames, " << before_end
+            << " before the end, the latest " << latest_delay_s << " s after its stamp (lag "
+            << NsToSeconds(growing.Lag()) << " s)\n";
+}
+
 TEST(SelectFrames, StatusesAndErrors) {
   Sequence empty;
   EXPECT_EQ(SelectFrames(empty, {}).status, FrameSelectionStatus::kNoImages);

@@ -73,7 +73,7 @@ struct StreamedMapping {
 }  // namespace
 
 PipelineSummary RunPipeline(const PipelineOptions& requested) {
-  if (requested.stream) return RunStreamPipeline(requested);
+  if (requested.stream || requested.follow) return RunStreamPipeline(requested);
   // The options as asked for, until the texture probe settles the frame
   // rate and the feature count.
   PipelineOptions options = requested;

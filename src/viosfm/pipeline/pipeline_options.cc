@@ -1,6 +1,7 @@
 #include "viosfm/pipeline/pipeline_options.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "viosfm/util/errors.h"
 #include "viosfm/util/string_util.h"
@@ -49,8 +50,25 @@ std::string PipelineOptions::Validate() const {
   if (num_threads < 1) return "num_threads must be >= 1";
   if (stream_vocabulary_frames < 1) return "stream_vocabulary_frames must be >= 1";
   if (stream && stream_mapper) return "stream and stream_mapper: the stream maps beside anyway";
-  if (stream && verification.pairs.mode == PairMode::kPairList) {
+  if ((stream || follow) && verification.pairs.mode == PairMode::kPairList) {
     return "stream: pairs.mode pair_list is not streamed";
+  }
+  if (follow && stream_mapper) return "follow and stream_mapper: the stream maps beside anyway";
+  if (!(follow_idle_s > 0.0) || !std::isfinite(follow_idle_s)) {
+    return "follow_idle_s must be > 0 s";
+  }
+  if (follow && (vio_source || !vio_trajectory.empty())) {
+    return "follow: a recording being made is followed with viosfm's own VIO (no "
+           "vio_trajectory)";
+  }
+  if (follow && frame_selection.trim_static &&
+      (frame_selection.static_source == StaticSource::kTrajectory ||
+       frame_selection.static_source == StaticSource::kImuAndTrajectory)) {
+    return "follow: a recording being made has its static frames found by the IMU "
+           "(frame_selection.static_source auto or imu)";
+  }
+  if (follow && HasRosbagExtension(dataset)) {
+    return "follow: a EuRoC folder being recorded is followed, not a bag";
   }
   if (const std::string error = calibration.Validate(); !error.empty()) {
     return "calibration." + error;

@@ -151,6 +151,15 @@ struct PipelineOptions {
   // recording), unless verification.retrieval.vocabulary_path gives one
   // (retrieval/incremental_retrieval.h); >= 1. Default 100.
   int stream_vocabulary_frames = 100;
+  // The dataset is a EuRoC folder being recorded (io/euroc_follower.h): the
+  // streamed run (stream is implied) takes its frames and IMU as they are
+  // appended, with viosfm's own VIO, and writes the model as it grows to
+  // OUT/live/ after every batch of the mapper; the recording has ended once
+  // nothing was appended for follow_idle_s. Default false.
+  bool follow = false;
+  // s, the silence after which a followed recording has ended (> 0).
+  // Default 3.
+  double follow_idle_s = 3.0;
   // The metric scale from the IMU (metric_scale.h), when the dataset has
   // one. Default true.
   bool use_imu_scale = true;
@@ -264,6 +273,11 @@ struct PipelineOptions {
     visit({"stream_vocabulary_frames",
            "streamed: the first frames the retrieval's vocabulary is trained on", kRunOnly},
           self.stream_vocabulary_frames);
+    visit(
+        {"follow", "the dataset is a EuRoC folder being recorded: follow it as it grows", kRunOnly},
+        self.follow);
+    visit({"follow_idle_s", "s of silence after which a followed recording has ended", kRunOnly},
+          self.follow_idle_s);
     visit({"use_imu_scale", "the metric scale from the IMU", kRunOnly}, self.use_imu_scale);
     VisitOptionGroup({"imu_scale", "", kRunOnly}, self.imu_scale, visit);
     visit({"num_threads", "worker threads of every stage", kRunOnly}, self.num_threads);

@@ -108,7 +108,13 @@ std::string PipelineSummary::ToString() const {
     out << "stream: the VIO done after " << stream.vio_seconds << " s, the verification after "
         << stream.verification_seconds << " s (" << stream.verification_busy_seconds
         << " s of it verifying), the mapper after " << stream.mapper_seconds << " s; "
-        << stream.seconds_after_last_frame << " s from the last frame's features to the model\n";
+        << stream.seconds_after_last_frame << " s from the last frame's features to the model";
+    if (stream.followed) {
+      out << "; the recording ended " << stream.recording_end_seconds
+          << " s after the start, the model was ready " << stream.seconds_after_recording_end
+          << " s after it";
+    }
+    out << "\n";
   }
   out << "output: " << output_folder.string()
       << " (model/, model_txt/, points.ply, trajectory_body.tum, "
@@ -245,6 +251,10 @@ std::string PipelineSummaryToJson(const PipelineSummary& s) {
                       {"features_beside_vio", s.stream.num_features_beside},
                       {"seconds_after_last_frame", s.stream.seconds_after_last_frame},
                       {"vocabulary_frames", s.stream.num_vocabulary_frames}};
+    if (s.stream.followed) {
+      json["stream"]["recording_end_seconds"] = s.stream.recording_end_seconds;
+      json["stream"]["seconds_after_recording_end"] = s.stream.seconds_after_recording_end;
+    }
   }
   json["images"] = {{"decoded", s.images.decodes},
                     {"reused", s.images.reuses},

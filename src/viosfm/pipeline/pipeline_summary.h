@@ -90,6 +90,12 @@ struct PipelineStreamSummary {
   // The retrieval's vocabulary: trained on the first frames (how many), or
   // loaded from a file.
   size_t num_vocabulary_frames = 0;
+  // A followed recording (--follow): when its last row came (seconds since
+  // the stream's start), and from then to the model, the wait for the
+  // silence that ends it (follow_idle_s) included.
+  bool followed = false;
+  double recording_end_seconds = 0.0;
+  double seconds_after_recording_end = 0.0;
 };
 
 struct PipelineSummary {

@@ -101,6 +101,7 @@ std::vector<std::string> RunOutputNames(const PipelineOptions& options) {
                                     "model_txt",
                                     "verification",
                                     "vio",
+                                    "live",
                                     "points.ply",
                                     "trajectory_cam.tum",
                                     "trajectory_body.tum",

@@ -29,7 +29,7 @@ void CheckStoredRunData(const std::filesystem::path& output_folder, const RunFin
 
 // The files and folders a run writes into its output folder (top level):
 // database.db with its SQLite -wal, -shm and -journal files, fingerprint.json,
-// options.json, summary.json, model/, model_txt/, verification/, vio/,
+// options.json, summary.json, model/, model_txt/, verification/, vio/, live/,
 // points.ply, the .tum trajectories, eval.json, eval_vio.json, and bag/ when
 // a bag is extracted to its default place.
 std::vector<std::string> RunOutputNames(const PipelineOptions& options);

@@ -10,8 +10,16 @@ namespace viosfm {
 SelectedFrames SelectFramesStage(const Sequence& sequence, const VioPoses& vio,
                                  const PipelineOptions& options, const std::string& vio_name,
                                  FrameCache* frame_cache) {
+  return SelectedFramesOf(sequence,
+                          SelectFrames(sequence, options.frame_selection, &vio.world_from_body),
+                          vio, options, vio_name, frame_cache);
+}
+
+SelectedFrames SelectedFramesOf(const Sequence& sequence, const FrameSelection& selection,
+                                const VioPoses& vio, const PipelineOptions& options,
+                                const std::string& vio_name, FrameCache* frame_cache) {
   SelectedFrames frames;
-  frames.selection = SelectFrames(sequence, options.frame_selection, &vio.world_from_body);
+  frames.selection = selection;
   if (!frames.selection.ok()) {
     throw InputError(options.dataset.string(), 0,
                      "no frames to reconstruct: " + frames.selection.message);

@@ -44,5 +44,10 @@ struct SelectedFrames {
 SelectedFrames SelectFramesStage(const Sequence& sequence, const VioPoses& vio,
                                  const PipelineOptions& options, const std::string& vio_name,
                                  FrameCache* frame_cache);
+// The stage with the frames already selected (a recording selected as it
+// grew, frame_selection.h GrowingFrameSelection).
+SelectedFrames SelectedFramesOf(const Sequence& sequence, const FrameSelection& selection,
+                                const VioPoses& vio, const PipelineOptions& options,
+                                const std::string& vio_name, FrameCache* frame_cache);
 
 }  // namespace viosfm

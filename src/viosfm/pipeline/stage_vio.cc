@@ -15,6 +15,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
+void CompleteVioPoses(VioPoses* poses);
+
 // viosfm's own VIO on the sequence: every posed frame, a new segment after
 // every stretch without a pose.
 VioPoses RunOwnVio(const Sequence& sequence, const PipelineOptions& options, FrameCache* frames,
@@ -25,9 +27,34 @@ VioPoses RunOwnVio(const Sequence& sequence, const PipelineOptions& options, Fra
                      "--vio-trajectory FILE (the TUM trajectory of any VIO)");
   }
   VIOSFM_LOG(INFO) << "run: no VIO trajectory given: running viosfm's own VIO";
+  return PosesOfOwnVio(sequence, options,
+                       RunVio(sequence, OwnVioOptions(options), frames, on_progress));
+}
+
+// The segments' odometers, and the log lines of the poses.
+void CompleteVioPoses(VioPoses* poses) {
+  poses->odometers = ComputeVioOdometers(poses->world_from_body, poses->segments);
+  if (poses->num_segments() > 1) {
+    VIOSFM_LOG(WARNING) << "run: the VIO poses form " << poses->num_segments()
+                        << " segments (split at " << poses->segment_rule
+                        << "); no relative pose joins two segments, the images do";
+  }
+  const Trajectory& vio = poses->world_from_body;
+  VIOSFM_LOG(INFO) << "run: " << vio.size() << " VIO poses over "
+                   << FormatNsSpan(vio.poses.front().timestamp_ns, vio.poses.back().timestamp_ns)
+                   << " in " << poses->num_segments() << " segment(s)";
+}
+
+}  // namespace
+
+VioOptions OwnVioOptions(const PipelineOptions& options) {
   VioOptions vio_options = options.own_vio;
   vio_options.show_progress = vio_options.show_progress && options.show_progress;
-  const VioResult result = RunVio(sequence, vio_options, frames, on_progress);
+  return vio_options;
+}
+
+VioPoses PosesOfOwnVio(const Sequence& sequence, const PipelineOptions& options,
+                       const VioResult& result) {
   WriteVioResult(options.output_folder / "vio", result);
   // Every frame the VIO gives a pose (tracking, IMU-only, or held at a
   // static start), in the VIO's own segments: a reset it re-localised stays
@@ -73,10 +100,9 @@ VioPoses RunOwnVio(const Sequence& sequence, const PipelineOptions& options, Fra
                    << result.frames.size() << " frames posed in " << segment + 1 << " segment(s) ("
                    << result.summary.num_resets << " reset(s)), " << result.summary.cpu_seconds
                    << " CPU s (output in " << (options.output_folder / "vio").string() << ")";
+  CompleteVioPoses(&poses);
   return poses;
 }
-
-}  // namespace
 
 OwnVioReadout OwnVioRollingShutter(const PipelineOptions& options,
                                    const TimeOffsetEstimate& time_offset, bool log) {
@@ -138,10 +164,11 @@ Trajectory LoadVioTrajectory(const Sequence& sequence, const PipelineOptions& op
 
 VioPoses LoadVioPoses(const Sequence& sequence, const PipelineOptions& options, FrameCache* frames,
                       const VioProgressCallback& on_progress) {
-  VioPoses poses;
   if (!options.vio_source && options.vio_trajectory.empty()) {
-    poses = RunOwnVio(sequence, options, frames, on_progress);
-  } else {
+    return RunOwnVio(sequence, options, frames, on_progress);
+  }
+  VioPoses poses;
+  {
     poses.world_from_body = LoadVioTrajectory(sequence, options);
     poses.rolling_shutter_readout_s = options.rolling_shutter_readout_s;
     poses.rolling_shutter_source = "rolling_shutter.readout_s";
@@ -151,16 +178,7 @@ VioPoses LoadVioPoses(const Sequence& sequence, const PipelineOptions& options, 
             ? "time gaps longer than " + FormatNsAsSeconds(options.vio_max_gap_ns, 3) + " s"
             : "none (--vio-max-gap 0)";
   }
-  poses.odometers = ComputeVioOdometers(poses.world_from_body, poses.segments);
-  if (poses.num_segments() > 1) {
-    VIOSFM_LOG(WARNING) << "run: the VIO poses form " << poses.num_segments()
-                        << " segments (split at " << poses.segment_rule
-                        << "); no relative pose joins two segments, the images do";
-  }
-  const Trajectory& vio = poses.world_from_body;
-  VIOSFM_LOG(INFO) << "run: " << vio.size() << " VIO poses over "
-                   << FormatNsSpan(vio.poses.front().timestamp_ns, vio.poses.back().timestamp_ns)
-                   << " in " << poses.num_segments() << " segment(s)";
+  CompleteVioPoses(&poses);
   return poses;
 }
 

@@ -67,6 +67,16 @@ Trajectory LoadVioTrajectory(const Sequence& sequence, const PipelineOptions& op
 VioPoses LoadVioPoses(const Sequence& sequence, const PipelineOptions& options,
                       FrameCache* frames = nullptr, const VioProgressCallback& on_progress = {});
 
+// The own VIO's options in a run (its progress bar only when the run shows
+// progress).
+VioOptions OwnVioOptions(const PipelineOptions& options);
+// The VIO poses of viosfm's own VIO's result on `sequence` (as LoadVioPoses
+// gives them): every frame the VIO posed, in its segments (a new one after
+// every reset it did not re-localise), their odometers, the rig it found;
+// writes OUT/vio/. Throws InputError naming the dataset if it posed none.
+VioPoses PosesOfOwnVio(const Sequence& sequence, const PipelineOptions& options,
+                       const VioResult& result);
+
 // The rolling-shutter readout the structure-from-motion stages take from
 // viosfm's own VIO (VioPoses::rolling_shutter_readout_s): the one it was
 // given, or its estimate (with the time offset) when the images' evidence

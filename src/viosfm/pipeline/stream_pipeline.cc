@@ -1,6 +1,8 @@
 #include "viosfm/pipeline/stream_pipeline.h"
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <exception>
 #include <filesystem>
@@ -19,7 +21,12 @@
 #include "viosfm/features/sift.h"
 #include "viosfm/io/colmap_database.h"
 #include "viosfm/io/dataset.h"
+#include "viosfm/io/euroc.h"
+#include "viosfm/io/euroc_follower.h"
 #include "viosfm/io/image_io.h"
+#include "viosfm/io/kalibr.h"
+#include "viosfm/io/ply.h"
+#include "viosfm/io/trajectory_io.h"
 #include "viosfm/matching/pair_generator.h"
 #include "viosfm/matching/pair_verification.h"
 #include "viosfm/pipeline/feature_prefetch.h"
@@ -68,8 +75,9 @@ struct VioSetup {
 // pose (the segments numbered as RunOwnVio numbers them).
 class SettledVio {
  public:
-  SettledVio(const Sequence& sequence, const PipelineOptions& options)
-      : sequence_(sequence), options_(options) {}
+  SettledVio(const SensorRig& rig, const std::filesystem::path& root,
+             const PipelineOptions& options)
+      : rig_(rig), root_(root), options_(options) {}
 
   // The own VIO's progress (called on its thread).
   void Report(const VioProgress& progress) {
@@ -77,7 +85,7 @@ class SettledVio {
       const std::lock_guard<std::mutex> lock(mutex_);
       if (!setup_) {
         VioSetup setup;
-        setup.rig = sequence_.rig;
+        setup.rig = rig_;
         setup.rig.cam_time_offset_ns = progress.time_offset->offset_ns;
         setup.rig.imu_noise = progress.imu_noise->used;
         const OwnVioReadout readout =
@@ -105,7 +113,7 @@ class SettledVio {
     {
       const std::lock_guard<std::mutex> lock(mutex_);
       VioSetup setup;
-      setup.rig = poses.own_vio_rig.value_or(sequence_.rig);
+      setup.rig = poses.own_vio_rig.value_or(rig_);
       setup.readout_s = poses.rolling_shutter_readout_s;
       setup.readout_source = poses.rolling_shutter_source;
       setup_ = setup;
@@ -130,7 +138,7 @@ class SettledVio {
     std::unique_lock<std::mutex> lock(mutex_);
     changed_.wait(lock, [&] { return setup_.has_value() || finished_ || !failure_.empty(); });
     if (!failure_.empty()) throw std::runtime_error(failure_);
-    if (!setup_) throw InputError(sequence_.root.string(), 0, "the VIO processed no frame");
+    if (!setup_) throw InputError(root_.string(), 0, "the VIO processed no frame");
     return *setup_;
   }
 
@@ -169,7 +177,8 @@ class SettledVio {
     odometers_.push_back(odometer);
   }
 
-  const Sequence& sequence_;
+  const SensorRig rig_;
+  const std::filesystem::path root_;
   const PipelineOptions& options_;
   std::mutex mutex_;
   std::condition_variable changed_;
@@ -200,6 +209,7 @@ class Worker {
         body();
       } catch (...) {
         error_ = std::current_exception();
+        failed_ = true;
       }
     });
   }
@@ -211,21 +221,84 @@ class Worker {
     Join();
     if (error_) std::rethrow_exception(error_);
   }
-  bool failed() const { return error_ != nullptr; }
-  std::string message() const {
-    try {
-      if (error_) std::rethrow_exception(error_);
-    } catch (const std::exception& error) {
-      return error.what();
-    } catch (...) {
-      return "unknown error";
-    }
-    return "";
-  }
+  // The thread has ended with an exception (any thread may ask).
+  bool failed() const { return failed_; }
 
  private:
   std::thread thread_;
   std::exception_ptr error_;
+  std::atomic<bool> failed_{false};
+};
+
+// The frames the stream takes, in time order: all known up front (a
+// recorded dataset) or added as a followed recording's frame selection
+// takes them.
+class FrameQueue {
+ public:
+  void Add(const SequenceImage& image) {
+    {
+      const std::lock_guard<std::mutex> lock(mutex_);
+      images_.push_back(image);
+    }
+    changed_.notify_all();
+  }
+  void Close() {
+    {
+      const std::lock_guard<std::mutex> lock(mutex_);
+      closed_ = true;
+    }
+    changed_.notify_all();
+  }
+  void Fail(const std::string& message) {
+    {
+      const std::lock_guard<std::mutex> lock(mutex_);
+      failure_ = message;
+    }
+    changed_.notify_all();
+  }
+  // Blocks until frame k is known (true) or every frame is (false).
+  // Throws std::runtime_error if the source failed.
+  bool Get(size_t k, SequenceImage* image) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    changed_.wait(lock, [&] { return k < images_.size() || closed_ || !failure_.empty(); });
+    if (!failure_.empty()) throw std::runtime_error(failure_);
+    if (k >= images_.size()) return false;
+    *image = images_[k];
+    return true;
+  }
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  std::vector<SequenceImage> images_;
+  bool closed_ = false;
+  std::string failure_;
+};
+
+// The IMU as far as it has come (a followed recording's grows).
+class SharedImu {
+ public:
+  void Add(const std::vector<ImuSample>& samples) {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    samples_.insert(samples_.end(), samples.begin(), samples.end());
+  }
+  bool empty() const {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    return samples_.empty();
+  }
+  // scene/rolling_shutter.h CamAngularRate on the samples so far.
+  Eigen::Vector3d CamAngularRateAt(const SensorRig& rig, timestamp_ns_t stamp_ns) const {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    return CamAngularRate(rig, samples_, stamp_ns);
+  }
+  std::vector<ImuSample> All() const {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    return samples_;
+  }
+
+ private:
+  mutable std::mutex mutex_;
+  std::vector<ImuSample> samples_;
 };
 
 // Everything the stream builds, for the stages after it.
@@ -238,21 +311,46 @@ struct StreamOutput {
   BatchedMapperSummary stream_mapper_summary;
   FeatureExtractionSummary features;
   PipelineStreamSummary stream;
+  // A followed recording: the recording as it came, and its frame selection.
+  Sequence followed;
+  FrameSelection followed_selection;
 };
 
 // The stream over the selected frames (see stream_pipeline.h).
 class Stream {
  public:
-  Stream(const Sequence& sequence, std::vector<size_t> selected, const PipelineOptions& options,
-         const RunFolder& folder, FrameCache* frame_cache, KeypointGreyValues* keypoint_values)
-      : sequence_(sequence),
-        selected_(std::move(selected)),
+  // A recorded dataset: `sequence` and its selected frames.
+  Stream(const Sequence& sequence, const std::vector<size_t>& selected,
+         const PipelineOptions& options, const RunFolder& folder, FrameCache* frame_cache,
+         KeypointGreyValues* keypoint_values)
+      : sequence_(&sequence),
+        rig_(sequence.rig),
+        root_(sequence.root),
         options_(options),
         verification_options_(options.EffectiveVerificationOptions()),
         folder_(folder),
         frame_cache_(frame_cache),
         keypoint_values_(keypoint_values),
-        settled_(sequence, options) {}
+        settled_(sequence.rig, sequence.root, options) {
+    for (const size_t index : selected) {
+      frame_queue_.Add(sequence.images[index]);
+      paths_.push_back(sequence.images[index].path);
+    }
+    frame_queue_.Close();
+    imu_.Add(sequence.imu);
+  }
+  // A recording being made, followed through `follower`.
+  Stream(EurocFollower* follower, const PipelineOptions& options, const RunFolder& folder,
+         FrameCache* frame_cache, KeypointGreyValues* keypoint_values)
+      : follower_(follower),
+        rig_(follower->header().rig),
+        root_(follower->header().root),
+        options_(options),
+        verification_options_(options.EffectiveVerificationOptions()),
+        folder_(folder),
+        frame_cache_(frame_cache),
+        keypoint_values_(keypoint_values),
+        settled_(follower->header().rig, follower->header().root, options) {}
 
   StreamOutput Run(const Timer& stream_timer);
 
@@ -263,22 +361,33 @@ class Stream {
     bool in_memory = false;
   };
 
-  void Ingest(size_t f);
+  // The VIO's thread: the own VIO over the recorded dataset, a reader of
+  // its selected frames for an external VIO, or the followed recording.
+  void RunRecordedVio(const Timer& stream_timer, double* vio_seconds);
+  void FollowRecording(const Timer& stream_timer, double* vio_seconds);
+  void Ingest(const SequenceImage& image);
   bool Decidable(size_t d, bool all_ingested) const;
   void Decide(size_t d);
   // frames_[k].image with its features (read back from the database when
   // no longer in memory), normalised descriptors too when `normalised`.
   const PairImage& WithFeatures(size_t k, bool normalised);
   void ForgetFeaturesBefore(size_t k);
+  // The model so far, in OUT/live/ (the mapper's thread, after each batch).
+  void WriteLiveModel(const Reconstruction& model, const MapperBatchStatistics& batch) const;
 
-  const Sequence& sequence_;
-  const std::vector<size_t> selected_;
+  const Sequence* sequence_ = nullptr;  // a recorded dataset
+  EurocFollower* follower_ = nullptr;   // a recording being made
+  const SensorRig rig_;
+  const std::filesystem::path root_;
   const PipelineOptions& options_;
   const VerificationOptions verification_options_;
   const RunFolder& folder_;
   FrameCache* frame_cache_;
   KeypointGreyValues* keypoint_values_;
   SettledVio settled_;
+  FrameQueue frame_queue_;
+  SharedImu imu_;
+  std::vector<fs::path> paths_;  // the selected frames known up front
 
   std::optional<ColmapDatabase> database_;
   Camera camera_;
@@ -295,18 +404,16 @@ class Stream {
   // retrieved earlier frames (ids, best first, once known).
   std::vector<std::optional<std::vector<size_t>>> neighbours_;
   std::vector<std::optional<std::vector<image_t>>> retrieved_;
-  std::unordered_set<image_t> temporal_partner_;  // scratch
   size_t next_to_decide_ = 0;
   std::vector<PairStepSeconds> step_seconds_;
   StreamOutput out_;
   double busy_seconds_ = 0.0;
+  double recording_end_seconds_ = 0.0;  // a followed recording's last row
 };
 
-void Stream::Ingest(size_t f) {
-  const SequenceImage& image = sequence_.images[selected_[f]];
+void Stream::Ingest(const SequenceImage& image) {
   const std::optional<FrameVioPose> pose =
       settled_.PoseAt(image.timestamp_ns, options_.max_vio_time_difference_ns);
-  const Timer busy;
   ImageFeatures features;
   std::vector<uint8_t> grey_values;
   if (prefetch_ && prefetch_->WaitAndTake(image.path, &features, &grey_values)) {
@@ -323,6 +430,7 @@ void Stream::Ingest(size_t f) {
     features = ExtractSift(*pixels, options_.EffectiveSiftOptions());
     grey_values = SampleKeypointGreyValues(*pixels, features.keypoints);
   }
+  const Timer busy;
   const std::string name = DatabaseImageName(image);
   image_t image_id = kInvalidImageId;
   {
@@ -346,7 +454,7 @@ void Stream::Ingest(size_t f) {
     pair_image.odometer = pose->odometer;
   }
   if (rolling_shutter_) {
-    pair_image.cam_angular_rate = CamAngularRate(setup_.rig, sequence_.imu, image.timestamp_ns);
+    pair_image.cam_angular_rate = imu_.CamAngularRateAt(setup_.rig, image.timestamp_ns);
   }
   const double readout_s = rolling_shutter_ ? setup_.readout_s : 0.0;
   SetPairImageKeypoints(camera_, features.keypoints, readout_s,
@@ -507,58 +615,178 @@ void Stream::Decide(size_t d) {
   busy_seconds_ += busy.ElapsedSeconds();
 }
 
+void Stream::WriteLiveModel(const Reconstruction& model, const MapperBatchStatistics& batch) const {
+  const fs::path live = folder_.path() / "live";
+  fs::create_directories(live);
+  Trajectory world_from_body;
+  std::vector<std::pair<timestamp_ns_t, image_t>> registered;
+  for (const image_t image_id : model.RegImageIds()) {
+    const std::optional<timestamp_ns_t>& stamp = model.GetImage(image_id).timestamp_ns;
+    if (stamp) registered.emplace_back(*stamp, image_id);
+  }
+  std::sort(registered.begin(), registered.end());
+  for (const auto& [stamp, image_id] : registered) {
+    world_from_body.poses.push_back(
+        {stamp, model.GetImage(image_id).cam_from_world.Inverse() * rig_.body_from_cam.Inverse()});
+  }
+  world_from_body.has_timestamps = true;
+  WriteTumTrajectory(live / "trajectory_body.tum", world_from_body);
+  WritePly(live / "points.ply", model);
+  VIOSFM_LOG(INFO) << "run: the model after batch " << batch.batch_index + 1 << " in "
+                   << live.string() << ": " << registered.size() << " frames, "
+                   << model.NumPoints3D() << " points";
+}
+
+void Stream::RunRecordedVio(const Timer& stream_timer, double* vio_seconds) {
+  const bool own_vio = !options_.vio_source && options_.vio_trajectory.empty();
+  if (own_vio) {
+    try {
+      out_.vio = LoadVioPoses(*sequence_, options_, frame_cache_,
+                              [&](const VioProgress& progress) { settled_.Report(progress); });
+      // Frames it did not read (after the IMU's last sample): the
+      // features' thread stops waiting for them.
+      frame_cache_->StopWaiting();
+    } catch (const std::exception& error) {
+      settled_.Fail(error.what());
+      frame_cache_->StopWaiting();
+      throw;
+    }
+    *vio_seconds = stream_timer.ElapsedSeconds();
+    return;
+  }
+  // An external VIO: its poses were read before; the selected frames are
+  // decoded here for the features' thread, in order.
+  for (const fs::path& path : paths_) {
+    try {
+      frame_cache_->Read(path, /*keep=*/true);
+    } catch (const std::exception&) {
+      // The verification's thread reads it again and reports what is wrong.
+      frame_cache_->StopWaiting();
+      return;
+    }
+  }
+}
+
+void Stream::FollowRecording(const Timer& stream_timer, double* vio_seconds) {
+  // The recording as it comes: its rows into the VIO (one step at a time)
+  // and the frame selection, whose frames go to the features and the
+  // verification as they are decided.
+  Sequence& so_far = out_.followed;
+  so_far.root = root_;
+  so_far.rig = rig_;
+  try {
+    VioOptions vio_options = OwnVioOptions(options_);
+    vio_options.show_progress = false;  // a recording being made has no known length
+    VioRunner vio(rig_, vio_options, frame_cache_, std::nullopt,
+                  [&](const VioProgress& progress) { settled_.Report(progress); });
+    GrowingFrameSelection selection(options_.frame_selection);
+    size_t released = 0;  // frames whose selection is decided
+    const auto take = [&](const std::vector<size_t>& selected, size_t decided) {
+      size_t next = 0;
+      for (; released < decided; ++released) {
+        const SequenceImage& image = so_far.images[released];
+        if (next < selected.size() && selected[next] == released) {
+          ++next;
+          prefetch_->AddPath(image.path);
+          frame_queue_.Add(image);
+        } else {
+          frame_cache_->Release(image.path);  // read by the VIO, not taken
+        }
+      }
+    };
+    const auto add = [&](const EurocFollower::Rows& rows) {
+      imu_.Add(rows.imu);
+      so_far.imu.insert(so_far.imu.end(), rows.imu.begin(), rows.imu.end());
+      vio.AddImu(rows.imu);
+      for (const SequenceImage& image : rows.images) {
+        so_far.images.push_back(image);
+        vio.AddImage(image);
+      }
+    };
+    Timer silence;
+    timestamp_ns_t poll_ns = 20'000'000;
+    while (true) {
+      const EurocFollower::Rows rows = follower_->Poll();
+      if (rows.empty()) {
+        if (silence.ElapsedSeconds() >= options_.follow_idle_s) break;
+        std::this_thread::sleep_for(std::chrono::nanoseconds(poll_ns));
+        continue;
+      }
+      silence.Start();
+      recording_end_seconds_ = stream_timer.ElapsedSeconds();
+      add(rows);
+      size_t decided = 0;
+      const std::vector<size_t> selected = selection.Update(so_far, &decided);
+      take(selected, decided);
+    }
+    VIOSFM_LOG(INFO) << "run: nothing appended to " << root_.string() << " for "
+                     << options_.follow_idle_s << " s: the recording has ended ("
+                     << so_far.images.size() << " images, " << so_far.imu.size() << " IMU samples)";
+    add(follower_->Finish());
+    if (so_far.images.empty()) {
+      throw InputError(root_.string(), 0, "the recording followed has no images");
+    }
+    const VioResult result = vio.Finish(root_);
+    // The ground truth, if the recording holds one (read now, when it is
+    // complete), for the evaluation.
+    const fs::path ground_truth =
+        EurocMav0Folder(root_, EurocReadOptions()) / "state_groundtruth_estimate0" / "data.csv";
+    if (fs::exists(ground_truth)) {
+      GroundTruthReadResult read = TryReadEurocGroundTruth(ground_truth);
+      if (!read.ok()) {
+        VIOSFM_LOG(WARNING) << "ignoring the recording's ground truth, which cannot be read (no "
+                               "evaluation): "
+                            << read.error;
+      }
+      so_far.ground_truth = std::move(read.states);
+    }
+    const std::vector<size_t> last = selection.Finish(so_far, &out_.followed_selection);
+    for (const size_t k : last) {
+      prefetch_->AddPath(so_far.images[k].path);
+      frame_queue_.Add(so_far.images[k]);
+    }
+    prefetch_->ClosePaths();
+    frame_queue_.Close();
+    out_.vio = PosesOfOwnVio(so_far, options_, result);
+    frame_cache_->StopWaiting();
+  } catch (const std::exception& error) {
+    settled_.Fail(error.what());
+    frame_queue_.Fail(error.what());
+    frame_cache_->StopWaiting();
+    if (prefetch_) prefetch_->ClosePaths();
+    throw;
+  }
+  *vio_seconds = stream_timer.ElapsedSeconds();
+}
+
 StreamOutput Stream::Run(const Timer& stream_timer) {
   const bool own_vio = !options_.vio_source && options_.vio_trajectory.empty();
-  std::vector<fs::path> paths;
-  for (const size_t index : selected_) paths.push_back(sequence_.images[index].path);
-
   // The database, from here on written by this thread only.
   database_.emplace(ColmapDatabase::Open(folder_.path() / "database.db"));
   {
     ColmapDatabase::Transaction transaction(*database_);
-    camera_ = database_->ReadCamera(database_->WriteCamera(sequence_.rig.camera));
+    camera_ = database_->ReadCamera(database_->WriteCamera(rig_.camera));
     transaction.Commit();
   }
+  if (!own_vio) {
+    out_.vio = LoadVioPoses(*sequence_, options_);
+    settled_.SetAll(out_.vio);
+  }
+  prefetch_.emplace(paths_, options_.EffectiveSiftOptions(), rig_.camera, frame_cache_,
+                    kFeaturePrefetchBytes, /*wait_when_full=*/true,
+                    /*more_paths=*/follower_ != nullptr);
 
-  // The VIO, or a reader of the selected frames for an external VIO (the
-  // features follow it through the frame cache).
+  // The VIO; whatever fails, the other threads stop and are joined before
+  // the stream and its inputs go.
   Worker vio_worker;
   double vio_seconds = 0.0;
-  if (own_vio) {
-    vio_worker.Start([&] {
-      try {
-        out_.vio = LoadVioPoses(sequence_, options_, frame_cache_,
-                                [&](const VioProgress& progress) { settled_.Report(progress); });
-        // Frames it did not read (after the IMU's last sample): the
-        // features' thread stops waiting for them.
-        frame_cache_->StopWaiting();
-      } catch (const std::exception& error) {
-        settled_.Fail(error.what());
-        frame_cache_->StopWaiting();
-        throw;
-      }
-      vio_seconds = stream_timer.ElapsedSeconds();
-    });
-  } else {
-    out_.vio = LoadVioPoses(sequence_, options_);
-    settled_.SetAll(out_.vio);
-    vio_worker.Start([&] {
-      for (const fs::path& path : paths) {
-        try {
-          frame_cache_->Read(path, /*keep=*/true);
-        } catch (const std::exception&) {
-          // The verification's thread reads it again and reports what is wrong.
-          frame_cache_->StopWaiting();
-          return;
-        }
-      }
-    });
-  }
-  prefetch_.emplace(paths, options_.EffectiveSiftOptions(), sequence_.rig.camera, frame_cache_,
-                    kFeaturePrefetchBytes, /*wait_when_full=*/true);
-
-  // Whatever fails, the other threads stop and are joined before the stream
-  // and its inputs go.
+  vio_worker.Start([&] {
+    if (follower_ != nullptr) {
+      FollowRecording(stream_timer, &vio_seconds);
+    } else {
+      RunRecordedVio(stream_timer, &vio_seconds);
+    }
+  });
   Worker mapper_worker;
   struct StopOnExit {
     Stream* stream;
@@ -571,12 +799,11 @@ StreamOutput Stream::Run(const Timer& stream_timer) {
   } stop_on_exit{this, &mapper_worker};
 
   setup_ = settled_.WaitForSetup();
-  rolling_shutter_ =
-      setup_.readout_s > 0.0 && options_.compensate_rolling_shutter && !sequence_.imu.empty();
+  rolling_shutter_ = setup_.readout_s > 0.0 && options_.compensate_rolling_shutter && !imu_.empty();
   out_.input.cameras = {camera_};
-  out_.input.imu = sequence_.imu;
   out_.input.rig = setup_.rig;
   out_.input.rolling_shutter_readout_s = rolling_shutter_ ? setup_.readout_s : 0.0;
+  if (sequence_ != nullptr) out_.input.imu = sequence_->imu;
   verifier_.emplace(verification_options_, setup_.rig.body_from_cam);
   step_seconds_.assign(
       static_cast<size_t>(NumThreadsFor(1 << 20, std::max(1, options_.num_threads))), {});
@@ -594,18 +821,23 @@ StreamOutput Stream::Run(const Timer& stream_timer) {
   double mapper_seconds = 0.0;
   BatchedMapperOptions mapper_options = options_.EffectiveMapperOptions();
   mapper_options.show_progress = false;
+  const MapperBatchCallback live = [this](const Reconstruction& model,
+                                          const MapperBatchStatistics& batch) {
+    WriteLiveModel(model, batch);
+  };
   mapper_worker.Start([&] {
     out_.reconstruction =
-        RunBatchedMapper(out_.input, mapper_options, &out_.stream_mapper_summary, &pair_stream_);
+        RunBatchedMapper(out_.input, mapper_options, &out_.stream_mapper_summary, &pair_stream_,
+                         follower_ != nullptr ? live : MapperBatchCallback());
     mapper_seconds = stream_timer.ElapsedSeconds();
   });
 
-  ProgressBar progress(
-      "stream", static_cast<int64_t>(selected_.size()),
-      options_.show_progress ? ProgressBar::Mode::kAuto : ProgressBar::Mode::kNever);
-  for (size_t f = 0; f < selected_.size(); ++f) {
-    if (mapper_worker.failed()) break;
-    Ingest(f);
+  ProgressBar progress("stream", static_cast<int64_t>(paths_.size()),
+                       options_.show_progress && follower_ == nullptr ? ProgressBar::Mode::kAuto
+                                                                      : ProgressBar::Mode::kNever);
+  SequenceImage image;
+  for (size_t f = 0; !mapper_worker.failed() && frame_queue_.Get(f, &image); ++f) {
+    Ingest(image);
     while (Decidable(next_to_decide_, /*all_ingested=*/false)) Decide(next_to_decide_);
     progress.Update();
   }
@@ -622,10 +854,18 @@ StreamOutput Stream::Run(const Timer& stream_timer) {
     Decide(next_to_decide_);
   }
   const double verification_seconds = stream_timer.ElapsedSeconds();
+  // The mapper's final adjustment reads the whole IMU: a followed
+  // recording's is complete once the VIO's thread has ended (its last rows
+  // came before the frame queue closed).
+  if (follower_ != nullptr) {
+    vio_worker.JoinAndRethrow();
+    out_.input.imu = imu_.All();
+  }
   pair_stream_.Close();
   mapper_worker.JoinAndRethrow();
   vio_worker.JoinAndRethrow();
   prefetch_->Finish();
+  if (follower_ != nullptr) fs::remove_all(folder_.path() / "live");
 
   VerificationSummary& summary = out_.verification.summary;
   summary.options = verification_options_.ToKeyValues();
@@ -646,7 +886,7 @@ StreamOutput Stream::Run(const Timer& stream_timer) {
                      std::make_pair(b.image_id1, b.image_id2);
             });
   VIOSFM_LOG(INFO) << "run: verification " << FormatVerificationSummary(summary);
-  out_.features.num_images = selected_.size();
+  out_.features.num_images = frames_.size();
   out_.features.num_extracted_before = out_.stream.num_features_beside;
   out_.features.seconds = last_frame_seconds;
   out_.stream.streamed = true;
@@ -655,6 +895,11 @@ StreamOutput Stream::Run(const Timer& stream_timer) {
   out_.stream.verification_busy_seconds = busy_seconds_;
   out_.stream.mapper_seconds = mapper_seconds;
   out_.stream.seconds_after_last_frame = mapper_seconds - last_frame_seconds;
+  if (follower_ != nullptr) {
+    out_.stream.followed = true;
+    out_.stream.recording_end_seconds = recording_end_seconds_;
+    out_.stream.seconds_after_recording_end = mapper_seconds - recording_end_seconds_;
+  }
   out_.stream.num_vocabulary_frames =
       retrieval_
           ? std::min<size_t>(frames_.size(), static_cast<size_t>(options_.stream_vocabulary_frames))
@@ -667,6 +912,7 @@ StreamOutput Stream::Run(const Timer& stream_timer) {
 
 PipelineSummary RunStreamPipeline(const PipelineOptions& requested) {
   PipelineOptions options = requested;
+  options.stream = true;
   if (const std::string error = options.Validate(); !error.empty()) {
     throw InputError("invalid run options: " + error);
   }
@@ -685,54 +931,94 @@ PipelineSummary RunStreamPipeline(const PipelineOptions& requested) {
   const RunFolder folder(options);
   if (fs::exists(folder.path() / "database.db")) {
     throw InputError((folder.path() / "database.db").string(), 0,
-                     "a streamed run (--stream) starts afresh and does not resume: this folder "
-                     "holds an earlier run's features and matches; re-run with --overwrite to "
-                     "remove that run's outputs, or choose another --out");
+                     "a streamed run (--stream, --follow) starts afresh and does not resume: this "
+                     "folder holds an earlier run's features and matches; re-run with --overwrite "
+                     "to remove that run's outputs, or choose another --out");
   }
   FrameCache frame_cache(kFrameCacheBytes);
   KeypointGreyValues keypoint_values;
   RunFingerprint fingerprint = FingerprintOfInputs(options);
 
-  const Sequence sequence = clock.Run([&] {
-    Sequence read = ReadDatasetStage(options, folder, &fingerprint);
-    ResolveRateByTexture(read, &frame_cache, &options, &summary);
+  // A recorded dataset is read whole; a recording being made gives its
+  // calibration now and its rows as they come.
+  std::optional<Sequence> recorded;
+  std::optional<EurocFollower> follower;
+  clock.Run([&] {
+    if (options.follow) {
+      if (!IsEurocDatasetFolder(options.dataset)) {
+        throw InputError(options.dataset.string(), 0,
+                         "--follow: a EuRoC folder being recorded (mav0/cam0, mav0/imu0) is "
+                         "followed; this is not one");
+      }
+      follower.emplace(options.dataset);
+      ApplyCalibrationFiles(options.calibration, follower->mutable_header());
+      if (options.texture_probe.enable) {
+        VIOSFM_LOG(INFO) << "run: --follow: the texture probe needs frames from the whole "
+                            "recording, which a recording being made does not have yet: the rate "
+                            "and the feature count stay as set ("
+                         << options.frame_selection.target_rate_hz << " Hz, "
+                         << options.sift.max_num_features << " features)";
+        options.texture_probe.enable = false;
+      }
+      summary.frame_rate_hz = options.frame_selection.target_rate_hz;
+      summary.max_num_features = options.sift.max_num_features;
+      return;
+    }
+    recorded = ReadDatasetStage(options, folder, &fingerprint);
+    ResolveRateByTexture(*recorded, &frame_cache, &options, &summary);
     if (options.texture_probe.enable) AddSettledRateAndFeatures(options, &fingerprint);
-    return read;
+    summary.num_frames_in = recorded->images.size();
+    if (own_vio && FrameSelectionUsesTrajectory(*recorded, options.frame_selection)) {
+      throw InputError(options.dataset.string(), 0,
+                       "--stream: the frame selection would need the own VIO's trajectory "
+                       "(frame_selection.static_source), which a stream has only at its end; "
+                       "select the static frames by the IMU, or run without --stream");
+    }
   });
-  summary.num_frames_in = sequence.images.size();
-  if (own_vio && FrameSelectionUsesTrajectory(sequence, options.frame_selection)) {
-    throw InputError(options.dataset.string(), 0,
-                     "--stream: the frame selection would need the own VIO's trajectory "
-                     "(frame_selection.static_source), which a stream has only at its end; "
-                     "select the static frames by the IMU, or run without --stream");
-  }
 
   StreamOutput streamed = clock.Run([&] {
     const Timer stream_timer;
+    // What the database is made from, before it changes: the VIO's poses
+    // (and a followed recording's files) once the VIO has ended.
+    if (own_vio) {
+      fingerprint.Set("vio.poses", "pending: a streamed run writes them when its VIO ends");
+    }
+    if (follower) {
+      fingerprint.Set("dataset.images", "pending: the recording is followed as it is made");
+    }
+    if (follower) {
+      folder.MarkIncomplete();
+      folder.WriteRecords(fingerprint, options.ToKeyValues());
+      Stream stream(&*follower, options, folder, &frame_cache, &keypoint_values);
+      return stream.Run(stream_timer);
+    }
     // The frames to take: the selection needs no VIO here (an external
     // VIO's trajectory is read now for it when the selection asks).
     std::optional<Trajectory> external;
-    if (!own_vio && FrameSelectionUsesTrajectory(sequence, options.frame_selection)) {
-      external = LoadVioTrajectory(sequence, options);
+    if (!own_vio && FrameSelectionUsesTrajectory(*recorded, options.frame_selection)) {
+      external = LoadVioTrajectory(*recorded, options);
     }
     const FrameSelection selection =
-        SelectFrames(sequence, options.frame_selection, external ? &*external : nullptr);
+        SelectFrames(*recorded, options.frame_selection, external ? &*external : nullptr);
     if (!selection.ok()) {
       throw InputError(options.dataset.string(), 0,
                        "no frames to reconstruct: " + selection.message);
     }
     std::vector<fs::path> paths;
-    for (const size_t index : selection.kept) paths.push_back(sequence.images[index].path);
+    for (const size_t index : selection.kept) paths.push_back(recorded->images[index].path);
     frame_cache.RetainOnly(paths);
-    // What the database is made from, before it changes: the VIO's poses
-    // once the VIO has ended.
-    if (own_vio) {
-      fingerprint.Set("vio.poses", "pending: a streamed run writes them when its VIO ends");
-    }
     folder.WriteRecords(fingerprint, options.ToKeyValues());
-    Stream stream(sequence, selection.kept, options, folder, &frame_cache, &keypoint_values);
+    Stream stream(*recorded, selection.kept, options, folder, &frame_cache, &keypoint_values);
     return stream.Run(stream_timer);
   });
+  // A followed recording: as it came, now complete.
+  if (follower) {
+    recorded = std::move(streamed.followed);
+    summary.num_frames_in = recorded->images.size();
+    fingerprint = FingerprintOfInputs(options);
+    AddSequenceToFingerprint(*recorded, &fingerprint);
+  }
+  const Sequence& sequence = *recorded;
   const VioPoses& vio = streamed.vio;
   AddVioPosesToFingerprint(vio.world_from_body, vio.segments, &fingerprint);
   folder.WriteRecords(fingerprint, options.ToKeyValues());
@@ -744,9 +1030,17 @@ PipelineSummary RunStreamPipeline(const PipelineOptions& requested) {
   summary.verification = streamed.verification.summary;
   summary.mapper = std::move(streamed.stream_mapper_summary);
 
-  // The frames as a run of pipeline.h selects them, for the stages after:
-  // the same frames and VIO poses the stream took.
-  const SelectedFrames frames = SelectFramesStage(sequence, vio, options, vio_name, &frame_cache);
+  // The frames as the stream took them, for the stages after it: a
+  // recorded dataset's as SelectFramesStage selects them (the same frames
+  // and VIO poses the stream took), a followed one's as its selection took
+  // them.
+  SelectedFrames frames;
+  if (follower) {
+    frames = SelectedFramesOf(sequence, streamed.followed_selection, vio, options, vio_name,
+                              &frame_cache);
+  } else {
+    frames = SelectFramesStage(sequence, vio, options, vio_name, &frame_cache);
+  }
   if (frames.sequence.images.size() != streamed.images.size()) {
     throw InternalError("the streamed run took " + std::to_string(streamed.images.size()) +
                         " frames, the frame selection " +

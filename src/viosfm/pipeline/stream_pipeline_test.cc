@@ -5,11 +5,15 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <atomic>
+#include <chrono>
 #include <map>
 #include <set>
 #include <string>
+#include <thread>
 #include <utility>
 
+#include "viosfm/io/euroc_replay.h"
 #include "viosfm/io/verification_report.h"
 #include "viosfm/pipeline/pipeline_test_fixture.h"
 
@@ -125,6 +129,86 @@ TEST(StreamPipelineTest, OwnVioStreamedGivesItsPosesAsTheyAre) {
   std::cerr << "own VIO streamed: " << s.num_frames_registered << " frames, ATE "
             << s.evaluation->ate_rmse_m << " m; in turn " << in_turn.num_frames_registered << ", "
             << in_turn.evaluation->ate_rmse_m << " m\n";
+}
+
+// A recording followed as it is made (viosfm replay's writer on another
+// thread, at twice its pace, into a folder the run follows): the frames,
+// the VIO's poses, the pairs and the model are those of the streamed run on
+// the recorded dataset; the fingerprint too (the replayed files are the
+// recording's, byte for byte), so a run on the finished folder would reuse
+// nothing it should not. The model after every batch is in OUT/live/ while
+// the run goes on, and gone once the model is complete.
+TEST(StreamPipelineTest, ARecordingFollowedAsItIsMadeGivesTheRecordedRunsModel) {
+  const Fixture& f = SharedFixture();
+  PipelineOptions recorded = SmallOptions(f, f.folder / "follow_reference");
+  recorded.vio_trajectory.clear();
+  recorded.stream = true;
+  const PipelineSummary reference = RunPipeline(recorded);
+
+  const fs::path live = f.folder / "follow_recording";
+  std::atomic<bool> started{false};
+  std::thread recorder([&] {
+    EurocReplayOptions replay;
+    replay.speed = 2.0;
+    started = true;
+    ReplayEurocRecording(f.dataset, live, replay);
+  });
+  // The run starts once the recorder has written the calibration.
+  while (!started || !fs::exists(live / "mav0" / "imu0" / "sensor.yaml")) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  PipelineOptions options = recorded;
+  options.dataset = live;
+  options.output_folder = f.folder / "follow_out";
+  options.stream = false;
+  options.follow = true;
+  options.follow_idle_s = 1.0;
+  std::atomic<bool> live_seen{false};
+  std::thread watcher([&] {
+    while (!fs::exists(options.output_folder / "summary.json")) {
+      if (fs::exists(options.output_folder / "live" / "trajectory_body.tum")) live_seen = true;
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+  });
+  const PipelineSummary s = RunPipeline(options);
+  recorder.join();
+  watcher.join();
+  std::cerr << s.ToString() << "\n";
+  EXPECT_TRUE(s.stream.followed);
+  EXPECT_EQ(s.fingerprint, reference.fingerprint);
+  EXPECT_EQ(s.num_frames_in, reference.num_frames_in);
+  EXPECT_EQ(s.frame_selection.kept, reference.frame_selection.kept);
+  EXPECT_EQ(s.num_frames_registered, reference.num_frames_registered);
+  EXPECT_EQ(s.num_frames_unposed, 0u);
+  EXPECT_EQ(s.verification.num_pairs, reference.verification.num_pairs);
+  EXPECT_EQ(s.verification.num_accepted, reference.verification.num_accepted);
+  EXPECT_EQ(s.mapper.tracks.num_tracks, reference.mapper.tracks.num_tracks);
+  ASSERT_TRUE(s.evaluation.has_value());
+  ASSERT_TRUE(reference.evaluation.has_value());
+  EXPECT_LT(s.evaluation->ate_rmse_m, 1.1 * reference.evaluation->ate_rmse_m + 1e-4);
+  // The model came after the recording's last row: the silence that ends
+  // it, then the last frames and the final adjustment.
+  EXPECT_GE(s.stream.seconds_after_recording_end, options.follow_idle_s);
+  EXPECT_GT(s.stream.recording_end_seconds, 1.0);  // 4.5 s at twice its pace
+  EXPECT_TRUE(live_seen);
+  EXPECT_FALSE(fs::exists(options.output_folder / "live"));
+  std::cerr << "followed: ATE " << s.evaluation->ate_rmse_m << " m (recorded "
+            << reference.evaluation->ate_rmse_m << " m), the model "
+            << s.stream.seconds_after_recording_end << " s after the recording's last row\n";
+}
+
+// --follow refuses what it cannot follow, before anything is written.
+TEST(StreamPipelineTest, WhatCannotBeFollowedIsRefused) {
+  const Fixture& f = SharedFixture();
+  PipelineOptions options = SmallOptions(f, f.folder / "follow_refused");
+  options.follow = true;  // with the fixture's VIO file
+  EXPECT_THAT([&] { RunPipeline(options); },
+              ::testing::ThrowsMessage<InputError>(HasSubstr("own VIO")));
+  options.vio_trajectory.clear();
+  options.follow_idle_s = 0.0;
+  EXPECT_THAT([&] { RunPipeline(options); },
+              ::testing::ThrowsMessage<InputError>(HasSubstr("follow_idle_s")));
+  EXPECT_FALSE(fs::exists(f.folder / "follow_refused"));
 }
 
 // A streamed run does not resume: a folder with stored data is refused

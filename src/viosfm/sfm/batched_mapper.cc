@@ -449,7 +449,8 @@ constexpr double kJumpRefutingMatchRatio = 2.0;
 
 Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
                                 const BatchedMapperOptions& options,
-                                BatchedMapperSummary* summary_out, VerifiedPairStream* stream) {
+                                BatchedMapperSummary* summary_out, VerifiedPairStream* stream,
+                                const MapperBatchCallback& on_batch) {
   const Timer total_timer;
   if (!options.Check()) throw InputError("batched mapper options: " + options.Validate());
   // The frames come from the stream, a batch at a time (frames_streamed),
@@ -1351,6 +1352,7 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
                      << stats.num_ba_iterations << " iterations, "
                      << BaLinearSolverName(stats.ba_linear_solver) << "), " << stats.seconds_total
                      << " s";
+    if (on_batch && !last) on_batch(reconstruction, stats);
     summary.batches.push_back(stats);
     progress.Update();
     if (last) break;

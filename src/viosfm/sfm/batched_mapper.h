@@ -38,6 +38,7 @@
 //     placed by the VIO only, or not posed (and why).
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -353,9 +354,15 @@ void ValidateBatchedMapperInput(const BatchedMapperInput& input);
 // then be filled by the stream's producer until it closes the stream (the
 // mapper reads it only after the last batch is taken, in the final
 // adjustment). Rethrows the stream's failure.
+// `on_batch`, if given, is called after each batch but the last (whose
+// adjustment is the final one) with the model as it stands, from the
+// mapper's thread.
+using MapperBatchCallback =
+    std::function<void(const Reconstruction& model, const MapperBatchStatistics& batch)>;
 Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
                                 const BatchedMapperOptions& options,
                                 BatchedMapperSummary* summary = nullptr,
-                                VerifiedPairStream* stream = nullptr);
+                                VerifiedPairStream* stream = nullptr,
+                                const MapperBatchCallback& on_batch = {});
 
 }  // namespace viosfm
