@@ -5,7 +5,7 @@
 # Usage:
 #   bench/realtime.sh [--out DIR] [--scenarios "room two_floors corridor"]
 #                     [--duration S] [--rate HZ] [--threads "2 1"]
-#                     [--repeat N] [--build DIR] [-- EXTRA RUN ARGS...]
+#                     [--repeat N] [--follow] [--build DIR] [-- EXTRA RUN ARGS...]
 #
 # For every scenario it simulates DURATION seconds at RATE Hz (752x480, IMU
 # at 200 Hz, ground truth; default 100 s at 10 Hz, 1000 images), then runs
@@ -23,6 +23,14 @@
 # (folders run_tT_rK), each run a row of its own, and a second table gives
 # the median, smallest and largest total of each.
 #
+# With --follow every run follows its recording as it is made: `viosfm
+# replay` writes the simulated sequence into DIR/SCENARIO/recording_tT at
+# the pace of its stamps while `viosfm run --follow` reconstructs it (the
+# EXTRA RUN ARGS apply to it); the table then gives, beside the totals, when
+# the recording ended and how long after its end the model was ready. With
+# --stream among the EXTRA RUN ARGS the same stream table is written for a
+# recorded sequence.
+#
 # The figures are measured, never asserted: a shared machine is noisy, so
 # repeat a row before trusting a small difference.
 set -euo pipefail
@@ -34,6 +42,7 @@ rate=10
 threads="2 1"
 repeat=1
 build=build
+follow=0
 extra=()
 while [[ $# -gt 0 ]]; do
   case "$1" in
@@ -44,6 +53,7 @@ while [[ $# -gt 0 ]]; do
     --threads) threads=$2; shift 2 ;;
     --repeat) repeat=$2; shift 2 ;;
     --build) build=$2; shift 2 ;;
+    --follow) follow=1; shift ;;
     --) shift; extra=("$@"); break ;;
     *) echo "bench/realtime.sh: unknown argument '$1' (see the top of the script)" >&2; exit 2 ;;
   esac
@@ -55,16 +65,26 @@ if [[ ! -x "$viosfm" ]]; then
 fi
 mkdir -p "$out"
 table="$out/realtime.md"
+streamed=$follow
+for arg in "${extra[@]}"; do [[ "$arg" == "--stream" ]] && streamed=1; done
 {
   echo "# viosfm run against the recording's duration"
   echo
   echo "$(date -u +%Y-%m-%d), $(nproc) cores; ${duration} s at ${rate} Hz per scenario;" \
-       "run arguments: ${extra[*]:-(defaults)}"
+       "run arguments: ${extra[*]:-(defaults)}$([[ $follow == 1 ]] && echo ", followed as recorded")"
   echo
-  echo "| scenario | threads | rate Hz, features | vio s (CPU) | features s (CPU) |" \
-       "verification s (CPU) | mapper s (CPU) | other s | total s | CPU s | cores busy |" \
-       "x real time | registered | ATE Sim(3) mm | ATE SE(3) mm | decodes | peak MiB |"
-  echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+  if [[ $streamed == 1 ]]; then
+    echo "| scenario | threads | rate Hz, features | VIO done s | verification done s |" \
+         "total s | CPU s | cores busy | x real time | recording ends s | model after the" \
+         "recording's end s | model after the last frame s | registered | ATE Sim(3) mm |" \
+         "ATE SE(3) mm | decodes | peak MiB |"
+    echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+  else
+    echo "| scenario | threads | rate Hz, features | vio s (CPU) | features s (CPU) |" \
+         "verification s (CPU) | mapper s (CPU) | other s | total s | CPU s | cores busy |" \
+         "x real time | registered | ATE Sim(3) mm | ATE SE(3) mm | decodes | peak MiB |"
+    echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+  fi
 } > "$table"
 
 for scenario in $scenarios; do
@@ -84,12 +104,26 @@ for scenario in $scenarios; do
     fi
     run="$out/$scenario/$name"
     rm -rf "$run"
+    input="$sequence"
+    follow_args=()
+    replay_pid=
+    if [[ $follow == 1 ]]; then
+      # The recording made again, at its pace, while the run follows it.
+      input="$out/$scenario/recording_${name#run_}"
+      rm -rf "$input"
+      "$viosfm" replay "$sequence" --out "$input" > "$out/$scenario/replay_${name#run_}.log" 2>&1 &
+      replay_pid=$!
+      while [[ ! -f "$input/mav0/imu0/sensor.yaml" ]]; do sleep 0.05; done
+      follow_args=(--follow)
+    fi
     /usr/bin/time -v -o "$out/$scenario/time_${name#run_}.txt" \
-      "$viosfm" run "$sequence" --out "$run" --threads "$t" --no-progress "${extra[@]}" \
-      > "$out/$scenario/$name.log" 2>&1 || {
+      "$viosfm" run "$input" --out "$run" --threads "$t" --no-progress "${follow_args[@]}" \
+      "${extra[@]}" > "$out/$scenario/$name.log" 2>&1 || {
         echo "bench/realtime.sh: $scenario with $t thread(s) failed: see $out/$scenario/$name.log" >&2
+        [[ -n "$replay_pid" ]] && wait "$replay_pid"
         continue
       }
+    [[ -n "$replay_pid" ]] && wait "$replay_pid"
     python3 - "$run/summary.json" "$out/$scenario/time_${name#run_}.txt" "$label" "$t" "$duration" \
       >> "$table" <<'EOF'
 import json, re, sys
@@ -112,6 +146,18 @@ def mm(key):
 # have settled them, summary.json "texture_probe").
 probe = summary.get("texture_probe", {})
 used = "%g, %d" % (probe["frame_rate_hz"], probe["max_num_features"]) if probe else "n/a"
+if "stream" in summary:
+    st = summary["stream"]
+    end = "%.1f" % st["recording_end_seconds"] if "recording_end_seconds" in st else "n/a"
+    after_end = ("%.1f" % st["seconds_after_recording_end"]
+                 if "seconds_after_recording_end" in st else "n/a")
+    print("| %s | %s | %s | %.1f | %.1f | %.1f | %.1f | %.2f | %.2f | %s | %s | %.1f | %d of %d | %s | %s | %d | %.0f |" % (
+        scenario, threads, used, st["vio_seconds"], st["verification_seconds"], total, total_cpu,
+        total_cpu / total, total / duration, end, after_end, st["seconds_after_last_frame"],
+        summary["frames"]["registered"], summary["frames"]["selected"],
+        mm("ate_sim3_rmse_m"), mm("ate_se3_rmse_m"), summary.get("images", {}).get("decoded", 0),
+        peak))
+    sys.exit(0)
 print("| %s | %s | %s | %s | %s | %s | %s | %.1f | %.1f | %.1f | %.2f | %.2f | %d of %d | %s | %s | %d | %.0f |" % (
     scenario, threads, used, stage("vio"), stage("features"), stage("verification"), stage("mapper"),
     other, total, total_cpu, total_cpu / total, total / duration,

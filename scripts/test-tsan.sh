@@ -3,7 +3,8 @@
 # ThreadSanitizer (gcc) in their own build folder and runs them: the
 # parallel loops (util/parallel.h), the frame cache and the feature
 # prefetch beside the VIO, descriptor matching and verification over pairs,
-# and the whole pipeline. Any report outside the third-party libraries
+# the stream of frames and pairs to a mapper beside the verification, the
+# whole pipeline, and the streamed and followed runs. Any report outside the third-party libraries
 # listed, with their reasons, in scripts/sanitizer/tsan.supp fails the run.
 #
 #   scripts/test-tsan.sh [BUILD_DIR]     default build-tsan
@@ -14,7 +15,7 @@ build="${1:-build-tsan}"
 jobs="${JOBS:-2}"
 tests=(util/parallel_test io/frame_cache_test pipeline/feature_prefetch_test
        matching/descriptor_matcher_test matching/verification_driver_test
-       pipeline/pipeline_test)
+       sfm/verified_pair_stream_test pipeline/pipeline_test pipeline/stream_pipeline_test)
 
 launcher=()
 command -v ccache >/dev/null 2>&1 && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)

@@ -58,6 +58,11 @@ void FeaturePrefetch::Follow() {
   changed_.notify_all();
 }
 
+void FeaturePrefetch::SetSiftOptions(const SiftOptions& options) {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  options_ = options;
+}
+
 void FeaturePrefetch::AddPath(const std::filesystem::path& path) {
   {
     const std::lock_guard<std::mutex> lock(mutex_);
@@ -78,11 +83,13 @@ void FeaturePrefetch::ClosePaths() {
 void FeaturePrefetch::FollowPaths() {
   for (size_t index = 0;; ++index) {
     std::filesystem::path path;
+    SiftOptions sift;
     {
       std::unique_lock<std::mutex> lock(mutex_);
       changed_.wait(lock, [&] { return stop_ || index < paths_.size() || paths_closed_; });
       if (stop_ || index >= paths_.size()) return;
       path = paths_[index];
+      sift = options_;
     }
     Extracted extracted;
     try {
@@ -92,7 +99,7 @@ void FeaturePrefetch::FollowPaths() {
           static_cast<uint64_t>(pixels->height) != camera_.height) {
         return;  // the features stage reads it again and reports the size
       }
-      extracted.features = ExtractSift(*pixels, options_);
+      extracted.features = ExtractSift(*pixels, sift);
       extracted.grey_values = SampleKeypointGreyValues(*pixels, extracted.features.keypoints);
     } catch (const std::exception& error) {
       // The features stage reads the image again and reports what is wrong.

@@ -52,6 +52,9 @@ class FeaturePrefetch {
   FeaturePrefetch(const FeaturePrefetch&) = delete;
   FeaturePrefetch& operator=(const FeaturePrefetch&) = delete;
 
+  // The SIFT options of the frames it has not begun (a followed recording's
+  // feature count is settled by its texture probe after the thread starts).
+  void SetSiftOptions(const SiftOptions& options);
   // One more path to follow, after those given (with more_paths).
   void AddPath(const std::filesystem::path& path);
   // No more paths come (with more_paths).
@@ -86,7 +89,7 @@ class FeaturePrefetch {
 
   std::vector<std::filesystem::path> paths_;  // under mutex_ with more_paths
   bool paths_closed_ = true;
-  const SiftOptions options_;
+  SiftOptions options_;  // under mutex_
   const Camera camera_;
   FrameCache* const frames_;
   const size_t max_bytes_;

@@ -311,10 +311,20 @@ struct StreamOutput {
   BatchedMapperSummary stream_mapper_summary;
   FeatureExtractionSummary features;
   PipelineStreamSummary stream;
-  // A followed recording: the recording as it came, and its frame selection.
+  // A followed recording: the recording as it came, and its frame selection;
+  // its texture probe (on its first frames) and the rate and feature count
+  // it settled.
   Sequence followed;
   FrameSelection followed_selection;
+  PipelineSummary probe;
+  double frame_rate_hz = 0.0;
+  int max_num_features = 0;
 };
+
+// s of a followed recording's first images its texture probe looks at (the
+// frames it probes spread over them): the recording's start stands for the
+// whole, which does not exist yet. The selection waits for them.
+constexpr double kFollowProbeWindowS = 10.0;
 
 // The stream over the selected frames (see stream_pipeline.h).
 class Stream {
@@ -379,7 +389,9 @@ class Stream {
   EurocFollower* follower_ = nullptr;   // a recording being made
   const SensorRig rig_;
   const std::filesystem::path root_;
-  const PipelineOptions& options_;
+  // The run's options; a followed recording's texture probe settles their
+  // frame rate and feature count before the first frame is queued.
+  PipelineOptions options_;
   const VerificationOptions verification_options_;
   const RunFolder& folder_;
   FrameCache* frame_cache_;
@@ -679,7 +691,26 @@ void Stream::FollowRecording(const Timer& stream_timer, double* vio_seconds) {
     vio_options.show_progress = false;  // a recording being made has no known length
     VioRunner vio(rig_, vio_options, frame_cache_, std::nullopt,
                   [&](const VioProgress& progress) { settled_.Report(progress); });
-    GrowingFrameSelection selection(options_.frame_selection);
+    // The selection once the texture probe has settled the rate (at once
+    // without the probe).
+    std::optional<GrowingFrameSelection> selection;
+    const auto settle_rate = [&](bool ended) {
+      if (selection) return;
+      if (options_.texture_probe.enable) {
+        if (!ended && (so_far.images.empty() ||
+                       NsToSeconds(so_far.images.back().timestamp_ns -
+                                   so_far.images.front().timestamp_ns) < kFollowProbeWindowS)) {
+          return;
+        }
+        VIOSFM_LOG(INFO) << "run: --follow: the texture probe takes the recording's first "
+                         << kFollowProbeWindowS << " s for the whole";
+        ResolveRateByTexture(so_far, frame_cache_, &options_, &out_.probe);
+        prefetch_->SetSiftOptions(options_.EffectiveSiftOptions());
+      }
+      out_.frame_rate_hz = options_.frame_selection.target_rate_hz;
+      out_.max_num_features = options_.sift.max_num_features;
+      selection.emplace(options_.frame_selection);
+    };
     size_t released = 0;  // frames whose selection is decided
     const auto take = [&](const std::vector<size_t>& selected, size_t decided) {
       size_t next = 0;
@@ -703,20 +734,24 @@ void Stream::FollowRecording(const Timer& stream_timer, double* vio_seconds) {
         vio.AddImage(image);
       }
     };
+    // The folder is looked at every 10 ms: rows come at the IMU's rate,
+    // and a frame is taken tens of milliseconds after its stamp anyway (the
+    // IMU has to pass it).
     Timer silence;
-    timestamp_ns_t poll_ns = 20'000'000;
     while (true) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
       const EurocFollower::Rows rows = follower_->Poll();
       if (rows.empty()) {
         if (silence.ElapsedSeconds() >= options_.follow_idle_s) break;
-        std::this_thread::sleep_for(std::chrono::nanoseconds(poll_ns));
         continue;
       }
       silence.Start();
       recording_end_seconds_ = stream_timer.ElapsedSeconds();
       add(rows);
+      settle_rate(/*ended=*/false);
+      if (!selection) continue;
       size_t decided = 0;
-      const std::vector<size_t> selected = selection.Update(so_far, &decided);
+      const std::vector<size_t> selected = selection->Update(so_far, &decided);
       take(selected, decided);
     }
     VIOSFM_LOG(INFO) << "run: nothing appended to " << root_.string() << " for "
@@ -740,7 +775,8 @@ void Stream::FollowRecording(const Timer& stream_timer, double* vio_seconds) {
       }
       so_far.ground_truth = std::move(read.states);
     }
-    const std::vector<size_t> last = selection.Finish(so_far, &out_.followed_selection);
+    settle_rate(/*ended=*/true);
+    const std::vector<size_t> last = selection->Finish(so_far, &out_.followed_selection);
     for (const size_t k : last) {
       prefetch_->AddPath(so_far.images[k].path);
       frame_queue_.Add(so_far.images[k]);
@@ -952,16 +988,6 @@ PipelineSummary RunStreamPipeline(const PipelineOptions& requested) {
       }
       follower.emplace(options.dataset);
       ApplyCalibrationFiles(options.calibration, follower->mutable_header());
-      if (options.texture_probe.enable) {
-        VIOSFM_LOG(INFO) << "run: --follow: the texture probe needs frames from the whole "
-                            "recording, which a recording being made does not have yet: the rate "
-                            "and the feature count stay as set ("
-                         << options.frame_selection.target_rate_hz << " Hz, "
-                         << options.sift.max_num_features << " features)";
-        options.texture_probe.enable = false;
-      }
-      summary.frame_rate_hz = options.frame_selection.target_rate_hz;
-      summary.max_num_features = options.sift.max_num_features;
       return;
     }
     recorded = ReadDatasetStage(options, folder, &fingerprint);
@@ -1011,12 +1037,20 @@ PipelineSummary RunStreamPipeline(const PipelineOptions& requested) {
     Stream stream(*recorded, selection.kept, options, folder, &frame_cache, &keypoint_values);
     return stream.Run(stream_timer);
   });
-  // A followed recording: as it came, now complete.
+  // A followed recording: as it came, now complete, its rate and feature
+  // count as its texture probe settled them.
   if (follower) {
     recorded = std::move(streamed.followed);
     summary.num_frames_in = recorded->images.size();
+    summary.texture_probe = streamed.probe.texture_probe;
+    summary.texture_probe_message = streamed.probe.texture_probe_message;
+    options.frame_selection.target_rate_hz = streamed.frame_rate_hz;
+    options.sift.max_num_features = streamed.max_num_features;
+    summary.frame_rate_hz = streamed.frame_rate_hz;
+    summary.max_num_features = streamed.max_num_features;
     fingerprint = FingerprintOfInputs(options);
     AddSequenceToFingerprint(*recorded, &fingerprint);
+    if (options.texture_probe.enable) AddSettledRateAndFeatures(options, &fingerprint);
   }
   const Sequence& sequence = *recorded;
   const VioPoses& vio = streamed.vio;
