@@ -322,6 +322,31 @@ SensorRig ReadEurocRig(const fs::path& mav0, const EurocReadOptions& options,
   return rig;
 }
 
+std::vector<GroundTruthState> ReadEurocGroundTruthOf(const fs::path& mav0,
+                                                     const EurocReadOptions& options,
+                                                     const Rigid3d& body_from_imu) {
+  const fs::path ground_truth_csv = mav0 / "state_groundtruth_estimate0" / "data.csv";
+  if (!options.read_ground_truth || !fs::exists(ground_truth_csv)) return {};
+  std::vector<GroundTruthState> states;
+  if (options.strict_ground_truth) {
+    states = ReadEurocGroundTruth(ground_truth_csv);
+  } else {
+    GroundTruthReadResult ground_truth = TryReadEurocGroundTruth(ground_truth_csv);
+    if (!ground_truth.ok()) {
+      VIOSFM_LOG(WARNING) << "ignoring the dataset's ground truth, which cannot be read (no "
+                             "evaluation): "
+                          << ground_truth.error;
+    }
+    states = std::move(ground_truth.states);
+  }
+  if (!IsIdentity(body_from_imu)) {
+    for (GroundTruthState& state : states) {
+      state.world_from_body = state.world_from_body * body_from_imu;
+    }
+  }
+  return states;
+}
+
 Sequence ReadEurocDataset(const fs::path& root, const EurocReadOptions& options) {
   if (const std::string problem = options.Validate(); !problem.empty()) {
     throw InputError("EuRoC read options: " + problem);
@@ -361,25 +386,7 @@ Sequence ReadEurocDataset(const fs::path& root, const EurocReadOptions& options)
     }
   }
 
-  const fs::path ground_truth_csv = mav0 / "state_groundtruth_estimate0" / "data.csv";
-  if (options.read_ground_truth && fs::exists(ground_truth_csv)) {
-    if (options.strict_ground_truth) {
-      sequence.ground_truth = ReadEurocGroundTruth(ground_truth_csv);
-    } else {
-      GroundTruthReadResult ground_truth = TryReadEurocGroundTruth(ground_truth_csv);
-      if (!ground_truth.ok()) {
-        VIOSFM_LOG(WARNING) << "ignoring the dataset's ground truth, which cannot be read (no "
-                               "evaluation): "
-                            << ground_truth.error;
-      }
-      sequence.ground_truth = std::move(ground_truth.states);
-    }
-    if (!IsIdentity(body_from_imu)) {
-      for (GroundTruthState& state : sequence.ground_truth) {
-        state.world_from_body = state.world_from_body * body_from_imu;
-      }
-    }
-  }
+  sequence.ground_truth = ReadEurocGroundTruthOf(mav0, options, body_from_imu);
 
   VIOSFM_LOG(INFO) << "EuRoC " << mav0.string() << ": " << sequence.images.size() << " images ("
                    << sequence.rig.camera.ModelName() << " " << sequence.rig.camera.width << "x"

@@ -157,6 +157,14 @@ std::filesystem::path EurocMav0Folder(const std::filesystem::path& root,
 SensorRig ReadEurocRig(const std::filesystem::path& mav0, const EurocReadOptions& options,
                        Rigid3d* body_from_imu);
 
+// The ground truth of a EuRoC folder as ReadEurocDataset reads it (none
+// without the file or with read_ground_truth false; a file that cannot be
+// read is an InputError with strict_ground_truth, else a warning and none),
+// re-expressed for the IMU's T_BS `body_from_imu`.
+std::vector<GroundTruthState> ReadEurocGroundTruthOf(const std::filesystem::path& mav0,
+                                                     const EurocReadOptions& options,
+                                                     const Rigid3d& body_from_imu);
+
 // `root` is the folder that contains mav0/, or the mav0 folder itself.
 Sequence ReadEurocDataset(const std::filesystem::path& root, const EurocReadOptions& options = {});
 

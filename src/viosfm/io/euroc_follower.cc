@@ -17,9 +17,10 @@ EurocFollower::EurocFollower(const fs::path& root, const EurocReadOptions& optio
   }
   if (!fs::is_directory(root)) throw InputError(root.string(), 0, "dataset folder not found");
   const fs::path mav0 = EurocMav0Folder(root, options);
+  options_ = options;
+  mav0_ = mav0;
   header_.root = root;
-  Rigid3d body_from_imu;
-  header_.rig = ReadEurocRig(mav0, options, &body_from_imu);
+  header_.rig = ReadEurocRig(mav0, options, &body_from_imu_);
   const fs::path cam_folder = mav0 / options.cam_name;
   if (!(header_.rig.camera_rate_hz > 0)) {
     throw InputError((cam_folder / "sensor.yaml").string(), 0,
@@ -116,6 +117,10 @@ EurocFollower::Rows EurocFollower::Poll() {
 
 EurocFollower::Rows EurocFollower::Finish() {
   return Read(/*ended=*/true);
+}
+
+std::vector<GroundTruthState> EurocFollower::ReadGroundTruth() const {
+  return ReadEurocGroundTruthOf(mav0_, options_, body_from_imu_);
 }
 
 }  // namespace viosfm

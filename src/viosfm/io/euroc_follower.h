@@ -47,6 +47,9 @@ class EurocFollower {
   // The end of the recording: a last line without its newline is read as a
   // row; an image row whose file is still missing is an InputError.
   Rows Finish();
+  // The recording's ground truth, if it holds one by now (as
+  // ReadEurocDataset reads it).
+  std::vector<GroundTruthState> ReadGroundTruth() const;
 
  private:
   // One appended-to file: how far it was read, and what is left of its
@@ -65,6 +68,9 @@ class EurocFollower {
   Rows Read(bool ended);
 
   Sequence header_;
+  EurocReadOptions options_;
+  std::filesystem::path mav0_;
+  Rigid3d body_from_imu_;
   std::filesystem::path image_folder_;
   Tail images_;
   Tail imu_;

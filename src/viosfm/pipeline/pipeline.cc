@@ -77,15 +77,9 @@ PipelineSummary RunPipeline(const PipelineOptions& requested) {
   // The options as asked for, until the texture probe settles the frame
   // rate and the feature count.
   PipelineOptions options = requested;
-  if (const std::string error = options.Validate(); !error.empty()) {
-    throw InputError("invalid run options: " + error);
-  }
+  PipelineSummary summary = StartRunSummary(options);
   Timer total_timer;
   total_timer.Start();
-  PipelineSummary summary;
-  summary.started_utc = UtcNow();
-  summary.dataset = options.dataset.string();
-  summary.output_folder = options.output_folder;
   StageClock clock(&summary.stages, kStageNames);
   const std::string vio_name = options.vio_source || options.vio_trajectory.empty()
                                    ? std::string("the VIO")
@@ -218,17 +212,10 @@ PipelineSummary RunPipeline(const PipelineOptions& requested) {
     WriteOutputsStage(options.output_folder, verification, reconstruction, frames, evaluation);
   });
 
-  summary.images = frame_cache.counts();
-  summary.frame_cache_max_bytes = frame_cache.max_bytes();
-  VIOSFM_LOG(INFO) << "run: " << summary.images.decodes << " image decodes for "
-                   << summary.num_frames_in << " images (" << summary.images.reuses
-                   << " taken from the frame cache)";
   // Every output on disk before summary.json says the run is complete (the
   // other files sync as they are written, util/file_util.h).
   features.database.SyncToDisk();
-  summary.total_seconds = total_timer.ElapsedSeconds();
-  summary.peak_memory_mb = PeakMemoryMb();
-  folder.WriteSummary(PipelineSummaryToJson(summary));
+  FinishRunSummary(frame_cache, total_timer, folder, &summary);
   return summary;
 }
 

@@ -12,6 +12,7 @@
 
 #include "viosfm/pipeline/frame_selection.h"
 #include "viosfm/pipeline/texture_probe.h"
+#include "viosfm/util/errors.h"
 
 namespace viosfm {
 
@@ -34,6 +35,29 @@ void ReturnFreedMemory() {
 #ifdef __GLIBC__
   malloc_trim(0);
 #endif
+}
+
+PipelineSummary StartRunSummary(const PipelineOptions& options) {
+  if (const std::string error = options.Validate(); !error.empty()) {
+    throw InputError("invalid run options: " + error);
+  }
+  PipelineSummary summary;
+  summary.started_utc = UtcNow();
+  summary.dataset = options.dataset.string();
+  summary.output_folder = options.output_folder;
+  return summary;
+}
+
+void FinishRunSummary(const FrameCache& frame_cache, const Timer& total_timer,
+                      const RunFolder& folder, PipelineSummary* summary) {
+  summary->images = frame_cache.counts();
+  summary->frame_cache_max_bytes = frame_cache.max_bytes();
+  VIOSFM_LOG(INFO) << "run: " << summary->images.decodes << " image decodes for "
+                   << summary->num_frames_in << " images (" << summary->images.reuses
+                   << " taken from the frame cache)";
+  summary->total_seconds = total_timer.ElapsedSeconds();
+  summary->peak_memory_mb = PeakMemoryMb();
+  folder.WriteSummary(PipelineSummaryToJson(*summary));
 }
 
 void StageClock::End(const std::string& name, double seconds, double cpu_seconds) {

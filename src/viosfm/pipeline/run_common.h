@@ -12,6 +12,7 @@
 #include "viosfm/io/frame_cache.h"
 #include "viosfm/pipeline/pipeline_options.h"
 #include "viosfm/pipeline/pipeline_summary.h"
+#include "viosfm/pipeline/run_folder.h"
 #include "viosfm/scene/sequence.h"
 #include "viosfm/util/logging.h"
 #include "viosfm/util/timer.h"
@@ -73,6 +74,15 @@ class StageClock {
   std::vector<std::string> names_;
   size_t index_ = 0;
 };
+
+// A run that starts now: `options` validated (InputError naming the bad
+// field), the summary's start time, dataset and output folder.
+PipelineSummary StartRunSummary(const PipelineOptions& options);
+// A run's last step, once every other output is on disk: the image decodes
+// (logged), the total time and the peak memory into `summary`, then
+// summary.json, which says the folder is complete.
+void FinishRunSummary(const FrameCache& frame_cache, const Timer& total_timer,
+                      const RunFolder& folder, PipelineSummary* summary);
 
 // Frames or features (texture_probe.h): the frame rate and the feature
 // count of a textured recording, settled before anything is extracted, into

@@ -764,17 +764,7 @@ void Stream::FollowRecording(const Timer& stream_timer, double* vio_seconds) {
     const VioResult result = vio.Finish(root_);
     // The ground truth, if the recording holds one (read now, when it is
     // complete), for the evaluation.
-    const fs::path ground_truth =
-        EurocMav0Folder(root_, EurocReadOptions()) / "state_groundtruth_estimate0" / "data.csv";
-    if (fs::exists(ground_truth)) {
-      GroundTruthReadResult read = TryReadEurocGroundTruth(ground_truth);
-      if (!read.ok()) {
-        VIOSFM_LOG(WARNING) << "ignoring the recording's ground truth, which cannot be read (no "
-                               "evaluation): "
-                            << read.error;
-      }
-      so_far.ground_truth = std::move(read.states);
-    }
+    so_far.ground_truth = follower_->ReadGroundTruth();
     settle_rate(/*ended=*/true);
     const std::vector<size_t> last = selection->Finish(so_far, &out_.followed_selection);
     for (const size_t k : last) {
@@ -949,15 +939,9 @@ StreamOutput Stream::Run(const Timer& stream_timer) {
 PipelineSummary RunStreamPipeline(const PipelineOptions& requested) {
   PipelineOptions options = requested;
   options.stream = true;
-  if (const std::string error = options.Validate(); !error.empty()) {
-    throw InputError("invalid run options: " + error);
-  }
+  PipelineSummary summary = StartRunSummary(options);
   Timer total_timer;
   total_timer.Start();
-  PipelineSummary summary;
-  summary.started_utc = UtcNow();
-  summary.dataset = options.dataset.string();
-  summary.output_folder = options.output_folder;
   StageClock clock(&summary.stages, kStreamStageNames);
   const bool own_vio = !options.vio_source && options.vio_trajectory.empty();
   const std::string vio_name =
@@ -1113,14 +1097,8 @@ PipelineSummary RunStreamPipeline(const PipelineOptions& requested) {
                       evaluation);
   });
 
-  summary.images = frame_cache.counts();
-  summary.frame_cache_max_bytes = frame_cache.max_bytes();
-  VIOSFM_LOG(INFO) << "run: " << summary.images.decodes << " image decodes for "
-                   << summary.num_frames_in << " images (" << summary.images.reuses
-                   << " taken from the frame cache)";
-  summary.total_seconds = total_timer.ElapsedSeconds();
-  summary.peak_memory_mb = PeakMemoryMb();
-  folder.WriteSummary(PipelineSummaryToJson(summary));
+  // The database was synced and closed at the stream's end.
+  FinishRunSummary(frame_cache, total_timer, folder, &summary);
   return summary;
 }
 

@@ -372,6 +372,21 @@ TEST(BatchedMapperTest, FinalAdjustmentRefinedWhileRetriangulationChangesTheMode
   EXPECT_LT(refined_rmse, 0.75 * once_rmse);
 }
 
+// The drift case mapped with every pair at once, for the streamed runs to
+// be held against.
+struct WholeRun {
+  BatchedMapperSummary summary;
+  Reconstruction model;
+};
+const WholeRun& DriftWholeRun() {
+  static const WholeRun run = [] {
+    WholeRun whole;
+    whole.model = RunBatchedMapper(Drift().sequence.input, DriftOptions(), &whole.summary);
+    return whole;
+  }();
+  return run;
+}
+
 // The mapper beside the verification (verified_pair_stream.h): a producer
 // thread hands the pairs over as a verification would, ordered by their
 // earlier frame, a few at a time, with the frontier after each handful.
@@ -384,8 +399,8 @@ TEST(BatchedMapperTest, StreamedPairsGiveTheModelOfEveryPair) {
   const DriftCase& drift = Drift();
   const std::vector<Rigid3d>& truth = drift.sequence.cams_from_world;
   const BatchedMapperInput& full = drift.sequence.input;
-  BatchedMapperSummary whole_summary;
-  const Reconstruction whole = RunBatchedMapper(full, DriftOptions(), &whole_summary);
+  const BatchedMapperSummary& whole_summary = DriftWholeRun().summary;
+  const Reconstruction& whole = DriftWholeRun().model;
 
   BatchedMapperInput input = full;
   input.verified_pairs.clear();
@@ -449,8 +464,8 @@ TEST(BatchedMapperTest, StreamedFramesGiveTheModelOfEveryPair) {
   const DriftCase& drift = Drift();
   const std::vector<Rigid3d>& truth = drift.sequence.cams_from_world;
   const BatchedMapperInput& full = drift.sequence.input;
-  BatchedMapperSummary whole_summary;
-  const Reconstruction whole = RunBatchedMapper(full, DriftOptions(), &whole_summary);
+  const BatchedMapperSummary& whole_summary = DriftWholeRun().summary;
+  const Reconstruction& whole = DriftWholeRun().model;
 
   BatchedMapperInput input = full;
   input.verified_pairs.clear();
