@@ -60,6 +60,13 @@ void FinishRunSummary(const FrameCache& frame_cache, const Timer& total_timer,
   folder.WriteSummary(PipelineSummaryToJson(*summary));
 }
 
+void TakeEvaluation(const TrajectoryEvaluation& evaluation, PipelineSummary* summary) {
+  summary->evaluation = evaluation.summary;
+  summary->all_frames = evaluation.all_frames.counts;
+  summary->gyro_check = evaluation.gyro_check;
+  summary->gyro_check_message = evaluation.gyro_check_message;
+}
+
 void StageClock::End(const std::string& name, double seconds, double cpu_seconds) {
   stages_->push_back({name, seconds, cpu_seconds});
   VIOSFM_LOG(INFO) << "run [" << index_ << "/" << names_.size() << "] " << name << ": "

@@ -13,6 +13,7 @@
 #include "viosfm/pipeline/pipeline_options.h"
 #include "viosfm/pipeline/pipeline_summary.h"
 #include "viosfm/pipeline/run_folder.h"
+#include "viosfm/pipeline/stage_evaluation.h"
 #include "viosfm/scene/sequence.h"
 #include "viosfm/util/logging.h"
 #include "viosfm/util/timer.h"
@@ -83,6 +84,10 @@ PipelineSummary StartRunSummary(const PipelineOptions& options);
 // summary.json, which says the folder is complete.
 void FinishRunSummary(const FrameCache& frame_cache, const Timer& total_timer,
                       const RunFolder& folder, PipelineSummary* summary);
+
+// The evaluation's figures into the summary (accuracy, every image's
+// poses, the rotations against the gyro).
+void TakeEvaluation(const TrajectoryEvaluation& evaluation, PipelineSummary* summary);
 
 // Frames or features (texture_probe.h): the frame rate and the feature
 // count of a textured recording, settled before anything is extracted, into

@@ -1088,10 +1088,7 @@ PipelineSummary RunStreamPipeline(const PipelineOptions& requested) {
     return EvaluateStage(sequence, frames, vio, mapped, streamed.reconstruction,
                          options.max_vio_time_difference_ns);
   });
-  summary.evaluation = evaluation.summary;
-  summary.all_frames = evaluation.all_frames.counts;
-  summary.gyro_check = evaluation.gyro_check;
-  summary.gyro_check_message = evaluation.gyro_check_message;
+  TakeEvaluation(evaluation, &summary);
   clock.Run([&] {
     WriteOutputsStage(options.output_folder, streamed.verification, streamed.reconstruction, frames,
                       evaluation);
