@@ -535,8 +535,9 @@ void Stream::ForgetFeaturesBefore(size_t k) {
     Frame& frame = frames_[i];
     if (!frame.in_memory) continue;
     frame.in_memory = false;
-    frame.image.points_normalized = {};
-    frame.image.points_px = {};
+    // Moved from, so their memory goes (`= {}` would keep the capacity).
+    frame.image.points_normalized = std::vector<Eigen::Vector2d>();
+    frame.image.points_px = std::vector<Eigen::Vector2d>();
     frame.image.stored_descriptors.reset();
     frame.image.descriptors.reset();
   }
@@ -887,6 +888,17 @@ StreamOutput Stream::Run(const Timer& stream_timer) {
     vio_worker.JoinAndRethrow();
     out_.input.imu = imu_.All();
   }
+  out_.stream.num_vocabulary_frames =
+      retrieval_
+          ? std::min<size_t>(frames_.size(), static_cast<size_t>(options_.stream_vocabulary_frames))
+          : 0;
+  // Every frame is verified: the pixels, features and retrieval index held for the
+  // verification are freed, and the pages glibc keeps of them (in the arenas
+  // of the threads that made them) go back to the system before the mapper's
+  // final adjustment, which starts once the stream is closed.
+  ForgetFeaturesBefore(frames_.size());
+  retrieval_.reset();
+  ReturnFreedMemory();
   pair_stream_.Close();
   mapper_worker.JoinAndRethrow();
   vio_worker.JoinAndRethrow();
@@ -926,10 +938,6 @@ StreamOutput Stream::Run(const Timer& stream_timer) {
     out_.stream.recording_end_seconds = recording_end_seconds_;
     out_.stream.seconds_after_recording_end = mapper_seconds - recording_end_seconds_;
   }
-  out_.stream.num_vocabulary_frames =
-      retrieval_
-          ? std::min<size_t>(frames_.size(), static_cast<size_t>(options_.stream_vocabulary_frames))
-          : 0;
   database_->SyncToDisk();
   return std::move(out_);
 }
