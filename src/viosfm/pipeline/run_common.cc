@@ -37,6 +37,14 @@ void ReturnFreedMemory() {
 #endif
 }
 
+void LimitMallocArenas(int max_arenas) {
+#ifdef __GLIBC__
+  mallopt(M_ARENA_MAX, max_arenas);
+#else
+  (void)max_arenas;
+#endif
+}
+
 PipelineSummary StartRunSummary(const PipelineOptions& options) {
   if (const std::string error = options.Validate(); !error.empty()) {
     throw InputError("invalid run options: " + error);

@@ -43,6 +43,11 @@ double PeakMemoryMb();
 // the two added up (bench/realtime.sh, docs/benchmarks.md "Real time").
 void ReturnFreedMemory();
 
+// At most `max_arenas` glibc malloc arenas (its default: 8 a core), so that
+// memory one thread frees is found again by the others: a streamed run's
+// threads each allocate and free in turn. Call before the threads start.
+void LimitMallocArenas(int max_arenas);
+
 // Runs the stages in order, recording each one's wall-clock and CPU time
 // and logging a heading for it.
 class StageClock {

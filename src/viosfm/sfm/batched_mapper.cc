@@ -1224,6 +1224,9 @@ Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
       }
       ValidateVerifiedPairs(images, taken.pairs, streamed_pairs.size());
       build_tracks(taken.pairs);
+      // No pair comes after the last batch's: the builder's graph (every
+      // match) goes before the final adjustment needs the memory.
+      if (last) track_builder.reset();
       std::move(taken.pairs.begin(), taken.pairs.end(), std::back_inserter(streamed_pairs));
       build_priors();
       // Points as the tracks are now: split where the new pairs split a
