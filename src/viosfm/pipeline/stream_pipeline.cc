@@ -308,7 +308,7 @@ struct StreamOutput {
   // mapper holds those; the points' colours come from the grey values
   // sampled when each frame's features were extracted).
   std::vector<MapperImage> images;
-  BatchedMapperInput input;         // cameras, IMU, rig, readout (the frames: `images`)
+  BatchedMapperInput input;  // cameras, IMU, rig, readout (the frames: `images`)
   Reconstruction reconstruction;
   VerificationResult verification;
   BatchedMapperSummary stream_mapper_summary;
