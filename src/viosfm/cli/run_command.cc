@@ -35,6 +35,7 @@ struct RunArguments {
   bool no_verify_registration = false;
   VerificationBandArguments band;
   bool no_imu_scale = false;
+  bool no_imu = false;
   VioUncertaintyArguments vio_uncertainty;
   std::string timestamps;
   BagArguments bag;
@@ -72,6 +73,7 @@ void RunRun(RunArguments args) {
   options.mapper.registration.verify_with_images = !args.no_verify_registration;
   args.band.ApplyTo(&options.verification);
   options.use_imu_scale = !args.no_imu_scale;
+  options.use_imu = !args.no_imu;
   options.image_folder.camera_yaml = args.bag.camera_yaml;
   options.rosbag = MakeRosbagOptions(args.bag, {});  // extract folder: OUT/bag
   options.image_folder.timestamps_file = args.timestamps;
@@ -272,14 +274,18 @@ void RegisterRun(CLI::App& app) {
   command->add_flag("--no-verify-registration", args->no_verify_registration,
                     "Place frames by the VIO alone (the paper's), without checking them "
                     "against their 2D-3D matches; frames without a VIO pose stay unposed");
+  command->add_flag("--no-imu", args->no_imu,
+                    "Leave the dataset's IMU out: the images alone (and a VIO trajectory file, "
+                    "if given) make the model");
   command->add_flag("--no-imu-scale", args->no_imu_scale,
                     "Keep the VIO's metric scale instead of estimating it from the dataset's "
                     "IMU over the registered frames");
   AddVerificationBandOptions(command, &args->band);
   command
       ->add_option("--vio-max-gap", args->vio_max_gap_s,
-                   "A VIO trajectory file is split into segments (no relative pose across) "
-                   "at time gaps longer than this, s (0: never)")
+                   "Time gaps in a VIO trajectory file longer than this (s) are judged by the "
+                   "images: one segment where they confirm the VIO's relative pose across, a "
+                   "break where they contradict it or see nothing (0: no gap is judged)")
       ->capture_default_str();
   AddVioUncertaintyOptions(command, &args->vio_uncertainty);
   command->add_flag("--guided-matching", args->options.verification.guided_matching,

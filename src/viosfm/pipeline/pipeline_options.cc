@@ -37,6 +37,7 @@ std::string PipelineOptions::Validate() const {
   if (output_folder.empty()) return "output_folder: an output folder is required";
   if (max_vio_time_difference_ns <= 0) return "max_vio_time_difference_ns must be positive";
   if (vio_max_gap_ns < 0) return "vio_max_gap_ns must be >= 0";
+  if (!(own_vio_max_frame_interval_s > 0.0)) return "own_vio_max_frame_interval_s must be > 0";
   if (!(rolling_shutter_readout_s >= 0.0 && rolling_shutter_readout_s < 1.0)) {
     return "rolling_shutter.readout_s must be in [0, 1) s";
   }

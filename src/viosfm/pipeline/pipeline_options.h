@@ -67,6 +67,9 @@ struct PipelineOptions {
   std::filesystem::path dataset;
   // Used only when `dataset` is not a EuRoC folder.
   ImageFolderOptions image_folder;
+  // Read the dataset's IMU; false: the images alone (and a VIO file, if
+  // given). Default true.
+  bool use_imu = true;
   // Used only when `dataset` is a ROS 1 bag (".bag"): topics and calibration.
   // Its images are extracted to rosbag.extract_folder, default OUT/bag (a
   // EuRoC folder of what was read, see io/rosbag_dataset.h).
@@ -85,6 +88,10 @@ struct PipelineOptions {
   // OUT/vio/ and every posed frame is used, each stretch between
   // re-initialisations a segment of its own (stage_vio.h).
   VioOptions own_vio;
+  // s, the median interval between images beyond which viosfm's own VIO is
+  // not run (it tracks corners from one frame to the next): the images and
+  // the IMU make the model without a VIO (stage_vio.h). Default 0.25.
+  double own_vio_max_frame_interval_s = 0.25;
   std::filesystem::path vio_trajectory;                  // trajectory file; default none
   TrajectoryFormat vio_format = TrajectoryFormat::kTum;  // default TUM
   // The frame of the file's poses; kCam poses are converted with the
@@ -93,9 +100,9 @@ struct PipelineOptions {
   // Largest gap between an image stamp and the VIO pose used for it (ns).
   // Default 5 ms.
   timestamp_ns_t max_vio_time_difference_ns = 5'000'000;
-  // A trajectory file (or vio_source) is split into segments at gaps between
-  // its stamps longer than this (ns); 0: one segment. Default 1 s
-  // (stage_vio.h).
+  // Gaps between a trajectory file's (or vio_source's) stamps longer than
+  // this (ns) are candidate breaks the images judge (sfm/vio_gaps.h); 0:
+  // none. Default 1 s.
   timestamp_ns_t vio_max_gap_ns = 1'000'000'000;
   // How far the VIO's relative poses are trusted (scene/vio_uncertainty.h):
   // the relative-pose priors' covariance (mapper.vio_uncertainty) and the
@@ -212,6 +219,8 @@ struct PipelineOptions {
           self.dataset);
     visit({"image_folder.timestamps_file", "image folder: 'filename timestamp' lines", kRunOnly},
           self.image_folder.timestamps_file);
+    visit({"use_imu", "read the dataset's IMU; false: the images alone", kShapesStoredData},
+          self.use_imu);
     visit({"image_folder.camera_yaml", "image folder: the camera's sensor.yaml", kRunOnly},
           self.image_folder.camera_yaml);
     visit({"calibration.camchain", "Kalibr camchain.yaml replacing the calibration", kRunOnly},
@@ -221,13 +230,17 @@ struct PipelineOptions {
     visit({"vio.source", "function (given in code) or file", kRunOnly}, self.vio_source);
     visit({"vio.trajectory", "VIO trajectory file; empty: viosfm's own VIO", kRunOnly},
           self.vio_trajectory);
+    visit({"own_vio_max_frame_interval_s",
+           "s, median image interval beyond which the own VIO is not run", kShapesStoredData,
+           own_vio_runs},
+          self.own_vio_max_frame_interval_s);
     visit({"vio.format", "tum, euroc, kitti or colmap", kShapesStoredData}, self.vio_format);
     visit({"vio.frame", "body or cam: the moving frame of the file's poses", kShapesStoredData},
           self.vio_frame);
     visit({"vio.max_time_difference_ns", "ns, largest gap between an image and its VIO pose",
            kShapesStoredData},
           self.max_vio_time_difference_ns);
-    visit({"vio.max_gap_ns", "ns, VIO segments split at longer gaps; 0: one segment",
+    visit({"vio.max_gap_ns", "ns, longer gaps in a VIO file are judged by the images; 0: none",
            kShapesStoredData},
           self.vio_max_gap_ns);
     visit({"rolling_shutter.compensate",

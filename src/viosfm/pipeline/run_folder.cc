@@ -99,6 +99,7 @@ std::vector<std::string> RunOutputNames(const PipelineOptions& options) {
                                     "summary.json",
                                     "model",
                                     "model_txt",
+                                    "models",
                                     "verification",
                                     "vio",
                                     "live",

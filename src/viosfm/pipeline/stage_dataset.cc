@@ -21,7 +21,11 @@ Sequence ReadDatasetStage(const PipelineOptions& options, const RunFolder& folde
   // from here until summary.json is written again, last. A refused run
   // leaves an earlier run's complete folder as it was.
   if (HasRosbagExtension(options.dataset)) folder.MarkIncomplete();
-  const Sequence sequence = ReadDataset(options.dataset, PipelineDatasetReadOptions(options));
+  Sequence sequence = ReadDataset(options.dataset, PipelineDatasetReadOptions(options));
+  if (!options.use_imu && sequence.has_imu()) {
+    VIOSFM_LOG(INFO) << "run: the dataset's IMU left out (use_imu false)";
+    sequence.imu.clear();
+  }
   AddSequenceToFingerprint(sequence, fingerprint);
   folder.CheckStoredData(*fingerprint, /*complete=*/false);
   folder.MarkIncomplete();
