@@ -8,6 +8,9 @@
 #   viosfm_k    the same with the ground truth's K (--camera-yaml)
 #   colmap      feature_extractor (single camera, SIMPLE_RADIAL guessed),
 #               exhaustive_matcher, mapper: COLMAP's defaults
+#   colmap_pp   COLMAP's defaults with its principal point refined as well
+#               (Mapper.ba_refine_principal_point), as viosfm refines a
+#               guessed camera's
 #   colmap_k    the same with K given and kept
 # Each: photos registered, camera-centre ATE against the ground truth after
 # Sim(3) alignment (mm), seconds.
@@ -85,6 +88,7 @@ colmap_run() {  # NAME EXTRA_FEATURE_FLAGS... -- EXTRA_MAPPER_FLAGS...
 
 if [ "${NO_COLMAP:-0}" != 1 ]; then
   colmap_run colmap
+  colmap_run colmap_pp -- --Mapper.ba_refine_principal_point 1
   read -r fx fy cx cy < <(awk -F'[][, ]+' '/^intrinsics/ { print $2, $3, $4, $5 }' "$out/camera.yaml")
   colmap_run colmap_k --ImageReader.camera_model PINHOLE \
     --ImageReader.camera_params "$fx,$fy,$cx,$cy" -- --Mapper.ba_refine_focal_length 0 \
@@ -96,11 +100,12 @@ fi
   echo
   echo "| run | calibration | photos posed | ATE Sim(3) mm | seconds |"
   echo "|---|---|---|---|---|"
-  for variant in viosfm viosfm_k colmap colmap_k; do
+  for variant in viosfm viosfm_k colmap colmap_pp colmap_k; do
     case $variant in
       viosfm) traj=$out/viosfm/trajectory_cam.tum; calib="guessed, refined" ;;
       viosfm_k) traj=$out/viosfm_k/trajectory_cam.tum; calib="ground-truth K" ;;
-      colmap) traj=$out/colmap/trajectory_cam.tum; calib="guessed, refined" ;;
+      colmap) traj=$out/colmap/trajectory_cam.tum; calib="guessed, refined (not the principal point)" ;;
+      colmap_pp) traj=$out/colmap_pp/trajectory_cam.tum; calib="guessed, refined" ;;
       colmap_k) traj=$out/colmap_k/trajectory_cam.tum; calib="ground-truth K, fixed" ;;
     esac
     [ -f "$traj" ] || { echo "| $variant | $calib | 0 | - | - |"; continue; }

@@ -11,9 +11,11 @@
 #   cut_vio     10 Hz frames, the VIO's poses dropped for about 20 % of the
 #               frames in 3-5 s stretches, against the uncut VIO
 #   no_imu      10 Hz frames, the images alone (--no-imu, no VIO), beside
-#               COLMAP 3.8 on the same images (NO_COLMAP=1 skips it)
+#               COLMAP 3.8 on the same images with the same calibration
+#               (sequential matching; NO_COLMAP=1 skips it)
 #   sparse_imu  keyframe-like frames 0.5-2 s apart with the IMU and no VIO:
-#               metric scale and gravity from the IMU
+#               metric scale and gravity from the IMU; beside the images
+#               alone, and COLMAP 3.8 (exhaustive matching)
 #
 # Usage: scripts/bench-sfm-core.sh OUT [CASE...]   (default: every case)
 # SCENARIO (default room), SEED (default 0). Needs jq and python3-numpy.
@@ -77,13 +79,56 @@ with open(sys.argv[2], "w") as f:
 PY
 }
 
+# COLMAP 3.8 on a simulated sequence's images with its calibration:
+# OUT/colmap_NAME/trajectory_body.tum.
+colmap_on() {  # NAME SEQ MATCHER
+  local dir=$out/colmap_$1 seq=$2 matcher=$3
+  [ "${NO_COLMAP:-0}" = 1 ] && return
+  [ -f "$dir/trajectory_body.tum" ] && return
+  rm -rf "$dir"
+  mkdir -p "$dir/sparse"
+  export QT_QPA_PLATFORM=offscreen
+  local params
+  params=$(/usr/bin/python3 - "$seq/mav0/cam0/sensor.yaml" <<'PY'
+import re, sys
+text = open(sys.argv[1]).read()
+def numbers(key):
+    return [float(v) for v in re.search(key + r":\s*\[([^\]]*)\]", text).group(1).split(",")]
+fx, fy, cx, cy = numbers("intrinsics")
+k1, k2, p1, p2 = numbers("distortion_coefficients")
+print(",".join(str(v) for v in [fx, fy, cx + 0.5, cy + 0.5, k1, k2, p1, p2]))
+PY
+)
+  local start
+  start=$(date +%s.%N)
+  {
+    colmap feature_extractor --database_path "$dir/database.db" \
+      --image_path "$seq/mav0/cam0/data" --ImageReader.camera_model OPENCV \
+      --ImageReader.single_camera 1 --ImageReader.camera_params "$params" \
+      --SiftExtraction.use_gpu 0 --SiftExtraction.num_threads 2 &&
+      colmap "$matcher" --database_path "$dir/database.db" --SiftMatching.use_gpu 0 \
+        --SiftMatching.num_threads 2 &&
+      colmap mapper --database_path "$dir/database.db" --image_path "$seq/mav0/cam0/data" \
+        --output_path "$dir/sparse" --Mapper.num_threads 2 --Mapper.ba_refine_focal_length 0 \
+        --Mapper.ba_refine_principal_point 0 --Mapper.ba_refine_extra_params 0
+  } > "$dir/log.txt" 2>&1 || true
+  echo "$(date +%s.%N) - $start" | bc > "$dir/seconds.txt"
+  [ -f "$dir/sparse/0/images.bin" ] || return
+  mkdir -p "$dir/txt"
+  colmap model_converter --input_path "$dir/sparse/0" --output_path "$dir/txt" --output_type TXT \
+    > /dev/null 2>&1
+  /usr/bin/python3 "$here/scripts/lib/colmap_to_tum.py" "$dir/txt" - "$dir/trajectory_body.tum" \
+    "$seq/mav0/cam0/sensor.yaml"
+}
+
 # Sim(3) ATE (mm), SE(3) ATE (mm), scale, gravity error (deg: the tilt
 # between the model's vertical and the truth's after the SE(3) fit) of a
-# run's trajectory_body.tum against its groundtruth_body.tum.
-accuracy() {  # RUN
-  /usr/bin/python3 - "$1" <<'PY'
+# body trajectory against the truth (default: a run's trajectory_body.tum
+# against its groundtruth_body.tum).
+accuracy() {  # RUN [ESTIMATE.tum]
+  /usr/bin/python3 - "$1" "${2:-$1/trajectory_body.tum}" <<'PY'
 import sys, numpy as np
-run = sys.argv[1]
+run, estimate = sys.argv[1], sys.argv[2]
 def load(p):
     d = {}
     for l in open(p):
@@ -92,7 +137,7 @@ def load(p):
         d[round(float(v[0]), 6)] = np.array(list(map(float, v[1:8])))
     return d
 try:
-    est, gt = load(f"{run}/trajectory_body.tum"), load(f"{run}/groundtruth_body.tum")
+    est, gt = load(estimate), load(f"{run}/groundtruth_body.tum")
 except OSError:
     print("- - - -"); sys.exit()
 keys = sorted(set(est) & set(gt))
@@ -126,6 +171,15 @@ row() {  # CASE RUN NOTE
   echo "| $1 | $2 | $frames | $sim3 | $se3 | $scale | $tilt | $3 |"
 }
 
+colmap_row() {  # CASE NAME RUN (whose ground truth it is judged against)
+  local traj=$out/colmap_$2/trajectory_body.tum
+  [ -f "$traj" ] || return 0
+  local posed
+  posed=$(grep -vc '^#' "$traj")
+  read -r sim3 se3 scale tilt <<< "$(accuracy "$out/runs/$3" "$traj")"
+  echo "| $1 | COLMAP 3.8 | $posed posed | $sim3 | $se3 | $scale | $tilt | the same images and calibration, $(awk '{ printf "%.0f", $1 }' "$out/colmap_$2/seconds.txt") s |"
+}
+
 table=()
 for case in "${cases[@]}"; do
   case $case in
@@ -154,14 +208,18 @@ for case in "${cases[@]}"; do
     no_imu)
       seq=$(simulate walk10 --duration 60 --rate 10)
       run walk_no_imu "$seq" --no-imu
+      colmap_on walk10 "$seq" sequential_matcher
       table+=("$(row no_imu walk_no_imu "images only")")
+      table+=("$(colmap_row no_imu walk10 walk_no_imu)")
       ;;
     sparse_imu)
       seq=$(simulate sparse --duration 60 --rate 20 --keyframes --keyframe-min-gap 0.5 --keyframe-max-gap 2)
       run sparse_imu "$seq" --rate 0
       run sparse_no_imu "$seq" --rate 0 --no-imu
+      colmap_on sparse "$seq" exhaustive_matcher
       table+=("$(row sparse_imu sparse_imu "the images and the IMU, no VIO")")
       table+=("$(row sparse_imu sparse_no_imu "the images alone")")
+      table+=("$(colmap_row sparse_imu sparse sparse_no_imu)")
       ;;
   esac
 done

@@ -83,7 +83,7 @@ Camera GuessCamera(const fs::path& first_image) {
   const double width = static_cast<double>(image.width);
   const double height = static_cast<double>(image.height);
   Camera camera = MakeCamera(CameraModelId::kSimpleRadial, image.width, image.height,
-                             {1.2 * std::max(width, height), 0.5 * width, 0.5 * height, 0.0});
+                             {1.2 * std::max(width, height), 0.5 * (width - 1.0), 0.5 * (height - 1.0), 0.0});
   camera.camera_id = 1;
   return camera;
 }

@@ -57,6 +57,7 @@ std::string PipelineSummary::ToString() const {
         << " merged\n";
   }
   if (mapper.images_only) out << "images only: no VIO pose placed a frame\n";
+  if (!camera_refined.empty()) out << "camera (guessed, refined): " << camera_refined << "\n";
   if (!mapper.imu_alignment_message.empty()) out << "IMU: " << mapper.imu_alignment_message << "\n";
   out << "every image: " << all_frames.ToString() << "\n";
   if (texture_probe.probed) {
@@ -158,7 +159,8 @@ std::string PipelineSummaryToJson(const PipelineSummary& s) {
   json["models"] = {{"frames", s.mapper.frames_per_model},
                     {"merged", s.mapper.num_models_merged},
                     {"images_only", s.mapper.images_only},
-                    {"imu_alignment", s.mapper.imu_alignment_message}};
+                    {"imu_alignment", s.mapper.imu_alignment_message},
+                    {"camera_refined", s.camera_refined}};
   json["all_frames"] = {{"images", s.all_frames.num_images},
                         {"from_model", s.all_frames.num_from_model},
                         {"between_model_frames", s.all_frames.num_between},

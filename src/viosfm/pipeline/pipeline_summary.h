@@ -120,6 +120,9 @@ struct PipelineSummary {
   std::string vio_segment_rule;
   // The gaps of a VIO trajectory file judged by the images (sfm/vio_gaps.h).
   VioGapSummary vio_gaps;
+  // A camera guessed from the image size, as the adjustment refined it
+  // ("MODEL params"); empty for a calibrated one.
+  std::string camera_refined;
   FrameSelection frame_selection;
   // The texture probe (texture_probe.h), and the frame rate (Hz) and
   // feature count the run used after it.

@@ -1,6 +1,7 @@
 #include "viosfm/pipeline/stage_mapping.h"
 
 #include <map>
+#include <sstream>
 
 #include "viosfm/pipeline/metric_scale.h"
 #include "viosfm/scene/reprojection.h"
@@ -76,7 +77,12 @@ BatchedMapperInput LoadMapperInputStage(const SelectedFrames& frames, const VioP
 
 BatchedMapperOptions MapperOptionsOfRun(const Sequence& sequence, const PipelineOptions& options) {
   BatchedMapperOptions mapper = options.EffectiveMapperOptions();
-  if (sequence.camera_guessed) mapper.ba.refine_intrinsics = true;
+  // A guessed camera's focal length, distortion and principal point are
+  // the adjustment's to find (docs/benchmarks.md "Images alone").
+  if (sequence.camera_guessed) {
+    mapper.ba.refine_intrinsics = true;
+    mapper.ba.refine_principal_point = true;
+  }
   return mapper;
 }
 
@@ -93,6 +99,14 @@ Reconstruction MapStage(const BatchedMapperInput& input, const Sequence& sequenc
 void FinishMapping(const Sequence& sequence, const VioPoses& vio, const PipelineOptions& options,
                    PipelineSummary* summary, Reconstruction* reconstruction) {
   VIOSFM_LOG(INFO) << "run: mapper " << summary->mapper.ToString();
+  if (sequence.camera_guessed) {
+    const Camera& camera = reconstruction->GetCamera(sequence.rig.camera.camera_id);
+    std::ostringstream params;
+    for (size_t k = 0; k < camera.params.size(); ++k) params << (k > 0 ? " " : "") << camera.params[k];
+    summary->camera_refined = camera.ModelName() + " " + params.str();
+    VIOSFM_LOG(INFO) << "run: the guessed camera refined by the adjustment: "
+                     << summary->camera_refined;
+  }
   if (vio.absent && !sequence.has_imu()) {
     summary->metric_scale.message =
         "images only: the model has the scale and frame of its first two views, not metres";

@@ -41,7 +41,8 @@ Reconstruction MapStage(const BatchedMapperInput& input, const Sequence& sequenc
                         std::vector<Reconstruction>* other_models = nullptr);
 
 // The mapper's options in a run: the run's (EffectiveMapperOptions), with
-// the camera's focal length and distortion refined where it was guessed.
+// the camera's focal length, distortion and principal point refined where
+// it was guessed.
 BatchedMapperOptions MapperOptionsOfRun(const Sequence& sequence, const PipelineOptions& options);
 
 // MapStage after the mapper (summary->mapper holds its summary): the

@@ -141,14 +141,14 @@ struct VioUncertaintyModel {
 // What the model needs to know of one VIO pose besides the pose itself.
 struct VioOdometer {
   int segment = 0;            // index of the segment (see SegmentVioTrajectory)
+  double distance_m = 0.0;    // path length from the segment's first pose
+  double rotation_rad = 0.0;  // rotation angle travelled from the segment's first pose
   // The time gaps in the VIO's poses before this one within its segment
   // (SegmentsFromTimeGaps): a VIO file does not say where it
   // re-initialised, so a long gap is only a candidate break, which the
   // images confirm or refute (sfm/vio_gaps.h). Frames with different
   // counts lie on two sides of a gap.
   int gap = 0;
-  double distance_m = 0.0;    // path length from the segment's first pose
-  double rotation_rad = 0.0;  // rotation angle travelled from the segment's first pose
 };
 
 // One frame as the model sees it: the VIO's pose of the camera and its

@@ -316,7 +316,10 @@ void BatchedMapper::AddNewImages() {
     summary_.frames.emplace_back();
     summary_.frames.back().image_id = input_image.image_id;
     is_break_.push_back(0);
-    batch_of_frame_.push_back(current_batch_);
+    // Frames known up front join in the batch of their index; streamed ones
+    // in the batch that takes them.
+    batch_of_frame_.push_back(frames_streamed_ ? current_batch_
+                                               : i / static_cast<size_t>(options_.batch_size));
   }
   num_images_ = images().size();
   summary_.num_images = static_cast<int>(num_images_);
@@ -433,6 +436,7 @@ size_t BatchedMapper::RegisterFromImages(bool may_start_model) {
 }
 
 bool BatchedMapper::StartModelFromImages() {
+  if (!registration_.verify_with_images) return false;
   std::vector<size_t> candidates;
   for (const size_t i : pending_) {
     if (!vio_poses_[i]) candidates.push_back(i);

@@ -362,10 +362,18 @@ std::vector<size_t> IncrementalMapper::RegisterNextFrames(const std::vector<size
         best_count = count;
       }
     }
-    if (best_model < 0) break;
+    if (best_model < 0) {
+      VIOSFM_LOG(DEBUG) << "mapper: no frame of " << candidates.size() - registered.size()
+                        << " candidates has " << registration_.min_num_correspondences
+                        << " 2D-3D matches with a model";
+      break;
+    }
     const FrameCorrespondences correspondences = Correspondences(best_frame, best_model);
     const AbsolutePoseResult result = EstimatePose(best_frame, correspondences, std::nullopt);
     if (!result.success) {
+      VIOSFM_LOG(DEBUG) << "mapper: " << reconstruction_.GetImage(frame_ids_[best_frame]).name
+                        << ": PnP found no pose from " << correspondences.size()
+                        << " 2D-3D matches (" << result.num_inliers << " inliers)";
       failed.insert(best_frame);
       continue;
     }
