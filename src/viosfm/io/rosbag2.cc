@@ -607,12 +607,12 @@ Rosbag2Reader::Rosbag2Reader(const fs::path& path) : path_(path) {
   }
 }
 
-Rosbag2Reader::~Rosbag2Reader() {
-  opened_.clear();
-  if (!temp_folder_.empty()) {
-    std::error_code ignored;
-    fs::remove_all(temp_folder_, ignored);
-  }
+Rosbag2Reader::~Rosbag2Reader() = default;
+
+Rosbag2Reader::TempFolder::~TempFolder() {
+  if (path.empty()) return;
+  std::error_code ignored;
+  fs::remove_all(path, ignored);
 }
 
 void Rosbag2Reader::OpenFiles(const std::vector<fs::path>& listed) {
@@ -624,8 +624,8 @@ void Rosbag2Reader::OpenFiles(const std::vector<fs::path>& listed) {
     FileKind kind = KindOfFile(listed_path);
     if (kind == FileKind::kZstd) {
       // Per-file compression: decompress into a folder of our own.
-      if (temp_folder_.empty()) temp_folder_ = MakeTempFolder();
-      fs::path inner = temp_folder_ / listed_path.filename();
+      if (temp_folder_.path.empty()) temp_folder_.path = MakeTempFolder();
+      fs::path inner = temp_folder_.path / listed_path.filename();
       if (ToLower(inner.extension().string()) == ".zstd") inner.replace_extension();
       VIOSFM_LOG(INFO) << listed_path.string() << ": zstd-compressed, decompressing to "
                        << inner.string();

@@ -138,14 +138,21 @@ class Rosbag2Reader : public BagReader {
   void OpenFiles(const std::vector<std::filesystem::path>& listed);
   void AddConnection(const std::string& file, BagConnection connection);
 
+  // A folder of our own for decompressed files (FILE compression), removed
+  // with the reader, also when its constructor throws.
+  struct TempFolder {
+    std::filesystem::path path;
+    ~TempFolder();
+  };
+
   std::filesystem::path path_;
   Rosbag2Storage storage_ = Rosbag2Storage::kSqlite3;
   Rosbag2Compression compression_ = Rosbag2Compression::kNone;
   bool compression_declared_ = false;
   std::vector<std::filesystem::path> files_;
+  TempFolder temp_folder_;  // declared before opened_: removed after the files close
   std::vector<std::unique_ptr<File>> opened_;
   std::vector<BagConnection> connections_;  // one per topic
-  std::filesystem::path temp_folder_;       // decompressed files (FILE compression)
 };
 
 // Writes a one-file sqlite3 bag in the current layout (schema version 4,
