@@ -151,7 +151,7 @@ std::unique_ptr<BagReader> OpenBag(const fs::path& path) {
   std::error_code error;
   if (fs::is_directory(path, error)) return std::make_unique<Rosbag2Reader>(path);
   if (!fs::is_regular_file(path, error)) throw InputError(path.string(), 0, "bag file not found");
-  char start[sizeof(kRosbagVersionLine) - 1] = {};
+  char start[16] = {};  // enough for each container's magic
   std::ifstream file(path, std::ios::binary);
   file.read(start, sizeof(start));
   const size_t size = static_cast<size_t>(file.gcount());
