@@ -39,8 +39,11 @@ BagCompression ParseCompression(const std::string& name) {
   }
 }
 
-// Writes `sequence` as the bag `out` with the options of `args`.
-void WriteBag(const Sequence& sequence, const ConvertArguments& args) {
+// Writes `sequence` as the bag `out` with the options of `args`; the
+// calibration as the sensor.yaml files of `euroc_folder` when it is given
+// (the folder the sequence was read from).
+void WriteBag(const Sequence& sequence, const ConvertArguments& args,
+              const fs::path& euroc_folder = {}) {
   const fs::path out = args.out;
   RosbagWriteOptions options;
   if (!args.bag.image_topic.empty()) options.image_topic = args.bag.image_topic;
@@ -48,6 +51,7 @@ void WriteBag(const Sequence& sequence, const ConvertArguments& args) {
   if (!args.bag.groundtruth_topic.empty()) options.groundtruth_topic = args.bag.groundtruth_topic;
   options.compressed_images = args.compressed_images;
   options.embed_calibration = !args.no_calibration;
+  if (!euroc_folder.empty()) UseEurocCalibrationTexts(euroc_folder, &options);
   options.writer.compression = ParseCompression(args.compression);
   if (const std::string error = options.Validate(); !error.empty()) {
     throw InputError("invalid convert options: " + error);
@@ -85,7 +89,7 @@ void RunConvert(const ConvertArguments& args) {
     if (!fs::is_directory(in)) throw InputError(args.in, 0, "dataset folder not found");
     EurocReadOptions read_options;
     read_options.require_imu = false;
-    WriteBag(ReadEurocDataset(in, read_options), args);
+    WriteBag(ReadEurocDataset(in, read_options), args, in);
     return;
   }
   if (in_is_bag && out_is_bag) {

@@ -659,11 +659,16 @@ void WriteRosbagDataset(const Sequence& sequence, const fs::path& bag,
     const uint32_t camera = writer.AddTopic(kCameraCalibrationTopic, BagMessageKind::kString);
     writer.Write(
         camera, first,
-        serialize_string(EurocCameraYamlText(sequence.rig.camera, sequence.rig.body_from_cam,
-                                             sequence.rig.camera_rate_hz)));
+        serialize_string(!options.camera_yaml_text.empty()
+                             ? options.camera_yaml_text
+                             : EurocCameraYamlText(sequence.rig.camera, sequence.rig.body_from_cam,
+                                                   sequence.rig.camera_rate_hz)));
     if (sequence.has_imu()) {
       const uint32_t imu = writer.AddTopic(kImuCalibrationTopic, BagMessageKind::kString);
-      writer.Write(imu, first, serialize_string(EurocImuYamlText(sequence.rig.imu_noise)));
+      writer.Write(imu, first,
+                   serialize_string(!options.imu_yaml_text.empty()
+                                        ? options.imu_yaml_text
+                                        : EurocImuYamlText(sequence.rig.imu_noise)));
     }
   }
 
@@ -736,6 +741,20 @@ void WriteRosbagDataset(const Sequence& sequence, const fs::path& bag,
                    << " images on " << options.image_topic << ", " << sequence.imu.size()
                    << " IMU samples on " << options.imu_topic << ", "
                    << sequence.ground_truth.size() << " ground-truth poses";
+}
+
+void UseEurocCalibrationTexts(const fs::path& folder, RosbagWriteOptions* options) {
+  options->camera_yaml_text.clear();
+  options->imu_yaml_text.clear();
+  const fs::path mav0 = fs::is_directory(folder / "mav0") ? folder / "mav0" : folder;
+  const fs::path camera = mav0 / "cam0" / "sensor.yaml";
+  const fs::path imu = mav0 / "imu0" / "sensor.yaml";
+  if (!fs::is_regular_file(camera)) return;
+  if (fs::is_regular_file(imu)) {
+    if (!IsIdentity(ReadEurocImuYaml(imu).body_from_imu)) return;
+    options->imu_yaml_text = ReadTextFile(imu);
+  }
+  options->camera_yaml_text = ReadTextFile(camera);
 }
 
 }  // namespace viosfm

@@ -103,6 +103,13 @@ struct RosbagWriteOptions {
   bool compressed_images = false;
   // Embed the calibration as sensor.yaml texts (see above, 3). Default true.
   bool embed_calibration = true;
+  // The sensor.yaml texts to embed as they are, instead of texts written
+  // from the sequence's rig: a EuRoC folder's own files, so that the bag
+  // gives the folder's rig bit for bit (a rotation written as text and read
+  // again can change in its last bit). Empty: written from the rig. See
+  // UseEurocCalibrationTexts. Default empty.
+  std::string camera_yaml_text;
+  std::string imu_yaml_text;
   // The container (by the bag's extension) and its compression.
   BagWriterOptions writer;
 
@@ -117,5 +124,13 @@ struct RosbagWriteOptions {
 // record time is its stamp.
 void WriteRosbagDataset(const Sequence& sequence, const std::filesystem::path& bag,
                         const RosbagWriteOptions& options = {});
+
+// Sets options->camera_yaml_text and imu_yaml_text to the sensor.yaml files
+// of the EuRoC folder `folder` (holding mav0/, or mav0/ itself), the
+// sequence written being that folder's. Leaves them empty when a file is
+// missing or the IMU's T_BS is not the identity: the folder's reader has
+// then re-expressed the ground truth in the IMU frame, and reading the bag
+// with the original texts would do it a second time.
+void UseEurocCalibrationTexts(const std::filesystem::path& folder, RosbagWriteOptions* options);
 
 }  // namespace viosfm
