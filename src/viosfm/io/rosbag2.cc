@@ -390,7 +390,7 @@ void Rosbag2SqliteFile::ReadMessages(
   const Statement statement = Prepare(db, path_,
                                       "SELECT id, topic_id, timestamp, data FROM messages WHERE "
                                       "topic_id IN (" +
-                                          ids + ") ORDER BY timestamp, id");
+                                          ids + ") ORDER BY id");
   int status = SQLITE_ROW;
   while ((status = sqlite3_step(statement.get())) == SQLITE_ROW) {
     const int64_t row = sqlite3_column_int64(statement.get(), 0);

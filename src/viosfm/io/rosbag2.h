@@ -98,7 +98,8 @@ class Rosbag2SqliteFile {
   const std::optional<Rosbag2Metadata>& metadata() const { return metadata_; }
 
   // Calls `visit(topic, timestamp, data, row id)` for each message of a
-  // topic `wanted` accepts, by timestamp (then row id).
+  // topic `wanted` accepts, in the order recorded (row id), which needs no
+  // sort (the 2019 layout has no timestamp index).
   void ReadMessages(const std::function<bool(const Topic&)>& wanted,
                     const std::function<void(const Topic&, timestamp_ns_t, std::span<const uint8_t>,
                                              int64_t)>& visit);

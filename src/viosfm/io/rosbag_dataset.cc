@@ -264,6 +264,20 @@ GreyImage CompressedImageToGrey(const RosCompressedImage& image, const std::stri
   return out;
 }
 
+// ".jpg" or ".png" when `data` is a JPEG or PNG file (by its first bytes),
+// else "".
+std::string FileExtensionOf(const std::vector<uint8_t>& data) {
+  static constexpr uint8_t kJpeg[] = {0xff, 0xd8, 0xff};
+  static constexpr uint8_t kPng[] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  if (data.size() >= sizeof(kJpeg) && std::equal(kJpeg, kJpeg + sizeof(kJpeg), data.begin())) {
+    return ".jpg";
+  }
+  if (data.size() >= sizeof(kPng) && std::equal(kPng, kPng + sizeof(kPng), data.begin())) {
+    return ".png";
+  }
+  return "";
+}
+
 struct Located {
   timestamp_ns_t stamp_ns = 0;
   std::string location;
@@ -416,14 +430,18 @@ Sequence ReadRosbagDataset(const fs::path& bag, const RosbagDatasetOptions& opti
         if (connection.topic == image_topic) {
           GreyImage grey;
           timestamp_ns_t stamp = 0;
+          std::string file_extension;  // of a CompressedImage kept as its file
+          std::vector<uint8_t> file_bytes;
           if (KindOf(format, connection.type) == std::optional<Kind>(Kind::kImage)) {
             const RosImage image = decode.image(message.data, where);
             stamp = stamp_of(image.header);
             grey = ImageToGrey(image, where);
           } else {
-            const RosCompressedImage image = decode.compressed_image(message.data, where);
+            RosCompressedImage image = decode.compressed_image(message.data, where);
             stamp = stamp_of(image.header);
             grey = CompressedImageToGrey(image, where);
+            file_extension = FileExtensionOf(image.data);
+            if (!file_extension.empty()) file_bytes = std::move(image.data);
           }
           if (first_image_location.empty()) {
             image_width = grey.width;
@@ -439,8 +457,21 @@ Sequence ReadRosbagDataset(const fs::path& bag, const RosbagDatasetOptions& opti
             throw InputError(where + ": a second image with the stamp " + std::to_string(stamp) +
                              " ns");
           }
-          const fs::path path = image_folder / (std::to_string(stamp) + ".png");
-          WriteGreyPng(path, grey);
+          // A JPEG or PNG file is kept as it is (its name then is the one a
+          // EuRoC folder of JPEG images has); anything else is written as PNG.
+          const fs::path path = image_folder / (std::to_string(stamp) +
+                                                (file_extension.empty() ? ".png" : file_extension));
+          if (file_extension.empty()) {
+            WriteGreyPng(path, grey);
+          } else {
+            WriteFileAtomically(
+                path,
+                [&](std::ostream& out) {
+                  out.write(reinterpret_cast<const char*>(file_bytes.data()),
+                            static_cast<std::streamsize>(file_bytes.size()));
+                },
+                /*binary=*/true);
+          }
           images.push_back({{stamp, message.location}, path});
         } else if (connection.topic == imu_topic) {
           const RosImu message_imu = decode.imu(message.data, where);

@@ -11,7 +11,8 @@
 //            is written to <extract_folder>/mav0/cam0/data/<stamp ns>.png (the
 //            EuRoC layout, so the names are the ones a EuRoC folder of the same
 //            recording has), because every stage of viosfm reads images from
-//            files.
+//            files; a CompressedImage holding a JPEG or PNG file is written as
+//            that file (<stamp ns>.jpg or .png), unchanged.
 //   IMU      sensor_msgs/Imu: angular_velocity (rad/s), linear_acceleration
 //            (m/s^2), header.stamp; orientation and covariances are ignored.
 //   ground truth (optional)  geometry_msgs/PoseStamped or TransformStamped,

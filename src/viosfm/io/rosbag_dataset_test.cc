@@ -394,26 +394,34 @@ TEST(RosbagDataset, RealEurocExcerptRoundTrips) {
 }
 
 // The real RealSense recording (JPEG images) as sensor_msgs/CompressedImage
-// holding the JPEG bytes: the grey pixels read from the bag are the ones
-// OpenCV decodes from the files (first 30 images, to stay fast).
+// holding the JPEG files, in every container: read back, each image is the
+// recording's JPEG file itself, under its name, and the grey pixels are the
+// ones OpenCV decodes from the files (first 30 images, to stay fast).
 TEST(RosbagDataset, RealJpegRecordingAsCompressedImages) {
   VIOSFM_REQUIRE_DATASET(root, "realsense_room_30s");
   Sequence original = ReadEurocDataset(root);
   original.images.resize(30);
   const fs::path folder = testing::MakeScratchFolder("rosbag_dataset_realsense");
-  RosbagWriteOptions write;
-  write.compressed_images = true;
-  write.writer.compression = BagCompression::kLz4;
-  WriteRosbagDataset(original, folder / "rs.bag", write);
-  const Sequence read = ReadRosbagDataset(folder / "rs.bag", Extract(folder / "x"));
-  ASSERT_EQ(read.images.size(), 30u);
-  for (size_t i = 0; i < read.images.size(); ++i) {
-    EXPECT_EQ(read.images[i].timestamp_ns, original.images[i].timestamp_ns);
-    EXPECT_EQ(ReadGreyImage(read.images[i].path).pixels,
-              ReadGreyImage(original.images[i].path).pixels);
+  for (const char* name : {"rs.bag", "rs.db3", "rs.mcap"}) {
+    SCOPED_TRACE(name);
+    RosbagWriteOptions write;
+    write.compressed_images = true;
+    write.writer.compression =
+        std::string(name) == "rs.db3" ? BagCompression::kZstd : BagCompression::kLz4;
+    WriteRosbagDataset(original, folder / name, write);
+    const Sequence read =
+        ReadRosbagDataset(folder / name, Extract(folder / ("x_" + std::string(name))));
+    ASSERT_EQ(read.images.size(), 30u);
+    for (size_t i = 0; i < read.images.size(); ++i) {
+      EXPECT_EQ(read.images[i].timestamp_ns, original.images[i].timestamp_ns);
+      EXPECT_EQ(read.images[i].path.filename(), original.images[i].path.filename());
+      EXPECT_TRUE(ReadTextFile(read.images[i].path) == ReadTextFile(original.images[i].path));
+    }
+    EXPECT_EQ(ReadGreyImage(read.images[29].path).pixels,
+              ReadGreyImage(original.images[29].path).pixels);
+    EXPECT_EQ(read.imu.size(), original.imu.size());
+    EXPECT_EQ(read.rig.camera.params, original.rig.camera.params);
   }
-  EXPECT_EQ(read.imu.size(), original.imu.size());
-  EXPECT_EQ(read.rig.camera.params, original.rig.camera.params);
 }
 
 // The real recording's calibration was written by others (a rotation
