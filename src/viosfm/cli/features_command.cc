@@ -99,7 +99,8 @@ void RegisterFeatures(CLI::App& app) {
       "skips the images already stored");
   command
       ->add_option("dataset", args->dataset,
-                   "EuRoC dataset (folder containing mav0/), a folder of images or a ROS 1 bag")
+                   "EuRoC dataset (folder containing mav0/), a folder of images or a bag (ROS 1 "
+                   ".bag; ROS 2 .db3, .mcap or bag folder)")
       ->required();
   command->add_option("--database", args->database, "COLMAP database (created if missing)")
       ->required();

@@ -125,7 +125,8 @@ void RegisterMatch(CLI::App& app) {
                          "database; a re-run skips the pairs already stored");
   command
       ->add_option("dataset", args->dataset,
-                   "EuRoC dataset (folder containing mav0/) or a ROS 1 bag")
+                   "EuRoC dataset (folder containing mav0/) or a bag (ROS 1 .bag; ROS 2 .db3, "
+                   ".mcap or bag folder)")
       ->required();
   command->add_option("--database", args->database, "COLMAP database with features")->required();
   AddBagOptions(command, &args->bag, /*add_camera_yaml=*/true);

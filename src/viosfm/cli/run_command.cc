@@ -184,7 +184,8 @@ void RegisterRun(CLI::App& app) {
       "says they were made from the same inputs and options");
   command
       ->add_option("dataset", args->dataset,
-                   "EuRoC dataset (folder containing mav0/), a folder of images or a ROS 1 bag")
+                   "EuRoC dataset (folder containing mav0/), a folder of images or a bag (ROS 1 "
+                   ".bag; ROS 2 .db3, .mcap or bag folder)")
       ->required();
   command->add_option("--out", args->out, "Output folder (created if missing)")->required();
   AddCalibrationOptions(command, &args->options.calibration);

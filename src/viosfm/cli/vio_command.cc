@@ -71,7 +71,8 @@ void RegisterVio(CLI::App& app) {
       "preintegration and marginalisation): a pose, velocity, biases and status for every frame");
   command
       ->add_option("dataset", args->dataset,
-                   "EuRoC dataset (folder containing mav0/) or a ROS 1 bag")
+                   "EuRoC dataset (folder containing mav0/) or a bag (ROS 1 .bag; ROS 2 .db3, "
+                   ".mcap or bag folder)")
       ->required();
   command->add_option("--out", args->out, "Output folder")->required();
   AddCalibrationOptions(command, &args->calibration);

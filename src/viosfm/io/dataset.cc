@@ -13,7 +13,7 @@ bool IsEurocDatasetFolder(const fs::path& folder) {
 }
 
 void CheckDatasetExists(const fs::path& path) {
-  if (HasRosbagExtension(path)) {
+  if (HasBagExtension(path)) {
     if (!fs::is_regular_file(path)) throw InputError(path.string(), 0, "bag file not found");
   } else if (!fs::is_directory(path)) {
     throw InputError(path.string(), 0, "dataset folder not found");
@@ -23,7 +23,7 @@ void CheckDatasetExists(const fs::path& path) {
 Sequence ReadDataset(const fs::path& path, const DatasetReadOptions& options) {
   CheckDatasetExists(path);
   Sequence sequence;
-  if (HasRosbagExtension(path)) {
+  if (IsBagPath(path)) {
     RosbagDatasetOptions rosbag = options.rosbag;
     rosbag.require_imu = rosbag.require_imu || options.require_imu;
     sequence = ReadRosbagDataset(path, rosbag);

@@ -1,5 +1,6 @@
 // Reading any dataset viosfm takes, by what it is: a EuRoC ASL folder (one
-// holding mav0/, or mav0/ itself), a ROS 1 bag (".bag", rosbag_dataset.h)
+// holding mav0/, or mav0/ itself), a bag (rosbag_dataset.h: a ROS 1 ".bag",
+// a ROS 2 ".db3" or ".mcap", or a rosbag2 folder holding metadata.yaml)
 // or a folder of images with a camera (image_folder.h); then the Kalibr or
 // EuRoC calibration files, if given, replace what the dataset says
 // (kalibr.h). Every command that takes a dataset reads it here.
@@ -32,7 +33,8 @@ struct DatasetReadOptions {
 bool IsEurocDatasetFolder(const std::filesystem::path& folder);
 
 // Throws InputError naming `path` when no dataset can be there: a bag
-// (".bag") that is not a file, or anything else that is not a folder. A run
+// file (".bag", ".db3", ".mcap") that is not a file, or anything else that is
+// not a folder. A run
 // checks it before it creates its output folder.
 void CheckDatasetExists(const std::filesystem::path& path);
 

@@ -68,7 +68,7 @@ std::string PipelineOptions::Validate() const {
     return "follow: a recording being made has its static frames found by the IMU "
            "(frame_selection.static_source auto or imu)";
   }
-  if (follow && HasRosbagExtension(dataset)) {
+  if (follow && IsBagPath(dataset)) {
     return "follow: a EuRoC folder being recorded is followed, not a bag";
   }
   if (const std::string error = calibration.Validate(); !error.empty()) {
@@ -89,7 +89,7 @@ std::string PipelineOptions::Validate() const {
   if (const std::string error = EffectiveMapperOptions().Validate(); !error.empty()) {
     return "mapper." + error;
   }
-  if (HasRosbagExtension(dataset)) {
+  if (IsBagPath(dataset)) {
     if (const std::string error = EffectiveRosbagOptions().Validate(); !error.empty()) {
       return "rosbag." + error;
     }

@@ -208,14 +208,14 @@ struct PipelineOptions {
   // their structs.
   template <class Self, class Visitor>
   static void VisitFields(Self& self, Visitor&& visit) {
-    const bool is_bag = HasRosbagExtension(self.dataset);
+    const bool is_bag = IsBagPath(self.dataset);
     const bool own_vio_runs = !self.vio_source && self.vio_trajectory.empty();
     // The uncertainty model widens the verification's epipolar band (and
     // weighs the mapper's priors, which stores nothing).
     const OptionEffect uncertainty_effect =
         self.verification.use_vio_prior && self.verification.band_follows_drift ? kShapesStoredData
                                                                                 : kRunOnly;
-    visit({"dataset", "EuRoC folder, image folder or ROS 1 bag (content hashed)", kRunOnly},
+    visit({"dataset", "EuRoC folder, image folder or bag, ROS 1 or 2 (content hashed)", kRunOnly},
           self.dataset);
     visit({"image_folder.timestamps_file", "image folder: 'filename timestamp' lines", kRunOnly},
           self.image_folder.timestamps_file);

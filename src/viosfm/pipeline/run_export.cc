@@ -5,10 +5,10 @@
 #include <nlohmann/json.hpp>
 #include <vector>
 
+#include "viosfm/io/bag_container.h"
 #include "viosfm/io/colmap_model.h"
 #include "viosfm/io/colmap_pose_priors.h"
 #include "viosfm/io/ply.h"
-#include "viosfm/io/rosbag.h"
 #include "viosfm/io/transforms_json.h"
 #include "viosfm/sfm/camera_position_covariance.h"
 #include "viosfm/util/errors.h"
@@ -39,7 +39,7 @@ fs::path ImageFolderOfRun(const fs::path& run_folder) {
   const fs::path dataset = text("dataset");
   if (dataset.empty()) return {};
   std::vector<fs::path> candidates;
-  if (HasRosbagExtension(dataset)) {
+  if (IsBagPath(dataset)) {
     const fs::path extract = text("rosbag.extract_folder");
     candidates = {extract / "mav0" / "cam0" / "data",
                   run_folder / "bag" / "mav0" / "cam0" / "data"};

@@ -69,9 +69,16 @@ RunFingerprint FingerprintOfInputs(const PipelineOptions& options) {
   RunFingerprint fingerprint;
   fingerprint.Set("fingerprint.version", kRunFingerprintVersion);
   const fs::path& dataset = options.dataset;
-  if (HasRosbagExtension(dataset)) {
+  if (IsBagPath(dataset)) {
     fingerprint.Set("dataset.kind", "rosbag");
-    fingerprint.Set("dataset.bag", FileValue(dataset));
+    if (fs::is_directory(dataset)) {
+      // A rosbag2 folder: metadata.yaml and its storage files.
+      for (const fs::path& file : BagFiles(dataset)) {
+        fingerprint.Set("dataset.bag." + file.filename().string(), FileValue(file));
+      }
+    } else {
+      fingerprint.Set("dataset.bag", FileValue(dataset));
+    }
     const RosbagDatasetOptions rosbag = options.EffectiveRosbagOptions();
     if (!rosbag.camera_yaml.empty()) {
       fingerprint.Set("dataset.camera_yaml", FileValue(rosbag.camera_yaml));

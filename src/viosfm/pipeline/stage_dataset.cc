@@ -20,7 +20,7 @@ Sequence ReadDatasetStage(const PipelineOptions& options, const RunFolder& folde
   // A bag's images are extracted into the folder: the folder is incomplete
   // from here until summary.json is written again, last. A refused run
   // leaves an earlier run's complete folder as it was.
-  if (HasRosbagExtension(options.dataset)) folder.MarkIncomplete();
+  if (IsBagPath(options.dataset)) folder.MarkIncomplete();
   Sequence sequence = ReadDataset(options.dataset, PipelineDatasetReadOptions(options));
   if (!options.use_imu && sequence.has_imu()) {
     VIOSFM_LOG(INFO) << "run: the dataset's IMU left out (use_imu false)";
