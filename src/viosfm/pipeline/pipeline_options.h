@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "viosfm/features/sift.h"
+#include "viosfm/io/dataset_checks.h"
 #include "viosfm/io/image_folder.h"
 #include "viosfm/io/kalibr.h"
 #include "viosfm/io/rosbag_dataset.h"
@@ -74,6 +75,9 @@ struct PipelineOptions {
   // Kalibr camchain.yaml (+ imu.yaml) replacing the dataset's calibration
   // (io/kalibr.h, ApplyCalibration). Default none.
   CalibrationFiles calibration;
+  // What the dataset's sensors may say and where its files may lie
+  // (io/dataset_checks.h: the IMU's bounds, links leaving the dataset).
+  DatasetChecks dataset_checks;
   // The output folder (created if missing). Required.
   std::filesystem::path output_folder;
 
@@ -217,6 +221,7 @@ struct PipelineOptions {
     visit({"calibration.camchain", "Kalibr camchain.yaml replacing the calibration", kRunOnly},
           self.calibration.camchain);
     visit({"calibration.imu", "Kalibr imu.yaml (needs camchain)", kRunOnly}, self.calibration.imu);
+    VisitOptionGroup({"dataset_checks", "", kRunOnly}, self.dataset_checks, visit);
     visit({"output_folder", "the output folder", kRunOnly}, self.output_folder);
     visit({"vio.source", "function (given in code) or file", kRunOnly}, self.vio_source);
     visit({"vio.trajectory", "VIO trajectory file; empty: viosfm's own VIO", kRunOnly},
