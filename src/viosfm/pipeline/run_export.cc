@@ -106,12 +106,18 @@ void CheckExportFolderPlace(const fs::path& run, const fs::path& output) {
   }
 }
 
-// The first component of `output` below `run`, if it lies inside it.
+// The name of `output` in `run`, if it lies inside it; InputError naming
+// it if it lies deeper than directly inside (in one of the run's folders).
 std::optional<std::string> NameInsideRun(const fs::path& run, const fs::path& output) {
   const fs::path run_path = fs::weakly_canonical(fs::absolute(run));
   const fs::path output_path = fs::weakly_canonical(fs::absolute(output));
   if (!IsInsideOrSame(output_path, run_path) || output_path == run_path) return std::nullopt;
-  return output_path.lexically_relative(run_path).begin()->string();
+  if (output_path.parent_path() != run_path) {
+    throw InputError(output.string(), 0,
+                     "--out lies inside a folder of the run: an export inside the run folder goes "
+                     "directly into it (default RUN/export); nothing was changed");
+  }
+  return output_path.filename().string();
 }
 
 }  // namespace
@@ -132,6 +138,7 @@ RunExportSummary ExportRun(const RunExportOptions& options) {
   RequireFolder(run, "run folder");
   const fs::path output = options.output_folder.empty() ? run / "export" : options.output_folder;
   CheckExportFolderPlace(run, output);
+  const std::optional<std::string> inside_run = NameInsideRun(run, output);
   // The run's folder is locked while it is read (and its manifest records
   // an export written inside it); the export's folder by its manifest.
   std::optional<ManagedFolder> run_manifest;
@@ -217,7 +224,6 @@ RunExportSummary ExportRun(const RunExportOptions& options) {
 
   // An export folder inside the run is the run's, with a manifest of its
   // own (what the user adds there stays through the run's --overwrite).
-  const std::optional<std::string> inside_run = NameInsideRun(run, output);
   if (inside_run && run_manifest) {
     if (run_manifest->IsForeign(*inside_run) &&
         run_manifest->manifest().subfolders.count(*inside_run) == 0) {
