@@ -174,9 +174,10 @@ struct PipelineOptions {
   int num_threads = 2;
   // Seed of every random choice (RANSAC, vocabulary training). Default 0.
   uint64_t seed = 0;
-  // Remove the output folder's stored database and outputs of an earlier
-  // run (RunOutputNames, run_fingerprint.h) before starting, instead of
-  // reusing them or refusing a folder made from other inputs. Default false.
+  // Remove what viosfm wrote in the output folder (its manifest,
+  // run_folder.h: an earlier run's database and outputs, report.html,
+  // export/) before starting, instead of reusing them or refusing a folder
+  // made from other inputs. Default false.
   bool overwrite = false;
   // Progress bars. Default true.
   bool show_progress = true;
