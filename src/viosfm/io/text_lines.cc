@@ -16,7 +16,7 @@ void ForEachDataLine(const std::filesystem::path& path, const std::string& what,
   if (!stream) throw InputError(path.string(), 0, "cannot open " + what + " for reading");
   // One line at a time, each at most kMaxTextLineBytes: the memory a file
   // takes while it is read does not grow with its size.
-  std::vector<char> buffer(kMaxTextLineBytes + 2);
+  std::vector<char> buffer(kMaxTextLineBytes + 1);
   int64_t line_number = 0;
   while (true) {
     stream.getline(buffer.data(), static_cast<std::streamsize>(buffer.size()));
