@@ -24,7 +24,7 @@
 # Usage: scripts/check-integrity.sh [BUILD_DIR [WORK_DIR]]
 #   BUILD_DIR  default build (needs build/src/viosfm/cli/viosfm)
 #   WORK_DIR   default BUILD_DIR/integrity (emptied first); logs in WORK_DIR/logs
-# Takes about 15 minutes on 2 cores. Exit status 1 if any check fails.
+# Takes about 20 minutes on 2 cores. Exit status 1 if any check fails.
 set -uo pipefail
 
 BUILD_DIR=${1:-build}
