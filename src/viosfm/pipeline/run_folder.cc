@@ -42,10 +42,6 @@ void WriteJsonFile(const fs::path& path, const std::string& text) {
   WriteFileAtomically(path, [&text](std::ostream& stream) { stream << text << "\n"; });
 }
 
-}  // namespace
-
-namespace {
-
 // "key was 'a', is now 'b'; ..." for at most kMaxDifferencesNamed
 // differences, and whether a key one side lacks suggests another version.
 std::string DescribeDifferences(const std::vector<FingerprintDifference>& differences,
@@ -71,8 +67,9 @@ std::string DescribeDifferences(const std::vector<FingerprintDifference>& differ
   return message;
 }
 
-// " (changed: cam0/data/1.png, ...)": the images whose size or content
-// differ from the database's record; empty if none can be named.
+// " (the content of 2 image(s) changed: 1.png, 7.png)": the images whose
+// size or content differ from the database's record; empty if none can be
+// named.
 std::string ChangedImages(const std::optional<ViosfmDatabaseRecord>& record,
                           const RunFingerprint& current) {
   if (!record || current.image_files.empty()) return "";
