@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <unordered_set>
 
+#include "viosfm/matching/incremental_pair_generator.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/string_util.h"
 
@@ -90,25 +91,26 @@ std::vector<ImagePair> TemporalRetrievalPairs(const std::vector<PairGeneratorIma
                                               int num_temporal_neighbors,
                                               int num_retrieval_neighbors) {
   VIOSFM_CHECK(retrieval.empty() || retrieval.size() == images.size());
-  std::unordered_set<image_t> known;
-  for (const PairGeneratorImage& image : images) known.insert(image.image_id);
+  // The frames fed to the incremental generator as a recording known up
+  // front: the same pairs, frame by frame.
+  PairGeneratorOptions options;
+  options.mode = PairMode::kTemporalRetrieval;
+  options.num_temporal_neighbors = num_temporal_neighbors;
+  options.num_retrieval_neighbors = num_retrieval_neighbors;
+  IncrementalPairGenerator generator(options);
+  generator.SetRetrievalUsed(!retrieval.empty());
+  for (const PairGeneratorImage& image : images) generator.AddFrame(image);
+  for (size_t k = 0; k < retrieval.size(); ++k) generator.SetRetrieved(k, retrieval[k]);
+  generator.FinishFrames();
   std::vector<ImagePair> pairs;
-  for (size_t k = 0; k < images.size(); ++k) {
-    const image_t query = images[k].image_id;
-    std::unordered_set<image_t> taken = {query};
-    for (const size_t n : TemporalNeighbors(images, k, num_temporal_neighbors)) {
-      taken.insert(images[n].image_id);
-      pairs.push_back({query, images[n].image_id});
-    }
-    if (retrieval.empty()) continue;
-    int added = 0;
-    for (const image_t candidate : retrieval[k]) {
-      if (added >= num_retrieval_neighbors) break;
-      if (!known.contains(candidate) || !taken.insert(candidate).second) continue;
-      pairs.push_back({query, candidate});
-      ++added;
+  size_t frame = 0;
+  std::vector<ProposedPair> proposed;
+  while (generator.Next(&frame, &proposed)) {
+    for (const ProposedPair& pair : proposed) {
+      pairs.push_back({images[pair.earlier_frame].image_id, images[frame].image_id});
     }
   }
+  VIOSFM_CHECK(generator.HasFinished());
   return SortAndDeduplicatePairs(std::move(pairs));
 }
 

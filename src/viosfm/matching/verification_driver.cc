@@ -15,6 +15,7 @@
 
 #include "viosfm/features/sift.h"
 #include "viosfm/geometry/epipolar.h"
+#include "viosfm/matching/pair_decider.h"
 #include "viosfm/matching/pair_verification.h"
 #include "viosfm/sensor/camera_models.h"
 #include "viosfm/util/errors.h"
@@ -236,15 +237,11 @@ VerificationResult RunVerification(const Sequence& sequence,
                    << " images (" << PairModeName(options.pairs.mode) << ", "
                    << (use_prior ? "VIO prior + RANSAC" : "RANSAC only") << ")";
 
+  PairDecider decider(options, sequence.rig.body_from_cam, database);
   std::vector<bool> stored(pairs.size());
   for (size_t i = 0; i < pairs.size(); ++i) {
-    stored[i] = database->ExistsMatches(pairs[i].image_id1, pairs[i].image_id2);
+    stored[i] = decider.IsStored(pairs[i].image_id1, pairs[i].image_id2);
   }
-
-  const int num_workers =
-      NumThreadsFor(std::max<int64_t>(1, options.batch_size), options.num_threads);
-  std::vector<PairStepSeconds> step_seconds(num_workers);
-  const PairVerifier verifier(options, sequence.rig.body_from_cam);
 
   // For on_verified: the earliest stamp among the frames of pairs[k..].
   std::vector<timestamp_ns_t> pending_from_ns(pairs.size() + 1,
@@ -260,7 +257,6 @@ VerificationResult RunVerification(const Sequence& sequence,
       options.show_progress ? ProgressBar::Mode::kAuto : ProgressBar::Mode::kNever);
   // The batch's images with their features.
   std::unordered_map<image_t, PairImage> cache;
-  result.decisions.reserve(pairs.size());
   for (size_t begin = 0; begin < pairs.size(); begin += options.batch_size) {
     const size_t end = std::min(pairs.size(), begin + static_cast<size_t>(options.batch_size));
 
@@ -300,74 +296,42 @@ VerificationResult RunVerification(const Sequence& sequence,
             NormalizeDescriptors(*data.stored_descriptors));
       }
     }
-    std::vector<PairWork> work(end - begin);
+    std::vector<PairToDecide> batch;
     for (size_t i = begin; i < end; ++i) {
-      PairDecision& decision = work[i - begin].decision;
-      const PairImage& info1 = images[index_by_id.at(pairs[i].image_id1)];
-      const PairImage& info2 = images[index_by_id.at(pairs[i].image_id2)];
-      decision.image_id1 = info1.image_id;
-      decision.image_id2 = info2.image_id;
-      decision.name1 = info1.name;
-      decision.name2 = info2.name;
-      decision.source = options.pairs.mode == PairMode::kTemporalRetrieval
-                            ? (temporal_pairs.count(pairs[i]) ? "temporal" : "retrieval")
-                            : PairModeName(options.pairs.mode);
-      decision.has_vio_prior = HasVioPrior(info1, info2);
-      if (stored[i] && options.reverify_stored_matches) {
-        work[i - begin].reverified = true;
-        work[i - begin].matches = database->ReadMatches(info1.image_id, info2.image_id);
-        work[i - begin].had_geometry =
-            database->ExistsTwoViewGeometry(info1.image_id, info2.image_id);
-      } else if (stored[i]) {
-        decision.resumed = true;
-        work[i - begin].matches = database->ReadMatches(info1.image_id, info2.image_id);
-        if (database->ExistsTwoViewGeometry(info1.image_id, info2.image_id)) {
-          decision.num_inliers = static_cast<int>(
-              database->ReadTwoViewGeometry(info1.image_id, info2.image_id).inlier_matches.size());
-          decision.accepted = decision.num_inliers > 0;
-        }
-        if (!decision.accepted) decision.num_inliers = 0;
-      }
+      const PairImage& image1 = cache.at(pairs[i].image_id1);
+      const PairImage& image2 = cache.at(pairs[i].image_id2);
+      const std::string source = options.pairs.mode == PairMode::kTemporalRetrieval
+                                     ? (temporal_pairs.count(pairs[i]) ? "temporal" : "retrieval")
+                                     : PairModeName(options.pairs.mode);
+      batch.push_back(
+          {&image1, &image2, &cameras.at(image1.camera_id), &cameras.at(image2.camera_id), source});
     }
     summary.seconds_loading += step_timer.ElapsedSeconds();
 
-    // Match and verify, in parallel over the batch's pairs.
-    ParallelFor(static_cast<int64_t>(end - begin), options.num_threads, [&](int64_t k, int thread) {
-      PairWork& pair_work = work[k];
-      const PairImage& image1 = cache.at(pair_work.decision.image_id1);
-      const PairImage& image2 = cache.at(pair_work.decision.image_id2);
-      verifier.Verify(image1, image2, cameras.at(image1.camera_id), cameras.at(image2.camera_id),
-                      &pair_work, &step_seconds[thread]);
-    });
-
-    // Store: matches and geometry of a pair together.
+    // Match, verify (in parallel over the batch's pairs) and store.
     step_timer.Start();
-    std::vector<ImagePairMatches> accepted;
-    for (PairWork& pair_work : work) {
-      const PairDecision& decision = pair_work.decision;
-      if (on_verified && decision.accepted) {
-        accepted.push_back(
-            {decision.image_id1, decision.image_id2,
-             pair_work.geometry
-                 ? pair_work.geometry->inlier_matches
-                 : database->ReadTwoViewGeometry(decision.image_id1, decision.image_id2)
-                       .inlier_matches});
-      }
-      StorePairWork(pair_work, database, &summary);
-      result.decisions.push_back(std::move(pair_work.decision));
-    }
+    std::vector<ImagePairMatches> accepted = decider.Decide(batch);
     summary.seconds_writing += step_timer.ElapsedSeconds();
     if (on_verified) on_verified(std::move(accepted), pending_from_ns[end]);
     progress.Update(static_cast<int64_t>(end - begin));
   }
   progress.Finish();
 
-  for (const PairDecision& decision : result.decisions) CountDecision(decision, &summary);
-  for (const PairStepSeconds& seconds : step_seconds) {
-    summary.seconds_matching += seconds.matching;
-    summary.seconds_vio += seconds.vio;
-    summary.seconds_ransac += seconds.ransac;
-  }
+  VerificationResult decided = decider.TakeResult();
+  result.decisions = std::move(decided.decisions);
+  const VerificationSummary& counts = decided.summary;
+  summary.num_resumed = counts.num_resumed;
+  summary.num_reverified = counts.num_reverified;
+  summary.num_pairs_without_prior = counts.num_pairs_without_prior;
+  summary.num_no_matches = counts.num_no_matches;
+  summary.num_vio_rejected = counts.num_vio_rejected;
+  summary.num_vio_depth_rejected = counts.num_vio_depth_rejected;
+  summary.num_accepted_corrected = counts.num_accepted_corrected;
+  summary.num_ransac_rejected = counts.num_ransac_rejected;
+  summary.num_accepted = counts.num_accepted;
+  summary.seconds_matching = counts.seconds_matching;
+  summary.seconds_vio = counts.seconds_vio;
+  summary.seconds_ransac = counts.seconds_ransac;
   summary.seconds_total = total_timer.ElapsedSeconds();
   VIOSFM_LOG(INFO) << "verification: " << FormatVerificationSummary(summary);
   return result;

@@ -205,6 +205,7 @@ std::string PipelineSummaryToJson(const PipelineSummary& s) {
                    {"confirmed", s.vio_gaps.num_confirmed},
                    {"contradicted", s.vio_gaps.num_jumps},
                    {"without_pairs", s.vio_gaps.num_unseen},
+                   {"without_pairs_kept", s.vio_gaps.num_unseen_kept},
                    {"pairs_dropped", s.vio_gaps.num_pairs_dropped}}},
                  {"jumps_found", s.mapper.num_vio_breaks},
                  {"jumps_refused", s.mapper.num_vio_jumps_refused}};

@@ -27,6 +27,8 @@
 #include "viosfm/io/kalibr.h"
 #include "viosfm/io/ply.h"
 #include "viosfm/io/trajectory_io.h"
+#include "viosfm/matching/incremental_pair_generator.h"
+#include "viosfm/matching/pair_decider.h"
 #include "viosfm/matching/pair_generator.h"
 #include "viosfm/matching/pair_verification.h"
 #include "viosfm/pipeline/feature_prefetch.h"
@@ -120,6 +122,14 @@ class SettledVio {
       posed_ = poses.world_from_body;
       segments_ = poses.segments;
       odometers_ = poses.odometers;
+      // A VIO file's gaps are judged by the pairs across them before a run
+      // in turn maps (sfm/vio_gaps.h); a stream maps before those pairs are
+      // all known, so each gap is a break here.
+      for (size_t k = 0; k < odometers_.size(); ++k) {
+        segments_[k] += odometers_[k].gap;
+        odometers_[k].segment = segments_[k];
+        odometers_[k].gap = 0;
+      }
       finished_ = true;
     }
     changed_.notify_all();
@@ -379,8 +389,10 @@ class Stream {
   void RunRecordedVio(const Timer& stream_timer, double* vio_seconds);
   void FollowRecording(const Timer& stream_timer, double* vio_seconds);
   void Ingest(const SequenceImage& image);
-  bool Decidable(size_t d, bool all_ingested) const;
-  void Decide(size_t d);
+  // Verifies the pairs of frame d with the frames before it.
+  void Decide(size_t d, const std::vector<ProposedPair>& partners);
+  // Decides every frame whose pairs are fixed.
+  void DecideReady();
   // frames_[k].image with its features (read back from the database when
   // no longer in memory), normalised descriptors too when `normalised`.
   const PairImage& WithFeatures(size_t k, bool normalised);
@@ -409,18 +421,12 @@ class Stream {
   VioSetup setup_;
   bool rolling_shutter_ = false;
   std::optional<FeaturePrefetch> prefetch_;
-  std::optional<PairVerifier> verifier_;
+  std::optional<PairDecider> decider_;
   std::optional<IncrementalRetrieval> retrieval_;
   VerifiedPairStream pair_stream_;
   std::vector<Frame> frames_;
-  std::vector<PairGeneratorImage> generator_images_;
+  std::optional<IncrementalPairGenerator> pair_generator_;
   std::unordered_map<image_t, size_t> frame_of_image_;
-  // Per frame: its temporal neighbours (indices, once fixed) and its
-  // retrieved earlier frames (ids, best first, once known).
-  std::vector<std::optional<std::vector<size_t>>> neighbours_;
-  std::vector<std::optional<std::vector<image_t>>> retrieved_;
-  size_t next_to_decide_ = 0;
-  std::vector<PairStepSeconds> step_seconds_;
   StreamOutput out_;
   double busy_seconds_ = 0.0;
   double recording_end_seconds_ = 0.0;  // a followed recording's last row
@@ -496,25 +502,15 @@ void Stream::Ingest(const SequenceImage& image) {
 
   frame_of_image_[image_id] = frames_.size();
   frames_.push_back(std::move(frame));
-  generator_images_.push_back({image_id, image.timestamp_ns});
-  neighbours_.emplace_back();
-  retrieved_.emplace_back();
+  pair_generator_->AddFrame({image_id, image.timestamp_ns});
   if (retrieval_) {
     for (RetrievedFrame& result : retrieval_->Add(image_id, features.descriptors)) {
       std::vector<image_t> ids;
       for (const ImageScore& score : result.similar) ids.push_back(score.image_id);
-      retrieved_[frame_of_image_.at(result.image_id)] = std::move(ids);
+      pair_generator_->SetRetrieved(frame_of_image_.at(result.image_id), std::move(ids));
     }
   }
   busy_seconds_ += busy.ElapsedSeconds();
-}
-
-bool Stream::Decidable(size_t d, bool all_ingested) const {
-  if (d >= frames_.size()) return false;
-  // Its temporal neighbours are among the N1 frames on either side.
-  const size_t n1 = static_cast<size_t>(verification_options_.pairs.num_temporal_neighbors);
-  if (!all_ingested && frames_.size() <= d + n1) return false;
-  return !retrieval_ || retrieved_[d].has_value();
 }
 
 const PairImage& Stream::WithFeatures(size_t k, bool normalised) {
@@ -548,87 +544,35 @@ void Stream::ForgetFeaturesBefore(size_t k) {
   }
 }
 
-void Stream::Decide(size_t d) {
-  const Timer busy;
-  const PairGeneratorOptions& pairs = verification_options_.pairs;
-  const int n1 = pairs.num_temporal_neighbors;
-  neighbours_[d] = TemporalNeighbors(generator_images_, d, n1);
-  // The earlier frames it pairs with, and how each pair was proposed.
-  std::vector<std::pair<size_t, const char*>> partners;
-  std::set<size_t> taken;
-  if (pairs.mode == PairMode::kTemporalRetrieval) {
-    for (const size_t i : *neighbours_[d]) {
-      if (i < d && taken.insert(i).second) partners.emplace_back(i, "temporal");
-    }
-    // Frames before it whose temporal neighbours include it.
-    for (size_t i = d > static_cast<size_t>(n1) ? d - n1 : 0; i < d; ++i) {
-      const std::vector<size_t>& of_i = *neighbours_[i];
-      if (std::find(of_i.begin(), of_i.end(), d) != of_i.end() && taken.insert(i).second) {
-        partners.emplace_back(i, "temporal");
-      }
-    }
-    if (retrieval_) {
-      std::unordered_set<image_t> excluded;
-      for (const size_t i : *neighbours_[d]) excluded.insert(frames_[i].image.image_id);
-      int added = 0;
-      for (const image_t candidate : *retrieved_[d]) {
-        if (added >= pairs.num_retrieval_neighbors) break;
-        if (excluded.count(candidate) > 0) continue;
-        const size_t i = frame_of_image_.at(candidate);
-        excluded.insert(candidate);
-        if (taken.insert(i).second) partners.emplace_back(i, "retrieval");
-        ++added;
-      }
-    }
-  } else if (pairs.mode == PairMode::kSequential) {
-    for (size_t i = d > static_cast<size_t>(n1) ? d - n1 : 0; i < d; ++i) {
-      partners.emplace_back(i, "sequential");
-    }
-  } else {  // kExhaustive
-    for (size_t i = 0; i < d; ++i) partners.emplace_back(i, "exhaustive");
-  }
-  std::sort(partners.begin(), partners.end());
+void Stream::DecideReady() {
+  size_t d = 0;
+  std::vector<ProposedPair> partners;
+  while (pair_generator_->Next(&d, &partners)) Decide(d, partners);
+}
 
-  // The pairs' work, their features loaded.
-  std::vector<PairWork> work(partners.size());
-  std::vector<std::pair<const PairImage*, const PairImage*>> images(partners.size());
-  for (size_t p = 0; p < partners.size(); ++p) {
-    const size_t i = partners[p].first;
+void Stream::Decide(size_t d, const std::vector<ProposedPair>& partners) {
+  const Timer busy;
+  const size_t n1 = static_cast<size_t>(verification_options_.pairs.num_temporal_neighbors);
+  // The pairs with their features.
+  std::vector<PairToDecide> pairs;
+  for (const ProposedPair& partner : partners) {
+    const size_t i = partner.earlier_frame;
+    const bool stored = decider_->IsStored(frames_[i].image.image_id, frames_[d].image.image_id);
     const bool prior = HasVioPrior(frames_[i].image, frames_[d].image);
     const bool normalised = !verification_options_.guided_matching || !prior;
-    images[p] = {&WithFeatures(i, normalised), &WithFeatures(d, normalised)};
-    PairDecision& decision = work[p].decision;
-    decision.image_id1 = images[p].first->image_id;
-    decision.image_id2 = images[p].second->image_id;
-    decision.name1 = images[p].first->name;
-    decision.name2 = images[p].second->name;
-    decision.source = partners[p].second;
-    decision.has_vio_prior = prior;
+    // Stored matches are judged again from the keypoints: no descriptor
+    // is compared.
+    const PairImage& earlier = WithFeatures(i, normalised && !stored);
+    const PairImage& later = WithFeatures(d, normalised && !stored);
+    pairs.push_back({&earlier, &later, &camera_, &camera_, partner.source});
   }
-  ParallelFor(static_cast<int64_t>(work.size()), options_.num_threads, [&](int64_t p, int thread) {
-    verifier_->Verify(*images[p].first, *images[p].second, camera_, camera_, &work[p],
-                      &step_seconds_[thread]);
-  });
-  std::vector<ImagePairMatches> accepted;
-  VerificationSummary& summary = out_.verification.summary;
-  for (PairWork& pair_work : work) {
-    StorePairWork(pair_work, &*database_, &summary);
-    if (pair_work.geometry) {
-      accepted.push_back({pair_work.decision.image_id1, pair_work.decision.image_id2,
-                          pair_work.geometry->inlier_matches});
-    }
-    CountDecision(pair_work.decision, &summary);
-    out_.verification.decisions.push_back(std::move(pair_work.decision));
-  }
-  summary.num_pairs += work.size();
+  std::vector<ImagePairMatches> accepted = decider_->Decide(pairs);
   // Every pair still to come has a later frame than d.
   pair_stream_.Add(std::move(accepted), frames_[d].image.timestamp_ns + 1);
-  next_to_decide_ = d + 1;
   // The features of frames no temporal pair needs any more (a retrieved
   // frame's are read back).
-  if (pairs.mode != PairMode::kExhaustive) {
-    ForgetFeaturesBefore(next_to_decide_ > static_cast<size_t>(n1) + 1 ? next_to_decide_ - n1 - 1
-                                                                       : 0);
+  if (verification_options_.pairs.mode != PairMode::kExhaustive) {
+    ForgetFeaturesBefore(d + 1 > n1 + 1 ? d - n1 : 0);
   }
   busy_seconds_ += busy.ElapsedSeconds();
 }
@@ -836,9 +780,7 @@ StreamOutput Stream::Run(const Timer& stream_timer) {
   out_.input.rig = setup_.rig;
   out_.input.rolling_shutter_readout_s = rolling_shutter_ ? setup_.readout_s : 0.0;
   if (sequence_ != nullptr) out_.input.imu = sequence_->imu;
-  verifier_.emplace(verification_options_, setup_.rig.body_from_cam);
-  step_seconds_.assign(
-      static_cast<size_t>(NumThreadsFor(1 << 20, std::max(1, options_.num_threads))), {});
+  decider_.emplace(verification_options_, setup_.rig.body_from_cam, &*database_);
   const PairGeneratorOptions& pairs = verification_options_.pairs;
   if (pairs.mode == PairMode::kTemporalRetrieval && pairs.num_retrieval_neighbors > 0) {
     RetrievalOptions retrieval = verification_options_.retrieval;
@@ -849,6 +791,8 @@ StreamOutput Stream::Run(const Timer& stream_timer) {
     retrieval.vocabulary.seed = verification_options_.seed;
     retrieval_.emplace(retrieval, options_.stream_vocabulary_frames, /*num_temporal_neighbors=*/0);
   }
+  pair_generator_.emplace(pairs);
+  pair_generator_->SetRetrievalUsed(retrieval_.has_value());
 
   double mapper_seconds = 0.0;
   BatchedMapperOptions mapper_options = options_.EffectiveMapperOptions();
@@ -870,21 +814,20 @@ StreamOutput Stream::Run(const Timer& stream_timer) {
   SequenceImage image;
   for (size_t f = 0; !mapper_worker.failed() && frame_queue_.Get(f, &image); ++f) {
     Ingest(image);
-    while (Decidable(next_to_decide_, /*all_ingested=*/false)) Decide(next_to_decide_);
+    DecideReady();
     progress.Update();
   }
   progress.Finish();
   const double last_frame_seconds = stream_timer.ElapsedSeconds();
+  pair_generator_->FinishFrames();
   if (retrieval_ && !mapper_worker.failed()) {
     for (RetrievedFrame& result : retrieval_->Finish()) {
       std::vector<image_t> ids;
       for (const ImageScore& score : result.similar) ids.push_back(score.image_id);
-      retrieved_[frame_of_image_.at(result.image_id)] = std::move(ids);
+      pair_generator_->SetRetrieved(frame_of_image_.at(result.image_id), std::move(ids));
     }
   }
-  while (!mapper_worker.failed() && Decidable(next_to_decide_, /*all_ingested=*/true)) {
-    Decide(next_to_decide_);
-  }
+  if (!mapper_worker.failed()) DecideReady();
   const double verification_seconds = stream_timer.ElapsedSeconds();
   // The mapper's final adjustment reads the whole IMU: a followed
   // recording's is complete once the VIO's thread has ended (its last rows
@@ -910,17 +853,13 @@ StreamOutput Stream::Run(const Timer& stream_timer) {
   prefetch_->Finish();
   if (follower_ != nullptr) fs::remove_all(folder_.path() / "live");
 
+  out_.verification = decider_->TakeResult();
   VerificationSummary& summary = out_.verification.summary;
   summary.options = verification_options_.ToKeyValues();
   summary.database_path = database_->path().string();
   summary.num_images = frames_.size();
   for (const Frame& frame : frames_) {
     if (frame.image.world_from_body) ++summary.num_images_with_prior;
-  }
-  for (const PairStepSeconds& seconds : step_seconds_) {
-    summary.seconds_matching += seconds.matching;
-    summary.seconds_vio += seconds.vio;
-    summary.seconds_ransac += seconds.ransac;
   }
   summary.seconds_total = verification_seconds;
   std::sort(out_.verification.decisions.begin(), out_.verification.decisions.end(),

@@ -3,15 +3,18 @@
 // reset: a keyframe trajectory has gaps of seconds between consecutive
 // poses and one world frame throughout. So every gap longer than the
 // run's vio_max_gap is a candidate break (VioOdometer::gap), and the
-// verified pairs whose frames lie on its two sides decide:
+// verified pairs whose frames lie on its two sides (and across no other
+// gap) decide:
 //  - pairs accepted under the VIO's relative pose (step 1 of the
 //    verification) confirm it: one segment across the gap;
 //  - pairs step 1 rejected that RANSAC accepted alone (the VIO's relative
 //    pose contradicted: ImagePairMatches::vio_contradicted) outnumbering
 //    them show a jump: the segment is split there;
-//  - no pair across it: the images show nothing, and the gap is a break
-//    too (the frames after it are registered from the images where they
-//    can be, and otherwise form a model of their own).
+//  - no pair across it: the images show nothing. The gap keeps its segment
+//    when the VIO crosses it no faster (speed, turn rate) than 1.5 times
+//    its fastest step elsewhere; otherwise it is a break (the frames after
+//    it are registered from the images where they can be, and otherwise
+//    form a model of their own).
 // Where a gap is confirmed, the pairs that contradicted the VIO across it
 // are dropped (a look-alike place's matches, which the VIO's pose refuted);
 // where it is a break, they stay (the images join the two sides).
@@ -25,12 +28,13 @@
 namespace viosfm {
 
 struct VioGapSummary {
-  int num_gaps = 0;        // candidate breaks
-  int num_confirmed = 0;   // one segment across them
-  int num_jumps = 0;       // contradicted by the images: breaks
-  int num_unseen = 0;      // no pair across them: breaks
+  int num_gaps = 0;           // candidate breaks
+  int num_confirmed = 0;      // one segment across them
+  int num_jumps = 0;          // contradicted by the images: breaks
+  int num_unseen = 0;         // no pair across them
+  int num_unseen_kept = 0;    // of those, crossed by the VIO as it moves elsewhere: one segment
   int num_pairs_dropped = 0;  // pairs that contradicted a confirmed gap's VIO pose
-  int num_segments = 0;    // VIO segments after the decisions
+  int num_segments = 0;       // VIO segments after the decisions
   std::string ToString() const;
 };
 

@@ -8,8 +8,10 @@ namespace viosfm {
 namespace {
 
 // Ten frames of one VIO segment with gaps before frames 3, 6 and 8 (their
-// VioOdometer::gap counts 0 0 0 1 1 1 2 2 3 3), and pairs between them.
-BatchedMapperInput MakeInput() {
+// VioOdometer::gap counts 0 0 0 1 1 1 2 2 3 3), one a second, the camera
+// moving 0.5 m a second along x; from `jump_index` on, the VIO's world frame
+// restarted 5 m away (a re-initialisation). Pairs between them.
+BatchedMapperInput MakeInput(int jump_index = 100) {
   BatchedMapperInput input;
   const std::vector<int> gaps = {0, 0, 0, 1, 1, 1, 2, 2, 3, 3};
   for (size_t i = 0; i < gaps.size(); ++i) {
@@ -17,7 +19,9 @@ BatchedMapperInput MakeInput() {
     image.image_id = static_cast<image_t>(i + 1);
     image.name = "frame" + std::to_string(i + 1);
     image.timestamp_ns = static_cast<timestamp_ns_t>(i) * 1'000'000'000;
-    image.vio_cam_from_world = Rigid3d();
+    const double x_m =
+        0.5 * static_cast<double>(i) + (static_cast<int>(i) >= jump_index ? 5.0 : 0.0);
+    image.vio_cam_from_world = Rigid3d(Eigen::Quaterniond::Identity(), Eigen::Vector3d(-x_m, 0, 0));
     image.vio_odometer.gap = gaps[i];
     input.images.push_back(image);
   }
@@ -36,11 +40,11 @@ ImagePairMatches Pair(image_t a, image_t b, bool contradicted) {
 TEST(VioGapsTest, ConfirmedGapsKeepOneSegmentAndAJumpSplitsIt) {
   BatchedMapperInput input = MakeInput();
   input.verified_pairs = {
-      Pair(1, 2, false),  Pair(2, 3, false),  // within the first stretch
-      Pair(3, 4, false),  Pair(2, 4, false),  // across gap 1: confirmed
-      Pair(3, 4, true),                       // a look-alike against the VIO: dropped
-      Pair(6, 7, true),   Pair(5, 7, true),   // across gap 2: the VIO jumped
-      Pair(8, 9, false),                      // across gap 3: confirmed
+      Pair(1, 2, false), Pair(2, 3, false),  // within the first stretch
+      Pair(3, 4, false), Pair(2, 4, false),  // across gap 1: confirmed
+      Pair(3, 4, true),                      // a look-alike against the VIO: dropped
+      Pair(6, 7, true),  Pair(5, 7, true),   // across gap 2: the VIO jumped
+      Pair(8, 9, false),                     // across gap 3: confirmed
   };
   const VioGapSummary summary = DecideVioGaps(&input);
   EXPECT_EQ(summary.num_gaps, 3);
@@ -56,8 +60,8 @@ TEST(VioGapsTest, ConfirmedGapsKeepOneSegmentAndAJumpSplitsIt) {
   EXPECT_EQ(input.verified_pairs.size(), 7u);
 }
 
-TEST(VioGapsTest, AGapWithoutPairsIsABreak) {
-  BatchedMapperInput input = MakeInput();
+TEST(VioGapsTest, AGapWithoutPairsWhereTheVioJumpsIsABreak) {
+  BatchedMapperInput input = MakeInput(/*jump_index=*/6);
   input.verified_pairs = {Pair(1, 2, false), Pair(3, 4, false), Pair(8, 9, false)};
   const VioGapSummary summary = DecideVioGaps(&input);
   EXPECT_EQ(summary.num_confirmed, 2);
@@ -67,10 +71,37 @@ TEST(VioGapsTest, AGapWithoutPairsIsABreak) {
   EXPECT_EQ(input.images[6].vio_odometer.segment, 1);
 }
 
-TEST(VioGapsTest, APairAcrossSeveralGapsConfirmsEach) {
+TEST(VioGapsTest, AGapWithoutPairsTheVioCrossesAsElsewhereKeepsItsSegment) {
   BatchedMapperInput input = MakeInput();
-  // Frame 1 with frame 10 crosses all three gaps.
-  input.verified_pairs = {Pair(1, 10, false)};
+  input.verified_pairs = {Pair(1, 2, false), Pair(3, 4, false), Pair(8, 9, false)};
+  const VioGapSummary summary = DecideVioGaps(&input);
+  EXPECT_EQ(summary.num_confirmed, 2);
+  EXPECT_EQ(summary.num_unseen, 1);
+  EXPECT_EQ(summary.num_unseen_kept, 1);
+  EXPECT_EQ(summary.num_segments, 1);
+}
+
+TEST(VioGapsTest, APairAcrossSeveralGapsConfirmsNone) {
+  BatchedMapperInput input = MakeInput(/*jump_index=*/6);
+  // Frame 1 with frame 10 crosses all three gaps: a loop seconds long, whose
+  // VIO band is as wide as the drift over all of them.
+  input.verified_pairs = {Pair(1, 10, false), Pair(2, 9, true)};
+  const VioGapSummary summary = DecideVioGaps(&input);
+  EXPECT_EQ(summary.num_confirmed, 0);
+  EXPECT_EQ(summary.num_unseen, 3);
+  // Gaps 1 and 3 crossed as the VIO moves within its stretches: kept; the
+  // jump at gap 2 a break.
+  EXPECT_EQ(summary.num_unseen_kept, 2);
+  EXPECT_EQ(summary.num_segments, 2);
+  // The pair against the VIO crosses breaks: it stays.
+  EXPECT_EQ(input.verified_pairs.size(), 2u);
+}
+
+TEST(VioGapsTest, APairAcrossConfirmedGapsSpeaksForTheOneLeft) {
+  BatchedMapperInput input = MakeInput();
+  // Gap 1 confirmed by its own pair; then 2 with 7 crosses gaps 1 and 2,
+  // and 6 with 10 crosses gaps 2 and 3: each decides the one left open.
+  input.verified_pairs = {Pair(3, 4, false), Pair(2, 7, false), Pair(6, 10, false)};
   const VioGapSummary summary = DecideVioGaps(&input);
   EXPECT_EQ(summary.num_confirmed, 3);
   EXPECT_EQ(summary.num_segments, 1);
