@@ -319,9 +319,9 @@ BundleAdjustmentSummary BundleAdjust(Reconstruction* reconstruction,
   if (!options.refine_intrinsics) {
     // The points first (eliminated), then the poses and the caller's
     // blocks: the ordering Ceres finds for a bundle adjustment problem,
-    // given instead of searched for in the problem's graph (which took half
-    // of Ceres' preprocessing, 0.1 s of each per-batch adjustment on a 100 s
-    // room). (With intrinsics, whose blocks live elsewhere, Ceres searches.)
+    // given instead of searched for in the problem's graph, a large part of
+    // Ceres' preprocessing. (With intrinsics, whose blocks live elsewhere,
+    // Ceres searches.)
     auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
     for (Eigen::Vector3d& xyz : point_parameters) ordering->AddElementToGroup(xyz.data(), 0);
     for (size_t k = 0; k < num_poses; ++k) {

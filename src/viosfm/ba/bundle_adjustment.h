@@ -35,8 +35,8 @@ namespace viosfm {
 
 // The linear solver of the Levenberg-Marquardt steps. kAuto in BundleAdjust:
 // SPARSE_SCHUR up to max_images_for_sparse_schur images, ITERATIVE_SCHUR
-// (with the SCHUR_JACOBI preconditioner) above; the batched mapper instead
-// measures both above that size and keeps the faster (batched_mapper.h).
+// (with the SCHUR_JACOBI preconditioner) above; the batched mapper chooses
+// from the problem's structure instead (sfm/linear_solver_chooser.h).
 enum class BaLinearSolver { kAuto, kSparseSchur, kDenseSchur, kIterativeSchur };
 
 // How a relative-pose prior is weighted.
@@ -88,13 +88,8 @@ struct BundleAdjustmentOptions {
   // sigma / sqrt(w), 3 mm / 3 mrad at c = 0 (a frame without matches
   // follows the VIO: nothing else acts on it) and 5 mm / 5 mrad at c = 300,
   // the size of a VIO's frame-to-frame noise, so that where matches are many
-  // the images correct the VIO. Measured on a simulated room sequence
-  // (pipeline/pipeline_test, VIO with 3 mm / 2 mrad jitter a frame and
-  // drift; Sim(3) ATE against the VIO's 31 mm): sigmas 0.01 m / 0.005 rad
-  // give 24 mm (the result keeps the VIO's noise), 0.05 give 13 mm, 0.1 give
-  // 7 mm, 0.2 give 4 mm and no priors 2 mm; on a weakly textured corridor
-  // with an exact VIO (sfm/batched_mapper_test) 0.05 give 2.1 mm, 0.1 give
-  // 3.7 mm and 0.2 give 5.6 mm: the priors matter where the images are weak.
+  // the images correct the VIO. Tighter sigmas keep the VIO's noise, looser
+  // ones lose the priors where the images are weak (a textureless corridor).
   double prior_rotation_sigma_rad = 0.1;
   double prior_translation_sigma_m = 0.1;
   // See PriorWeighting. Default kCovariance.
@@ -103,11 +98,8 @@ struct BundleAdjustmentOptions {
   // in standard deviations; 0: plain squares. Default 10: a correct 6-D
   // prior (expected squared norm 6) keeps 88 % of its weight, one more than
   // 10 sigma off (a VIO jump, a reset, a drift far beyond the model) exerts
-  // no force, as if it were absent. Measured on a synthetic corridor
-  // (sfm/frame_registration_test.cc): one prior corrupted by 0.5 m and 10
-  // degrees moves the solution by 26 cm without a loss, by 4.2 mm with a
-  // Cauchy loss of scale 5, and by 3.3 mm with this one - which is what
-  // removing that prior does (the scale loses one of its constraints).
+  // no force, as if it were absent: a corrupted prior moves the solution no
+  // more than removing it would (sfm/frame_registration_test.cc).
   double prior_loss_scale = 10.0;
   // px, the standard deviation of a keypoint's position that the
   // reprojection errors (in pixels, unweighted) stand for when they are
@@ -121,29 +113,23 @@ struct BundleAdjustmentOptions {
   int max_num_iterations = 50;  // Levenberg-Marquardt iterations (default 50)
   int num_threads = 2;          // Jacobian evaluation and linear solver threads (default 2)
   // Up to this number of images in the problem SPARSE_SCHUR is used; above
-  // it, see BaLinearSolver (default 100). Neither solver wins everywhere
-  // (docs/benchmarks.md): where the cameras see each other (a room) the
-  // reduced camera matrix is nearly dense and its factorisation dominates
-  // SPARSE_SCHUR (610 images: 5.0 CPU-s an iteration against 1.4 for
-  // ITERATIVE_SCHUR; the whole run from stored matches 334 against 143
-  // CPU-s, ATE 0.85 and 0.84 mm); along a weakly textured corridor the
-  // conjugate gradients need many steps and SPARSE_SCHUR is about twice as
-  // fast.
+  // it, see BaLinearSolver (default 100). Neither solver wins everywhere:
+  // where the cameras see each other (a room) the reduced camera matrix is
+  // nearly dense and its factorisation dominates SPARSE_SCHUR; along a weakly
+  // textured corridor the conjugate gradients need many steps.
+  // See docs/benchmarks.md, section "Bundle adjustment: choosing the linear solver".
   int max_images_for_sparse_schur = 100;
   BaLinearSolver linear_solver = BaLinearSolver::kAuto;  // (default kAuto)
-  // Relative cost change to stop. Default 1e-5: on the final adjustment of
-  // 100 s simulated walks (980 images) 1e-6 took 25 iterations instead of
-  // 13 on the room and 37 instead of 16 along the corridor, for the same
-  // ATE within 1 % (docs/benchmarks.md, "Real time").
+  // Relative cost change to stop. Default 1e-5: a tighter tolerance costs
+  // the final adjustment many more iterations for no better model.
+  // See docs/history/benchmarks-2026.md, section "Real time: where a 100 s recording's time goes".
   double function_tolerance = 1e-5;
   // ITERATIVE_SCHUR: the conjugate gradients' steps per iteration at most.
   // Default 500 (Ceres'). With the IMU's factors (sfm/inertial_terms.h) the
-  // reduced system holds a stiff frame-to-frame chain that the
-  // Schur-Jacobi preconditioner does not see: on the final adjustment of a
-  // 980-frame simulated room every iteration from the fifth on took all
-  // 500 steps (111 s in all, against 19 s with the gyro's priors); capped
-  // at 100, 33 s for Sim(3) ATE 0.616 mm against 0.581 (the gyro's priors
-  // 0.637). `--realtime` takes 100.
+  // reduced system holds a stiff frame-to-frame chain that the Schur-Jacobi
+  // preconditioner does not see, so the steps run to the cap; `--realtime`
+  // takes 100, most of the factors' gain for a third of their time.
+  // See docs/benchmarks.md, section "Scaling: 300 to 2400 frames".
   int max_linear_solver_iterations = 500;
   double gradient_tolerance = 1e-10;  // (default 1e-10)
   double parameter_tolerance = 1e-8;  // relative step size to stop (default 1e-8)

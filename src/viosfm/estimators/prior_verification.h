@@ -196,10 +196,11 @@ class RelativePoseDrift {
 // The VIO's relative pose corrected by the matches, within the VIO's
 // expected drift between the two frames. A band wide enough for the drift
 // of far-apart frames (a loop's two visits) judges each match on its own,
-// so the drift's slack lets in matches no single pose explains: on a
-// corridor of identical doors, pairs 15 to 50 s apart facing opposite ways
-// whose matches lie on the radial epipolar lines of the walking direction
-// (benchmarks.md, VIO-aided verification). The drift is one rigid error
+// so the drift's slack lets in matches no single pose explains (on a
+// corridor of identical doors, far-apart views facing opposite ways whose
+// matches lie on the radial epipolar lines of the walking direction; see
+// docs/benchmarks.md, section "VIO-aided verification against ground truth").
+// The drift is one rigid error
 // of the whole relative pose, though: this finds that one error, and the
 // pair is then judged with the fixed T_EE under the corrected pose.
 //

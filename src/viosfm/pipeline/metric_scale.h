@@ -17,11 +17,10 @@
 // The same fit gives the direction of gravity in the reconstruction's world
 // frame, from every registered frame's IMU; the world frame itself is the
 // VIO's, levelled by the VIO's gravity at the frames that fixed it (the
-// first batch's), to within that VIO's tilt error there (0.3 degrees with
-// the simulator's gentle VIO, whose frames' tilt is noisy). When the fit is
+// first batch's), to within that VIO's tilt error there. When the fit is
 // usable, the reconstruction is turned about the world origin so that the
-// fitted gravity points along -z: a level model (docs/benchmarks.md, "A
-// level model").
+// fitted gravity points along -z: a level model (see
+// docs/history/benchmarks-2026.md, section "A level model").
 #pragma once
 
 #include <string>

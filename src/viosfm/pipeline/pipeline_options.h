@@ -129,9 +129,9 @@ struct PipelineOptions {
   // residual as a global shutter over its residual with the readout. The VIO
   // keeps a readout that lowers its residual by 2 %; keypoints a fraction of
   // a pixel precise are moved by pixels by a wrong one, so these stages ask
-  // for a quarter less. Default 1.25 (a simulated 20 ms readout gives 2.25;
-  // the real handheld recording, whose camera's shutter is not documented,
-  // 1.11: docs/benchmarks.md).
+  // for a quarter less. Default 1.25: between a simulated rolling shutter's
+  // clear evidence and the real handheld recording's weak one. See
+  // docs/benchmarks.md, section "Rolling shutter: the keypoints moved to the frame's stamp".
   double min_readout_evidence = 1.25;
 
   // Static trimming and downsampling (default: trimmed, 10 Hz, the paper).
@@ -318,24 +318,15 @@ struct PipelineOptions {
 // probe (texture_probe.h: a recording whose every frame is rich in keypoints
 // is taken at 4 Hz with 2500 features a frame), and bundle adjustments that
 // stop at a relative cost change of 3e-5 (mapper.ba.function_tolerance,
-// 1e-5 otherwise): the IMU's factors (sfm/inertial_terms.h) made the final
-// adjustment 10 s longer on the 100 s corridor, which this takes back
-// (docs/benchmarks.md "The IMU in the final adjustment"), with at most 100
+// 1e-5 otherwise), taking back the time the IMU's factors
+// (sfm/inertial_terms.h) add to the final adjustment, with at most 100
 // conjugate-gradient steps an iteration where ITERATIVE_SCHUR solves
 // (mapper.ba.max_linear_solver_iterations, 500 otherwise), and one refinement
 // of the final adjustment at most (mapper.final_ba_max_refinements, 3
 // otherwise), where its filtering and re-triangulation change 2 % of the
 // observations or more (mapper.final_ba_refine_min_change, 0.5 % otherwise):
-// the real handheld recording's change is 11.6 %, and its refinement takes 3.5
-// s of a 40 s run for a better model (its worst second against the gyro
-// 0.571 -> 0.415 degrees); the simulated 100 s corridor's is 0.8 %, and its
-// refinement took 29 s for none (Sim(3) ATE 5.68 against 5.45 mm).
-// Measured on simulated 100
-// s walks with viosfm's own VIO (docs/benchmarks.md, "Real time"): 0.83 to
-// 0.97 times the recording's duration on the 2-core machine of 2026-11-27,
-// the room (textured: 4 Hz) at a Sim(3) ATE of 0.46 mm; the paper's
-// settings took 4519 s on the room (2026-11-25, beside other jobs; 4052 s
-// of it brute-force matching of 40 561 pairs), for 0.42 mm.
+// a change that large is worth a refinement, a small one is not worth its
+// time. See docs/benchmarks.md, section "Real time: where a 100 s recording's time goes".
 void ApplyRealtimeSettings(PipelineOptions* options);
 
 }  // namespace viosfm

@@ -29,7 +29,7 @@ inline constexpr size_t kFrameCacheBytes = size_t{512} << 20;
 // features, 200 of 8192; the rest are extracted by the features stage.
 inline constexpr size_t kFeaturePrefetchBytes = size_t{256} << 20;
 
-// The current time as "2026-11-24T10:00:00Z".
+// The current time as "YYYY-MM-DDThh:mm:ssZ" (UTC).
 std::string UtcNow();
 
 // MB, the process's peak resident memory so far.
@@ -39,8 +39,8 @@ double PeakMemoryMb();
 // the VIO handed to feature extraction (up to kFrameCacheBytes) and the
 // verification's descriptors are freed by then, but glibc keeps freed heap
 // pages for reuse, and the mapper's final bundle adjustment (about 0.4 MB
-// a frame) does not fit in them: without this, a 2400-frame run's peak was
-// the two added up (bench/realtime.sh, docs/benchmarks.md "Real time").
+// a frame) does not fit in them: without this, a long run's peak is the two
+// added up. See docs/benchmarks.md, section "Scaling: 300 to 2400 frames".
 void ReturnFreedMemory();
 
 // At most `max_arenas` glibc malloc arenas (its default: 8 a core), so that

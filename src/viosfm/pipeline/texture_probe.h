@@ -21,11 +21,10 @@
 // the rate and the feature count the probe settled, so stored data made
 // with another decision (by another version of the probe) are refused.
 //
-// Measured on the simulated 100 s walks of docs/benchmarks.md ("Real time",
-// "Frames or features"): the room (textured everywhere) at 4 Hz and 2500
-// features is as accurate as the paper's settings, in less than its
-// duration; the corridor and two_floors (weak texture in places) lose half
-// their accuracy or more at 5 Hz, and stay at the run's rate.
+// A recording textured everywhere keeps its accuracy at a lower rate with
+// more features, while one with weak texture in places loses it, so only
+// the former is slowed down. See docs/history/benchmarks-2026.md, section
+// "Real time: where a 100 s recording's time goes" ("Frames or features").
 #pragma once
 
 #include <cstddef>

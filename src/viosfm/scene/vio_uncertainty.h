@@ -48,8 +48,9 @@
 // that trusts the VIO too much pulls the reconstruction toward its drift, one
 // that trusts it too little only gives the images more say. viosfm's own
 // VIO uses them too: its marginal covariance is overconfident against the
-// simulator's truth (yaw error 2.5-4.5 times its sigma), these rates are
-// not (docs/benchmarks.md, scripts/vio-covariance-consistency.py).
+// simulator's truth, these rates are not (scripts/vio-covariance-consistency.py;
+// see docs/history/benchmarks-2026.md, section "The own VIO's covariance against its actual
+// drift").
 #pragma once
 
 #include <Eigen/Core>
@@ -80,11 +81,10 @@ struct VioUncertaintyModel {
   // scale_sigma) cannot be averaged out over many relative poses: it is the
   // scale the model takes from the VIO, which the IMU's scale fit then
   // corrects. So the relative-pose priors carry only this part
-  // (WithinSegment). Default 0.005: on the keyframe-like simulated
-  // sequences, 0.02 per prior (the whole scale error on every prior, as if
-  // independent) let the keyframes' lengths float (corridor 28 mm ATE), and
-  // 0.0001 held them so rigidly that the room lost 46 %; 0.005 gives the
-  // corridor 20 mm and the room what it had (docs/benchmarks.md).
+  // (WithinSegment). Default 0.005: the whole scale error on every prior, as
+  // if independent, lets keyframes' lengths float, and a rigid length costs
+  // the room; see docs/history/benchmarks-2026.md, section
+  // "Trusting the VIO as far as it deserves".
   double relative_scale_sigma = 0.005;
   double position_noise_m = 0.002;    // m, white noise per frame and axis. Default 0.002
   double rotation_noise_rad = 0.001;  // rad, white noise per frame and axis. Default 0.001

@@ -96,12 +96,9 @@ struct BatchedMapperOptions {
   // filtered out near the threshold and attached again is no change: the
   // adjustment had it), the final adjustment runs again, at most
   // final_ba_max_refinements times (COLMAP's global refinements do the same:
-  // 0.0005 and 5, counting what comes back as a change). On the 18
-  // simulated trust sequences, fountain-P11 with six emulated VIOs and the
-  // real handheld recording, 0.005 against 0.01 refined 8 of the 25 once
-  // more, each to a better model or the same (docs/benchmarks.md "What the
-  // refinement counts"). Defaults 0.005 and 3; 0 refinements: one final
-  // adjustment.
+  // 0.0005 and 5, counting what comes back as a change). Defaults 0.005 and
+  // 3; 0 refinements: one final adjustment. See docs/history/benchmarks-2026.md,
+  // section "What the refinement counts: keypoints that changed, at 0.5 %".
   int final_ba_max_refinements = 3;
   double final_ba_refine_min_change = 0.005;
   // The gyro's relative rotations in the final global bundle adjustment,
@@ -128,47 +125,37 @@ struct BatchedMapperOptions {
   // or 0 for ba.max_num_iterations; the final global bundle adjustment always
   // runs ba.max_num_iterations. Default 3. Every per-batch adjustment starts
   // from a refined reconstruction plus one batch placed by the VIO, so a few
-  // iterations take it most of the way, and the final one converges: on the
-  // simulated 100 s room, corridor and two_floors, 3 instead of 10 took the
-  // per-batch adjustments from 39, 45 and 54 s to 15, 13 and 14 s, the final
-  // one needed 1 to 3 more iterations, and the ATE stayed within 1 % (room),
-  // within the run-to-run spread (corridor) or fell by 3 % (two_floors;
-  // docs/benchmarks.md "The mapper's levers").
+  // iterations take it most of the way, and the final one converges: fewer
+  // iterations cut the per-batch adjustments' time by more than half for the
+  // same model. See docs/history/benchmarks-2026.md, section
+  // "The mapper's levers: the window, the final adjustment, its tolerance".
   int batch_ba_max_num_iterations = 3;
   // The first batch's bundle adjustment runs to convergence (up to
   // ba.max_num_iterations) whatever batch_ba_max_num_iterations says.
   // Default true. That adjustment is the only one that starts from poses
-  // placed by the VIO alone and points just triangulated from them: capped
-  // at 3 iterations, it left the real handheld recording's first 50 frames
-  // unconverged, the points filtered after it depended on where three
-  // iterations happened to stop, and with two threads' timing the later
-  // batches parted ways (final models 7.5 mm and 0.59 deg apart from the
-  // same matches; a bend of 1.2 deg against the gyro at 15 s in 3 of 4
-  // runs). Converged, three runs with one and two threads gave the same
-  // model, 0.28 deg against the gyro, for about 1 s more of mapping
-  // (docs/benchmarks.md "The first batch's adjustment converged").
+  // placed by the VIO alone and points just triangulated from them: capped,
+  // the points filtered after it depend on where the iterations happened to
+  // stop, and with two threads' timing the later batches part ways;
+  // converged, one and two threads give the same model. See
+  // docs/history/benchmarks-2026.md, section "The first batch's adjustment converged".
   bool converge_first_batch_ba = true;
   // Bridging priors (beyond the paper). The paper's relative-pose terms join
   // consecutive frames only. Across a stretch of frames whose images barely
   // match, the slack each of those terms allows adds up like a random walk,
   // while a VIO's rotation error over a few seconds is far smaller than the
-  // sum of its frame-to-frame noise (and its roll and pitch do not drift).
-  // On the simulated two_floors, through the weakly textured stairwell (20
-  // consecutive pairs without a verified match), the reconstruction's yaw
-  // turned by 1.2 degrees and its tilt by 0.5 degrees where the VIO's error
-  // changed by 0.03 degrees; the second floor ended up rotated against the
-  // first. So for every consecutive pair with fewer than
+  // sum of its frame-to-frame noise (and its roll and pitch do not drift):
+  // through a weakly textured stairwell the second floor ends up rotated
+  // against the first. So for every consecutive pair with fewer than
   // `bridge_max_matches` verified matches, rotation-only relative-pose terms
   // from the VIO join the frames `bridge_spans` apart (in selected frames)
   // that straddle it, weighted w(c) with c the fewest verified matches of a
   // consecutive pair they straddle. Rotation only: a VIO's translation over
   // seconds carries its scale and position drift. Only where the images
-  // give (almost) nothing: with the threshold at 200 matches the corridor's
-  // 8 weaker pairs (38 to 200 matches) were bridged too and its ATE grew
-  // from 5.2 to 17 mm, since the images there still hold the rotation
-  // better than the VIO. Defaults {10, 50} frames (1 and 5 s at 10 Hz) and
-  // 30 matches (twice the verification's minimum of inliers); empty spans:
-  // off (the paper's terms only).
+  // give (almost) nothing: where a pair has a few dozen matches, the images
+  // still hold the rotation better than the VIO. Defaults {10, 50} frames (1
+  // and 5 s at 10 Hz) and 30 matches (twice the verification's minimum of
+  // inliers); empty spans: off (the paper's terms only). See
+  // docs/history/benchmarks-2026.md, section "Bridging priors: the stairwell of two_floors".
   // With the covariance weighting (ba.prior_weighting, the default) they
   // are full 6-DoF priors weighted by the VIO model's covariance over their
   // span, like every other prior; with the paper weighting rotation-only,
@@ -488,7 +475,7 @@ class BatchedMapper {
   // gyro's priors at once.
   bool inertial_declined_ = false;
   // The inflation of the gyro's priors and of the IMU factors' covariance
-  // the first global adjustment measured; later ones keep at least that.
+  // the first global adjustment found; later ones keep at least that.
   double gyro_sigma_floor_ = 1.0;
   double inertial_sigma_floor_ = 1.0;
   // The main model, made by the images alone, was scaled and levelled by

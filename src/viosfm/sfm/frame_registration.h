@@ -53,16 +53,11 @@ struct FrameRegistrationOptions {
   //  - otherwise (a weak PnP, or an ambiguous one: repeated structure, where
   //    the images support the prediction and another pose far from it) the
   //    prediction stands.
-  // Defaults 0.7, 30, 5, 0.1 m and 0.05 rad. Measured: on the simulated
-  // two_floors' weakly textured stairwell a PnP pose of 18 inliers was 0.2 m
-  // off a correct VIO; along the simulated corridor of identical doors a
-  // PnP pose of 103 inliers was 22 m off a VIO pose with 31 (the next
-  // doors), and re-posing such frames folded the corridor (ATE 9.8 m); on a
-  // 20 s corridor walk, a PnP pose of 63 inliers from a wrong pair's points
-  // was 21 m and 3.1 rad off the VIO's, which the frame's matches with its
-  // registered neighbours showed (2869 of them against 17): taken for a
-  // jump, the last frames were cut off and the model's ATE was 3.5 m
-  // (3.5 mm with the matches' check).
+  // Defaults 0.7, 30, 5, 0.1 m and 0.05 rad: a weak PnP in a textureless
+  // stretch, or a strong one on the next identical door, can be far off a
+  // correct VIO, and the frame's own matches tell a look-alike place from a
+  // VIO jump. See docs/history/benchmarks-2026.md, section
+  // "A look-alike place is not a VIO jump".
   double min_predicted_inlier_ratio = 0.7;
   int min_reposing_inliers = 30;
   double break_sigmas = 5.0;
@@ -78,10 +73,9 @@ struct FrameRegistrationOptions {
   // batch's frames, frames registered before their points existed): their
   // 2D-3D matches against the adjusted model, re-posed from them under the
   // rules above (at least min_reposing_inliers inliers, within the drift).
-  // Default true. Measured on real photos (Strecha's fountain-P11 with a
-  // drifting VIO): the gauge frame, placed by the VIO 25 to 60 mm off the
-  // others, kept 1 observation and the model 10 to 41 mm ATE; with it every
-  // photo is supported and 2.7 to 2.9 mm (docs/benchmarks.md).
+  // Default true: on real photos with a drifting VIO the gauge frame is
+  // otherwise left where the VIO put it and the whole model leans on it.
+  // See docs/benchmarks.md, section "Real photos with a drifting VIO: Strecha's fountain-P11".
   bool recheck_after_adjustment = true;
 
   std::string Validate() const;  // empty if valid, else names the bad field

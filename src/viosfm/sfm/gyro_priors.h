@@ -4,10 +4,9 @@
 //
 // Where the images see nothing (a dark or bare stairwell, a turn toward a
 // white wall), the frames are held only by the VIO's relative poses, and a
-// stretch held by them alone turns with the VIO's drift: on the simulated
-// two_floors walk, 8 s without a single point between the floors left the
-// second floor turned by 17 mrad against the first (the VIO's own relative
-// rotation over that stretch was 8.5 mrad off). A gyro integrated over the
+// stretch held by them alone turns with the VIO's drift (a second floor
+// turned against the first across a stairwell without points). A gyro
+// integrated over the
 // same stretch, with the bias that the well-imaged stretches on either
 // side give (the images' rotations are far better than any VIO's), is off
 // by a few tenths of a milliradian per second of gap: the bias error times
@@ -25,9 +24,8 @@
 // uncertainty and random walk over the window, and a floor for what the
 // gyro model leaves out (misalignment, timing); inflated where the
 // reconstruction's rotations disagree with the priors more than that allows
-// (on the real handheld recording, by 3.3: its rolling shutter and clock
-// offset leave about a milliradian between the images' and the gyro's
-// relative rotations of consecutive frames).
+// (a real rig's rolling shutter and clock offset). See
+// docs/history/benchmarks-2026.md, section "The gyro's rotations in the final adjustment".
 #pragma once
 
 #include <Eigen/Core>
@@ -59,10 +57,10 @@ struct GyroPriorOptions {
   // gyro model leaves out (the camera-IMU rotation's error, timing,
   // rolling shutter). Default 0.0002.
   double rotation_floor_rad = 0.0002;
-  // Pairs further apart than this are not given a prior (s). Default 5: on
-  // the simulated corridor keyframes (gaps up to 7 s) 10 gave 22.2 mm of
-  // ATE against 17.4 mm; the gyro's bias fit leans on the longest pairs,
-  // where the model's own rotation error is largest.
+  // Pairs further apart than this are not given a prior (s). Default 5: the
+  // gyro's bias fit leans on the longest pairs, where the model's own
+  // rotation error is largest, and longer gaps made the keyframe sequences
+  // worse.
   double max_gap_s = 5.0;
 
   std::string Validate() const;  // empty if valid, else names the bad field
@@ -128,7 +126,7 @@ struct GyroPriors {
 
 // `frames` in strictly increasing time; `imu` in increasing time. The
 // priors' sigma factor is at least `min_sigma_factor` (>= 1): a model that
-// earlier priors already pulled toward the gyro no longer measures how far
+// earlier priors already pulled toward the gyro no longer shows how far
 // the rig is from it, so a later adjustment keeps the first one's factor.
 GyroPriors MakeGyroPriors(const std::vector<GyroFrame>& frames, const std::vector<ImuSample>& imu,
                           const SensorRig& rig, const GyroPriorOptions& options,

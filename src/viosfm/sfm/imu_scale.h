@@ -26,20 +26,13 @@
 // 1.5 mm for 0.3 m/s^2 over 0.1 s) is no larger than a real
 // reconstruction's jitter between neighbouring frames (about a millimetre),
 // and a least squares whose column carries that noise shrinks the scale
-// towards zero (errors in the variables): on a real handheld recording
-// consecutive frames 0.1 s apart give 0.78, frames 0.5-1 s apart 0.98-1.01,
-// which the scene's known heights confirm (docs/benchmarks.md). The fit is
-// therefore repeated on frames at least spacing_check_interval_s apart, and
-// the spaced frames' estimate (less precise, not shrunk) is the result
-// whenever it is precise enough to be used (max_scale_sigma) or disagrees
-// with the consecutive frames' by more than the noise allows. A shrinkage
-// too small for that check still matters: along the simulated 100 s
-// corridor the consecutive frames gave 0.9941 (1.7 sigma from the spaced
-// frames' 0.9982 +- 0.0022), which left the model 0.55 % short; the
-// spaced frames' scale leaves it 0.15 % short (docs/benchmarks.md,
-// "The metric scale from frames 1 s apart"). Only where the spaced
-// frames' scale is too uncertain and agrees does the consecutive frames'
-// stand.
+// towards zero (errors in the variables). The fit is therefore repeated on frames at least
+// spacing_check_interval_s apart, and the spaced frames' estimate (less precise, not shrunk) is the
+// result whenever it is precise enough to be used (max_scale_sigma) or disagrees with the
+// consecutive frames' by more than the noise allows: a shrinkage too small for that check still
+// leaves the scale a few tenths of a per cent short. See docs/history/benchmarks-2026.md, section
+// "The metric scale from frames 1 s apart". Only where the spaced frames' scale is too uncertain
+// and agrees does the consecutive frames' stand.
 #pragma once
 
 #include <string>
@@ -63,10 +56,10 @@ struct ImuScaleOptions {
   double rotation_sigma_rad = 0.001;
   // s, the spacing of the jitter check: the fit is repeated on frames at
   // least this far apart (the displacement the motion adds grows with the
-  // square of the time: 100 times 0.1 s's at 1 s). Default 1 (the real
-  // recording: 0.78, 0.86, 0.88, 0.99, 0.98, 1.01 at 0.1, 0.2, 0.3, 0.5,
-  // 0.8, 1 s; a simulated gentle walk with 2 mm of jitter, truth 1: 0.81,
-  // 0.96, 0.98, 1.00 at 0.1, 0.3, 0.5, 1 s).
+  // square of the time: 100 times 0.1 s's at 1 s). Default 1: from about
+  // 0.5 s apart the jitter no longer shrinks the scale, on the real handheld
+  // recording and in the simulator. See docs/history/benchmarks-2026.md,
+  // section "Real handheld recording: `realsense_room_30s`".
   double spacing_check_interval_s = 1.0;
   // When the spaced frames' scale is too uncertain to be used, the
   // consecutive frames' stands if it is within this many combined standard
@@ -87,23 +80,21 @@ struct ImuScaleOptions {
   // max_refuting_scale_sigma, its residual_ratio at most
   // max_refuting_residual_ratio, and it is the scale of the frames far
   // enough apart (spaced_used): the consecutive frames' is shrunk towards
-  // zero by their jitter, and looks precise while it is. Defaults 5, 0.25 and 2: VIOs started in
-  // motion on the real handheld recording came out 1.8 to 5.5 times too
-  // small, which the IMU measured as 1.94 +- 0.10 to 4.37 +- 0.47 with
-  // residual ratios of 0.66 to 1.46 (a VIO whose scale drifts as well;
-  // docs/benchmarks.md, "Starting in motion"); a scale known to 25 % is far
-  // nearer the truth than one that many sigmas away. (The residual bound of
-  // a usable scale, max_residual_ratio, guards percents, not factors.)
+  // zero by their jitter, and looks precise while it is. Defaults 5, 0.25
+  // and 2: a VIO started in motion can be off by a factor, which its IMU fit
+  // shows many sigmas away, and a scale known to 25 % is far nearer the
+  // truth than that. (The residual bound of a usable scale,
+  // max_residual_ratio, guards percents, not factors.)
+  // See docs/history/benchmarks-2026.md, section "Starting in motion".
   double vio_refuted_sigmas = 5.0;
   double max_refuting_scale_sigma = 0.25;
   double max_refuting_residual_ratio = 2.0;
   // Not usable when the whitened residual exceeds its expected size by this
   // factor (ImuScaleResult::residual_ratio): the trajectory's shape is then
   // worse than the equations assume (bent or tilted in places) and pulls
-  // the scale systematically; no inflated sigma captures that. Default 1
-  // (measured: 0.16-0.19 on ground truth, 0.27-0.66 on good
-  // reconstructions, 2.2-2.7 on a two_floors reconstruction 44 mm off,
-  // whose IMU scale was 3 % off).
+  // the scale systematically; no inflated sigma captures that. Default 1:
+  // ground truth and good reconstructions stay well below it, a bent one
+  // goes above it.
   double max_residual_ratio = 1.0;
   // Where the final bundle adjustment's IMU factors held
   // (sfm/inertial_terms.h), their metric scale of the model is the IMU's
@@ -112,11 +103,9 @@ struct ImuScaleOptions {
   // from it (with the fit's sigma), else the fit's is. The factors solve
   // the scale with the shape, the velocities and a pair of biases every
   // second; this linear fit holds the shape and one accelerometer bias per
-  // bias_window_s. Defaults true and 3: on the 18 simulated trust sequences
-  // (three seeds) the applied scale's errors summed 3.56 % with the fit's
-  // (two beyond 0.5 %), 1.87 % with the factors' (all within 0.35 %), which
-  // lay 0.1 to 1.1 of the fit's sigmas from it (docs/benchmarks.md, "The
-  // scale from the IMU factors").
+  // bias_window_s. Defaults true and 3: on the simulated trust sequences the
+  // factors' scale is the more accurate and lies within the fit's noise.
+  // See docs/history/benchmarks-2026.md, section "The scale from the IMU factors".
   bool use_factor_scale = true;
   double max_factor_disagreement = 3.0;
 

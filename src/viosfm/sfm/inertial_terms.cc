@@ -246,8 +246,7 @@ bool InertialTerms::Initialise(int num_threads, double min_sigma_factor) {
     // The scale and the tilt stay at the model's (the VIO's, within a few
     // per cent and a few tenths of a degree): with the poses held, their
     // jitter between consecutive frames looks like accelerations the IMU
-    // did not measure, and a free scale shrinks to fit them (0.82 on the
-    // simulated two_floors walk, where the adjustment then finds 0.995).
+    // did not sense, and a free scale would shrink to fit them.
     problem.SetParameterBlockConstant(scale_.data());
     problem.SetParameterBlockConstant(tilt_.data());
     ceres::Solver::Options solver_options;
@@ -271,8 +270,7 @@ bool InertialTerms::Initialise(int num_threads, double min_sigma_factor) {
   // the covariance the rig is to blame (its timing, rolling shutter,
   // camera-IMU rotation), and the rest of the factor shares that; the
   // positions' disagreement is the held poses' own jitter, which the
-  // adjustment removes (on the simulated two_floors walk the 9-D median
-  // is 15.8 sigma with the poses held and 0.7 after the adjustment).
+  // adjustment removes.
   median_whitened_rotation_residual_ = MedianWhitenedRotationResidual(cam_from_world);
   sigma_factor_ = std::max(min_sigma_factor, median_whitened_rotation_residual_ / kMedianChi3);
   if (sigma_factor_ > options_.max_sigma_factor) {

@@ -6,9 +6,8 @@
 // The relative-pose priors carry the VIO's lengths only as far as its
 // covariance allows, and where the images are strong the connectivity
 // factor hands the shape to them; but images never see a length, so over a
-// long walk the model's local scale drifts with the images' (the simulated
-// two_floors walk: +0.17 % on the first floor, +0.95 % on the second, where
-// the VIO stayed within 0.3 %). The accelerometer sees lengths everywhere:
+// long walk the model's local scale drifts with the images' while the VIO's
+// stays put. The accelerometer sees lengths everywhere:
 // its factors keep every stretch of the model at one metric scale, and
 // with the gyro's rotations in them they also hold what the gyro's priors
 // held (sfm/gyro_priors.h), which they replace.
@@ -53,13 +52,9 @@ struct InertialTermOptions {
   // IMU factors in the final bundle adjustment, when the dataset has an IMU,
   // in place of the gyro's rotation priors and of the bridging priors
   // (without relative-pose priors, ba.use_relative_pose_priors = false,
-  // neither). Default true: on the simulated sequences with the realistic
-  // emulated VIO (scripts/bench-vio-trust.sh) the Sim(3) ATE fell on every
-  // one (keyframes: room 0.98 -> 0.87 mm, two_floors 27.9 -> 14.7,
-  // corridor 17.4 -> 14.0; 10 Hz: 0.56 -> 0.51, 21.0 -> 10.0, 5.09 ->
-  // 3.77), and on the 100 s two_floors walk with the own VIO its scale error
-  // from +0.56 % to about 0 (docs/benchmarks.md "The IMU in the final
-  // adjustment").
+  // neither). Default true: the factors lowered the error of every simulated
+  // trust sequence and keep a long walk at one metric scale.
+  // See docs/history/benchmarks-2026.md, section "The IMU in the final adjustment".
   bool enabled = true;
   // s: no factor between consecutive frames further apart. Default 10.
   double max_gap_s = 10.0;
@@ -67,32 +62,20 @@ struct InertialTermOptions {
   // frame, joined to the next one's by their random walk over the time
   // between them; 0: a pair per frame. A window holds the biases still
   // while they walk, and over a frame gap of seconds what it misses goes
-  // into the velocities and the positions (two_floors_kf of seed 1: its
-  // second floor 43 mm too low, from one 5 s gap at the stairwell's foot).
-  // On the 18 sequences of scripts/bench-vio-trust.sh (three seeds), Sim(3)
-  // ATE summed over them: 10 s windows 153.4 mm, 1 s 129.9, a pair per
-  // frame 129.6 (1 s: better on 15 of 18, two_floors_kf seed 1 19.15 ->
-  // 8.63; worse on corridor_kf and two_floors_10hz of seed 0 by 13 and
-  // 22 %); the 100 s walks under --realtime, own VIO: two_floors 14.69 ->
-  // 8.83 mm, the room 0.54 -> 0.44, the corridor 5.07 -> 5.09, in about
-  // the same time (docs/benchmarks.md "The IMU's biases every second").
-  // Default 1.
+  // into the velocities and the positions. Default 1: about as good as a
+  // pair per frame, far better than 10 s windows, in the same time.
+  // See docs/history/benchmarks-2026.md, section "The IMU's biases every second".
   double bias_window_s = 1.0;
   // The factors are not used (the gyro's priors are, which allow for a
   // floor of unmodelled rotation error) when the model's rotations disagree
   // with the gyro's by more than this many times the preintegration's
   // covariance (Initialise's sigma_factor): the rig's timing, rolling shutter
   // or calibration is then further from the IMU model than the factors can
-  // take. The simulated trust sequences of three seeds
-  // (scripts/bench-vio-trust.sh) give 1.3 to 9.4, the keyframe-like ones the
-  // most (their model's own rotation noise against a gyro integrated over
-  // seconds), and the factors, so inflated, still lowered their error
-  // (two_floors_kf of seed 2: 32.1 -> 16.5 mm, scale error +2.6 -> +0.6 %);
-  // the real RealSense recording (rolling shutter, about a milliradian
-  // between the images' and the gyro's rotation of consecutive frames)
-  // gives 14.9, where the adjustment had put the model's metric scale at
-  // 0.16. 12 lies between the two; max_scale_change is the check behind it.
-  // Default 12.
+  // take. Default 12: above what the simulated trust sequences show, where
+  // the inflated factors still help, and below the real rolling-shutter
+  // recording's, where they broke the metric scale; max_scale_change is the
+  // check behind it. See docs/history/benchmarks-2026.md, section "Three seeds: the comparison is
+  // not settled".
   double max_sigma_factor = 12.0;
   // After the final adjustment, the factors' metric scale of the model
   // (scale()) further from 1 than this (relative; the model has the VIO's

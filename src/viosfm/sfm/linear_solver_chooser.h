@@ -15,22 +15,16 @@
 namespace viosfm {
 
 // Neither SPARSE_SCHUR nor ITERATIVE_SCHUR is faster on every scene
-// (bundle_adjustment.h). Measured once on the suite's room and corridor,
-// 610 images each, mapping from the same stored matches, one thread
-// (docs/benchmarks.md, "Bundle adjustment: choosing the linear solver"):
-// the room's mapping took 225 CPU-s with SPARSE_SCHUR throughout and 126
-// with ITERATIVE_SCHUR above 100 images; the corridor's 95 and 251. The
-// scenes' reduced camera matrices are about as full (each camera shares
-// points with a third to a half of the others; the corridor more at small
-// sizes), so the fill does not tell them apart; the mean track length L
-// (observations per point) does: 9.4 to 13.7 on the room from 150 images
-// on (points stay in view of many cameras), 7.9 to 8.7 on the corridor
-// (weak texture: short tracks), where the conjugate gradients with the
-// Schur-Jacobi preconditioner needed about three times as long in the
-// mapper's adjustments. And where the reduced camera matrix's Cholesky
-// factor is large (X = E^2 / (n obs) of BaProblemStructure; SPARSE_SCHUR's
-// cost per iteration and observation grew as 1.9 + 0.2 X us on the room),
-// the factorisation dominates whatever the tracks. The rule:
+// (bundle_adjustment.h): each costs about twice the other on one of the
+// suite's room and corridor. Their reduced camera matrices are about as
+// full, so the fill does not tell them apart; the mean track length L
+// (observations per point) does: long where points stay in view of many
+// cameras (a room), short where the texture is weak (a corridor), where the
+// conjugate gradients with the Schur-Jacobi preconditioner need many more
+// steps. And where the reduced camera matrix's Cholesky factor is large
+// (X = E^2 / (n obs) of BaProblemStructure), the factorisation dominates
+// whatever the tracks. See docs/benchmarks.md, section
+// "Bundle adjustment: choosing the linear solver, deterministically". The rule:
 //
 //   n <= max_images_for_sparse_schur       SPARSE_SCHUR
 //   L >= kMinTrackLengthForIterative       ITERATIVE_SCHUR
@@ -49,21 +43,17 @@ namespace viosfm {
 //   otherwise                              ITERATIVE_SCHUR
 //
 // Where the factor stays small the graph is a long chain of cameras, and
-// there the conjugate gradients need many steps at every iteration. Measured
-// on the final adjustment of 100 s simulated walks at 10 Hz (980 images,
-// 2 threads, both solvers from the same batches; docs/benchmarks.md,
-// "Real time"), at 1000 features per image: two_floors F = 8.1e3:
-// SPARSE_SCHUR 75 s, ITERATIVE_SCHUR 371 s; corridor F = 1.11e5: 78 s and
-// 157 s; room F = 2.92e5: 168 s and 28 s. The mean track length (14.4,
-// 12.2, 17.6) would take ITERATIVE_SCHUR for all three. The rule used to
-// divide the work by the observations instead of the images; the room
-// at 2000 features then fell under it (166 per observation against 327 at
-// 1000, the same factorisation) and took SPARSE_SCHUR for 385 s.
+// there the conjugate gradients need many steps at every iteration; the mean
+// track length would take ITERATIVE_SCHUR for every 100 s simulated walk,
+// where F separates the walk seen once from the room. The work is divided by
+// the images, not the observations, so that the feature count does not move
+// the choice. See docs/history/benchmarks-2026.md, section
+// "Real time: where a 100 s recording's time goes".
 //
 // A forced solver (options.linear_solver != kAuto) is always taken. Two scenes
 // fixed the thresholds; a scene between them may get the slower solver, never
 // a different result beyond the solvers' tolerance (both converge to the same
-// cost: the trajectories of the table above agree to 0.1 mm).
+// cost).
 class LinearSolverChooser {
  public:
   // Mean track length from which ITERATIVE_SCHUR is taken (observations per point).
@@ -71,8 +61,8 @@ class LinearSolverChooser {
   // The largest X = E^2 / (n obs) at which SPARSE_SCHUR is taken.
   static constexpr double kMaxFillPerObservation = 20.0;
   // The largest F (block operations per free image) at which the final
-  // adjustment takes SPARSE_SCHUR: between the corridor's 1.11e5 and the
-  // room's 2.92e5 (above).
+  // adjustment takes SPARSE_SCHUR: between the simulated corridor's and the
+  // room's (above).
   static constexpr double kMaxFactorizationPerImageForFinalSparse = 1.8e5;
 
   explicit LinearSolverChooser(const BundleAdjustmentOptions& options);

@@ -38,11 +38,11 @@
 // variance added to the frame noise); over its correlation time (1 s by
 // default) the average of several frames is then trusted more than it
 // deserves, by up to the square root of the frames in that time. (A
-// Gauss-Markov state per frame, which counts it exactly, gave the same
-// figures on the simulated sequences: docs/benchmarks.md.)
+// Gauss-Markov state per frame, which counts it exactly, does no better.)
 //
 // Off by default: on the simulated trust sequences the chain of priors
-// gives the better model (docs/benchmarks.md, "The VIO as drift states").
+// gives the better model. See docs/history/benchmarks-2026.md, section
+// "The VIO as drift states: its own model, measured worse than the chain".
 #pragma once
 
 #include <Eigen/Core>
