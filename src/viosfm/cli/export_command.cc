@@ -26,7 +26,10 @@ void RunExport(ExportArguments args) {
   options.image_folder = args.images;
   const RunExportSummary summary = ExportRun(options);
   std::cout << "Exported to " << summary.output_folder.string()
-            << " (self-contained: copy the folder alone; its README.txt repeats this).\n"
+            << (summary.num_image_files > 0
+                    ? " (self-contained: copy the folder alone; its README.txt repeats this).\n"
+                    : " WITHOUT the images (the run's image folder was not found: export again "
+                      "with --images DIR to make it self-contained).\n")
             << ExportGuide(summary, summary.output_folder);
 }
 

@@ -259,9 +259,13 @@ void WriteStaging(const fs::path& run, const Reconstruction& model, const PosePr
                 staging / "images", summary);
   }
   WriteFileAtomically(staging / "README.txt", [summary](std::ostream& out) {
-    out << "viosfm export: self-contained (paths relative to this folder). images/ holds "
-           "hard links to the run's images where the filesystem allows (the same files: edit "
-           "copies of them), else copies. From a shell in this folder:\n\n"
+    out << (summary->num_image_files > 0
+                ? "viosfm export: self-contained (paths relative to this folder). images/ holds "
+                  "hard links to the run's images where the filesystem allows (the same files: "
+                  "edit copies of them), else copies."
+                : "viosfm export WITHOUT the images: the run's image folder was not found (viosfm "
+                  "export --images DIR adds them); paths are relative to this folder.")
+        << " From a shell in this folder:\n\n"
         << ExportGuide(*summary, fs::path());
   });
 }
