@@ -2,7 +2,7 @@
 
 namespace viosfm::cli {
 
-void AddBagOptions(CLI::App* command, BagArguments* args, bool add_camera_yaml) {
+void AddBagOptions(CLI::App* command, BagArguments* args) {
   command->add_option("--image-topic", args->image_topic,
                       "Bag: sensor_msgs/Image or CompressedImage topic (default: the only one, "
                       "or /cam0/image_raw)");
@@ -11,11 +11,10 @@ void AddBagOptions(CLI::App* command, BagArguments* args, bool add_camera_yaml) 
   command->add_option("--groundtruth-topic", args->groundtruth_topic,
                       "Bag: geometry_msgs/PoseStamped or TransformStamped ground truth "
                       "(default: /groundtruth/pose when present)");
-  if (add_camera_yaml) {
-    command->add_option("--camera-yaml", args->camera_yaml,
-                        "Bag: Kalibr/EuRoC camera sensor.yaml (default: the calibration in the "
-                        "bag, or mav0/ beside it)");
-  }
+  command->add_option("--camera-yaml", args->camera_yaml,
+                      "Bag or image folder: the camera's EuRoC/Kalibr sensor.yaml (a bag's "
+                      "default: the calibration in the bag, or mav0/ beside it; an image "
+                      "folder's: a camera guessed from the image size)");
   command->add_option("--imu-yaml", args->imu_yaml,
                       "Bag: Kalibr/EuRoC IMU sensor.yaml (with --camera-yaml)");
 }

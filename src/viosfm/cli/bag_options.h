@@ -14,14 +14,15 @@ struct BagArguments {
   std::string image_topic;
   std::string imu_topic;
   std::string groundtruth_topic;
+  // A bag's, and an image folder's: the subcommands that read image
+  // folders give it to both.
   std::string camera_yaml;
   std::string imu_yaml;
 };
 
-// Adds --image-topic, --imu-topic, --groundtruth-topic, --imu-yaml and, with
-// add_camera_yaml, --camera-yaml (subcommands that read image folders
-// already have it: it then serves both).
-void AddBagOptions(CLI::App* command, BagArguments* args, bool add_camera_yaml);
+// Adds --image-topic, --imu-topic, --groundtruth-topic, --camera-yaml and
+// --imu-yaml.
+void AddBagOptions(CLI::App* command, BagArguments* args);
 
 // The read options of a bag whose images go to `extract_folder`.
 RosbagDatasetOptions MakeRosbagOptions(const BagArguments& args,

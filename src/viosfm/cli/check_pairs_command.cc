@@ -79,8 +79,9 @@ void RegisterCheckPairs(CLI::App& app) {
   auto args = std::make_shared<CheckPairsArguments>();
   CLI::App* command = app.add_subcommand(
       "check-pairs",
-      "Judge verification runs (viosfm match --report) on a simulated sequence against its "
-      "ground truth: correct candidate pairs (views sharing a surface), accepted wrong pairs "
+      "Judge verification runs on a simulated sequence against its ground truth. Of each run "
+      "(viosfm match --report): correct candidate pairs (views sharing a surface), accepted wrong "
+      "pairs "
       "(inliers disagreeing with the true geometry), and each run's share of the first run's "
       "correct pairs");
   command->add_option("sequence", args->sequence, "`viosfm simulate` output folder")->required();

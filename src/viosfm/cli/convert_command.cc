@@ -123,15 +123,18 @@ void RegisterConvert(CLI::App& app) {
   auto args = std::make_shared<ConvertArguments>();
   CLI::App* command = app.add_subcommand(
       "convert",
-      "Convert between a EuRoC folder and a bag, by extension: FOLDER -> X.bag (ROS 1), X.db3 "
-      "(ROS 2, rosbag2 sqlite3) or X.mcap (ROS 2, MCAP) writes sensor_msgs/Image mono8 on "
-      "/cam0/image_raw, sensor_msgs/Imu on /imu0, the ground truth on /groundtruth/pose and the "
-      "calibration; BAG -> FOLDER writes what viosfm reads from the bag as a EuRoC folder; BAG "
-      "-> X.bag, X.db3 or X.mcap writes what viosfm reads from the first bag into the second");
+      "Convert a EuRoC folder to a bag (ROS 1 or ROS 2), or back. A bag is a ROS 1 .bag, a ROS "
+      "2 .db3 or .mcap; the output's extension chooses the kind.");
+  command->footer(
+      "FOLDER -> X.bag (ROS 1), X.db3 (ROS 2, rosbag2 sqlite3) or X.mcap (ROS 2, MCAP) writes "
+      "sensor_msgs/Image mono8 on /cam0/image_raw, sensor_msgs/Imu on /imu0, the ground truth on "
+      "/groundtruth/pose and the calibration; BAG -> FOLDER writes what viosfm reads from the bag "
+      "as a EuRoC folder; BAG -> X.bag, X.db3 or X.mcap writes what viosfm reads from the first "
+      "bag into the second.");
   command->add_option("in", args->in, "EuRoC folder, or a bag (.bag, .db3, .mcap, rosbag2 folder)")
       ->required();
   command->add_option("out", args->out, ".bag, .db3, .mcap or folder (written)")->required();
-  AddBagOptions(command, &args->bag, /*add_camera_yaml=*/true);
+  AddBagOptions(command, &args->bag);
   command
       ->add_option("--compression", args->compression,
                    "Writing a bag: default (.bag none, .mcap zstd, .db3 none), none, bz2 or lz4 "

@@ -77,7 +77,7 @@ void RegisterEmulateVio(CLI::App& app) {
   auto args = std::make_shared<EmulateVioArgs>();
   CLI::App* command = app.add_subcommand(
       "emulate-vio",
-      "Emulate a drifting VIO on a ground-truth trajectory of any spacing (the photos of a "
+      "Emulate a drifting VIO on a ground-truth trajectory. Of any spacing (the photos of a "
       "survey, keyframes): the simulator's realistic VIO (drift in time, distance and "
       "rotation, scale error, correlated noise, optional re-initialisations; the VIO "
       "uncertainty model's defaults) on a grid through every ground-truth stamp, written as "

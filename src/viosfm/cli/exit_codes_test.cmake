@@ -106,6 +106,16 @@ expect_exit(2 "^error: ${WORK}/absent.bag: bag file not found" run "${WORK}/abse
 if(EXISTS "${WORK}/out_absent")
   message(FATAL_ERROR "run on an absent dataset left ${WORK}/out_absent behind")
 endif()
+# A folder of photos whose names are not timestamps, with a VIO file: the
+# images were numbered 1 s apart, so the VIO cannot pose them; the error
+# names --timestamps, the flag that gives their stamps.
+foreach(name photo_a photo_b photo_c)
+  configure_file("${CMAKE_CURRENT_LIST_DIR}/../../../docs/images/sim_room.png"
+                 "${WORK}/photos/${name}.png" COPYONLY)
+endforeach()
+file(WRITE "${WORK}/photos_vio.tum" "100.0 0 0 0 0 0 0 1\n101.0 0.1 0 0 0 0 0 1\n")
+expect_exit(2 "^error: ${WORK}/photos_vio.tum: the VIO poses .* do not overlap .*the image names are not timestamps.*give their stamps with --timestamps FILE"
+            run "${WORK}/photos" --out "${WORK}/out_photos" --vio-trajectory "${WORK}/photos_vio.tum")
 # Two verification flags that exclude each other: refused before any work.
 expect_exit(2 "^error: --fixed-band and --wide-band exclude each other" run "${WORK}/dataset"
             --out "${WORK}/out_bands" --fixed-band --wide-band)

@@ -1,13 +1,13 @@
 // `viosfm export RUN`: a finished run folder as the inputs of the next tools
 // (COLMAP database with pose priors and model, transforms.json for
-// nerfstudio / instant-ngp / Gaussian splatting), see pipeline/run_export.h.
+// nerfstudio / instant-ngp / Gaussian splatting, the images), in one
+// self-contained folder; see pipeline/run_export.h.
+#include <iostream>
 #include <memory>
 #include <string>
 
 #include "viosfm/cli/commands.h"
 #include "viosfm/pipeline/run_export.h"
-#include "viosfm/util/errors.h"
-#include "viosfm/util/logging.h"
 
 namespace viosfm::cli {
 namespace {
@@ -25,13 +25,12 @@ void RunExport(ExportArguments args) {
   options.output_folder = args.out;
   options.image_folder = args.images;
   const RunExportSummary summary = ExportRun(options);
-  VIOSFM_LOG(INFO) << "export: next, e.g.\n"
-                   << "  colmap pose_prior_mapper --database_path "
-                   << (summary.output_folder / "database.db").string() << " --image_path "
-                   << (summary.output_folder / "images").string() << " --output_path OUT  "
-                   << "(COLMAP 3.10+)\n"
-                   << "  ns-train splatfacto --data " << summary.output_folder.string()
-                   << "  (nerfstudio)";
+  std::cout << "Exported to " << summary.output_folder.string()
+            << (summary.num_image_files > 0
+                    ? " (self-contained: copy the folder alone; its README.txt repeats this).\n"
+                    : " WITHOUT the images (the run's image folder was not found: export again "
+                      "with --images DIR to make it self-contained).\n")
+            << ExportGuide(summary, summary.output_folder);
 }
 
 }  // namespace
@@ -40,11 +39,17 @@ void RegisterExport(CLI::App& app) {
   auto args = std::make_shared<ExportArguments>();
   CLI::App* command = app.add_subcommand(
       "export",
-      "Export a run folder for the next tool: a COLMAP database with the poses as pose priors "
-      "(COLMAP 3.10+ pose_priors table and 3.8 prior columns) and the model in sparse/0, a "
-      "nerfstudio/instant-ngp transforms.json with sparse_pc.ply, and an images link");
+      "Export a run for COLMAP, nerfstudio and gsplat, self-contained. One folder holds "
+      "the images, a COLMAP database with the poses as pose priors, the model "
+      "(sparse/0), transforms.json with sparse_pc.ply; prints the next steps");
+  command->footer(
+      "Example: viosfm export out/v101 (writes out/v101/export/; copy it to a GPU machine as "
+      "it is). The images are hard links to the run's image files where the filesystem allows, "
+      "else copies; every path in the folder is relative to it.");
   command->add_option("run", args->run, "Output folder of `viosfm run`")->required();
-  command->add_option("--out", args->out, "Export folder (default RUN/export, replaced)");
+  command->add_option("--out", args->out,
+                      "Export folder (default RUN/export): new, empty or an earlier export, whose "
+                      "own files are replaced and what you added kept");
   command->add_option("--images", args->images,
                       "The run's image folder (default: from RUN/options.json)");
   command

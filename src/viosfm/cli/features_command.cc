@@ -7,6 +7,7 @@
 
 #include "viosfm/cli/bag_options.h"
 #include "viosfm/cli/commands.h"
+#include "viosfm/cli/option_flags.h"
 #include "viosfm/features/feature_extraction.h"
 #include "viosfm/io/colmap_database.h"
 #include "viosfm/io/dataset.h"
@@ -25,16 +26,14 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// `viosfm features` runs the feature stage of a run: its flags set a run's
+// options (option_flags.h), of which it uses the dataset's and the SIFT's.
 struct FeaturesArguments {
   std::string dataset;
   std::string database;
-  SiftOptions sift;
-  bool no_root_sift = false;
   std::string camera;
   BagArguments bag;
-  std::string timestamps;
-  CalibrationFiles calibration;
-  DatasetChecks checks;
+  PipelineOptions options;
 };
 
 // "MODEL,WIDTH,HEIGHT,p1,p2,..." e.g. "PINHOLE,752,480,458.6,457.3,367.2,248.4".
@@ -69,37 +68,38 @@ fs::path BagFolder(const FeaturesArguments& args) {
                                           : fs::path();
 }
 
-Sequence ReadFeaturesDataset(const FeaturesArguments& args) {
+// The run's options of the features: the dataset's, with a bag's images
+// beside the database (OUT/bag), and the SIFT's.
+PipelineOptions FeaturesRunOptions(const FeaturesArguments& args) {
+  PipelineOptions options = args.options;
+  options.dataset = args.dataset;
+  options.rosbag = MakeRosbagOptions(args.bag, BagFolder(args));
+  options.image_folder.camera_yaml = args.bag.camera_yaml;
+  options.num_threads = CapNumThreads(options.num_threads, "--threads");
+  return options;
+}
+
+Sequence ReadFeaturesDataset(const FeaturesArguments& args, const PipelineOptions& run_options) {
   DatasetReadOptions options;
   options.rosbag = MakeRosbagOptions(args.bag, fs::absolute(args.database).parent_path() / "bag");
-  options.image_folder.timestamps_file = args.timestamps;
-  options.image_folder.camera_yaml = args.bag.camera_yaml;
+  options.image_folder = run_options.image_folder;
   if (!args.camera.empty()) options.image_folder.camera = ParseCameraOption(args.camera);
-  options.calibration = args.calibration;
-  options.checks = args.checks;
+  options.calibration = run_options.calibration;
+  options.checks = run_options.dataset_checks;
   return ReadDataset(args.dataset, options);
 }
 
 // What the features stored in the database are made from, under the keys a
 // run's fingerprint gives them (pipeline/run_fingerprint.h).
-RunFingerprint FeaturesFingerprint(const FeaturesArguments& args, const SiftOptions& sift,
-                                   const Sequence& sequence) {
-  PipelineOptions options;
-  options.dataset = args.dataset;
-  options.image_folder.timestamps_file = args.timestamps;
-  options.image_folder.camera_yaml = args.bag.camera_yaml;
-  options.rosbag = MakeRosbagOptions(args.bag, BagFolder(args));
-  options.calibration = args.calibration;
-  options.sift = sift;
+RunFingerprint FeaturesFingerprint(const PipelineOptions& options, const Sequence& sequence) {
   RunFingerprint fingerprint = FingerprintOfInputs(options);
   AddSequenceToFingerprint(sequence, &fingerprint);
   return FingerprintPart(fingerprint, FeaturesFingerprintPrefixes());
 }
 
 void RunFeatures(const FeaturesArguments& args) {
-  SiftOptions options = args.sift;
-  options.root_sift = !args.no_root_sift;
-  options.num_threads = CapNumThreads(options.num_threads, "--threads");
+  const PipelineOptions run_options = FeaturesRunOptions(args);
+  const SiftOptions options = run_options.EffectiveSiftOptions();
   if (const std::string error = options.Validate(); !error.empty()) {
     throw InputError("invalid feature options: " + error);
   }
@@ -110,8 +110,8 @@ void RunFeatures(const FeaturesArguments& args) {
   // before its rows change.
   DatabaseFolder folder(database_path, BagFolder(args));
   if (!BagFolder(args).empty()) folder.MarkWriting();
-  const Sequence sequence = ReadFeaturesDataset(args);
-  folder.CheckAndRecord(FeaturesFingerprint(args, options, sequence));
+  const Sequence sequence = ReadFeaturesDataset(args, run_options);
+  folder.CheckAndRecord(FeaturesFingerprint(run_options, sequence));
   ColmapDatabase database = ColmapDatabase::Open(database_path);
   VIOSFM_LOG(INFO) << "features: " << sequence.images.size() << " images of " << args.dataset
                    << " -> " << database_path.string() << " (max " << options.max_num_features
@@ -130,9 +130,11 @@ void RegisterFeatures(CLI::App& app) {
   auto args = std::make_shared<FeaturesArguments>();
   CLI::App* command = app.add_subcommand(
       "features",
-      "Extract SIFT (RootSIFT) features of every image into a COLMAP 3.8 database; a re-run "
-      "skips the images already stored, and a database whose features other inputs or options "
-      "made is refused (fingerprint.json beside it, as a run's)");
+      "Extract SIFT features into a COLMAP database (the feature stage of `viosfm run`). RootSIFT "
+      "features of every image into a COLMAP 3.8 database, with the flags of `viosfm run`; a "
+      "re-run skips the images already stored, "
+      "and a database whose features other inputs or options made is refused (fingerprint.json "
+      "beside it, as a run's)");
   command
       ->add_option("dataset", args->dataset,
                    "EuRoC dataset (folder containing mav0/), a folder of images or a bag (ROS 1 "
@@ -140,31 +142,15 @@ void RegisterFeatures(CLI::App& app) {
       ->required();
   command->add_option("--database", args->database, "COLMAP database (created if missing)")
       ->required();
-  AddCalibrationOptions(command, &args->calibration);
-  AddDatasetCheckOptions(command, &args->checks);
-  command->add_option("--max-features", args->sift.max_num_features, "Features kept per image")
-      ->capture_default_str();
-  command->add_flag("--no-root-sift", args->no_root_sift,
-                    "L2-normalised SIFT descriptors instead of RootSIFT");
-  command->add_option("--threads", args->sift.num_threads, "Images extracted in parallel")
-      ->capture_default_str();
-  command
-      ->add_option("--peak-threshold", args->sift.peak_threshold,
-                   "Minimum DoG response (intensities in [0, 1])")
-      ->capture_default_str();
-  command
-      ->add_option("--first-octave", args->sift.first_octave,
-                   "First octave of the scale space: -1 (image doubled, COLMAP's) or 0 (the image "
-                   "itself: about half the time, coarser keypoints)")
-      ->check(CLI::IsMember({-1, 0}))
-      ->capture_default_str();
-  command->add_option("--camera-yaml", args->bag.camera_yaml,
-                      "Image folder or bag: Kalibr/EuRoC camera sensor.yaml");
-  AddBagOptions(command, &args->bag, /*add_camera_yaml=*/false);
+  AddCalibrationOptions(command, &args->options.calibration);
+  AddDatasetCheckOptions(command, &args->options.dataset_checks);
+  AddOptionFlags(command, MakeOptionTarget(&args->options, ""),
+                 {"--max-features", "--no-root-sift", "--threads", "--peak-threshold",
+                  "--first-octave", "--timestamps"});
+  command->get_option("--first-octave")->check(CLI::IsMember({-1, 0}));
+  AddBagOptions(command, &args->bag);
   command->add_option("--camera", args->camera,
                       "Image folder: MODEL,WIDTH,HEIGHT,PARAMS... (COLMAP model and order)");
-  command->add_option("--timestamps", args->timestamps,
-                      "Image folder: file of 'filename timestamp' lines");
   command->callback([args] { RunFeatures(*args); });
 }
 

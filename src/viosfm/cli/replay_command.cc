@@ -22,9 +22,11 @@ void RegisterReplay(CLI::App& app) {
   auto args = std::make_shared<ReplayArguments>();
   CLI::App* command = app.add_subcommand(
       "replay",
-      "Write a recorded EuRoC folder again, as a recorder writes it while it records: the "
-      "sensor.yaml files, then its IMU rows and images (each image before its row) at the pace "
-      "of their stamps; `viosfm run OUT --follow` follows it");
+      "Record a EuRoC folder again at its pace, for `viosfm run --follow`. It writes at the pace "
+      "of the stamps as a recorder would: `viosfm run OUT --follow` follows OUT as it grows.");
+  command->footer(
+      "The sensor.yaml files first, then the IMU rows and the images (each image before its row) "
+      "at the pace of their stamps times --speed.");
   command->add_option("dataset", args->in, "EuRoC dataset (folder containing mav0/)")->required();
   command->add_option("--out", args->out, "The folder to record into (created)")->required();
   command->add_option("--speed", args->options.speed, "Times real time (0: as fast as possible)")

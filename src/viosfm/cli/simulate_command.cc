@@ -74,7 +74,7 @@ void RegisterSimulate(CLI::App& app) {
   auto args = std::make_shared<SimulateArgs>();
   CLI::App* command = app.add_subcommand(
       "simulate",
-      "Simulate a visual-inertial sequence with exact ground truth (EuRoC ASL layout): rendered "
+      "Simulate a visual-inertial sequence with exact ground truth. A EuRoC folder: rendered "
       "images, motion, IMU, ground-truth state, per-frame scene regions and an emulated "
       "drifting VIO trajectory");
   command->add_option("--out", args->out, "Output folder (replaced atomically)")->required();

@@ -8,6 +8,7 @@
 
 #include "viosfm/cli/bag_options.h"
 #include "viosfm/cli/commands.h"
+#include "viosfm/cli/option_flags.h"
 #include "viosfm/io/dataset.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/logging.h"
@@ -70,8 +71,12 @@ void RegisterVio(CLI::App& app) {
   auto args = std::make_shared<VioArguments>();
   CLI::App* command = app.add_subcommand(
       "vio",
-      "Monocular visual-inertial odometry (KLT front end, sliding-window back end with IMU "
-      "preintegration and marginalisation): a pose, velocity, biases and status for every frame");
+      "Run viosfm's visual-inertial odometry alone. It writes a pose, velocity, biases and "
+      "status for every frame (trajectory_body.tum, trajectory_cam.tum, states.csv).");
+  command->footer(
+      "Monocular: a KLT front end, a sliding-window back end with IMU preintegration and "
+      "marginalisation, the camera-IMU time offset and a rolling-shutter readout estimated; "
+      "`viosfm run` runs it as its first stage.");
   command
       ->add_option("dataset", args->dataset,
                    "EuRoC dataset (folder containing mav0/) or a bag (ROS 1 .bag; ROS 2 .db3, "
@@ -80,29 +85,11 @@ void RegisterVio(CLI::App& app) {
   command->add_option("--out", args->out, "Output folder")->required();
   AddCalibrationOptions(command, &args->calibration);
   AddDatasetCheckOptions(command, &args->checks);
-  command
-      ->add_option("--max-frames", args->options.max_frames,
-                   "Process only the first N images (0: all)")
-      ->capture_default_str();
-  command->add_option("--threads", args->options.window.num_threads, "Threads of the window solver")
-      ->capture_default_str();
-  command->add_option("--window-size", args->options.window.window_size, "Keyframes in the window")
-      ->capture_default_str();
-  command
-      ->add_option("--max-features", args->options.tracker.max_num_features,
-                   "Corners tracked per image")
-      ->capture_default_str();
-  command
-      ->add_option("--iterations", args->options.window.max_num_iterations,
-                   "Solver iterations per frame")
-      ->capture_default_str();
-  command
-      ->add_option("--rolling-shutter-readout", args->options.rolling_shutter_readout_s,
-                   "s, the camera's rolling-shutter readout time, first row to last; "
-                   "observations are moved to the frame's stamp (0: not given, estimated with the "
-                   "time offset; a global shutter when the images show none)")
-      ->capture_default_str();
-  AddBagOptions(command, &args->bag, /*add_camera_yaml=*/true);
+  // The own VIO's options are a run's own_vio.* (option_flags.h).
+  AddOptionFlags(command, MakeOptionTarget(&args->options, "own_vio."),
+                 {"--max-frames", "--threads", "--window-size", "--max-features", "--iterations",
+                  "--rolling-shutter-readout"});
+  AddBagOptions(command, &args->bag);
   command->add_option("--set", args->set_options,
                       "KEY=VALUE: set any VIO option by its key, as `viosfm run --list-options` "
                       "lists it without the leading 'own_vio.' (repeatable; applied after the "

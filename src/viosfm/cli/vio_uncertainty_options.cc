@@ -35,9 +35,8 @@ void AddVerificationBandOptions(CLI::App* command, VerificationBandArguments* ar
 
 void AddVioUncertaintyOptions(CLI::App* command, VioUncertaintyArguments* arguments) {
   VioUncertaintyModel& m = arguments->model;
-  const std::string group = "VIO uncertainty (how far its relative poses are trusted)";
   const auto add = [&](const char* name, double* value, const char* help) {
-    command->add_option(name, *value, help)->capture_default_str()->group(group);
+    command->add_option(name, *value, help)->capture_default_str()->group(kVioUncertaintyGroup);
   };
   add("--vio-uncertainty", &arguments->factor,
       "Multiplier of every rate below (2: a VIO twice as bad as the defaults assume)");
@@ -59,6 +58,17 @@ void AddVioUncertaintyOptions(CLI::App* command, VioUncertaintyArguments* argume
       "Slowly varying rotation noise, rad");
   add("--vio-noise-correlation", &m.noise_correlation_s,
       "Correlation time of the slowly varying noise, s");
+}
+
+std::vector<std::string> VioUncertaintyFlagNames() {
+  CLI::App app;
+  VioUncertaintyArguments arguments;
+  AddVioUncertaintyOptions(&app, &arguments);
+  std::vector<std::string> names;
+  for (const CLI::Option* option : app.get_options()) {
+    if (option->get_group() == kVioUncertaintyGroup) names.push_back(option->get_name());
+  }
+  return names;
 }
 
 }  // namespace viosfm::cli

@@ -6,6 +6,8 @@
 
 #include <CLI/CLI.hpp>
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "viosfm/matching/verification_driver.h"
 #include "viosfm/scene/vio_uncertainty.h"
@@ -19,8 +21,13 @@ struct VioUncertaintyArguments {
   VioUncertaintyModel Model() const;
 };
 
-// Adds --vio-uncertainty F and one flag per rate (--vio-yaw-per-sqrt-m ...).
+// Adds --vio-uncertainty F and one flag per rate (--vio-yaw-per-sqrt-m ...),
+// in the group kVioUncertaintyGroup.
 void AddVioUncertaintyOptions(CLI::App* command, VioUncertaintyArguments* arguments);
+inline constexpr const char* kVioUncertaintyGroup =
+    "VIO uncertainty (how far its relative poses are trusted)";
+// The names of the flags AddVioUncertaintyOptions adds.
+std::vector<std::string> VioUncertaintyFlagNames();
 
 struct VerificationBandArguments {
   bool fixed_band = false;  // --fixed-band: band_follows_drift false

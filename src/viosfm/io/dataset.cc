@@ -40,9 +40,11 @@ Sequence ReadDataset(const fs::path& path, const DatasetReadOptions& options) {
                        "not a EuRoC dataset (no mav0/) nor a bag: an image folder has no IMU");
     }
     if (const std::string error = options.image_folder.Validate(); !error.empty()) {
-      throw InputError(path.string(), 0,
-                       "not a EuRoC dataset (no mav0/), so read as an image folder: " + error +
-                           " (give the camera: --camera-yaml or --camera)");
+      throw InputError(
+          path.string(), 0,
+          "not a EuRoC dataset (no mav0/), so read as an image folder: " + error +
+              " (give the camera once, by its sensor.yaml with --camera-yaml, or none to have it "
+              "guessed from the image size)");
     }
     sequence = ReadImageFolder(path, options.image_folder, options.checks);
   }

@@ -1,13 +1,15 @@
 // `viosfm export RUN`: a finished run folder (pipeline.h) turned into the
-// inputs of the next tools, in one folder (default RUN/export; a new or
-// empty folder, or an earlier export: never the run itself, a folder that
-// holds it, or a folder of the user's), whose viosfm_manifest.json lists
-// what the export wrote (util/folder_manifest.h: an export again replaces
-// those files only, so what the user added, e.g. COLMAP's output, stays):
+// inputs of the next tools, in one self-contained folder (default
+// RUN/export; a new or empty folder, or an earlier export: never the run
+// itself, a folder that holds it, or a folder of the user's), whose
+// viosfm_manifest.json lists what the export wrote (util/folder_manifest.h:
+// an export again replaces those files only, so what the user added, e.g.
+// COLMAP's output, stays). The folder can be copied alone to another
+// machine: every path in it is relative to it, and it holds the images.
 //
-//   images -> ...        a symbolic link to the run's image folder (EuRoC
-//                        mav0/cam0/data, the image folder, or RUN/bag/... for
-//                        a bag), so the paths below resolve
+//   images/              the run's images (every image of the database):
+//                        hard links to the run's image files where the
+//                        filesystem allows, else copies
 //   database.db          the run's COLMAP database (features, matches, verified
 //                        pairs) with viosfm's poses as pose priors: COLMAP
 //                        3.10+'s pose_priors table (position, Cartesian
@@ -18,25 +20,24 @@
 //   transforms.json      nerfstudio / instant-ngp cameras (io/transforms_json.h)
 //                        of the registered images, file paths "images/<name>"
 //   sparse_pc.ply        the model's points (ply_file_path of transforms.json)
-//
-// so that, e.g.:
-//   colmap pose_prior_mapper --database_path E/database.db --image_path E/images
-//                            --output_path E/colmap_sparse          (COLMAP 3.10+)
-//   colmap point_triangulator --database_path E/database.db --image_path E/images
-//                            --input_path E/sparse/0 --output_path OUT   (3.8+)
-//   ns-train splatfacto --data E                                     (nerfstudio)
+//   README.txt           the next steps (ExportGuide) and the model's
+//                        reprojection error under both definitions in use
 //
 // Why a separate step and not part of `viosfm run`: it needs only the run
 // folder, so any finished run can be exported (again, with other priors)
-// without recomputing; the database copy doubles the disk use, which a user
-// should ask for; and the pose-prior covariances can come from a model of
-// the VIO's uncertainty without `viosfm run` knowing about the export.
+// without recomputing; the database and image copies take disk space,
+// which a user should ask for; and the pose-prior covariances can come from
+// a model of the VIO's uncertainty without `viosfm run` knowing about the
+// export.
 #pragma once
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <filesystem>
 #include <map>
 #include <string>
+
+#include "viosfm/scene/reconstruction.h"
 
 namespace viosfm {
 
@@ -70,10 +71,36 @@ struct RunExportOptions {
   bool Check() const { return Validate().empty(); }
 };
 
+// A model's mean reprojection error under the two definitions in use. Both
+// average the same residuals, the pixel distance between a keypoint and its
+// point's projection in a registered image (the pixel conventions of the
+// keypoints and of the principal point agree, io/colmap_convention.h); they
+// weigh them differently.
+struct ModelReprojectionErrors {
+  // viosfm's (summary.json mean_reprojection_error_px, the run's log): the
+  // mean over every observation, so a point counts once per image seeing it.
+  size_t num_observations = 0;
+  double mean_over_observations_px = 0.0;
+  // COLMAP's (model_analyzer's "Mean reprojection error",
+  // Reconstruction::ComputeMeanReprojectionError): the mean over the points
+  // of each point's stored ERROR (points3D; the mean over its own
+  // observations), points without one (-1) left out: a point counts once.
+  size_t num_points = 0;
+  double mean_over_points_px = 0.0;
+};
+
+// Both means of `model`; the points' stored errors (Point3D::error) give
+// the second, as COLMAP reads them.
+ModelReprojectionErrors ComputeModelReprojectionErrors(const Reconstruction& model);
+
 struct RunExportSummary {
   std::filesystem::path output_folder;
-  std::filesystem::path image_folder;  // empty if it could not be found (no link)
-  size_t num_images = 0;               // registered images exported
+  std::filesystem::path image_folder;  // empty if it could not be found (no images)
+  size_t num_image_files = 0;          // images placed in images/ (the database's)
+  size_t num_images_linked = 0;        // of them, hard links to the run's image files
+  size_t num_images_copied = 0;        // copies (another filesystem, or links refused)
+  uint64_t bytes_copied = 0;
+  size_t num_images = 0;  // registered images exported
   size_t num_points = 0;
   size_t num_priors_from_covariances = 0;  // priors whose covariance was given
   size_t num_priors_from_model = 0;        // priors with the model's covariance
@@ -81,9 +108,18 @@ struct RunExportSummary {
   double keypoint_sigma_px = 0.0;          // the model's, when used
   double scale_sigma = 0.0;                // the model's scale's (relative), when used
   double median_position_stddev_m = 0.0;   // sqrt(trace / 3) of the priors' covariances
+  ModelReprojectionErrors reprojection;
 };
 
-// Throws InputError naming the file for a missing or malformed run folder.
+// Throws InputError naming the file for a missing or malformed run folder,
+// or an image of the run's database that its image folder lacks.
 RunExportSummary ExportRun(const RunExportOptions& options);
+
+// What to do with an export next, as lines of text: COLMAP 3.8 (Debian 12's;
+// and 3.10+'s pose_prior_mapper), nerfstudio and gsplat commands on the
+// export at `folder` (as the user will type it; empty: the commands run
+// inside the export folder), and the model's reprojection error under both
+// definitions.
+std::string ExportGuide(const RunExportSummary& summary, const std::filesystem::path& folder);
 
 }  // namespace viosfm

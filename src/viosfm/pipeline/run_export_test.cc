@@ -1,15 +1,21 @@
 #include "viosfm/pipeline/run_export.h"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <regex>
 #include <set>
+#include <sstream>
 #include <string>
 
 #include "viosfm/io/colmap_database.h"
@@ -19,6 +25,7 @@
 #include "viosfm/io/transforms_json.h"
 #include "viosfm/pipeline/pipeline.h"
 #include "viosfm/pipeline/pipeline_test_fixture.h"
+#include "viosfm/scene/reprojection.h"
 #include "viosfm/sensor/camera_models.h"
 #include "viosfm/sim/sequence_simulator.h"
 #include "viosfm/util/file_util.h"
@@ -70,7 +77,21 @@ TEST(RunExport, WritesEveryFileWithTheModelsPoses) {
   EXPECT_EQ(f.summary.num_images, model.NumRegImages());
   EXPECT_EQ(f.summary.num_points, model.NumPoints3D());
   EXPECT_EQ(f.summary.image_folder, fs::absolute(f.dataset / "mav0" / "cam0" / "data"));
-  EXPECT_TRUE(fs::is_symlink(e / "images"));
+  // images/ is a folder of the export holding every image of the database,
+  // each with the dataset's bytes (a hard link here: one filesystem).
+  EXPECT_TRUE(fs::is_directory(e / "images"));
+  EXPECT_FALSE(fs::is_symlink(e / "images"));
+  const std::vector<DatabaseImage> database_images =
+      ColmapDatabase::Open(f.run / "database.db").ReadAllImages();
+  ASSERT_GE(database_images.size(), model.NumRegImages());
+  EXPECT_EQ(f.summary.num_image_files, database_images.size());
+  EXPECT_EQ(f.summary.num_images_linked + f.summary.num_images_copied, database_images.size());
+  EXPECT_EQ(f.summary.num_images_linked, database_images.size());
+  for (const DatabaseImage& image : database_images) {
+    const fs::path exported = e / "images" / image.name;
+    ASSERT_TRUE(fs::is_regular_file(exported) && !fs::is_symlink(exported)) << exported;
+    EXPECT_EQ(ReadTextFile(exported), ReadTextFile(f.summary.image_folder / image.name));
+  }
   for (const char* file : {"cameras.bin", "images.bin", "points3D.bin"}) {
     EXPECT_EQ(ReadTextFile(e / "sparse" / "0" / file), ReadTextFile(f.run / "model" / file));
   }
@@ -195,9 +216,17 @@ TEST(RunExport, Colmap38OpensTheExportAndReproducesThePoints) {
     GTEST_SKIP() << "colmap not installed (apt-get install colmap); skipping";
   }
   const fs::path e = f.run / "export";
-  const size_t ours = PointsOf(
-      RunColmap(f, "model_analyzer --path " + e.string() + "/sparse/0", "analyzer_ours.log"));
+  const std::string analyzer =
+      RunColmap(f, "model_analyzer --path " + e.string() + "/sparse/0", "analyzer_ours.log");
+  const size_t ours = PointsOf(analyzer);
   EXPECT_EQ(ours, f.summary.num_points);
+  // COLMAP's mean reprojection error is the export's second definition (the
+  // points' mean errors averaged), printed with 6 decimals.
+  std::smatch match;
+  ASSERT_TRUE(
+      std::regex_search(analyzer, match, std::regex("Mean reprojection error: ([0-9.]+) ?px")))
+      << analyzer;
+  EXPECT_NEAR(std::stod(match[1]), f.summary.reprojection.mean_over_points_px, 1e-6);
   // A copy of the database, since COLMAP writes to the one it opens.
   fs::copy_file(e / "database.db", f.folder / "colmap.db", fs::copy_options::overwrite_existing);
   fs::create_directories(f.folder / "triangulated");
@@ -252,7 +281,11 @@ TEST(RunExport, AnExportAgainKeepsWhatTheUserAddedAndTheRunRecordsIt) {
   EXPECT_EQ(exported.kind, "export");
   EXPECT_TRUE(exported.complete);
   EXPECT_EQ(exported.files.count("transforms.json"), 1u);
-  EXPECT_EQ(exported.files.count("images"), 1u);  // the link, not what it points to
+  EXPECT_EQ(exported.files.count("README.txt"), 1u);
+  EXPECT_EQ(exported.folders.count("images"), 1u);
+  for (const DatabaseImage& image : ColmapDatabase::Open(f.run / "database.db").ReadAllImages()) {
+    EXPECT_EQ(exported.files.count("images/" + image.name), 1u) << image.name;
+  }
 
   const fs::path out = f.folder / "exported";
   RunExportOptions options;
@@ -270,6 +303,187 @@ TEST(RunExport, AnExportAgainKeepsWhatTheUserAddedAndTheRunRecordsIt) {
   second.erase("notes.txt");
   second.erase("colmap_sparse/0/images.bin");
   EXPECT_EQ(second, first);  // the export's own files, written again the same
+}
+
+// The two means of the reprojection error: COLMAP's is the points' stored
+// errors averaged, each the mean over its own observations (recomputed here
+// from the geometry); viosfm's weighs each point by its observations, which
+// ties it to the stored errors and the track lengths exactly.
+TEST(RunExport, StatesTheReprojectionErrorUnderBothDefinitions) {
+  const Fixture& f = SharedFixture();
+  const Reconstruction model = ReadColmapModel(f.run / "model");
+  const ModelReprojectionErrors& errors = f.summary.reprojection;
+  double sum_of_point_means = 0.0, weighted_sum = 0.0;
+  size_t num_points = 0, num_observations = 0;
+  for (const point3D_t id : model.Point3DIds()) {
+    const Point3D& point = model.GetPoint3D(id);
+    double point_sum = 0.0;
+    for (const TrackElement& element : point.track) {
+      const Image& image = model.GetImage(element.image_id);
+      const Eigen::Vector3d in_cam = image.cam_from_world * point.xyz;
+      const Camera& camera = model.GetCamera(image.camera_id);
+      const Eigen::Vector2d projected = *Project(camera, in_cam);
+      point_sum += (projected - image.points2D.at(element.point2D_idx).xy).norm();
+    }
+    const double point_mean = point_sum / static_cast<double>(point.track.size());
+    EXPECT_NEAR(point.error, point_mean, 1e-9) << "point " << id;
+    sum_of_point_means += point_mean;
+    weighted_sum += point.error * static_cast<double>(point.track.size());
+    num_observations += point.track.size();
+    ++num_points;
+  }
+  ASSERT_GT(num_points, 100u);
+  EXPECT_EQ(errors.num_points, num_points);
+  EXPECT_EQ(errors.num_observations, num_observations);
+  EXPECT_NEAR(errors.mean_over_points_px, sum_of_point_means / num_points, 1e-9);
+  EXPECT_NEAR(errors.mean_over_observations_px, weighted_sum / num_observations, 1e-9);
+  // The run's summary states viosfm's.
+  const nlohmann::json summary = nlohmann::json::parse(ReadTextFile(f.run / "summary.json"));
+  EXPECT_NEAR(summary["mean_reprojection_error_px"].get<double>(), errors.mean_over_observations_px,
+              1e-9);
+  // The guide names both, with their figures.
+  const std::string guide = ExportGuide(f.summary, {});
+  EXPECT_NE(guide.find("over its " + std::to_string(num_observations) + " observations"),
+            std::string::npos)
+      << guide;
+  EXPECT_NE(guide.find("over its " + std::to_string(num_points) + " points"), std::string::npos)
+      << guide;
+}
+
+// Renames a folder away while it lives, and back.
+class MovedAway {
+ public:
+  explicit MovedAway(fs::path folder)
+      : folder_(std::move(folder)), away_(folder_.string() + ".away") {
+    fs::rename(folder_, away_);
+  }
+  ~MovedAway() { fs::rename(away_, folder_); }
+
+ private:
+  fs::path folder_;
+  fs::path away_;
+};
+
+// The export copied alone to another place, with the dataset and the run
+// moved away: every image of transforms.json, of the COLMAP model and of
+// the database resolves inside the copy, and no file of it names a path
+// outside it; COLMAP 3.8 undistorts every image of the copy's model.
+TEST(RunExport, AnExportCopiedAloneKeepsEveryImage) {
+  const Fixture& f = SharedFixture();
+  const fs::path copy = f.folder / "elsewhere" / "export_copy";
+  fs::remove_all(copy.parent_path());
+  fs::create_directories(copy.parent_path());
+  fs::copy(f.run / "export", copy, fs::copy_options::recursive);
+  const MovedAway dataset(f.dataset);
+  const MovedAway run(f.run);
+
+  for (const auto& entry : fs::recursive_directory_iterator(copy)) {
+    EXPECT_FALSE(entry.is_symlink()) << entry.path();
+  }
+  const TransformsJson transforms = ReadTransformsJson(copy / "transforms.json");
+  ASSERT_EQ(transforms.frames.size(), f.summary.num_images);
+  for (const TransformsFrame& frame : transforms.frames) {
+    EXPECT_FALSE(fs::path(frame.file_path).is_absolute()) << frame.file_path;
+    EXPECT_TRUE(fs::is_regular_file(copy / frame.file_path)) << frame.file_path;
+  }
+  EXPECT_TRUE(fs::is_regular_file(copy / transforms.ply_file_path));
+  const Reconstruction model = ReadColmapModel(copy / "sparse" / "0");
+  for (const image_t id : model.RegImageIds()) {
+    EXPECT_TRUE(fs::is_regular_file(copy / "images" / model.GetImage(id).name));
+  }
+  for (const DatabaseImage& image : ColmapDatabase::Open(copy / "database.db").ReadAllImages()) {
+    EXPECT_TRUE(fs::is_regular_file(copy / "images" / image.name)) << image.name;
+  }
+  // No text file of the copy names the places it came from.
+  for (const char* file : {"transforms.json", "README.txt", "viosfm_manifest.json"}) {
+    const std::string text = ReadTextFile(copy / file);
+    EXPECT_EQ(text.find(f.folder.string()), std::string::npos) << file;
+  }
+
+  if (std::system("colmap help > /dev/null 2>&1") != 0) {
+    GTEST_SKIP() << "colmap not installed (apt-get install colmap); the COLMAP check skipped";
+  }
+  // The COLMAP 3.8 steps of the copy's README.txt, run as written from
+  // inside the copy, each succeed on its images alone.
+  const std::string readme = ReadTextFile(copy / "README.txt");
+  const size_t begin = readme.find("COLMAP 3.8");
+  const size_t end = readme.find("COLMAP 3.10");
+  ASSERT_TRUE(begin != std::string::npos && end != std::string::npos && begin < end) << readme;
+  std::istringstream steps(readme.substr(begin, end - begin));
+  std::string step;
+  int num_colmap_steps = 0;
+  while (std::getline(steps, step)) {
+    if (step.rfind("  colmap ", 0) != 0 && step.rfind("  mkdir ", 0) != 0) continue;
+    num_colmap_steps += step.rfind("  colmap ", 0) == 0 ? 1 : 0;
+    const fs::path log = f.folder / ("readme_step_" + std::to_string(num_colmap_steps) + ".log");
+    const std::string command = "cd '" + copy.string() + "' && QT_QPA_PLATFORM=offscreen" + step +
+                                " > '" + log.string() + "' 2>&1";
+    ASSERT_EQ(std::system(command.c_str()), 0) << step << "\n" << ReadTextFile(log);
+  }
+  EXPECT_EQ(num_colmap_steps, 5);  // analyzer, triangulator, mapper, aligner, undistorter
+  const Reconstruction triangulated = ReadColmapModel(copy / "colmap_triangulated");
+  EXPECT_EQ(triangulated.NumRegImages(), model.NumRegImages());
+  EXPECT_GT(triangulated.NumPoints3D(), model.NumPoints3D() / 2);
+  // COLMAP's own model, moved by model_aligner onto the pose priors: its
+  // camera centres lie on viosfm's (in an arbitrary frame of its own, they
+  // would be metres off).
+  const Reconstruction mapped = ReadColmapModel(copy / "colmap_sparse" / "0");
+  ASSERT_GE(mapped.NumRegImages(), 3u);
+  std::map<std::string, Eigen::Vector3d> ours;
+  Eigen::AlignedBox3d extent;
+  for (const image_t id : model.RegImageIds()) {
+    ours[model.GetImage(id).name] = model.GetImage(id).ProjectionCenter();
+    extent.extend(model.GetImage(id).ProjectionCenter());
+  }
+  std::vector<double> distances;
+  for (const image_t id : mapped.RegImageIds()) {
+    const Image& image = mapped.GetImage(id);
+    ASSERT_EQ(ours.count(image.name), 1u) << image.name;
+    distances.push_back((image.ProjectionCenter() - ours.at(image.name)).norm());
+  }
+  std::sort(distances.begin(), distances.end());
+  const double median = distances[distances.size() / 2];
+  const double size = extent.diagonal().norm();
+  std::cout << "COLMAP 3.8 mapper + model_aligner: " << mapped.NumRegImages() << " of "
+            << model.NumRegImages() << " images, median distance to viosfm's centres " << median
+            << " m (viosfm's centres span " << size << " m)\n";
+  EXPECT_LT(median, 0.05 * size);
+  for (const image_t id : model.RegImageIds()) {
+    EXPECT_TRUE(fs::is_regular_file(copy / "undistorted" / "images" / model.GetImage(id).name))
+        << model.GetImage(id).name;
+  }
+}
+
+// An export onto another filesystem (here /dev/shm, a tmpfs) cannot
+// hard-link the run's images: it copies them, byte for byte.
+TEST(RunExport, CopiesTheImagesWhereNoHardLinkCanBeMade) {
+  const Fixture& f = SharedFixture();
+  const fs::path other = "/dev/shm";
+  std::error_code error;
+  struct stat here {
+  }, there{};
+  if (!fs::is_directory(other, error) || ::stat(f.folder.c_str(), &here) != 0 ||
+      ::stat(other.c_str(), &there) != 0 || here.st_dev == there.st_dev) {
+    GTEST_SKIP() << other << " is not another filesystem here; the copy fallback not tested";
+  }
+  const fs::path out = other / ("viosfm_export_test_" + std::to_string(::getpid()));
+  fs::remove_all(out);
+  RunExportOptions options;
+  options.run_folder = f.run;
+  options.output_folder = out;
+  const RunExportSummary summary = ExportRun(options);
+  const std::vector<DatabaseImage> images =
+      ColmapDatabase::Open(f.run / "database.db").ReadAllImages();
+  EXPECT_EQ(summary.num_images_copied, images.size());
+  EXPECT_EQ(summary.num_images_linked, 0u);
+  uint64_t bytes = 0;
+  for (const DatabaseImage& image : images) {
+    const fs::path source = f.summary.image_folder / image.name;
+    EXPECT_EQ(ReadTextFile(out / "images" / image.name), ReadTextFile(source)) << image.name;
+    bytes += fs::file_size(source);
+  }
+  EXPECT_EQ(summary.bytes_copied, bytes);
+  fs::remove_all(out);
 }
 
 }  // namespace

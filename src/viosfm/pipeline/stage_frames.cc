@@ -52,7 +52,12 @@ SelectedFrames SelectedFramesOf(const Sequence& sequence, const FrameSelection& 
                          std::to_string(frames.selection.kept.size()) +
                          " images have a pose within " +
                          FormatNsAsSeconds(options.max_vio_time_difference_ns, 3) +
-                         " s (at least 2 are needed)");
+                         " s (at least 2 are needed)" +
+                         (sequence.unordered ? "; the image names are not timestamps, so the "
+                                               "images were numbered 1 s apart: give their "
+                                               "stamps with --timestamps FILE ('filename "
+                                               "timestamp' lines)"
+                                             : ""));
   }
   if (!vio.absent && frames.num_without_vio_pose > 0) {
     VIOSFM_LOG(WARNING) << "run: " << frames.num_without_vio_pose << " of "
