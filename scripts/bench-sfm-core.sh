@@ -55,8 +55,17 @@ run() {  # NAME DATASET FLAGS...: OUT/runs/NAME, run once
 
 # The VIO's poses at the image stamps only (a keyframe trajectory file).
 at_image_stamps() {  # SEQ VIO_IN VIO_OUT
-  awk -F, 'NR == FNR { if ($1 !~ /^#/) keep[sprintf("%.9f", $1 / 1e9)] = 1; next }
-           /^#/ || keep[$1] { print }' "$1/mav0/cam0/data.csv" "$2" > "$3"
+  /usr/bin/python3 - "$1/mav0/cam0/data.csv" "$2" "$3" <<'PY'
+import sys
+def ns(text):  # decimal seconds or integer nanoseconds, exactly
+    whole, _, frac = text.partition(".")
+    return int(whole) * 10**9 + int((frac + "000000000")[:9]) if "." in text else int(text)
+stamps = {int(l.split(",")[0]) for l in open(sys.argv[1]) if not l.startswith("#")}
+with open(sys.argv[3], "w") as out:
+    for l in open(sys.argv[2]):
+        if l.startswith("#") or ns(l.split()[0]) in stamps:
+            out.write(l)
+PY
 }
 
 # The VIO's poses dropped in stretches of 3-5 s covering about 20 % of the time.

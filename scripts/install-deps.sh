@@ -21,6 +21,7 @@ packages=(
   libyaml-cpp-dev nlohmann-json3-dev libtbb-dev
   libbz2-dev liblz4-dev  # bz2- and lz4-compressed chunks of ROS bags (and MCAP's lz4)
   libzstd-dev  # ROS 2 bags: zstd MCAP chunks, zstd-compressed rosbag2 messages and files
+  libxxhash-dev  # XXH3 content hashes of the inputs (util/hash.h)
   libjs-three  # three.js, copied into the report's 3D view
 )
 # To test and benchmark it.

@@ -91,6 +91,7 @@ void RunRun(RunArguments args) {
     SetOptionFromText(options, key, assignment.substr(equals + 1));
     if (SettledByTextureProbe(key)) options.texture_probe.enable = false;
   }
+  options.num_threads = CapNumThreads(options.num_threads, "--threads");
   if (const std::string error = options.Validate(); !error.empty()) {
     throw InputError("invalid run options: " + error);
   }
@@ -189,6 +190,7 @@ void RegisterRun(CLI::App& app) {
       ->required();
   command->add_option("--out", args->out, "Output folder (created if missing)")->required();
   AddCalibrationOptions(command, &args->options.calibration);
+  AddDatasetCheckOptions(command, &args->options.dataset_checks);
   // Defined before the flags that set one option each: CLI11 runs the
   // callbacks in the order of definition, so those flags (and --set) override
   // the settings it applies.

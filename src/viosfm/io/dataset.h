@@ -8,6 +8,7 @@
 
 #include <filesystem>
 
+#include "viosfm/io/dataset_checks.h"
 #include "viosfm/io/image_folder.h"
 #include "viosfm/io/kalibr.h"
 #include "viosfm/io/rosbag_dataset.h"
@@ -27,6 +28,9 @@ struct DatasetReadOptions {
   // The dataset must have an IMU (the VIO). Default false: the IMU only
   // helps (frame selection, metric scale).
   bool require_imu = false;
+  // What the sensors may say and where the dataset's files may lie
+  // (dataset_checks.h).
+  DatasetChecks checks;
 };
 
 // Whether `folder` is a EuRoC dataset: it holds mav0/, or is mav0/ with cam0/.

@@ -114,7 +114,19 @@ std::vector<StampedImage> ImagesFromTimestampsFile(const fs::path& folder, const
                        "column 2, within +-2^62 ns (146 years) of the epoch, got '" +
                            std::string(stamp_text) + "'");
     }
-    const fs::path path = folder / std::string(fields[0]);
+    // A name resolved inside the folder: never an absolute path or one that
+    // climbs out of it.
+    const fs::path name{std::string(fields[0])};
+    const bool inside =
+        !name.has_root_path() && fields[0].find('\0') == std::string_view::npos &&
+        std::none_of(name.begin(), name.end(), [](const fs::path& part) { return part == ".."; });
+    if (!inside) {
+      throw InputError(file.string(), line_number,
+                       "image name '" + std::string(fields[0]) +
+                           "' must be a relative path inside the image folder " + folder.string() +
+                           " (not absolute, no '..')");
+    }
+    const fs::path path = folder / name;
     if (!fs::is_regular_file(path)) {
       throw InputError(
           file.string(), line_number,
@@ -151,7 +163,8 @@ std::string ImageFolderOptions::Validate() const {
   return "";
 }
 
-Sequence ReadImageFolder(const fs::path& folder, const ImageFolderOptions& options) {
+Sequence ReadImageFolder(const fs::path& folder, const ImageFolderOptions& options,
+                         const DatasetChecks& checks) {
   if (const std::string problem = options.Validate(); !problem.empty()) {
     throw InputError("image folder options: " + problem);
   }
@@ -160,6 +173,10 @@ Sequence ReadImageFolder(const fs::path& folder, const ImageFolderOptions& optio
   Sequence sequence;
   sequence.root = folder;
   if (options.camera) {
+    if (const std::string problem = CheckCameraCalibration(*options.camera); !problem.empty()) {
+      throw InputError("the image folder's camera " + options.camera->ModelName() +
+                       " is not one a camera can have: " + problem);
+    }
     sequence.rig.camera = *options.camera;
     sequence.rig.camera.camera_id = 1;
     sequence.rig.camera_rate_hz = 0.0;  // estimated from the stamps below
@@ -198,6 +215,7 @@ Sequence ReadImageFolder(const fs::path& folder, const ImageFolderOptions& optio
   if (!(sequence.rig.camera_rate_hz > 0)) {
     sequence.rig.camera_rate_hz = EstimateFrameRateHz(sequence.images);
   }
+  CheckSequenceImages(sequence, folder, checks);
 
   if (!options.camera && options.camera_yaml.empty()) {
     sequence.rig.camera = GuessCamera(sequence.images.front().path);

@@ -11,11 +11,11 @@
 //  (b) a timestamps file (options.timestamps_file), one image a line:
 //          <filename> <timestamp>
 //      separated by spaces, tabs or one comma; blank lines and lines starting
-//      with '#' are skipped. <filename> is relative to the folder (or
-//      absolute) and has no spaces. <timestamp> without a decimal point is an
-//      integer count of nanoseconds ("1403715273262142976"); with a decimal
-//      point it is seconds ("1403715273.262142976", converted digit-exactly,
-//      rounded to 1 ns). Only the listed files are used, in any order.
+//      with '#' are skipped. <filename> is relative to the folder, stays
+//      inside it (not absolute, no '..') and has no spaces. <timestamp> without a decimal point is
+//      an integer count of nanoseconds ("1403715273262142976"); with a decimal point it is seconds
+//      ("1403715273.262142976", converted digit-exactly, rounded to 1 ns). Only the listed files
+//      are used, in any order.
 // Images are returned sorted by timestamp; two images with the same stamp
 // are an error.
 //
@@ -26,14 +26,18 @@
 // simple radial camera, focal length 1.2 times the larger side).
 //
 // Errors throw InputError naming the file, the line (where there is one) and
-// what was expected: a missing folder, no images, duplicate stamps or file names, a listed file
-// that does not exist, a malformed timestamps line, an invalid camera.
+// what was expected: a missing folder, no images, duplicate stamps or file
+// names, a listed file that does not exist or lies outside the folder, a
+// malformed timestamps line, an invalid camera; and what `checks` refuses
+// (dataset_checks.h: a link leaving the folder, an image whose header's
+// size is not the camera's).
 #pragma once
 
 #include <filesystem>
 #include <optional>
 #include <string>
 
+#include "viosfm/io/dataset_checks.h"
 #include "viosfm/scene/sequence.h"
 
 namespace viosfm {
@@ -55,6 +59,7 @@ struct ImageFolderOptions {
 // Whether a file name has one of the image extensions above.
 bool HasImageExtension(const std::filesystem::path& path);
 
-Sequence ReadImageFolder(const std::filesystem::path& folder, const ImageFolderOptions& options);
+Sequence ReadImageFolder(const std::filesystem::path& folder, const ImageFolderOptions& options,
+                         const DatasetChecks& checks = {});
 
 }  // namespace viosfm

@@ -48,6 +48,9 @@ std::string PipelineOptions::Validate() const {
   if (const std::string error = imu_scale.Validate(); !error.empty()) {
     return "imu_scale." + error;
   }
+  if (const std::string error = dataset_checks.Validate(); !error.empty()) {
+    return "dataset_checks." + error;
+  }
   if (num_threads < 1) return "num_threads must be >= 1";
   if (stream_vocabulary_frames < 1) return "stream_vocabulary_frames must be >= 1";
   if (stream && stream_mapper) return "stream and stream_mapper: the stream maps beside anyway";

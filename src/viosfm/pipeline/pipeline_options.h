@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "viosfm/features/sift.h"
+#include "viosfm/io/dataset_checks.h"
 #include "viosfm/io/image_folder.h"
 #include "viosfm/io/kalibr.h"
 #include "viosfm/io/rosbag_dataset.h"
@@ -77,6 +78,9 @@ struct PipelineOptions {
   // Kalibr camchain.yaml (+ imu.yaml) replacing the dataset's calibration
   // (io/kalibr.h, ApplyCalibration). Default none.
   CalibrationFiles calibration;
+  // What the dataset's sensors may say and where its files may lie
+  // (io/dataset_checks.h: the IMU's bounds, links leaving the dataset).
+  DatasetChecks dataset_checks;
   // The output folder (created if missing). Required.
   std::filesystem::path output_folder;
 
@@ -177,9 +181,10 @@ struct PipelineOptions {
   int num_threads = 2;
   // Seed of every random choice (RANSAC, vocabulary training). Default 0.
   uint64_t seed = 0;
-  // Remove the output folder's stored database and outputs of an earlier
-  // run (RunOutputNames, run_fingerprint.h) before starting, instead of
-  // reusing them or refusing a folder made from other inputs. Default false.
+  // Remove what viosfm wrote in the output folder (its manifest,
+  // run_folder.h: an earlier run's database and outputs, report.html,
+  // export/) before starting, instead of reusing them or refusing a folder
+  // made from other inputs. Default false.
   bool overwrite = false;
   // Progress bars. Default true.
   bool show_progress = true;
@@ -226,6 +231,7 @@ struct PipelineOptions {
     visit({"calibration.camchain", "Kalibr camchain.yaml replacing the calibration", kRunOnly},
           self.calibration.camchain);
     visit({"calibration.imu", "Kalibr imu.yaml (needs camchain)", kRunOnly}, self.calibration.imu);
+    VisitOptionGroup({"dataset_checks", "", kRunOnly}, self.dataset_checks, visit);
     visit({"output_folder", "the output folder", kRunOnly}, self.output_folder);
     visit({"vio.source", "function (given in code) or file", kRunOnly}, self.vio_source);
     visit({"vio.trajectory", "VIO trajectory file; empty: viosfm's own VIO", kRunOnly},

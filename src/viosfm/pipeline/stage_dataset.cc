@@ -10,6 +10,7 @@ DatasetReadOptions PipelineDatasetReadOptions(const PipelineOptions& options) {
   read.image_folder = options.image_folder;
   read.rosbag = options.EffectiveRosbagOptions();
   read.calibration = options.calibration;
+  read.checks = options.dataset_checks;
   read.require_imu = false;  // the IMU only helps (frame selection, metric scale)
   return read;
 }

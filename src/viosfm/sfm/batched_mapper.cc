@@ -481,29 +481,16 @@ void BatchedMapper::MergeModels() {
   }
 }
 
-void BatchedMapper::MapBatch(size_t b, size_t num_batches, const MapperBatchCallback& on_batch,
-                             bool* last_out) {
-  const Timer batch_timer;
-  Timer timer;
-  current_batch_ = b;
-  const size_t batch_size = static_cast<size_t>(options_.batch_size);
-  bool last = b + 1 == num_batches;
-  const size_t begin = b * batch_size;
-  size_t end = std::min(num_images_, begin + batch_size);
-  if (stream_ != nullptr) last = TakeStreamedBatch(begin, &end, last);
-  *last_out = last;
-  MapperBatchStatistics stats;
-  stats.batch_index = static_cast<int>(b);
-  stats.num_images = static_cast<int>(end - begin);
-
+TriangulationStatistics BatchedMapper::RegisterBatch(size_t begin, size_t end,
+                                                     MapperBatchStatistics* stats) {
   // 2. Registration: each frame by its VIO pose relative to the latest
   // registered frame of its VIO segment, checked against the images.
   newly_registered_.clear();
-  timer.Start();
+  Timer timer;
   for (size_t i = begin; i < end; ++i) {
     if (!TryRegister(i)) pending_.push_back(i);
   }
-  stats.seconds_registration = timer.ElapsedSeconds();
+  stats->seconds_registration = timer.ElapsedSeconds();
 
   // 3. Triangulation of the tracks seen by the batch, then the frames that
   // the new points (or a newly registered frame of their VIO segment)
@@ -521,7 +508,58 @@ void BatchedMapper::MapBatch(size_t b, size_t num_batches, const MapperBatchCall
   }
   RetryPending();
   RegisterFromImages(/*may_start_model=*/true);
-  stats.seconds_triangulation = timer.ElapsedSeconds();
+  stats->seconds_triangulation = timer.ElapsedSeconds();
+  return triangulation;
+}
+
+size_t BatchedMapper::RegisterLateFrames() {
+  // After the final adjustment: the frames that only the final model allows
+  // to register, and separate models for those the images join to none
+  // (a VIO segment where its VIO puts it, or an initial pair of their own).
+  size_t registered = RetryPending() + RegisterFromImages(/*may_start_model=*/true);
+  while (!pending_.empty() && (StartModelFromVioSegment() || StartModelFromImages())) {
+    registered += RetryPending() + RegisterFromImages(/*may_start_model=*/false);
+  }
+  return registered;
+}
+
+void BatchedMapper::RefineFinalModel(bool frames_changed, double final_change, bool global) {
+  // Another global adjustment for the frames re-posed, registered or merged
+  // after the final one, and, after a final global one, while its filtering
+  // and re-triangulation change the model (final_ba_refine_min_change).
+  while (frames_changed ||
+         (global && final_change > options_.final_ba_refine_min_change &&
+          summary_.num_final_ba_refinements < options_.final_ba_max_refinements)) {
+    if (!frames_changed) {
+      ++summary_.num_final_ba_refinements;
+      VIOSFM_LOG(INFO) << std::fixed << std::setprecision(2)
+                       << "final bundle adjustment: filtering and re-triangulation changed "
+                       << 100.0 * final_change << " % of the observations: refinement "
+                       << summary_.num_final_ba_refinements << " of at most "
+                       << options_.final_ba_max_refinements;
+    }
+    frames_changed = false;
+    summary_.final_ba = Adjust(0, true);
+    AdjustOtherModels(true);
+    final_change = FilterAndRetriangulateAll();
+  }
+  if (global) summary_.final_ba_last_change = final_change;
+}
+
+void BatchedMapper::MapBatch(size_t b, size_t num_batches, const MapperBatchCallback& on_batch,
+                             bool* last_out) {
+  const Timer batch_timer;
+  current_batch_ = b;
+  const size_t batch_size = static_cast<size_t>(options_.batch_size);
+  bool last = b + 1 == num_batches;
+  const size_t begin = b * batch_size;
+  size_t end = std::min(num_images_, begin + batch_size);
+  if (stream_ != nullptr) last = TakeStreamedBatch(begin, &end, last);
+  *last_out = last;
+  MapperBatchStatistics stats;
+  stats.batch_index = static_cast<int>(b);
+  stats.num_images = static_cast<int>(end - begin);
+  const TriangulationStatistics triangulation = RegisterBatch(begin, end, &stats);
 
   // 4. Bundle adjustment: the last batch's is the final global one.
   const bool global = last && options_.final_global_ba;
@@ -542,9 +580,9 @@ void BatchedMapper::MapBatch(size_t b, size_t num_batches, const MapperBatchCall
     AdjustOtherModels(global);
   }
 
-  // 5. Filtering and re-triangulation of the tracks left without a point.
-  timer.Start();
-  // After the final adjustment: the share of the observations they change.
+  // 5. Filtering and re-triangulation of the tracks left without a point;
+  // after the final adjustment, the share of the observations they change.
+  const Timer timer;
   double final_change = 0.0;
   if (window_begin == 0) {
     final_change = FilterAndRetriangulateAll();
@@ -552,46 +590,17 @@ void BatchedMapper::MapBatch(size_t b, size_t num_batches, const MapperBatchCall
     FilterAndRetriangulateWindow(window_begin);
   }
   // 6. The frames placed by the VIO alone that the adjusted model now
-  // re-poses; after the final bundle adjustment also the frames that only
-  // the final model allows to register (in separate models where the images
-  // join them to no other), and then another global adjustment.
+  // re-poses; after the final adjustment the frames only it registers, and
+  // the models merged, then the final model refined.
   const size_t reposed_after_adjustment = RecheckVioPlaced();
   summary_.num_reposed_after_adjustment += static_cast<int>(reposed_after_adjustment);
-  size_t registered_late = 0;
-  if (last) {
-    registered_late = RetryPending() + RegisterFromImages(/*may_start_model=*/true);
-    while (!pending_.empty() && (StartModelFromVioSegment() || StartModelFromImages())) {
-      registered_late += RetryPending() + RegisterFromImages(/*may_start_model=*/false);
-    }
-  }
+  const size_t registered_late = last ? RegisterLateFrames() : 0;
   const int merged_before = summary_.num_models_merged;
   MergeModels();
-  // Another global adjustment for the frames re-posed, registered or merged
-  // after the final one, and while its filtering and re-triangulation change
-  // the model (final_ba_refine_min_change).
-  bool frames_changed =
-      last &&
-      reposed_after_adjustment + registered_late +
-              static_cast<size_t>(summary_.num_models_merged - merged_before) >
-          0 &&
-      (options_.ba_after_each_batch || options_.final_global_ba);
-  while (frames_changed ||
-         (global && final_change > options_.final_ba_refine_min_change &&
-          summary_.num_final_ba_refinements < options_.final_ba_max_refinements)) {
-    if (!frames_changed) {
-      ++summary_.num_final_ba_refinements;
-      VIOSFM_LOG(INFO) << std::fixed << std::setprecision(2)
-                       << "final bundle adjustment: filtering and re-triangulation changed "
-                       << 100.0 * final_change << " % of the observations: refinement "
-                       << summary_.num_final_ba_refinements << " of at most "
-                       << options_.final_ba_max_refinements;
-    }
-    frames_changed = false;
-    summary_.final_ba = Adjust(0, true);
-    AdjustOtherModels(true);
-    final_change = FilterAndRetriangulateAll();
-  }
-  if (global) summary_.final_ba_last_change = final_change;
+  const size_t changed = reposed_after_adjustment + registered_late +
+                         static_cast<size_t>(summary_.num_models_merged - merged_before);
+  RefineFinalModel(last && changed > 0 && (options_.ba_after_each_batch || global), final_change,
+                   global);
   stats.seconds_filtering = timer.ElapsedSeconds();
 
   const Reconstruction& reconstruction = core_.reconstruction();

@@ -412,6 +412,7 @@ class BatchedMapper {
   // Adjustment, filtering, re-triangulation.
   std::vector<RelativePosePrior> ActivePriors(bool with_bridging) const;
   BundleAdjustmentSummary Adjust(size_t window_begin, bool global);
+  BaLinearSolver ChooseLinearSolver(const std::vector<image_t>& free_images, bool global);
   void CompensateRollingShutter(bool global);
   std::unique_ptr<InertialTerms> MakeInertialTerms(const GyroPriors& gyro,
                                                    const std::vector<GyroFrame>& frames);
@@ -426,6 +427,9 @@ class BatchedMapper {
 
   // A batch, the final refinements, and every frame's verdict.
   void MapBatch(size_t b, size_t num_batches, const MapperBatchCallback& on_batch, bool* last);
+  TriangulationStatistics RegisterBatch(size_t begin, size_t end, MapperBatchStatistics* stats);
+  size_t RegisterLateFrames();
+  void RefineFinalModel(bool frames_changed, double final_change, bool global);
   void JudgeFrames();
 
   const std::vector<image_t>& MainRegistered() const;

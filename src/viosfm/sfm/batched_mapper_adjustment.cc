@@ -122,7 +122,53 @@ Eigen::Vector3d MedianOf(const std::vector<Eigen::Vector3d>& vectors) {
   return median;
 }
 
+// The registered frames' poses, the points and the cameras of a model, to
+// put back.
+class ModelSnapshot {
+ public:
+  explicit ModelSnapshot(const Reconstruction& reconstruction)
+      : cameras_(reconstruction.Cameras()) {
+    for (const auto& [image_id, image] : reconstruction.Images()) {
+      if (image.registered) poses_.emplace_back(image_id, image.cam_from_world);
+    }
+    for (const auto& [point_id, point] : reconstruction.Points3D()) {
+      points_.emplace_back(point_id, point.xyz);
+    }
+  }
+  void Restore(Reconstruction* reconstruction) const {
+    for (const auto& [image_id, pose] : poses_) {
+      reconstruction->GetImage(image_id).cam_from_world = pose;
+    }
+    for (const auto& [point_id, xyz] : points_) {
+      if (reconstruction->ExistsPoint3D(point_id)) reconstruction->GetPoint3D(point_id).xyz = xyz;
+    }
+    for (const auto& [camera_id, camera] : cameras_) reconstruction->GetCamera(camera_id) = camera;
+  }
+
+ private:
+  std::vector<std::pair<image_t, Rigid3d>> poses_;
+  std::vector<std::pair<point3D_t, Eigen::Vector3d>> points_;
+  std::unordered_map<camera_t, Camera> cameras_;
+};
+
 }  // namespace
+
+BaLinearSolver BatchedMapper::ChooseLinearSolver(const std::vector<image_t>& free_images,
+                                                 bool global) {
+  if (!global || ba_options_.linear_solver != BaLinearSolver::kAuto) {
+    return solver_chooser_.Next(free_images.size(), global);
+  }
+  // The final adjustment: by the work of the reduced camera matrix's
+  // factorisation (linear_solver_chooser.h).
+  const BaProblemStructure structure = ComputeBaProblemStructure(
+      core_.reconstruction(), free_images, /*with_factorization=*/true);
+  const BaLinearSolver solver = solver_chooser_.Next(structure, /*final=*/true);
+  VIOSFM_LOG(INFO) << "final bundle adjustment: " << structure.num_free_images
+                   << " images, factorisation work per image " << structure.FactorizationPerImage()
+                   << " (per observation " << structure.FactorizationPerObservation()
+                   << "): " << OptionText(solver);
+  return solver;
+}
 
 std::vector<RelativePosePrior> BatchedMapper::ActivePriors(bool with_bridging) const {
   // The priors not crossing a VIO jump found so far.
@@ -330,18 +376,7 @@ BundleAdjustmentSummary BatchedMapper::Adjust(size_t window_begin, bool global) 
       !(first_adjustment && options_.converge_first_batch_ba)) {
     batch_ba_options.max_num_iterations = options_.batch_ba_max_num_iterations;
   }
-  if (global && ba_options_.linear_solver == BaLinearSolver::kAuto) {
-    const BaProblemStructure structure =
-        ComputeBaProblemStructure(reconstruction, free_images, /*with_factorization=*/true);
-    batch_ba_options.linear_solver = solver_chooser_.Next(structure, /*final=*/true);
-    VIOSFM_LOG(INFO) << "final bundle adjustment: " << structure.num_free_images
-                     << " images, factorisation work per image "
-                     << structure.FactorizationPerImage() << " (per observation "
-                     << structure.FactorizationPerObservation()
-                     << "): " << OptionText(batch_ba_options.linear_solver);
-  } else {
-    batch_ba_options.linear_solver = solver_chooser_.Next(free_images.size(), global);
-  }
+  batch_ba_options.linear_solver = ChooseLinearSolver(free_images, global);
   CompensateRollingShutter(global);
   std::vector<RelativePosePrior> priors = ActivePriors(/*with_bridging=*/true);
   std::optional<GyroPriors> gyro_priors;
@@ -373,18 +408,8 @@ BundleAdjustmentSummary BatchedMapper::Adjust(size_t window_begin, bool global) 
   };
   if (gyro_priors && inertial_terms == nullptr) use_gyro_priors();
   // What the factors' adjustment may have to undo (max_scale_change).
-  std::vector<std::pair<image_t, Rigid3d>> poses_before;
-  std::vector<std::pair<point3D_t, Eigen::Vector3d>> points_before;
-  std::unordered_map<camera_t, Camera> cameras_before;
-  if (inertial_terms != nullptr) {
-    for (const auto& [image_id, image] : reconstruction.Images()) {
-      if (image.registered) poses_before.emplace_back(image_id, image.cam_from_world);
-    }
-    for (const auto& [point_id, point] : reconstruction.Points3D()) {
-      points_before.emplace_back(point_id, point.xyz);
-    }
-    cameras_before = reconstruction.Cameras();
-  }
+  std::optional<ModelSnapshot> before;
+  if (inertial_terms != nullptr) before.emplace(reconstruction);
   std::unique_ptr<VioDriftTerms> drift_terms = MakeDriftTerms(global, &priors);
   CombinedTerms combined({inertial_terms.get(), drift_terms.get()});
   const int max_held_views = global ? 0 : options_.ba_window_max_held_views;
@@ -407,15 +432,7 @@ BundleAdjustmentSummary BatchedMapper::Adjust(size_t window_begin, bool global) 
             << ", further from 1 than max_scale_change " << options_.inertial.max_scale_change
             << ": dropped, the adjustment again with the gyro's priors";
     VIOSFM_LOG(WARNING) << "final bundle adjustment: " << message.str();
-    for (const auto& [image_id, pose] : poses_before) {
-      reconstruction.GetImage(image_id).cam_from_world = pose;
-    }
-    for (const auto& [point_id, xyz] : points_before) {
-      if (reconstruction.ExistsPoint3D(point_id)) reconstruction.GetPoint3D(point_id).xyz = xyz;
-    }
-    for (const auto& [camera_id, camera] : cameras_before) {
-      reconstruction.GetCamera(camera_id) = camera;
-    }
+    before->Restore(&reconstruction);
     inertial_terms.reset();
     inertial_declined_ = true;
     summary_.num_inertial_factors = 0;
