@@ -3,7 +3,7 @@ BUILD_DIR ?= build
 JOBS ?= $(shell nproc)
 CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Release
 
-.PHONY: deps configure build test demo package check-package check-report-browser bench fuzz test-sanitize test-tsan check-integrity clean
+.PHONY: deps configure build test demo package check-package bench fuzz test-sanitize test-tsan check-integrity clean
 
 deps:
 	./scripts/install-deps.sh
@@ -23,6 +23,22 @@ test: build
 # the main job on the built-in simulated default, each step timed.
 demo:
 	JOBS=$(JOBS) CMAKE_FLAGS="$(CMAKE_FLAGS)" ./scripts/demo.sh --setup $(BUILD_DIR)
+
+# The Debian package build/viosfm_VERSION_ARCH.deb (the `viosfm` program; its
+# dependencies are the libraries it links and libjs-three): install it with
+# `apt-get install ./build/viosfm_*.deb`.
+package:
+	./scripts/install-deps.sh --demo
+	cmake -S . -B $(BUILD_DIR) -G Ninja $(CMAKE_FLAGS) -DVIOSFM_BUILD_TESTS=OFF \
+	  -DVIOSFM_BUILD_BENCHMARKS=OFF
+	cmake --build $(BUILD_DIR) -j $(JOBS) --target viosfm
+	cd $(BUILD_DIR) && cpack -G DEB
+
+# Installs the package of `make package` into a clean Debian 12 root
+# (debootstrap, chroot; needs root) and runs `viosfm --help` and a short run
+# there: scripts/check-package.sh.
+check-package: package
+	./scripts/check-package.sh $$(ls $(BUILD_DIR)/viosfm_*.deb | head -n 1) build-check-package
 
 # Builds the benchmarks and runs them; see docs/benchmarks.md.
 bench: configure

@@ -23,6 +23,7 @@ packages=(
   libzstd-dev  # ROS 2 bags: zstd MCAP chunks, zstd-compressed rosbag2 messages and files
   libxxhash-dev  # XXH3 content hashes of the inputs (util/hash.h)
   libjs-three  # three.js, copied into the report's 3D view
+  file  # `make package`: CPack's Debian generator reads the binary's type with it
 )
 # To test and benchmark it.
 if [[ "$profile" == "all" ]]; then
