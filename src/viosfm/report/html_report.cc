@@ -45,6 +45,9 @@ td.num { text-align: right; font-variant-numeric: tabular-nums; }
 .figures { display: flex; flex-wrap: wrap; gap: 12px; }
 .note { color: #8a5a00; background: #fff6e0; padding: 6px 10px; border-left: 3px solid #e0a000; }
 .options td { font-family: monospace; font-size: 12px; }
+#decisions { background: #fff6e0; border-left: 3px solid #e0a000; margin: 12px 0;
+  padding: 6px 10px 6px 28px; font-size: 14px; }
+#decisions li { margin: 2px 0; }
 )";
 
 std::string Escape(const std::string& text) {
@@ -285,6 +288,20 @@ class Page {
  private:
   std::ostringstream out_;
 };
+
+// The run's decisions a user should know (summary.json's `warnings`: time
+// offset, IMU noise, scale source and uncertainty, frames without a pose,
+// VIO segments, IMU-only stretches), one line each, at the top.
+void DecisionsList(const RunData& run, Page* page) {
+  const Json* warnings = Find(run.summary, "warnings");
+  if (warnings == nullptr || !warnings->is_array()) return;
+  std::ostringstream& out = page->out();
+  out << "<ul id=\"decisions\" title=\"The run's decisions (summary.json: warnings)\">\n";
+  for (const Json& line : *warnings) {
+    if (line.is_string()) out << "<li>" << Escape(line.get<std::string>()) << "</li>\n";
+  }
+  out << "</ul>\n";
+}
 
 void SummarySection(const RunData& run, Page* page) {
   const Json& s = run.summary;
@@ -731,6 +748,7 @@ std::string RenderRunReport(const fs::path& run_dir) {
       << Escape(Text(run.summary, "started_utc")) << " &middot; viosfm "
       << Escape(Text(run.summary, "viosfm_version")) << " &middot; run folder "
       << Escape(run_dir.string()) << "</p>\n";
+  DecisionsList(run, &page);
   SummarySection(run, &page);
   TrajectoryFigures figures;
   AccuracySection(run, &page, &figures);

@@ -353,6 +353,30 @@ TEST(RenderRunReport, MissingOptionalFilesAreNamedInTheirSections) {
   EXPECT_FALSE(Contains(html, "position error (m)"));
 }
 
+// summary.json's `warnings` are listed at the top, before the summary, one
+// item each; a run without them has no list.
+TEST(RenderRunReport, DecisionsAreListedAtTheTop) {
+  const fs::path run_dir = testing::MakeScratchFolder("report_decisions");
+  nlohmann::ordered_json summary = MakeSummary(false);
+  summary["warnings"] = {
+      "time offset: camera-IMU 0.0 -> -47.3 ms (the VIO's estimate replaced "
+      "the calibration's)",
+      "metric scale: the VIO's (IMU fit not usable: x < y), +-2.00 %"};
+  testing::WriteTextFile(run_dir / "summary.json", summary.dump());
+  const std::string html = RenderRunReport(run_dir);
+  const size_t list = html.find("<ul id=\"decisions\"");
+  ASSERT_NE(list, std::string::npos);
+  EXPECT_LT(list, html.find("<h2 id=\"summary\">"));
+  EXPECT_EQ(Count(html, "<li>"), 2u);
+  EXPECT_TRUE(Contains(html,
+                       "<li>time offset: camera-IMU 0.0 -&gt; -47.3 ms (the VIO&#39;s "
+                       "estimate replaced the calibration&#39;s)</li>"));
+  EXPECT_TRUE(Contains(html, "(IMU fit not usable: x &lt; y), +-2.00 %</li>"));
+
+  testing::WriteTextFile(run_dir / "summary.json", MakeSummary(false).dump());
+  EXPECT_FALSE(Contains(RenderRunReport(run_dir), "id=\"decisions\""));
+}
+
 TEST(RenderRunReport, AteFromSummaryWhenNoEvalFiles) {
   const fs::path run_dir = testing::MakeScratchFolder("report_summary_eval");
   testing::WriteTextFile(run_dir / "summary.json", MakeSummary(true).dump());
