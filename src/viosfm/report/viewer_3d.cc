@@ -23,6 +23,8 @@ namespace {
 namespace fs = std::filesystem;
 
 const char* kThreeFile = "three.min.js";
+// A frame turned this much from the last frustum drawn gets its own.
+constexpr double kMinFrustumTurnDeg = 30.0;
 const char* kOrbitControlsFile = "examples/js/controls/OrbitControls.js";
 
 std::string Base64(const std::vector<uint8_t>& bytes) {
@@ -395,6 +397,26 @@ std::vector<size_t> DecimationIndices(size_t n, size_t max_points) {
   return indices;
 }
 
+std::vector<size_t> SpreadFrames(const std::vector<Viewer3dFrame>& frames, double min_distance,
+                                 double min_turn_deg, size_t max_frames) {
+  std::vector<size_t> spread;
+  Rigid3d last_world_from_cam;
+  for (size_t i = 0; i < frames.size(); ++i) {
+    const Rigid3d world_from_cam = frames[i].cam_from_world.Inverse();
+    if (!spread.empty()) {
+      const double distance = (world_from_cam.translation - last_world_from_cam.translation).norm();
+      const double turn_deg =
+          world_from_cam.rotation.angularDistance(last_world_from_cam.rotation) * 180.0 / M_PI;
+      if (distance < min_distance && turn_deg < min_turn_deg) continue;
+    }
+    spread.push_back(i);
+    last_world_from_cam = world_from_cam;
+  }
+  std::vector<size_t> kept;
+  for (const size_t k : DecimationIndices(spread.size(), max_frames)) kept.push_back(spread[k]);
+  return kept;
+}
+
 bool HasThreeJs(const Viewer3dOptions& options) {
   std::error_code error;
   return fs::is_regular_file(options.three_js_dir / kThreeFile, error) &&
@@ -474,10 +496,11 @@ std::string RenderViewer3d(const Viewer3dScene& scene, const Viewer3dOptions& op
   const Eigen::Vector2d grid_center(std::round(center.x() / spacing) * spacing,
                                     std::round(center.y() / spacing) * spacing);
 
-  // Frustums in the camera's own shape, a fifth of a grid cell deep.
-  const std::vector<size_t> frame_indices =
-      DecimationIndices(scene.frames.size(), options.max_cameras);
+  // Frustums in the camera's own shape, a fifth of a grid cell deep, spread
+  // so that they do not overlap.
   const double depth = 0.2 * spacing;
+  const std::vector<size_t> frame_indices =
+      SpreadFrames(scene.frames, 1.5 * depth, kMinFrustumTurnDeg, options.max_cameras);
   const Camera& cam = scene.camera;
   const bool has_intrinsics = cam.width > 0 && cam.height > 0 && cam.HasValidParams();
   const double w = has_intrinsics ? static_cast<double>(cam.width) : 4.0;

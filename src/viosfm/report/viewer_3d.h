@@ -2,10 +2,11 @@
 // (drag: rotate, wheel: zoom, right-drag or shift-drag: pan):
 //  - the point cloud (decimated), coloured by height (a colour bar in
 //    metres) or by the images' colour, as the user chooses;
-//  - a camera frustum at every posed frame (at most max_cameras, evenly
-//    spread), drawn as the camera saw: its image's corners and a tick on the
-//    image's top edge; a click on one shows the frame's image and name
-//    beside the view and marks it;
+//  - camera frustums of the posed frames, spread so that they do not
+//    overlap (a frame 1.5 frustum depths from the last one drawn or turned
+//    30 degrees from it; at most max_cameras), drawn as the camera saw: its
+//    image's corners and a tick on the image's top edge; a click on one
+//    shows the frame's image and name beside the view and marks it;
 //  - the camera path, coloured by its position error when a ground truth
 //    exists (drawn grey);
 //  - a metric grid on the floor (cells of a round number of metres, said in
@@ -92,6 +93,12 @@ struct Viewer3dOptions {
 
 // The indices every k-th point keeps (k = ceil(n / max_points)), in order.
 std::vector<size_t> DecimationIndices(size_t n, size_t max_points);
+
+// The frames drawn as frustums, in order: the first, then each one at least
+// `min_distance` (m) from the last one kept or turned from it by at least
+// `min_turn_deg`; every k-th of those when more than max_frames remain.
+std::vector<size_t> SpreadFrames(const std::vector<Viewer3dFrame>& frames, double min_distance,
+                                 double min_turn_deg, size_t max_frames);
 
 // Whether three.min.js and OrbitControls.js are in options.three_js_dir.
 bool HasThreeJs(const Viewer3dOptions& options);

@@ -164,6 +164,23 @@ TEST(Viewer3d, FrustumsFollowThePoseAndTheImage) {
   EXPECT_NEAR(data["grid"]["z"].get<double>() + center.z(), -1.0 + 0.02 * 2, 1e-9);
 }
 
+// Frames along a line 0.1 m apart, the camera turning by 40 degrees at
+// the 10th: with 0.35 m between frustums every 4th frame is drawn, and the
+// turned one too.
+TEST(Viewer3d, FrustumsAreSpreadByDistanceAndTurn) {
+  std::vector<Viewer3dFrame> frames(20);
+  for (int i = 0; i < 20; ++i) {
+    const double yaw = (i >= 10 ? 40.0 : 0.0) * M_PI / 180.0;
+    frames[i].cam_from_world =
+        Rigid3d(Eigen::Quaterniond(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitY())),
+                Eigen::Vector3d(0.1 * i, 0, 0))
+            .Inverse();
+  }
+  EXPECT_EQ(SpreadFrames(frames, 0.35, 30.0, 300), (std::vector<size_t>{0, 4, 8, 10, 14, 18}));
+  EXPECT_EQ(SpreadFrames(frames, 0.35, 30.0, 3), (std::vector<size_t>{0, 8, 14}));
+  EXPECT_EQ(SpreadFrames(frames, 0.0, 30.0, 300).size(), 20u);
+}
+
 TEST(Viewer3d, ThumbnailsAreSmallJpegsOfTheImage) {
   const fs::path folder = testing::MakeScratchFolder("viewer3d_thumbnail");
   cv::Mat image(480, 640, CV_8UC3, cv::Scalar(0, 0, 255));  // red
