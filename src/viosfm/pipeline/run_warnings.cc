@@ -31,6 +31,14 @@ std::string FirstClause(const std::string& message) {
   return message.substr(0, end);
 }
 
+// Why the IMU's scale fit was not used: its message's verdict, after the
+// figures ("IMU scale 0.87 +- 0.02 from 298 frame pairs (...): too
+// uncertain (...), not used"), else its first clause.
+std::string ImuScaleVerdict(const std::string& message) {
+  const size_t at = message.rfind("): ");
+  return at == std::string::npos ? FirstClause(message) : message.substr(at + 3);
+}
+
 std::string TimeOffsetLine(const OwnVioDecisions& vio) {
   if (!vio.time_offset_estimated || vio.time_offset_ns == vio.calibration_time_offset_ns) return "";
   return "time offset: camera-IMU " +
@@ -76,7 +84,7 @@ std::string ScaleLine(const PipelineSummary& s) {
   } else if (m.imu.usable) {
     source = "the IMU's fused with the VIO's";
   } else {
-    source = "the VIO's (IMU fit not usable: " + FirstClause(m.imu.message) + ")";
+    source = "the VIO's (IMU fit " + ImuScaleVerdict(m.imu.message) + ")";
   }
   return "metric scale: " + source + ", +-" + Format("%.2f", 100.0 * m.applied_scale_sigma) + " %";
 }

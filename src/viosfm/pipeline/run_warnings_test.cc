@@ -37,7 +37,10 @@ PipelineSummary RecordingLikeSummary() {
   s.own_vio.num_resets = 1;
   s.metric_scale.estimated = true;
   s.metric_scale.imu.usable = false;
-  s.metric_scale.imu.message = "IMU scale too uncertain: 0.97 +- 0.31 (more than 0.05); kept";
+  s.metric_scale.imu.message =
+      "IMU scale 0.86733 +- 0.01919 from 298 frame pairs (residual 0.89 times the expected) "
+      "(frames at least 1.00 s apart: 0.99270 +- 0.05839, within 2.0 sigma): too uncertain "
+      "(more than 0.5 %; too little motion or IMU), not used";
   s.metric_scale.applied_scale_sigma = 0.02;
   return s;
 }
@@ -52,8 +55,8 @@ TEST(RunWarnings, OneShortLinePerDecision) {
             "IMU noise replaced (measured at rest): accel 0.183 -> 0.015; random "
             "walks scaled");
   EXPECT_EQ(lines[2],
-            "metric scale: the VIO's (IMU fit not usable: IMU scale too uncertain: "
-            "0.97 +- 0.31), +-2.00 %");
+            "metric scale: the VIO's (IMU fit too uncertain (more than 0.5 %; too "
+            "little motion or IMU), not used), +-2.00 %");
   EXPECT_EQ(lines[3],
             "frames without a pose: 3 of 299 selected (why: summary.json unposed_frames)");
   EXPECT_EQ(lines[4], "VIO segments: 2, 1 joined by the images (1 VIO resets)");
