@@ -42,9 +42,7 @@ Sequence ReadDataset(const fs::path& path, const DatasetReadOptions& options) {
     if (const std::string error = options.image_folder.Validate(); !error.empty()) {
       throw InputError(path.string(), 0,
                        "not a EuRoC dataset (no mav0/), so read as an image folder: " + error +
-                           " (give its camera once: --camera-yaml FILE, a EuRoC/Kalibr "
-                           "sensor.yaml, or --calibration FILE, a Kalibr camchain.yaml; "
-                           "`viosfm features` also takes --camera MODEL,WIDTH,HEIGHT,PARAMS)");
+                           " (give the camera: --camera-yaml or --camera)");
     }
     sequence = ReadImageFolder(path, options.image_folder, options.checks);
   }
