@@ -3,13 +3,14 @@ BUILD_DIR ?= build
 JOBS ?= $(shell nproc)
 CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Release
 
-.PHONY: deps configure build test demo bench fuzz test-sanitize test-tsan check-integrity clean
+.PHONY: deps configure build test demo package check-package bench fuzz test-sanitize test-tsan check-integrity clean
 
 deps:
 	./scripts/install-deps.sh
 
 configure: deps
-	cmake -S . -B $(BUILD_DIR) -G Ninja $(CMAKE_FLAGS)
+	cmake -S . -B $(BUILD_DIR) -G Ninja $(CMAKE_FLAGS) -DVIOSFM_BUILD_TESTS=ON \
+	  -DVIOSFM_BUILD_BENCHMARKS=ON
 
 build: configure
 	cmake --build $(BUILD_DIR) -j $(JOBS)
@@ -18,9 +19,26 @@ build: configure
 test: build
 	cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)
 
-# Builds and runs the main job on the built-in simulated default.
-demo: build
-	./scripts/demo.sh $(BUILD_DIR)
+# Installs what the program needs, builds the `viosfm` program alone and runs
+# the main job on the built-in simulated default, each step timed.
+demo:
+	JOBS=$(JOBS) CMAKE_FLAGS="$(CMAKE_FLAGS)" ./scripts/demo.sh --setup $(BUILD_DIR)
+
+# The Debian package build/viosfm_VERSION_ARCH.deb (the `viosfm` program; its
+# dependencies are the libraries it links and libjs-three): install it with
+# `apt-get install ./build/viosfm_*.deb`.
+package:
+	./scripts/install-deps.sh --demo
+	cmake -S . -B $(BUILD_DIR) -G Ninja $(CMAKE_FLAGS) -DVIOSFM_BUILD_TESTS=OFF \
+	  -DVIOSFM_BUILD_BENCHMARKS=OFF
+	cmake --build $(BUILD_DIR) -j $(JOBS) --target viosfm
+	cd $(BUILD_DIR) && cpack -G DEB
+
+# Installs the package of `make package` into a clean Debian 12 root
+# (debootstrap, chroot; needs root) and runs `viosfm --help` and a short run
+# there: scripts/check-package.sh.
+check-package: package
+	./scripts/check-package.sh $$(ls $(BUILD_DIR)/viosfm_*.deb | head -n 1) build-check-package
 
 # Builds the benchmarks and runs them; see docs/benchmarks.md.
 bench: configure

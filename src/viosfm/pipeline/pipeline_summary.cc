@@ -137,7 +137,10 @@ std::string PipelineSummary::ToString() const {
   out << "output: " << output_folder.string()
       << " (model/, model_txt/, points.ply, trajectory_body.tum, "
          "trajectory_body_all_frames.tum, summary.json)";
-  return out.str();
+  const std::vector<std::string> warnings = RunWarnings(*this);
+  out << "\ndecisions (summary.json: warnings):" << (warnings.empty() ? " none" : "");
+  for (const std::string& line : warnings) out << "\n  " << line;
+  return WrapLines(out.str());
 }
 
 std::string PipelineSummaryToJson(const PipelineSummary& s) {
@@ -305,6 +308,7 @@ std::string PipelineSummaryToJson(const PipelineSummary& s) {
   } else {
     json["gyro_check"] = {{"message", s.gyro_check_message}};
   }
+  json["warnings"] = RunWarnings(s);
   json["options_file"] = "options.json";
   json["fingerprint"] = s.fingerprint;
   return json.dump(2);

@@ -16,6 +16,7 @@
 #include "viosfm/pipeline/all_frame_poses.h"
 #include "viosfm/pipeline/frame_selection.h"
 #include "viosfm/pipeline/metric_scale.h"
+#include "viosfm/pipeline/run_warnings.h"
 #include "viosfm/pipeline/texture_probe.h"
 #include "viosfm/sfm/batched_mapper.h"
 #include "viosfm/sfm/vio_gaps.h"
@@ -117,6 +118,8 @@ struct PipelineSummary {
   size_t num_frames_vio_only = 0;
   size_t num_frames_unposed = 0;
   int num_vio_segments = 0;  // in the VIO input (after the gaps' decisions)
+  // What viosfm's own VIO decided (time offset, IMU noise, IMU-only stretches).
+  OwnVioDecisions own_vio;
   std::string vio_segment_rule;
   // The gaps of a VIO trajectory file judged by the images (sfm/vio_gaps.h).
   VioGapSummary vio_gaps;
@@ -160,7 +163,8 @@ struct PipelineSummary {
   double total_seconds = 0.0;
   double peak_memory_mb = 0.0;  // getrusage ru_maxrss
 
-  // A few lines for the terminal.
+  // A few lines for the terminal, none wider than kMaxConsoleLineLength,
+  // the decisions (RunWarnings) last.
   std::string ToString() const;
 };
 

@@ -71,6 +71,45 @@ void CompleteVioPoses(VioPoses* poses) {
                    << " in " << poses->num_segments() << " segment(s)";
 }
 
+// The own VIO's decisions for the run's warnings (run_warnings.h).
+OwnVioDecisions OwnVioDecisionsOf(const VioResult& result) {
+  OwnVioDecisions decisions;
+  decisions.ran = true;
+  const TimeOffsetEstimate& offset = result.summary.time_offset;
+  decisions.time_offset_estimated = offset.estimated;
+  decisions.calibration_time_offset_ns = offset.calibration_offset_ns;
+  decisions.time_offset_ns = offset.offset_ns;
+  decisions.imu_noise_given = result.summary.imu_noise.given;
+  decisions.imu_noise_used = result.summary.imu_noise.used;
+  decisions.imu_noise_measured = result.summary.imu_noise.measured;
+  decisions.num_resets = result.summary.num_resets;
+  // Stretches of consecutive frames carried by the IMU alone.
+  bool in_stretch = false;
+  timestamp_ns_t start_ns = 0;
+  timestamp_ns_t last_ns = 0;
+  const auto end_stretch = [&] {
+    if (!in_stretch) return;
+    decisions.longest_imu_only_s =
+        std::max(decisions.longest_imu_only_s, static_cast<double>(last_ns - start_ns) * 1e-9);
+    in_stretch = false;
+  };
+  for (const VioFrameResult& frame : result.frames) {
+    if (frame.status == VioStatus::kImuOnly) {
+      ++decisions.num_imu_only_frames;
+      if (!in_stretch) {
+        ++decisions.num_imu_only_stretches;
+        in_stretch = true;
+        start_ns = frame.timestamp_ns;
+      }
+      last_ns = frame.timestamp_ns;
+    } else {
+      end_stretch();
+    }
+  }
+  end_stretch();
+  return decisions;
+}
+
 }  // namespace
 
 VioOptions OwnVioOptions(const PipelineOptions& options) {
@@ -117,6 +156,7 @@ VioPoses PosesOfOwnVio(const Sequence& sequence, const PipelineOptions& options,
   rig.cam_time_offset_ns = result.summary.time_offset.offset_ns;
   rig.imu_noise = result.summary.imu_noise.used;
   poses.own_vio_rig = rig;
+  poses.own_vio = OwnVioDecisionsOf(result);
   const OwnVioReadout readout = OwnVioRollingShutter(options, result.summary.time_offset, true);
   poses.rolling_shutter_readout_s = readout.readout_s;
   poses.rolling_shutter_source = readout.source;

@@ -22,6 +22,7 @@
 
 #include "viosfm/io/frame_cache.h"
 #include "viosfm/pipeline/pipeline_options.h"
+#include "viosfm/pipeline/run_warnings.h"
 #include "viosfm/scene/vio_uncertainty.h"
 #include "viosfm/vio/odometry.h"
 
@@ -41,6 +42,8 @@ struct VioPoses {
   // estimate and the IMU noise figures it used), for what else reads the
   // IMU (the metric scale); empty for an external VIO.
   std::optional<SensorRig> own_vio_rig;
+  // What viosfm's own VIO decided (ran false for an external VIO).
+  OwnVioDecisions own_vio;
   // s, the camera's rolling-shutter readout for the structure-from-motion
   // stages: the one viosfm's own VIO was given, or its estimate when the
   // images' evidence for it reaches PipelineOptions::min_readout_evidence;

@@ -10,6 +10,8 @@
 #include <utility>
 #include <vector>
 
+#include "viosfm/io/colmap_model.h"
+#include "viosfm/io/dataset.h"
 #include "viosfm/io/ply.h"
 #include "viosfm/io/trajectory_io.h"
 #include "viosfm/report/json_file.h"
@@ -43,6 +45,9 @@ td.num { text-align: right; font-variant-numeric: tabular-nums; }
 .figures { display: flex; flex-wrap: wrap; gap: 12px; }
 .note { color: #8a5a00; background: #fff6e0; padding: 6px 10px; border-left: 3px solid #e0a000; }
 .options td { font-family: monospace; font-size: 12px; }
+#decisions { background: #fff6e0; border-left: 3px solid #e0a000; margin: 12px 0;
+  padding: 6px 10px 6px 28px; font-size: 14px; }
+#decisions li { margin: 2px 0; }
 )";
 
 std::string Escape(const std::string& text) {
@@ -284,6 +289,20 @@ class Page {
   std::ostringstream out_;
 };
 
+// The run's decisions a user should know (summary.json's `warnings`: time
+// offset, IMU noise, scale source and uncertainty, frames without a pose,
+// VIO segments, IMU-only stretches), one line each, at the top.
+void DecisionsList(const RunData& run, Page* page) {
+  const Json* warnings = Find(run.summary, "warnings");
+  if (warnings == nullptr || !warnings->is_array()) return;
+  std::ostringstream& out = page->out();
+  out << "<ul id=\"decisions\" title=\"The run's decisions (summary.json: warnings)\">\n";
+  for (const Json& line : *warnings) {
+    if (line.is_string()) out << "<li>" << Escape(line.get<std::string>()) << "</li>\n";
+  }
+  out << "</ul>\n";
+}
+
 void SummarySection(const RunData& run, Page* page) {
   const Json& s = run.summary;
   page->Heading("Summary", "summary");
@@ -423,9 +442,70 @@ void AccuracySection(const RunData& run, Page* page, TrajectoryFigures* figures_
   page->Figures({RenderSvg(figures_out->top_view), RenderSvg(figures_out->side_view)});
 }
 
-// The 3D view (report/viewer_3d.h): the points of RUN/points.ply and the
-// estimated path, coloured by its error when the estimate was aligned to the
-// ground truth (which is then drawn in the estimate's frame).
+// The folder the run read its images from (RUN/options.json's dataset: a
+// EuRoC folder's mav0/cam0/data, a bag's extracted images, or an image
+// folder); empty if it cannot be told or is gone.
+fs::path ImageFolderOfRun(const RunData& run) {
+  if (!run.options || !run.options->is_object()) return {};
+  const auto text = [&run](const char* key) -> std::string {
+    const auto it = run.options->find(key);
+    return it != run.options->end() && it->is_string() ? it->get<std::string>() : std::string();
+  };
+  const fs::path dataset = text("dataset");
+  if (dataset.empty()) return {};
+  std::vector<fs::path> candidates;
+  if (IsBagPath(dataset)) {
+    candidates = {fs::path(text("rosbag.extract_folder")) / "mav0" / "cam0" / "data",
+                  run.run_dir / "bag" / "mav0" / "cam0" / "data"};
+  } else {
+    candidates = {dataset / "mav0" / "cam0" / "data", dataset / "cam0" / "data", dataset};
+  }
+  std::error_code error;
+  for (const fs::path& candidate : candidates) {
+    if (!candidate.empty() && fs::is_directory(candidate, error)) return candidate;
+  }
+  return {};
+}
+
+// The frames of RUN/model (COLMAP) as frustums, in the order of their stamps
+// (else names), and their camera; the images from the run's dataset.
+void AddFrames(const RunData& run, Viewer3dScene* scene) {
+  const fs::path model = run.run_dir / "model";
+  std::error_code error;
+  if (!fs::is_directory(model, error)) return;
+  const Reconstruction reconstruction = ReadColmapModel(model);
+  const fs::path images = ImageFolderOfRun(run);
+  std::vector<const Image*> ordered;
+  for (const auto& [id, image] : reconstruction.Images()) {
+    if (image.registered) ordered.push_back(&image);
+  }
+  std::sort(ordered.begin(), ordered.end(), [](const Image* a, const Image* b) {
+    const std::optional<timestamp_ns_t> ta = TimestampFromImageName(a->name);
+    const std::optional<timestamp_ns_t> tb = TimestampFromImageName(b->name);
+    if (ta && tb && *ta != *tb) return *ta < *tb;
+    return a->name < b->name;
+  });
+  std::optional<timestamp_ns_t> first;
+  for (const Image* image : ordered) {
+    if (!first) first = TimestampFromImageName(image->name);
+    Viewer3dFrame frame;
+    frame.cam_from_world = image->cam_from_world;
+    frame.name = image->name;
+    const std::optional<timestamp_ns_t> stamp = TimestampFromImageName(image->name);
+    if (stamp && first) frame.time_s = static_cast<double>(*stamp - *first) * 1e-9;
+    if (!images.empty()) frame.image_path = images / image->name;
+    scene->frames.push_back(std::move(frame));
+  }
+  if (!ordered.empty()) {
+    const auto camera = reconstruction.Cameras().find(ordered.front()->camera_id);
+    if (camera != reconstruction.Cameras().end()) scene->camera = camera->second;
+  }
+}
+
+// The 3D view (report/viewer_3d.h): the points of RUN/points.ply, the
+// frames of RUN/model as frustums, and the estimated path, coloured by its
+// error when the estimate was aligned to the ground truth (which is then
+// drawn in the estimate's frame).
 void View3dSection(const RunData& run, const TrajectoryFigures& figures, Page* page) {
   page->Heading("3D view", "view3d");
   Viewer3dOptions options;
@@ -445,6 +525,10 @@ void View3dSection(const RunData& run, const TrajectoryFigures& figures, Page* p
     scene.points = std::move(points.xyz);
     scene.colors = std::move(points.rgb);
   }
+  AddFrames(run, &scene);
+  // An images-only model has no gravity; every other run's world is the
+  // VIO's or the IMU's, gravity-aligned.
+  scene.gravity_up = Text(run.summary, "models/images_only") != "true";
   if (run.has_estimate) {
     if (figures.estimate_evaluation) {
       // The associated poses in the estimate's order, with their errors.
@@ -468,8 +552,8 @@ void View3dSection(const RunData& run, const TrajectoryFigures& figures, Page* p
       }
     }
   }
-  if (scene.points.empty() && scene.path.empty()) {
-    page->Note("no 3D view: points.ply and trajectory_body.tum are missing or empty.");
+  if (scene.points.empty() && scene.path.empty() && scene.frames.empty()) {
+    page->Note("no 3D view: points.ply, model/ and trajectory_body.tum are missing or empty.");
     return;
   }
   page->out() << RenderViewer3d(scene, options);
@@ -664,6 +748,7 @@ std::string RenderRunReport(const fs::path& run_dir) {
       << Escape(Text(run.summary, "started_utc")) << " &middot; viosfm "
       << Escape(Text(run.summary, "viosfm_version")) << " &middot; run folder "
       << Escape(run_dir.string()) << "</p>\n";
+  DecisionsList(run, &page);
   SummarySection(run, &page);
   TrajectoryFigures figures;
   AccuracySection(run, &page, &figures);

@@ -7,15 +7,20 @@
 #include <cstdlib>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <string>
 #include <vector>
 
 #include "viosfm/eval/report.h"
 #include "viosfm/eval/traj_eval.h"
+#include "viosfm/io/colmap_model.h"
 #include "viosfm/io/image_io.h"
 #include "viosfm/io/ply.h"
 #include "viosfm/io/trajectory_io.h"
 #include "viosfm/io/verification_report.h"
+#include "viosfm/sensor/camera_models.h"
 #include "viosfm/util/file_util.h"
 #include "viosfm/util/testing.h"
 
@@ -214,6 +219,44 @@ Fixture BuildFixture(const fs::path& run_dir) {
   return fixture;
 }
 
+// Every 10th pose of the estimate as a frame of model/ (a 640 x 480 pinhole
+// camera looking along the loop, its image's top up), and the frames'
+// images, each a flat colour, in a EuRoC-like dataset folder that
+// options.json names. Returns the number of frames.
+size_t AddModelAndImages(const Fixture& fixture) {
+  const fs::path dataset = fixture.run_dir.parent_path() / "dataset";
+  const fs::path images = dataset / "mav0" / "cam0" / "data";
+  fs::create_directories(images);
+  Reconstruction model;
+  Camera camera = MakeCamera(CameraModelId::kPinhole, 640, 480, {500, 500, 320, 240});
+  camera.camera_id = 1;
+  model.AddCamera(camera);
+  Eigen::Matrix3d body_from_cam;
+  body_from_cam.col(0) = Eigen::Vector3d::UnitX();   // image right
+  body_from_cam.col(1) = -Eigen::Vector3d::UnitZ();  // image down
+  body_from_cam.col(2) = Eigen::Vector3d::UnitY();   // forward along the loop
+  const Trajectory estimate = MakeEstimate(MakeGroundTruth(400));
+  size_t n = 0;
+  for (size_t i = 0; i < estimate.size(); i += 10, ++n) {
+    Image image;
+    image.image_id = static_cast<image_t>(n + 1);
+    image.camera_id = 1;
+    image.name = std::to_string(estimate.poses[i].timestamp_ns) + ".png";
+    const Rigid3d world_from_cam =
+        estimate.poses[i].world_from_frame * Rigid3d(body_from_cam, Eigen::Vector3d::Zero());
+    image.cam_from_world = world_from_cam.Inverse();
+    image.registered = true;
+    model.AddImage(image);
+    const cv::Mat pixels(480, 640, CV_8UC3, cv::Scalar(40, 160, 40));
+    EXPECT_TRUE(cv::imwrite((images / image.name).string(), pixels));
+  }
+  WriteColmapModel(fixture.run_dir / "model", model, ColmapModelFormat::kBinary);
+  nlohmann::json options = nlohmann::json::parse(ReadTextFile(fixture.run_dir / "options.json"));
+  options["dataset"] = dataset.string();
+  testing::WriteTextFile(fixture.run_dir / "options.json", options.dump(2));
+  return n;
+}
+
 std::string Fixed(double value, int decimals) {
   char buffer[64];
   std::snprintf(buffer, sizeof(buffer), "%.*f", decimals, value);
@@ -308,6 +351,30 @@ TEST(RenderRunReport, MissingOptionalFilesAreNamedInTheirSections) {
   // The trajectory views and the BA chart are still drawn.
   EXPECT_EQ(Count(html, "<svg "), 3u);
   EXPECT_FALSE(Contains(html, "position error (m)"));
+}
+
+// summary.json's `warnings` are listed at the top, before the summary, one
+// item each; a run without them has no list.
+TEST(RenderRunReport, DecisionsAreListedAtTheTop) {
+  const fs::path run_dir = testing::MakeScratchFolder("report_decisions");
+  nlohmann::ordered_json summary = MakeSummary(false);
+  summary["warnings"] = {
+      "time offset: camera-IMU 0.0 -> -47.3 ms (the VIO's estimate replaced "
+      "the calibration's)",
+      "metric scale: the VIO's (IMU fit not usable: x < y), +-2.00 %"};
+  testing::WriteTextFile(run_dir / "summary.json", summary.dump());
+  const std::string html = RenderRunReport(run_dir);
+  const size_t list = html.find("<ul id=\"decisions\"");
+  ASSERT_NE(list, std::string::npos);
+  EXPECT_LT(list, html.find("<h2 id=\"summary\">"));
+  EXPECT_EQ(Count(html, "<li>"), 2u);
+  EXPECT_TRUE(Contains(html,
+                       "<li>time offset: camera-IMU 0.0 -&gt; -47.3 ms (the VIO&#39;s "
+                       "estimate replaced the calibration&#39;s)</li>"));
+  EXPECT_TRUE(Contains(html, "(IMU fit not usable: x &lt; y), +-2.00 %</li>"));
+
+  testing::WriteTextFile(run_dir / "summary.json", MakeSummary(false).dump());
+  EXPECT_FALSE(Contains(RenderRunReport(run_dir), "id=\"decisions\""));
 }
 
 TEST(RenderRunReport, AteFromSummaryWhenNoEvalFiles) {
@@ -454,7 +521,7 @@ TEST(HtmlReport, ThreeDViewIsSelfContained) {
   }
   EXPECT_TRUE(Contains(html, "REVISION=\"111\""));  // Debian's three.js
   EXPECT_TRUE(Contains(html, "OrbitControls"));
-  EXPECT_TRUE(Contains(html, "num_points: 20000"));
+  EXPECT_TRUE(Contains(html, "\"num_points\":20000"));
   EXPECT_TRUE(Contains(html, "Camera path coloured by position error"));
   EXPECT_FALSE(Contains(html, "<script src"));
   EXPECT_FALSE(Contains(html, "<link "));
@@ -508,6 +575,81 @@ TEST(ChromiumRendering, ThreeDViewDrawsWithWebGl) {
   if (keep != nullptr) {
     fs::copy_file(png_path, fs::path(keep) / "view3d.png", fs::copy_options::overwrite_existing);
   }
+}
+
+// The 3D view with the frames of model/: headless Chromium draws the
+// frustums (orange), the grid and the x, y, z axes (red, green, blue), and a
+// click on a frustum (#viewer-selftest-click) marks it (yellow) and shows its
+// frame's image and name.
+TEST(ChromiumRendering, ThreeDViewShowsFrustumsGridAxesAndTheClickedFrame) {
+  if (!fs::exists(kChromium)) {
+    GTEST_SKIP() << kChromium << " not found (apt-get install chromium); skipping the browser test";
+  }
+  const char* keep = std::getenv("VIOSFM_REPORT_FIXTURE_DIR");
+  const fs::path scratch = testing::MakeScratchFolder("report_chromium_frustums");
+  const Fixture fixture = BuildFixture(keep != nullptr ? fs::path(keep) : scratch / "run");
+  const size_t num_frames = AddModelAndImages(fixture);
+  const fs::path html = fixture.run_dir / "report.html";
+  WriteRunReport(fixture.run_dir, html);
+  const std::string page = ReadTextFile(html);
+  if (!Contains(page, "id=\"viewer3d-canvas\"")) {
+    GTEST_SKIP() << "libjs-three not installed (apt-get install libjs-three); skipping";
+  }
+  EXPECT_TRUE(Contains(page, "z blue (up, against gravity)"));
+  const fs::path dom_path = scratch / "dom_click.html";
+  ASSERT_EQ(RunChromium(scratch, "--dump-dom", html, dom_path, "#viewer-selftest-click"), 0)
+      << ReadTextFile(scratch / "chromium_stderr.txt");
+  const std::string dom = ReadTextFile(dom_path);
+  EXPECT_TRUE(Contains(dom, "200 poses, " + std::to_string(num_frames) + " cameras"));
+  // The click picked a frame, and the panel shows it: no longer hidden, its
+  // caption the image's name, its image a JPEG thumbnail.
+  const size_t clicked_at = dom.find("data-clicked=\"");
+  ASSERT_NE(clicked_at, std::string::npos);
+  const int clicked = std::stoi(dom.substr(clicked_at + 14));
+  ASSERT_GE(clicked, 0) << "no frustum visible to click";
+  ASSERT_LT(clicked, static_cast<int>(num_frames));
+  EXPECT_TRUE(Contains(
+      dom, "<figure id=\"viewer3d-frame\" data-frame=\"" + std::to_string(clicked) + "\">"))
+      << dom.substr(dom.find("<figure id=\"viewer3d-frame\""), 200);
+  const Trajectory estimate = MakeEstimate(MakeGroundTruth(400));
+  const std::string name =
+      std::to_string(estimate.poses[10 * static_cast<size_t>(clicked)].timestamp_ns) + ".png";
+  EXPECT_TRUE(Contains(dom, "<figcaption id=\"viewer3d-frame-caption\">" + name + " ("));
+  EXPECT_TRUE(Contains(dom,
+                       "id=\"viewer3d-frame-image\" alt=\"the frame's image\" "
+                       "src=\"data:image/jpeg;base64,"));
+
+  const std::string prefix = "data:image/png;base64,";
+  const size_t start = dom.find(prefix);
+  ASSERT_NE(start, std::string::npos) << "no canvas data in the DOM (WebGL unavailable?)";
+  const size_t end = dom.find('<', start);
+  const std::vector<uint8_t> png =
+      DecodeBase64(dom.substr(start + prefix.size(), end - start - prefix.size()));
+  const cv::Mat canvas = cv::imdecode(png, cv::IMREAD_COLOR);
+  ASSERT_FALSE(canvas.empty());
+  if (keep != nullptr) {
+    cv::imwrite((fs::path(keep) / "view3d_frames.png").string(), canvas);
+  }
+  // Pixels near each element's colour (BGR): frustums 0xff8c1a, the clicked
+  // one 0xffff00, axes 0xe53935, 0x43a047, 0x1e88e5, the grid's lines 0x8a8a8a
+  // and 0x4a4a4a.
+  const auto count = [&canvas](int r, int g, int b, int tolerance) {
+    size_t n = 0;
+    for (int y = 0; y < canvas.rows; ++y) {
+      for (int x = 0; x < canvas.cols; ++x) {
+        const cv::Vec3b p = canvas.at<cv::Vec3b>(y, x);
+        n += std::abs(p[2] - r) <= tolerance && std::abs(p[1] - g) <= tolerance &&
+             std::abs(p[0] - b) <= tolerance;
+      }
+    }
+    return n;
+  };
+  EXPECT_GT(count(0xff, 0x8c, 0x1a, 30), 200u) << "frustums";
+  EXPECT_GT(count(0xff, 0xff, 0x00, 30), 20u) << "the clicked frustum";
+  EXPECT_GT(count(0xe5, 0x39, 0x35, 30), 20u) << "x axis";
+  EXPECT_GT(count(0x43, 0xa0, 0x47, 30), 20u) << "y axis";
+  EXPECT_GT(count(0x1e, 0x88, 0xe5, 30), 20u) << "z axis";
+  EXPECT_GT(count(0x8a, 0x8a, 0x8a, 12) + count(0x4a, 0x4a, 0x4a, 12), 1000u) << "grid";
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include <limits>
 #include <sstream>
 
+#include "viosfm/report/plot_canvas.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/file_util.h"
 
@@ -72,7 +73,52 @@ struct Axes {
   double Y(double y) const { return top + height - (y - this->y.min) / this->y.Span() * height; }
 };
 
-class SvgWriter {
+const Color kTickColor = {0x33, 0x33, 0x33};
+const Color kGridColor = {0xe6, 0xe6, 0xe6};
+const Color kWhite = {0xff, 0xff, 0xff};
+
+const char* AnchorName(TextAnchor anchor) {
+  switch (anchor) {
+    case TextAnchor::kStart: return "start";
+    case TextAnchor::kMiddle: return "middle";
+    case TextAnchor::kEnd: return "end";
+  }
+  return "start";
+}
+
+PlotTextStyle Anchored(TextAnchor anchor) {
+  PlotTextStyle style;
+  style.anchor = anchor;
+  return style;
+}
+
+PlotTextStyle TitleStyle() {
+  PlotTextStyle style = Anchored(TextAnchor::kMiddle);
+  style.size = 14.0;
+  style.bold = true;
+  return style;
+}
+
+PlotTextStyle VerticalStyle() {
+  PlotTextStyle style = Anchored(TextAnchor::kMiddle);
+  style.vertical = true;
+  return style;
+}
+
+PlotRectStyle Filled(const Color& color) {
+  PlotRectStyle style;
+  style.fill = color;
+  return style;
+}
+
+PlotRectStyle Framed(const std::string& css_class) {
+  PlotRectStyle style;
+  style.outline = PlotStroke{kTickColor, 1.0, false};
+  style.css_class = css_class;
+  return style;
+}
+
+class SvgWriter : public PlotCanvas {
  public:
   SvgWriter(double width, double height) {
     out_ << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << Px(width) << "\" height=\""
@@ -81,33 +127,44 @@ class SvgWriter {
     out_ << "<rect x=\"0.00\" y=\"0.00\" width=\"" << Px(width) << "\" height=\"" << Px(height)
          << "\" fill=\"#ffffff\"/>\n";
   }
-  std::ostringstream& out() { return out_; }
-  void Line(double x1, double y1, double x2, double y2, const std::string& stroke, double width,
-            bool dashed = false) {
+  void Line(double x1, double y1, double x2, double y2, const PlotStroke& stroke) override {
     out_ << "<line x1=\"" << Px(x1) << "\" y1=\"" << Px(y1) << "\" x2=\"" << Px(x2) << "\" y2=\""
-         << Px(y2) << "\" stroke=\"" << stroke << "\" stroke-width=\"" << Px(width) << '"';
-    if (dashed) out_ << " stroke-dasharray=\"6 4\"";
+         << Px(y2) << "\" stroke=\"" << stroke.color.Hex() << "\" stroke-width=\""
+         << Px(stroke.width) << '"';
+    if (stroke.dashed) out_ << " stroke-dasharray=\"6 4\"";
     out_ << "/>\n";
   }
-  void Text(double x, double y, const std::string& text, const std::string& anchor,
-            const std::string& extra = "") {
-    out_ << "<text x=\"" << Px(x) << "\" y=\"" << Px(y) << "\" text-anchor=\"" << anchor << '"';
-    if (!extra.empty()) out_ << ' ' << extra;
+  void Text(double x, double y, const std::string& text, const PlotTextStyle& style) override {
+    out_ << "<text x=\"" << Px(x) << "\" y=\"" << Px(y) << "\" text-anchor=\""
+         << AnchorName(style.anchor) << '"';
+    if (style.size != 12.0) out_ << " font-size=\"" << FormatNumber(style.size) << '"';
+    if (style.bold) out_ << " font-weight=\"bold\"";
+    if (style.vertical) out_ << " transform=\"rotate(-90 " << Px(x) << ' ' << Px(y) << ")\"";
+    if (style.color) out_ << " fill=\"" << style.color->Hex() << '"';
     out_ << '>' << XmlEscape(text) << "</text>\n";
   }
-  void Rect(double x, double y, double width, double height, const std::string& fill,
-            const std::string& extra = "") {
+  void Rect(double x, double y, double width, double height, const PlotRectStyle& style) override {
     out_ << "<rect x=\"" << Px(x) << "\" y=\"" << Px(y) << "\" width=\"" << Px(width)
-         << "\" height=\"" << Px(height) << "\" fill=\"" << fill << '"';
-    if (!extra.empty()) out_ << ' ' << extra;
+         << "\" height=\"" << Px(height) << "\" fill=\""
+         << (style.fill ? style.fill->Hex() : std::string("none")) << '"';
+    if (!style.css_class.empty()) out_ << " class=\"" << style.css_class << '"';
+    if (style.fill_opacity < 1.0) out_ << " fill-opacity=\"" << Px(style.fill_opacity) << '"';
+    if (style.outline) {
+      out_ << " stroke=\"" << style.outline->color.Hex() << "\" stroke-width=\""
+           << Px(style.outline->width) << '"';
+    }
     out_ << "/>\n";
   }
-  void Polyline(const std::vector<std::pair<double, double>>& points, const std::string& stroke,
-                double width, bool dashed) {
+  void Circle(double cx, double cy, double radius, const Color& fill) override {
+    out_ << "<circle cx=\"" << Px(cx) << "\" cy=\"" << Px(cy) << "\" r=\"" << Px(radius)
+         << "\" fill=\"" << fill.Hex() << "\"/>\n";
+  }
+  void Polyline(const std::vector<std::pair<double, double>>& points,
+                const PlotStroke& stroke) override {
     if (points.size() < 2) return;
-    out_ << "<polyline fill=\"none\" stroke=\"" << stroke << "\" stroke-width=\"" << Px(width)
-         << "\" stroke-linejoin=\"round\" stroke-linecap=\"round\"";
-    if (dashed) out_ << " stroke-dasharray=\"6 4\"";
+    out_ << "<polyline fill=\"none\" stroke=\"" << stroke.color.Hex() << "\" stroke-width=\""
+         << Px(stroke.width) << "\" stroke-linejoin=\"round\" stroke-linecap=\"round\"";
+    if (stroke.dashed) out_ << " stroke-dasharray=\"6 4\"";
     out_ << " points=\"";
     // Points closer than kMinPointSpacing to the last written one are left
     // out (the last point is always written): a 200 Hz ground truth stays small.
@@ -130,6 +187,11 @@ class SvgWriter {
   }
 
  private:
+  static std::string FormatNumber(double value) {
+    char buffer[32];
+    std::snprintf(buffer, sizeof(buffer), "%g", value);
+    return buffer;
+  }
   std::ostringstream out_;
 };
 
@@ -214,7 +276,7 @@ double TickStep(const std::vector<double>& ticks) {
   return ticks.size() >= 2 ? ticks[1] - ticks[0] : (ticks.empty() ? 1.0 : std::abs(ticks[0]));
 }
 
-void DrawAxes(const Figure& figure, const Axes& axes, SvgWriter* svg) {
+void DrawAxes(const Figure& figure, const Axes& axes, PlotCanvas* svg) {
   const double right = axes.left + axes.width;
   const double bottom = axes.top + axes.height;
   // x ticks and grid.
@@ -224,18 +286,18 @@ void DrawAxes(const Figure& figure, const Axes& axes, SvgWriter* svg) {
         LogTicks(std::pow(10.0, axes.x.min), std::pow(10.0, axes.x.max));
     for (double t : ticks) {
       const double px = axes.X(t);
-      svg->Line(px, axes.top, px, bottom, "#e6e6e6", 1.0);
-      svg->Line(px, bottom, px, bottom + 5, "#333333", 1.0);
-      svg->Text(px, bottom + 18, FormatTick(t, t), "middle");
+      svg->Line(px, axes.top, px, bottom, {kGridColor, 1.0});
+      svg->Line(px, bottom, px, bottom + 5, {kTickColor, 1.0});
+      svg->Text(px, bottom + 18, FormatTick(t, t), Anchored(TextAnchor::kMiddle));
     }
   } else {
     const std::vector<double> ticks = LinearTicks(axes.x.min, axes.x.max, x_target);
     const double step = TickStep(ticks);
     for (double t : ticks) {
       const double px = axes.X(t);
-      svg->Line(px, axes.top, px, bottom, "#e6e6e6", 1.0);
-      svg->Line(px, bottom, px, bottom + 5, "#333333", 1.0);
-      svg->Text(px, bottom + 18, FormatTick(t, step), "middle");
+      svg->Line(px, axes.top, px, bottom, {kGridColor, 1.0});
+      svg->Line(px, bottom, px, bottom + 5, {kTickColor, 1.0});
+      svg->Text(px, bottom + 18, FormatTick(t, step), Anchored(TextAnchor::kMiddle));
     }
   }
   // y ticks and grid.
@@ -244,33 +306,30 @@ void DrawAxes(const Figure& figure, const Axes& axes, SvgWriter* svg) {
   const double y_step = TickStep(y_ticks);
   for (double t : y_ticks) {
     const double py = axes.Y(t);
-    svg->Line(axes.left, py, right, py, "#e6e6e6", 1.0);
-    svg->Line(axes.left - 5, py, axes.left, py, "#333333", 1.0);
-    svg->Text(axes.left - 8, py + 4, FormatTick(t, y_step), "end");
+    svg->Line(axes.left, py, right, py, {kGridColor, 1.0});
+    svg->Line(axes.left - 5, py, axes.left, py, {kTickColor, 1.0});
+    svg->Text(axes.left - 8, py + 4, FormatTick(t, y_step), Anchored(TextAnchor::kEnd));
   }
   // Frame of the plot area (drawn after the grid).
-  svg->Rect(axes.left, axes.top, axes.width, axes.height, "none",
-            "class=\"plot-area\" stroke=\"#333333\" stroke-width=\"1.00\"");
+  svg->Rect(axes.left, axes.top, axes.width, axes.height, Framed("plot-area"));
   if (!figure.title.empty()) {
-    svg->Text(axes.left + 0.5 * axes.width, 22, figure.title, "middle",
-              "font-size=\"14\" font-weight=\"bold\"");
+    svg->Text(axes.left + 0.5 * axes.width, 22, figure.title, TitleStyle());
   }
   if (!figure.x_label.empty()) {
-    svg->Text(axes.left + 0.5 * axes.width, bottom + 38, figure.x_label, "middle");
+    svg->Text(axes.left + 0.5 * axes.width, bottom + 38, figure.x_label,
+              Anchored(TextAnchor::kMiddle));
   }
   if (!figure.y_label.empty()) {
     const double x = 16.0;
     const double y = axes.top + 0.5 * axes.height;
-    svg->Text(x, y, figure.y_label, "middle",
-              "transform=\"rotate(-90 " + Px(x) + ' ' + Px(y) + ")\"");
+    svg->Text(x, y, figure.y_label, VerticalStyle());
   }
 }
 
-void DrawSeries(const Figure& figure, const Axes& axes, SvgWriter* svg) {
+void DrawSeries(const Figure& figure, const Axes& axes, PlotCanvas* svg) {
   const auto [color_min, color_max] = ColorRange(figure);
   for (const Series& s : figure.series) {
     const size_t n = std::min(s.x.size(), s.y.size());
-    const std::string stroke = s.color.Hex();
     switch (s.kind) {
       case SeriesKind::kLine: {
         // A gap (unusable point) splits the polyline.
@@ -280,7 +339,7 @@ void DrawSeries(const Figure& figure, const Axes& axes, SvgWriter* svg) {
             points.emplace_back(axes.X(s.x[i]), axes.Y(s.y[i]));
             continue;
           }
-          svg->Polyline(points, stroke, s.line_width, s.dashed);
+          svg->Polyline(points, {s.color, s.line_width, s.dashed});
           points.clear();
         }
         break;
@@ -288,32 +347,31 @@ void DrawSeries(const Figure& figure, const Axes& axes, SvgWriter* svg) {
       case SeriesKind::kScatter:
         for (size_t i = 0; i < n; ++i) {
           if (!Usable(figure, s.x[i], s.y[i])) continue;
-          svg->out() << "<circle cx=\"" << Px(axes.X(s.x[i])) << "\" cy=\"" << Px(axes.Y(s.y[i]))
-                     << "\" r=\"" << Px(s.marker_radius) << "\" fill=\"" << stroke << "\"/>\n";
+          svg->Circle(axes.X(s.x[i]), axes.Y(s.y[i]), s.marker_radius, s.color);
         }
         break;
       case SeriesKind::kColoredLine: {
         // Consecutive segments of one colour are merged into one polyline.
         VIOSFM_CHECK_EQ(s.values.size(), n) << "kColoredLine needs one value a point";
         std::vector<std::pair<double, double>> points;
-        std::string run_color;
+        std::optional<Color> run_color;
         for (size_t i = 0; i + 1 < n; ++i) {
           if (!Usable(figure, s.x[i], s.y[i]) || !Usable(figure, s.x[i + 1], s.y[i + 1])) {
-            svg->Polyline(points, run_color, s.line_width, false);
+            if (run_color) svg->Polyline(points, {*run_color, s.line_width, false});
             points.clear();
             continue;
           }
           const double value = 0.5 * (s.values[i] + s.values[i + 1]);
-          const std::string color = ColorMap((value - color_min) / (color_max - color_min)).Hex();
+          const Color color = ColorMap((value - color_min) / (color_max - color_min));
           if (color != run_color) {
-            svg->Polyline(points, run_color, s.line_width, false);
+            if (run_color) svg->Polyline(points, {*run_color, s.line_width, false});
             points.clear();
             run_color = color;
           }
           if (points.empty()) points.emplace_back(axes.X(s.x[i]), axes.Y(s.y[i]));
           points.emplace_back(axes.X(s.x[i + 1]), axes.Y(s.y[i + 1]));
         }
-        svg->Polyline(points, run_color, s.line_width, false);
+        if (run_color) svg->Polyline(points, {*run_color, s.line_width, false});
         break;
       }
       case SeriesKind::kBars:
@@ -323,34 +381,38 @@ void DrawSeries(const Figure& figure, const Axes& axes, SvgWriter* svg) {
           const double x1 = axes.X(s.x[i] + 0.5 * s.bar_width);
           const double y0 = axes.Y(0.0);
           const double y1 = axes.Y(s.y[i]);
-          svg->Rect(std::min(x0, x1), std::min(y0, y1), std::abs(x1 - x0), std::abs(y1 - y0),
-                    stroke, "stroke=\"#ffffff\" stroke-width=\"0.50\"");
+          PlotRectStyle bar = Filled(s.color);
+          bar.outline = PlotStroke{kWhite, 0.5, false};
+          svg->Rect(std::min(x0, x1), std::min(y0, y1), std::abs(x1 - x0), std::abs(y1 - y0), bar);
         }
         break;
     }
   }
 }
 
-void DrawReferenceLines(const Figure& figure, const Axes& axes, SvgWriter* svg) {
+void DrawReferenceLines(const Figure& figure, const Axes& axes, PlotCanvas* svg) {
   for (const ReferenceLine& line : figure.horizontal_lines) {
     const double py = axes.Y(line.value);
-    svg->Line(axes.left, py, axes.left + axes.width, py, line.color.Hex(), 1.5, line.dashed);
+    svg->Line(axes.left, py, axes.left + axes.width, py, {line.color, 1.5, line.dashed});
     if (!line.label.empty()) {
-      svg->Text(axes.left + axes.width - 4, py - 4, line.label, "end",
-                "fill=\"" + line.color.Hex() + "\"");
+      PlotTextStyle style = Anchored(TextAnchor::kEnd);
+      style.color = line.color;
+      svg->Text(axes.left + axes.width - 4, py - 4, line.label, style);
     }
   }
   for (const ReferenceLine& line : figure.vertical_lines) {
     if (figure.log_x && line.value <= 0.0) continue;
     const double px = axes.X(line.value);
-    svg->Line(px, axes.top, px, axes.top + axes.height, line.color.Hex(), 1.5, line.dashed);
+    svg->Line(px, axes.top, px, axes.top + axes.height, {line.color, 1.5, line.dashed});
     if (!line.label.empty()) {
-      svg->Text(px + 4, axes.top + 14, line.label, "start", "fill=\"" + line.color.Hex() + "\"");
+      PlotTextStyle style = Anchored(TextAnchor::kStart);
+      style.color = line.color;
+      svg->Text(px + 4, axes.top + 14, line.label, style);
     }
   }
 }
 
-void DrawLegend(const Figure& figure, const Axes& axes, SvgWriter* svg) {
+void DrawLegend(const Figure& figure, const Axes& axes, PlotCanvas* svg) {
   std::vector<const Series*> entries;
   size_t longest = 0;
   for (const Series& s : figure.series) {
@@ -365,33 +427,32 @@ void DrawLegend(const Figure& figure, const Axes& axes, SvgWriter* svg) {
   const double x0 =
       figure.legend_right ? axes.left + axes.width - box_width - 8.0 : axes.left + 8.0;
   const double y0 = axes.top + 8.0;
-  svg->Rect(x0, y0, box_width, box_height, "#ffffff",
-            "fill-opacity=\"0.85\" stroke=\"#bbbbbb\" stroke-width=\"1.00\"");
+  PlotRectStyle box = Filled(kWhite);
+  box.fill_opacity = 0.85;
+  box.outline = PlotStroke{{0xbb, 0xbb, 0xbb}, 1.0, false};
+  svg->Rect(x0, y0, box_width, box_height, box);
   for (size_t i = 0; i < entries.size(); ++i) {
     const Series& s = *entries[i];
     const double cy = y0 + 4.0 + row * (static_cast<double>(i) + 0.5);
     const double sx = x0 + 6.0;
     switch (s.kind) {
       case SeriesKind::kLine:
-        svg->Line(sx, cy, sx + 22, cy, s.color.Hex(), s.line_width, s.dashed);
+        svg->Line(sx, cy, sx + 22, cy, {s.color, s.line_width, s.dashed});
         break;
-      case SeriesKind::kScatter:
-        svg->out() << "<circle cx=\"" << Px(sx + 11) << "\" cy=\"" << Px(cy) << "\" r=\""
-                   << Px(s.marker_radius) << "\" fill=\"" << s.color.Hex() << "\"/>\n";
-        break;
+      case SeriesKind::kScatter: svg->Circle(sx + 11, cy, s.marker_radius, s.color); break;
       case SeriesKind::kColoredLine:
         for (int k = 0; k < 3; ++k) {
-          svg->Line(sx + 7.33 * k, cy, sx + 7.33 * (k + 1), cy, ColorMap(0.1 + 0.4 * k).Hex(),
-                    s.line_width + 0.5);
+          svg->Line(sx + 7.33 * k, cy, sx + 7.33 * (k + 1), cy,
+                    {ColorMap(0.1 + 0.4 * k), s.line_width + 0.5});
         }
         break;
-      case SeriesKind::kBars: svg->Rect(sx + 4, cy - 6, 14, 12, s.color.Hex()); break;
+      case SeriesKind::kBars: svg->Rect(sx + 4, cy - 6, 14, 12, Filled(s.color)); break;
     }
-    svg->Text(sx + 28, cy + 4, s.label, "start");
+    svg->Text(sx + 28, cy + 4, s.label, Anchored(TextAnchor::kStart));
   }
 }
 
-void DrawColorBar(const Figure& figure, const Axes& axes, SvgWriter* svg) {
+void DrawColorBar(const Figure& figure, const Axes& axes, PlotCanvas* svg) {
   if (!HasColoredSeries(figure)) return;
   const auto [min, max] = ColorRange(figure);
   const double x = axes.left + axes.width + 18.0;
@@ -400,22 +461,20 @@ void DrawColorBar(const Figure& figure, const Axes& axes, SvgWriter* svg) {
   for (int k = 0; k < kColorBarSteps; ++k) {
     // Top step holds the largest values.
     const double t = (kColorBarSteps - 1 - k + 0.5) / kColorBarSteps;
-    svg->Rect(x, axes.top + k * step_height, bar_width, step_height + 0.3, ColorMap(t).Hex());
+    svg->Rect(x, axes.top + k * step_height, bar_width, step_height + 0.3, Filled(ColorMap(t)));
   }
-  svg->Rect(x, axes.top, bar_width, axes.height, "none",
-            "class=\"colorbar\" stroke=\"#333333\" stroke-width=\"1.00\"");
+  svg->Rect(x, axes.top, bar_width, axes.height, Framed("colorbar"));
   const std::vector<double> ticks = LinearTicks(min, max, 5);
   const double step = TickStep(ticks);
   for (double t : ticks) {
     const double py = axes.top + axes.height - (t - min) / (max - min) * axes.height;
-    svg->Line(x + bar_width, py, x + bar_width + 4, py, "#333333", 1.0);
-    svg->Text(x + bar_width + 6, py + 4, FormatTick(t, step), "start");
+    svg->Line(x + bar_width, py, x + bar_width + 4, py, {kTickColor, 1.0});
+    svg->Text(x + bar_width + 6, py + 4, FormatTick(t, step), Anchored(TextAnchor::kStart));
   }
   if (!figure.colorbar_label.empty()) {
     const double lx = x + bar_width + 58.0;
     const double ly = axes.top + 0.5 * axes.height;
-    svg->Text(lx, ly, figure.colorbar_label, "middle",
-              "transform=\"rotate(-90 " + Px(lx) + ' ' + Px(ly) + ")\"");
+    svg->Text(lx, ly, figure.colorbar_label, VerticalStyle());
   }
 }
 
@@ -549,63 +608,107 @@ std::string XmlEscape(const std::string& text) {
   return escaped;
 }
 
-std::string RenderSvg(const Figure& figure) {
+namespace {
+
+void DrawFigure(const Figure& figure, PlotCanvas* canvas) {
   const Axes axes = ComputeAxes(figure);
+  DrawAxes(figure, axes, canvas);
+  DrawSeries(figure, axes, canvas);
+  DrawReferenceLines(figure, axes, canvas);
+  DrawColorBar(figure, axes, canvas);
+  DrawLegend(figure, axes, canvas);
+}
+
+struct BarChartLayout {
+  double left = 0.0, top = 0.0, row = 0.0, plot_width = 0.0, plot_height = 0.0, height = 0.0;
+  double max_value = 1.0;
+  double X(double v) const { return left + std::max(0.0, v) / max_value * plot_width; }
+};
+
+BarChartLayout LayOut(const BarChart& chart) {
+  VIOSFM_CHECK_EQ(chart.names.size(), chart.values.size());
+  BarChartLayout layout;
+  size_t longest = 4;
+  for (const std::string& name : chart.names) longest = std::max(longest, name.size());
+  layout.left = std::clamp(14.0 + kCharWidth * static_cast<double>(longest), 60.0, 280.0);
+  const double right = 80.0;  // the value text
+  layout.top = chart.title.empty() ? kTopMarginPlain : kTopMarginTitle;
+  layout.row = chart.bar_height + 6.0;
+  layout.plot_height = std::max(layout.row, layout.row * static_cast<double>(chart.names.size()));
+  layout.height = layout.top + layout.plot_height + 46.0;
+  layout.plot_width = std::max(20.0, chart.width - layout.left - right);
+  layout.max_value = 0.0;
+  for (double v : chart.values) {
+    if (std::isfinite(v)) layout.max_value = std::max(layout.max_value, v);
+  }
+  if (layout.max_value <= 0.0) layout.max_value = 1.0;
+  return layout;
+}
+
+void DrawBarChart(const BarChart& chart, const BarChartLayout& layout, PlotCanvas* canvas) {
+  const double left = layout.left, top = layout.top;
+  const std::vector<double> ticks =
+      LinearTicks(0.0, layout.max_value, std::max(2, static_cast<int>(layout.plot_width / 90.0)));
+  const double step = TickStep(ticks);
+  const double bottom = top + layout.plot_height;
+  for (double t : ticks) {
+    canvas->Line(layout.X(t), top, layout.X(t), bottom, {kGridColor, 1.0});
+    canvas->Line(layout.X(t), bottom, layout.X(t), bottom + 5, {kTickColor, 1.0});
+    canvas->Text(layout.X(t), bottom + 18, FormatTick(t, step), Anchored(TextAnchor::kMiddle));
+  }
+  for (size_t i = 0; i < chart.names.size(); ++i) {
+    const double y = top + layout.row * static_cast<double>(i) + 3.0;
+    const double v = std::isfinite(chart.values[i]) ? chart.values[i] : 0.0;
+    PlotRectStyle bar = Filled(chart.color);
+    bar.css_class = "bar";
+    canvas->Rect(left, y, layout.X(v) - left, chart.bar_height, bar);
+    canvas->Text(left - 6, y + chart.bar_height * 0.5 + 4, chart.names[i],
+                 Anchored(TextAnchor::kEnd));
+    canvas->Text(layout.X(v) + 4, y + chart.bar_height * 0.5 + 4,
+                 FormatValue(v, chart.value_decimals), Anchored(TextAnchor::kStart));
+  }
+  canvas->Line(left, top, left, bottom, {kTickColor, 1.0});
+  canvas->Line(left, bottom, left + layout.plot_width, bottom, {kTickColor, 1.0});
+  if (!chart.title.empty()) canvas->Text(0.5 * chart.width, 22, chart.title, TitleStyle());
+  if (!chart.value_label.empty()) {
+    canvas->Text(left + 0.5 * layout.plot_width, bottom + 38, chart.value_label,
+                 Anchored(TextAnchor::kMiddle));
+  }
+}
+
+void WriteBytes(const std::filesystem::path& path, const std::vector<uint8_t>& bytes) {
+  WriteFileAtomically(path, [&bytes](std::ostream& out) {
+    out.write(reinterpret_cast<const char*>(bytes.data()),
+              static_cast<std::streamsize>(bytes.size()));
+  });
+}
+
+}  // namespace
+
+std::string RenderSvg(const Figure& figure) {
   SvgWriter svg(figure.width, figure.height);
-  DrawAxes(figure, axes, &svg);
-  DrawSeries(figure, axes, &svg);
-  DrawReferenceLines(figure, axes, &svg);
-  DrawColorBar(figure, axes, &svg);
-  DrawLegend(figure, axes, &svg);
+  DrawFigure(figure, &svg);
   return svg.Finish();
 }
 
 std::string RenderSvg(const BarChart& chart) {
-  VIOSFM_CHECK_EQ(chart.names.size(), chart.values.size());
-  size_t longest = 4;
-  for (const std::string& name : chart.names) longest = std::max(longest, name.size());
-  const double left = std::clamp(14.0 + kCharWidth * static_cast<double>(longest), 60.0, 280.0);
-  const double right = 80.0;  // the value text
-  const double top = chart.title.empty() ? kTopMarginPlain : kTopMarginTitle;
-  const double row = chart.bar_height + 6.0;
-  const double plot_height = std::max(row, row * static_cast<double>(chart.names.size()));
-  const double height = top + plot_height + 46.0;
-  const double plot_width = std::max(20.0, chart.width - left - right);
-
-  double max_value = 0.0;
-  for (double v : chart.values) {
-    if (std::isfinite(v)) max_value = std::max(max_value, v);
-  }
-  if (max_value <= 0.0) max_value = 1.0;
-  auto px = [&](double v) { return left + std::max(0.0, v) / max_value * plot_width; };
-
-  SvgWriter svg(chart.width, height);
-  const std::vector<double> ticks =
-      LinearTicks(0.0, max_value, std::max(2, static_cast<int>(plot_width / 90.0)));
-  const double step = TickStep(ticks);
-  const double bottom = top + plot_height;
-  for (double t : ticks) {
-    svg.Line(px(t), top, px(t), bottom, "#e6e6e6", 1.0);
-    svg.Line(px(t), bottom, px(t), bottom + 5, "#333333", 1.0);
-    svg.Text(px(t), bottom + 18, FormatTick(t, step), "middle");
-  }
-  for (size_t i = 0; i < chart.names.size(); ++i) {
-    const double y = top + row * static_cast<double>(i) + 3.0;
-    const double v = std::isfinite(chart.values[i]) ? chart.values[i] : 0.0;
-    svg.Rect(left, y, px(v) - left, chart.bar_height, chart.color.Hex(), "class=\"bar\"");
-    svg.Text(left - 6, y + chart.bar_height * 0.5 + 4, chart.names[i], "end");
-    svg.Text(px(v) + 4, y + chart.bar_height * 0.5 + 4, FormatValue(v, chart.value_decimals),
-             "start");
-  }
-  svg.Line(left, top, left, bottom, "#333333", 1.0);
-  svg.Line(left, bottom, left + plot_width, bottom, "#333333", 1.0);
-  if (!chart.title.empty()) {
-    svg.Text(0.5 * chart.width, 22, chart.title, "middle", "font-size=\"14\" font-weight=\"bold\"");
-  }
-  if (!chart.value_label.empty()) {
-    svg.Text(left + 0.5 * plot_width, bottom + 38, chart.value_label, "middle");
-  }
+  const BarChartLayout layout = LayOut(chart);
+  SvgWriter svg(chart.width, layout.height);
+  DrawBarChart(chart, layout, &svg);
   return svg.Finish();
+}
+
+std::vector<uint8_t> RenderPng(const Figure& figure, double scale) {
+  PngCanvas png(figure.width, figure.height, scale);
+  DrawFigure(figure, &png);
+  return png.Encode();
+}
+
+std::vector<uint8_t> RenderPng(const BarChart& chart, double scale) {
+  const BarChartLayout layout = LayOut(chart);
+  PngCanvas png(chart.width, layout.height, scale);
+  DrawBarChart(chart, layout, &png);
+  return png.Encode();
 }
 
 void WriteSvg(const std::filesystem::path& path, const Figure& figure) {
@@ -616,6 +719,14 @@ void WriteSvg(const std::filesystem::path& path, const Figure& figure) {
 void WriteSvg(const std::filesystem::path& path, const BarChart& chart) {
   const std::string text = RenderSvg(chart);
   WriteFileAtomically(path, [&text](std::ostream& out) { out << text; });
+}
+
+void WritePng(const std::filesystem::path& path, const Figure& figure, double scale) {
+  WriteBytes(path, RenderPng(figure, scale));
+}
+
+void WritePng(const std::filesystem::path& path, const BarChart& chart, double scale) {
+  WriteBytes(path, RenderPng(chart, scale));
 }
 
 }  // namespace viosfm

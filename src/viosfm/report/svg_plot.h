@@ -15,7 +15,8 @@
 //
 // Output is deterministic: coordinates are written with 2 decimals, tick
 // labels with the decimals their step needs. No scripts, no external files:
-// the SVG can be inlined into an HTML page.
+// the SVG can be inlined into an HTML page. The same layout is also drawn as
+// a PNG (report/plot_canvas.h).
 #pragma once
 
 #include <cstdint>
@@ -123,9 +124,17 @@ std::string FormatTick(double value, double step);
 std::string RenderSvg(const Figure& figure);
 std::string RenderSvg(const BarChart& chart);
 
-// Write RenderSvg(...) atomically to `path`.
+// The same figure as a PNG file's bytes, drawn with OpenCV (anti-aliased
+// lines, OpenCV's Hershey font), `scale` device pixels a figure pixel
+// (default 2: sharp on high-density screens and in documents).
+std::vector<uint8_t> RenderPng(const Figure& figure, double scale = 2.0);
+std::vector<uint8_t> RenderPng(const BarChart& chart, double scale = 2.0);
+
+// Write RenderSvg(...) / RenderPng(...) atomically to `path`.
 void WriteSvg(const std::filesystem::path& path, const Figure& figure);
 void WriteSvg(const std::filesystem::path& path, const BarChart& chart);
+void WritePng(const std::filesystem::path& path, const Figure& figure, double scale = 2.0);
+void WritePng(const std::filesystem::path& path, const BarChart& chart, double scale = 2.0);
 
 // Escapes &, <, >, " and ' for XML text and attribute values.
 std::string XmlEscape(const std::string& text);

@@ -1,13 +1,19 @@
 #include "viosfm/report/viewer_3d.h"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <sstream>
 
 #include "viosfm/report/svg_plot.h"
+#include "viosfm/sensor/camera_models.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/file_util.h"
 
@@ -17,6 +23,8 @@ namespace {
 namespace fs = std::filesystem;
 
 const char* kThreeFile = "three.min.js";
+// A frame turned this much from the last frustum drawn gets its own.
+constexpr double kMinFrustumTurnDeg = 30.0;
 const char* kOrbitControlsFile = "examples/js/controls/OrbitControls.js";
 
 std::string Base64(const std::vector<uint8_t>& bytes) {
@@ -75,12 +83,13 @@ std::string ScriptSafe(const std::string& text) {
   return out;
 }
 
-// The viewer; VIOSFM_SCENE holds the data.
+// The viewer; VIOSFM_SCENE holds the data (RenderViewer3d).
 const char* kViewerScript = R"JS(
 (function () {
   var d = VIOSFM_SCENE;
-  var canvas = document.getElementById('viewer3d-canvas');
-  var status = document.getElementById('viewer3d-status');
+  var $ = function (id) { return document.getElementById(id); };
+  var canvas = $('viewer3d-canvas');
+  var status = $('viewer3d-status');
   function decode(text, Type) {
     var s = atob(text), bytes = new Uint8Array(s.length);
     for (var i = 0; i < s.length; ++i) bytes[i] = s.charCodeAt(i);
@@ -88,10 +97,17 @@ const char* kViewerScript = R"JS(
   }
   function geometry(positions, colors) {
     var g = new THREE.BufferGeometry();
-    var set = (g.setAttribute || g.addAttribute).bind(g);
-    set('position', new THREE.BufferAttribute(decode(positions, Float32Array), 3));
-    if (colors) set('color', new THREE.BufferAttribute(decode(colors, Uint8Array), 3, true));
+    g.setAttribute('position', new THREE.BufferAttribute(positions, 3));
+    if (colors) g.setAttribute('color', new THREE.BufferAttribute(colors, 3, true));
     return g;
+  }
+  // matplotlib's viridis at 0, 1/8, ..., 1 (as report/svg_plot.h's ColorMap).
+  var stops = [[68,1,84],[72,40,120],[62,73,137],[49,104,142],[38,130,142],[31,158,137],
+               [53,183,121],[110,206,88],[253,231,37]];
+  function colorMap(t, out, k) {
+    t = Math.min(1, Math.max(0, t || 0)) * (stops.length - 1);
+    var i = Math.min(Math.floor(t), stops.length - 2), f = t - i;
+    for (var c = 0; c < 3; ++c) out[k + c] = Math.round((1 - f) * stops[i][c] + f * stops[i + 1][c]);
   }
   var renderer;
   try {
@@ -105,25 +121,104 @@ const char* kViewerScript = R"JS(
   renderer.setSize(d.width, d.height, false);
   renderer.setClearColor(0x1e1e1e, 1);
   var scene = new THREE.Scene();
+  var layers = {points: new THREE.Group(), cameras: new THREE.Group(), path: new THREE.Group(),
+                grid: new THREE.Group()};
+  for (var name in layers) scene.add(layers[name]);
+
+  // Points, coloured by height or by the images' colour.
+  var pointPositions = decode(d.points, Float32Array);
+  var imageColors = d.has_point_colors ? decode(d.point_colors, Uint8Array) : null;
+  var heightColors = new Uint8Array(d.num_points * 3);
+  for (var i = 0; i < d.num_points; ++i) {
+    colorMap((pointPositions[3 * i + 2] - d.height_min) / (d.height_max - d.height_min),
+             heightColors, 3 * i);
+  }
+  var pointGeometry = geometry(pointPositions, heightColors);
   if (d.num_points > 0) {
-    scene.add(new THREE.Points(geometry(d.points, d.point_colors),
+    layers.points.add(new THREE.Points(pointGeometry,
         new THREE.PointsMaterial({size: 2, sizeAttenuation: false,
                                   vertexColors: THREE.VertexColors})));
   }
+  function setColorMode(mode) {
+    var colors = mode === 'image' && imageColors ? imageColors : heightColors;
+    pointGeometry.setAttribute('color', new THREE.BufferAttribute(colors, 3, true));
+    $('viewer3d-height-legend').style.visibility = colors === heightColors ? 'visible' : 'hidden';
+    render();
+  }
+
+  // Camera path (coloured by its error) and the ground truth.
   if (d.num_ground_truth > 1) {
-    scene.add(new THREE.Line(geometry(d.ground_truth, null),
-                             new THREE.LineBasicMaterial({color: 0xb0b0b0})));
+    layers.path.add(new THREE.Line(geometry(decode(d.ground_truth, Float32Array), null),
+                                   new THREE.LineBasicMaterial({color: 0xb0b0b0})));
   }
   if (d.num_path > 1) {
-    scene.add(new THREE.Line(geometry(d.path, d.path_colors),
-                             new THREE.LineBasicMaterial({vertexColors: THREE.VertexColors})));
-    scene.add(new THREE.Points(geometry(d.path, d.path_colors),
-        new THREE.PointsMaterial({size: 4, sizeAttenuation: false,
-                                  vertexColors: THREE.VertexColors})));
+    var pathGeometry = geometry(decode(d.path, Float32Array), decode(d.path_colors, Uint8Array));
+    layers.path.add(new THREE.Line(pathGeometry,
+        new THREE.LineBasicMaterial({vertexColors: THREE.VertexColors})));
   }
+
+  // Frustums: per frame its centre, the image's corners (top-left, top-right,
+  // bottom-right, bottom-left) at depth d.frustum_depth and the tip of a tick
+  // on the top edge.
+  var frustum = decode(d.frustums, Float32Array);
+  var edges = [[0,1],[0,2],[0,3],[0,4],[1,2],[2,3],[3,4],[4,1],[1,5],[5,2]];
+  // The clicked frustum is drawn over the others (no depth test): it lies
+  // exactly on its orange lines.
+  function frustumLines(indices, color, onTop) {
+    var positions = new Float32Array(indices.length * edges.length * 6), k = 0;
+    indices.forEach(function (f) {
+      edges.forEach(function (e) {
+        for (var end = 0; end < 2; ++end) {
+          for (var c = 0; c < 3; ++c) positions[k++] = frustum[(6 * f + e[end]) * 3 + c];
+        }
+      });
+    });
+    var lines = new THREE.LineSegments(geometry(positions, null),
+        new THREE.LineBasicMaterial({color: color, depthTest: !onTop}));
+    if (onTop) lines.renderOrder = 1;
+    return lines;
+  }
+  var all = [];
+  for (var f = 0; f < d.frames.length; ++f) all.push(f);
+  if (all.length > 0) layers.cameras.add(frustumLines(all, 0xff8c1a));
+  var selectedLines = null;
+
+  // Grid on the floor and the world's axes at its origin.
+  var grid = new THREE.GridHelper(d.grid.size, Math.round(d.grid.size / d.grid.spacing),
+                                  0x8a8a8a, 0x4a4a4a);
+  grid.rotation.x = Math.PI / 2;  // GridHelper lies in x-z; the floor is x-y
+  grid.position.set(d.grid.center[0], d.grid.center[1], d.grid.z);
+  layers.grid.add(grid);
+  var axisColors = [0xe53935, 0x43a047, 0x1e88e5];
+  var axisNames = ['x', 'y', d.gravity_up ? 'z (up)' : 'z'];
+  var origin = new THREE.Vector3(d.origin[0], d.origin[1], d.origin[2]);
+  for (var a = 0; a < 3; ++a) {
+    var direction = new THREE.Vector3(a === 0 ? 1 : 0, a === 1 ? 1 : 0, a === 2 ? 1 : 0);
+    var length = d.grid.spacing;
+    layers.grid.add(new THREE.ArrowHelper(direction, origin, length, axisColors[a],
+                                          0.25 * length, 0.12 * length));
+    layers.grid.add(label(axisNames[a], axisColors[a],
+        origin.clone().add(direction.clone().multiplyScalar(1.25 * length)), 0.3 * length));
+  }
+  function label(text, color, position, height) {
+    var c = document.createElement('canvas');
+    c.width = 256; c.height = 64;
+    var g = c.getContext('2d');
+    g.font = 'bold 44px sans-serif';
+    g.fillStyle = '#' + ('000000' + color.toString(16)).slice(-6);
+    g.textBaseline = 'middle';
+    g.fillText(text, 4, 32);
+    var sprite = new THREE.Sprite(new THREE.SpriteMaterial({map: new THREE.CanvasTexture(c),
+                                                            depthTest: false}));
+    sprite.scale.set(4 * height, height, 1);
+    sprite.position.copy(position);
+    sprite.center.set(0, 0.5);
+    return sprite;
+  }
+
   var r = d.radius;
   var camera = new THREE.PerspectiveCamera(50, d.width / d.height, r / 1000, r * 100);
-  camera.up.set(0, 0, 1);  // the world is gravity-aligned, z up
+  camera.up.set(0, 0, 1);
   camera.position.set(1.0 * r, -1.35 * r, 0.95 * r);
   var controls = new THREE.OrbitControls(camera, canvas);
   controls.target.set(0, 0, 0);
@@ -131,20 +226,165 @@ const char* kViewerScript = R"JS(
   function render() { renderer.render(scene, camera); }
   controls.addEventListener('change', render);
   controls.update();
-  render();
+
+  // Where a frame's frustum is on the canvas (CSS px from its top-left): the
+  // centre of its image rectangle.
+  function screenPosition(f) {
+    var p = new THREE.Vector3();
+    for (var corner = 1; corner <= 4; ++corner) {
+      p.x += frustum[(6 * f + corner) * 3] / 4;
+      p.y += frustum[(6 * f + corner) * 3 + 1] / 4;
+      p.z += frustum[(6 * f + corner) * 3 + 2] / 4;
+    }
+    var rect = canvas.getBoundingClientRect();
+    var inFront = p.clone().applyMatrix4(camera.matrixWorldInverse).z < 0;
+    p.project(camera);
+    return {x: (p.x + 1) / 2 * rect.width, y: (1 - p.y) / 2 * rect.height, visible: inFront &&
+            Math.abs(p.x) <= 1 && Math.abs(p.y) <= 1};
+  }
+  function select(f) {
+    if (selectedLines) layers.cameras.remove(selectedLines);
+    selectedLines = frustumLines([f], 0xffff00, true);
+    layers.cameras.add(selectedLines);
+    var frame = d.frames[f];
+    var panel = $('viewer3d-frame');
+    var image = $('viewer3d-frame-image');
+    if (frame.thumbnail) {
+      image.src = 'data:image/jpeg;base64,' + frame.thumbnail;
+      image.hidden = false;
+    } else {
+      image.removeAttribute('src');
+      image.hidden = true;
+    }
+    $('viewer3d-frame-caption').textContent = frame.name +
+        (frame.time_s !== null ? ' (' + frame.time_s.toFixed(2) + ' s)' : '') +
+        (frame.thumbnail ? '' : ': its image was not found at ' + frame.image_path);
+    panel.hidden = false;
+    panel.setAttribute('data-frame', String(f));
+    render();
+  }
+  // A click (a press and release within 5 px) picks the nearest frustum
+  // within 14 px of it.
+  var down = null;
+  canvas.addEventListener('pointerdown', function (e) { down = [e.clientX, e.clientY]; });
+  canvas.addEventListener('pointerup', function (e) {
+    if (!down || Math.hypot(e.clientX - down[0], e.clientY - down[1]) > 5) return;
+    if (!layers.cameras.visible) return;
+    var rect = canvas.getBoundingClientRect();
+    var x = e.clientX - rect.left, y = e.clientY - rect.top, best = -1, bestDistance = 14;
+    for (var f = 0; f < d.frames.length; ++f) {
+      var s = screenPosition(f);
+      var distance = Math.hypot(s.x - x, s.y - y);
+      if (s.visible && distance < bestDistance) { best = f; bestDistance = distance; }
+    }
+    if (best >= 0) select(best);
+  });
+  $('viewer3d-frame-close').addEventListener('click', function () {
+    $('viewer3d-frame').hidden = true;
+    if (selectedLines) layers.cameras.remove(selectedLines);
+    selectedLines = null;
+    render();
+  });
+  ['points', 'cameras', 'path', 'grid'].forEach(function (name) {
+    $('viewer3d-show-' + name).addEventListener('change', function (e) {
+      layers[name].visible = e.target.checked;
+      render();
+    });
+  });
+  document.querySelectorAll('input[name="viewer3d-color"]').forEach(function (input) {
+    input.addEventListener('change', function (e) { setColorMode(e.target.value); });
+  });
+  setColorMode(d.has_point_colors ? 'image' : 'height');
+
+  window.viosfmViewer = {
+    numFrames: d.frames.length,
+    render: render,
+    setColorMode: function (mode) {
+      var input = document.querySelector('input[name="viewer3d-color"][value="' + mode + '"]');
+      if (input) input.checked = true;
+      setColorMode(mode);
+    },
+    setVisible: function (name, visible) {
+      $('viewer3d-show-' + name).checked = visible;
+      layers[name].visible = visible;
+      render();
+    },
+    screenPosition: screenPosition,
+    selected: function () {
+      var panel = $('viewer3d-frame');
+      return panel.hidden ? -1 : Number(panel.getAttribute('data-frame'));
+    }
+  };
   status.textContent = d.num_points + ' of ' + d.total_points + ' points, ' + d.num_path +
-      ' poses. Drag to rotate, scroll to zoom, right-drag or shift-drag to pan.';
+      ' poses, ' + d.frames.length + ' cameras. Drag to rotate, scroll to zoom, right-drag or ' +
+      'shift-drag to pan; click a camera to see its image.';
   canvas.setAttribute('data-rendered', 'true');
-  if (window.location.hash === '#viewer-selftest') {
-    document.getElementById('viewer3d-selftest').textContent = canvas.toDataURL('image/png');
+  // #viewer-selftest-click first clicks (as a user's press and release) the
+  // visible frustum nearest the canvas's centre.
+  if (window.location.hash === '#viewer-selftest-click') {
+    var rect = canvas.getBoundingClientRect(), target = -1, nearest = Infinity;
+    for (var f = 0; f < d.frames.length; ++f) {
+      var s = screenPosition(f);
+      var distance = Math.hypot(s.x - rect.width / 2, s.y - rect.height / 2);
+      if (s.visible && distance < nearest) { target = f; nearest = distance; }
+    }
+    if (target >= 0) {
+      var at = screenPosition(target);
+      ['pointerdown', 'pointerup'].forEach(function (type) {
+        canvas.dispatchEvent(new PointerEvent(type, {clientX: rect.left + at.x,
+            clientY: rect.top + at.y, bubbles: true}));
+      });
+    }
+    $('viewer3d-selftest').setAttribute('data-clicked', String(target));
+  }
+  if (window.location.hash.indexOf('#viewer-selftest') === 0) {
+    $('viewer3d-selftest').textContent = canvas.toDataURL('image/png');
   }
 })();
 )JS";
 
+const char* kViewerStyle = R"CSS(
+#viewer3d .controls { font-size: 13px; margin: 6px 0; }
+#viewer3d .controls label { margin-right: 10px; }
+#viewer3d .stage { position: relative; display: inline-block; max-width: 100%; }
+#viewer3d-frame { position: absolute; top: 8px; right: 8px; width: 330px; margin: 0;
+  background: rgba(255, 255, 255, 0.95); border: 1px solid #888; padding: 6px; font-size: 12px; }
+#viewer3d-frame img { width: 100%; display: block; }
+#viewer3d-frame button { float: right; }
+#viewer3d-height-legend span { display: inline-block; width: 160px; height: 10px; vertical-align: middle; }
+)CSS";
+
+struct Extent {
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();
+  double radius = 1.0;
+};
+
+// The centre (median per axis of the points, else of the path) and a radius
+// holding 90 % of the points and the path.
+Extent SceneExtent(const std::vector<Eigen::Vector3d>& points,
+                   const std::vector<Eigen::Vector3d>& path) {
+  Extent extent;
+  const std::vector<Eigen::Vector3d>& reference = points.empty() ? path : points;
+  if (reference.empty()) return extent;
+  for (int k = 0; k < 3; ++k) {
+    std::vector<double> values;
+    for (const Eigen::Vector3d& p : reference) values.push_back(p[k]);
+    std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+    extent.center[k] = values[values.size() / 2];
+  }
+  std::vector<double> distances;
+  for (const Eigen::Vector3d& p : reference) distances.push_back((p - extent.center).norm());
+  for (const Eigen::Vector3d& p : path) distances.push_back((p - extent.center).norm());
+  std::sort(distances.begin(), distances.end());
+  extent.radius = std::max(1e-3, distances[distances.size() * 9 / 10]);
+  return extent;
+}
 }  // namespace
 
 std::string Viewer3dOptions::Validate() const {
   if (max_points < 1) return "max_points must be >= 1";
+  if (max_cameras < 1) return "max_cameras must be >= 1";
+  if (thumbnail_width < 0) return "thumbnail_width must be >= 0";
   if (width < 100 || height < 100) return "width and height must be >= 100 px";
   return "";
 }
@@ -157,10 +397,55 @@ std::vector<size_t> DecimationIndices(size_t n, size_t max_points) {
   return indices;
 }
 
+std::vector<size_t> SpreadFrames(const std::vector<Viewer3dFrame>& frames, double min_distance,
+                                 double min_turn_deg, size_t max_frames) {
+  std::vector<size_t> spread;
+  Rigid3d last_world_from_cam;
+  for (size_t i = 0; i < frames.size(); ++i) {
+    const Rigid3d world_from_cam = frames[i].cam_from_world.Inverse();
+    if (!spread.empty()) {
+      const double distance = (world_from_cam.translation - last_world_from_cam.translation).norm();
+      const double turn_deg =
+          world_from_cam.rotation.angularDistance(last_world_from_cam.rotation) * 180.0 / M_PI;
+      if (distance < min_distance && turn_deg < min_turn_deg) continue;
+    }
+    spread.push_back(i);
+    last_world_from_cam = world_from_cam;
+  }
+  std::vector<size_t> kept;
+  for (const size_t k : DecimationIndices(spread.size(), max_frames)) kept.push_back(spread[k]);
+  return kept;
+}
+
 bool HasThreeJs(const Viewer3dOptions& options) {
   std::error_code error;
   return fs::is_regular_file(options.three_js_dir / kThreeFile, error) &&
          fs::is_regular_file(options.three_js_dir / kOrbitControlsFile, error);
+}
+
+double GridSpacing(double radius_m) {
+  const double target = std::max(radius_m, 1e-6) / 5.0;
+  const double magnitude = std::pow(10.0, std::floor(std::log10(target)));
+  for (const double factor : {1.0, 2.0, 5.0}) {
+    if (factor * magnitude >= target * (1.0 - 1e-9)) return factor * magnitude;
+  }
+  return 10.0 * magnitude;
+}
+
+std::vector<uint8_t> MakeThumbnailJpeg(const fs::path& path, int width) {
+  std::error_code error;
+  if (width <= 0 || path.empty() || !fs::is_regular_file(path, error)) return {};
+  const cv::Mat image = cv::imread(path.string(), cv::IMREAD_COLOR);
+  if (image.empty()) return {};
+  cv::Mat small = image;
+  if (image.cols > width) {
+    const int height = std::max(
+        1, static_cast<int>(std::lround(static_cast<double>(image.rows) * width / image.cols)));
+    cv::resize(image, small, cv::Size(width, height), 0, 0, cv::INTER_AREA);
+  }
+  std::vector<uint8_t> bytes;
+  cv::imencode(".jpg", small, bytes, {cv::IMWRITE_JPEG_QUALITY, 70});
+  return bytes;
 }
 
 std::string RenderViewer3d(const Viewer3dScene& scene, const Viewer3dOptions& options) {
@@ -172,32 +457,17 @@ std::string RenderViewer3d(const Viewer3dScene& scene, const Viewer3dOptions& op
 
   // Decimated points and their colours.
   const std::vector<size_t> kept = DecimationIndices(scene.points.size(), options.max_points);
+  const bool has_colors = !scene.colors.empty() && scene.colors.size() == scene.points.size();
   std::vector<Eigen::Vector3d> points;
   std::vector<uint8_t> colors;
   for (const size_t i : kept) {
     points.push_back(scene.points[i]);
-    for (int k = 0; k < 3; ++k) {
-      colors.push_back(scene.colors.size() == scene.points.size() ? scene.colors[i][k] : 160);
-    }
+    if (has_colors) colors.insert(colors.end(), scene.colors[i].data(), scene.colors[i].data() + 3);
   }
-  // The centre (median per axis of the points, else of the path) and a
-  // radius holding 90 % of them.
-  const std::vector<Eigen::Vector3d>& reference = points.empty() ? scene.path : points;
-  Eigen::Vector3d center = Eigen::Vector3d::Zero();
-  double radius = 1.0;
-  if (!reference.empty()) {
-    for (int k = 0; k < 3; ++k) {
-      std::vector<double> values;
-      for (const Eigen::Vector3d& p : reference) values.push_back(p[k]);
-      std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
-      center[k] = values[values.size() / 2];
-    }
-    std::vector<double> distances;
-    for (const Eigen::Vector3d& p : reference) distances.push_back((p - center).norm());
-    for (const Eigen::Vector3d& p : scene.path) distances.push_back((p - center).norm());
-    std::sort(distances.begin(), distances.end());
-    radius = std::max(1e-3, distances[distances.size() * 9 / 10]);
-  }
+  const Extent extent = SceneExtent(points, scene.path);
+  const Eigen::Vector3d& center = extent.center;
+  const double radius = extent.radius;
+
   // Path colours: the error on the report's colour map, else one colour.
   double max_error = 0.0;
   for (const double e : scene.path_errors_m) max_error = std::max(max_error, e);
@@ -205,16 +475,116 @@ std::string RenderViewer3d(const Viewer3dScene& scene, const Viewer3dOptions& op
   std::vector<uint8_t> path_colors;
   for (size_t i = 0; i < scene.path.size(); ++i) {
     const Color c = by_error ? ColorMap(max_error > 0 ? scene.path_errors_m[i] / max_error : 0.0)
-                             : Color{255, 120, 30};
+                             : Color{255, 255, 255};
     path_colors.insert(path_colors.end(), {c.r, c.g, c.b});
   }
 
+  // Heights: the colour bar spans the 2nd to 98th percentile; the floor grid
+  // lies at the 2nd (below the cameras when there are no points).
+  std::vector<double> heights;
+  for (const Eigen::Vector3d& p : points) heights.push_back(p.z());
+  if (heights.empty()) {
+    for (const Eigen::Vector3d& p : scene.path) heights.push_back(p.z() - 1.0);
+  }
+  std::sort(heights.begin(), heights.end());
+  const double height_min = heights.empty() ? center.z() : heights[heights.size() * 2 / 100];
+  double height_max = heights.empty() ? center.z() + 1.0 : heights[heights.size() * 98 / 100];
+  if (!(height_max > height_min)) height_max = height_min + 1.0;
+  const double spacing = GridSpacing(radius);
+  const double grid_half = std::ceil(1.6 * radius / spacing) * spacing;
+  // Grid lines on multiples of the spacing in world coordinates.
+  const Eigen::Vector2d grid_center(std::round(center.x() / spacing) * spacing,
+                                    std::round(center.y() / spacing) * spacing);
+
+  // Frustums in the camera's own shape, a fifth of a grid cell deep, spread
+  // so that they do not overlap.
+  const double depth = 0.2 * spacing;
+  const std::vector<size_t> frame_indices =
+      SpreadFrames(scene.frames, 1.5 * depth, kMinFrustumTurnDeg, options.max_cameras);
+  const Camera& cam = scene.camera;
+  const bool has_intrinsics = cam.width > 0 && cam.height > 0 && cam.HasValidParams();
+  const double w = has_intrinsics ? static_cast<double>(cam.width) : 4.0;
+  const double h = has_intrinsics ? static_cast<double>(cam.height) : 3.0;
+  const auto ray = [&](double u, double v) -> Eigen::Vector3d {
+    if (!has_intrinsics) return Eigen::Vector3d((u - 0.5 * w) / w, (v - 0.5 * h) / w, 1.0);
+    const Eigen::Vector2d xy = ImageToCam(cam, Eigen::Vector2d(u, v));
+    return Eigen::Vector3d(xy.x(), xy.y(), 1.0);
+  };
+  const std::array<Eigen::Vector3d, 6> corners = {
+      Eigen::Vector3d::Zero(), ray(0, 0), ray(w, 0), ray(w, h), ray(0, h), ray(0.5 * w, -0.25 * h)};
+  std::vector<Eigen::Vector3d> frustum_points;
+  nlohmann::json frames = nlohmann::json::array();
+  for (const size_t i : frame_indices) {
+    const Viewer3dFrame& frame = scene.frames[i];
+    const Rigid3d world_from_cam = frame.cam_from_world.Inverse();
+    for (const Eigen::Vector3d& corner : corners) {
+      frustum_points.push_back(world_from_cam * (depth * corner));
+    }
+    const std::vector<uint8_t> thumbnail =
+        MakeThumbnailJpeg(frame.image_path, options.thumbnail_width);
+    frames.push_back({{"name", frame.name},
+                      {"time_s", frame.time_s ? nlohmann::json(*frame.time_s) : nlohmann::json()},
+                      {"image_path", frame.image_path.string()},
+                      {"thumbnail", Base64(thumbnail)}});
+  }
+
+  nlohmann::json data = {{"width", options.width},
+                         {"height", options.height},
+                         {"radius", radius},
+                         {"center", {center.x(), center.y(), center.z()}},
+                         {"origin", {-center.x(), -center.y(), -center.z()}},
+                         {"total_points", scene.points.size()},
+                         {"num_points", points.size()},
+                         {"has_point_colors", has_colors},
+                         {"height_min", height_min - center.z()},
+                         {"height_max", height_max - center.z()},
+                         {"num_path", scene.path.size()},
+                         {"num_ground_truth", scene.ground_truth_path.size()},
+                         {"gravity_up", scene.gravity_up},
+                         {"grid",
+                          {{"spacing", spacing},
+                           {"size", 2.0 * grid_half},
+                           {"center", {grid_center.x() - center.x(), grid_center.y() - center.y()}},
+                           {"z", height_min - center.z()}}},
+                         {"points", Float32Base64(points, center)},
+                         {"point_colors", Base64(colors)},
+                         {"path", Float32Base64(scene.path, center)},
+                         {"path_colors", Base64(path_colors)},
+                         {"ground_truth", Float32Base64(scene.ground_truth_path, center)},
+                         {"frustums", Float32Base64(frustum_points, center)},
+                         {"frames", frames}};
+
   std::ostringstream out;
-  out << "<div id=\"viewer3d\">\n<canvas id=\"viewer3d-canvas\" width=\"" << options.width
+  out << "<style>" << kViewerStyle << "</style>\n<div id=\"viewer3d\">\n";
+  out << "<div class=\"controls\">Colour the points by <label><input type=\"radio\" "
+         "name=\"viewer3d-color\" value=\"height\""
+      << (has_colors ? "" : " checked") << "> height</label><label><input type=\"radio\" "
+      << "name=\"viewer3d-color\" value=\"image\"" << (has_colors ? " checked" : " disabled")
+      << "> the images' colour</label> &middot; Show ";
+  for (const auto& [id, text] :
+       {std::pair{"points", "points"}, std::pair{"cameras", "cameras"},
+        std::pair{"path", "camera path"}, std::pair{"grid", "grid and axes"}}) {
+    out << "<label><input type=\"checkbox\" id=\"viewer3d-show-" << id << "\" checked> " << text
+        << "</label>";
+  }
+  out << "</div>\n<div class=\"stage\">\n<canvas id=\"viewer3d-canvas\" width=\"" << options.width
       << "\" height=\"" << options.height << "\" style=\"width:" << options.width
       << "px;height:" << options.height
-      << "px;max-width:100%;border:1px solid #ccc;touch-action:none\"></canvas>\n";
+      << "px;max-width:100%;border:1px solid #ccc;touch-action:none;display:block\"></canvas>\n";
+  out << "<figure id=\"viewer3d-frame\" hidden><button type=\"button\" id=\"viewer3d-frame-close\">"
+         "close</button><figcaption id=\"viewer3d-frame-caption\"></figcaption>"
+         "<img id=\"viewer3d-frame-image\" alt=\"the frame's image\"></figure>\n</div>\n";
   out << "<p id=\"viewer3d-status\" class=\"meta\">The 3D view needs JavaScript and WebGL.</p>\n";
+  out << "<p id=\"viewer3d-legend\" class=\"meta\">Grid: " << Number(spacing)
+      << " m cells at z = " << Number(height_min)
+      << " m (the floor: 2 % of the points lie lower); axes at the "
+      << "world's origin, " << Number(spacing) << " m long: x red, y green, z blue"
+      << (scene.gravity_up ? " (up, against gravity)" : " (the model's; no gravity: images only)")
+      << ". Cameras orange, the clicked one yellow; the tick marks the image's top edge.</p>\n";
+  out << "<p id=\"viewer3d-height-legend\" class=\"meta\">Points by height: " << Number(height_min)
+      << " m <span style=\"background:linear-gradient(to right";
+  for (int i = 0; i <= 8; ++i) out << ", " << ColorMap(i / 8.0).Hex();
+  out << ")\"></span> " << Number(height_max) << " m</p>\n";
   if (by_error) {
     out << "<p class=\"meta\">Camera path coloured by position error: <span "
            "style=\"display:inline-block;width:160px;height:10px;vertical-align:middle;"
@@ -222,21 +592,13 @@ std::string RenderViewer3d(const Viewer3dScene& scene, const Viewer3dOptions& op
     for (int i = 0; i <= 4; ++i) out << ", " << ColorMap(i / 4.0).Hex();
     out << ")\"></span> 0 to " << Number(max_error)
         << " m (Sim(3)-aligned); ground truth in grey.</p>\n";
+  } else {
+    out << "<p class=\"meta\">Camera path in white.</p>\n";
   }
   out << "<pre id=\"viewer3d-selftest\" hidden></pre>\n</div>\n";
   out << "<script>\n" << ScriptSafe(three) << "\n</script>\n";
   out << "<script>\n" << ScriptSafe(orbit) << "\n</script>\n";
-  out << "<script>\nvar VIOSFM_SCENE = {"
-      << "width: " << options.width << ", height: " << options.height
-      << ", radius: " << Number(radius) << ", center: [" << Number(center.x()) << ", "
-      << Number(center.y()) << ", " << Number(center.z()) << "]"
-      << ", total_points: " << scene.points.size() << ", num_points: " << points.size()
-      << ", num_path: " << scene.path.size()
-      << ", num_ground_truth: " << scene.ground_truth_path.size() << ",\n  points: \""
-      << Float32Base64(points, center) << "\",\n  point_colors: \"" << Base64(colors)
-      << "\",\n  path: \"" << Float32Base64(scene.path, center) << "\",\n  path_colors: \""
-      << Base64(path_colors) << "\",\n  ground_truth: \""
-      << Float32Base64(scene.ground_truth_path, center) << "\"};\n"
+  out << "<script>\nvar VIOSFM_SCENE = " << ScriptSafe(data.dump()) << ";\n"
       << kViewerScript << "</script>\n";
   return out.str();
 }
