@@ -2,8 +2,6 @@
 
 #include <atomic>
 #include <cmath>
-#include <condition_variable>
-#include <deque>
 #include <exception>
 #include <iomanip>
 #include <mutex>
@@ -14,6 +12,7 @@
 #include <vector>
 
 #include "viosfm/io/image_io.h"
+#include "viosfm/util/bounded_queue.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/logging.h"
 #include "viosfm/util/progress.h"
@@ -128,19 +127,15 @@ FeatureExtractionSummary ExtractFeatures(const Sequence& sequence, const SiftOpt
   const size_t num_workers =
       std::min(tasks.size(), static_cast<size_t>(std::max(1, options.num_threads)));
   // Bounded hand-over from the workers to this (writer) thread.
-  const size_t max_queued = 2 * num_workers;
-  std::mutex mutex;
-  std::condition_variable results_ready;
-  std::condition_variable space_ready;
-  std::deque<Result> results;
+  BoundedQueue<Result> results(2 * num_workers);
   std::atomic<size_t> next_task{0};
-  std::atomic<bool> stop{false};
+  std::atomic<size_t> num_workers_running{num_workers};
+  std::mutex error_mutex;
   std::exception_ptr worker_error;
-  size_t num_workers_running = num_workers;
 
   auto worker = [&] {
     try {
-      while (!stop) {
+      while (true) {
         const size_t t = next_task++;
         if (t >= tasks.size()) break;
         const SequenceImage& image = sequence.images[tasks[t].sequence_index];
@@ -166,20 +161,17 @@ FeatureExtractionSummary ExtractFeatures(const Sequence& sequence, const SiftOpt
             access.on_extracted(result.image_id, pixels, result.features.keypoints);
           }
         }
-        std::unique_lock<std::mutex> lock(mutex);
-        space_ready.wait(lock, [&] { return results.size() < max_queued || stop; });
-        results.push_back(std::move(result));
-        results_ready.notify_one();
+        if (!results.Push(std::move(result))) break;  // the writer stopped
       }
     } catch (...) {
-      std::lock_guard<std::mutex> lock(mutex);
-      if (!worker_error) worker_error = std::current_exception();
-      stop = true;
-      space_ready.notify_all();
+      {
+        const std::lock_guard<std::mutex> lock(error_mutex);
+        if (!worker_error) worker_error = std::current_exception();
+      }
+      results.Close();  // the other workers stop; the writer keeps what is done
     }
-    std::lock_guard<std::mutex> lock(mutex);
-    --num_workers_running;
-    results_ready.notify_one();
+    // The last worker out closes the queue: the writer takes what is left.
+    if (--num_workers_running == 0) results.Close();
   };
 
   std::vector<std::thread> threads;
@@ -189,26 +181,17 @@ FeatureExtractionSummary ExtractFeatures(const Sequence& sequence, const SiftOpt
                        show_progress ? ProgressBar::Mode::kAuto : ProgressBar::Mode::kNever);
   std::exception_ptr writer_error;
   try {
-    while (true) {
-      std::unique_lock<std::mutex> lock(mutex);
-      results_ready.wait(lock, [&] { return !results.empty() || num_workers_running == 0; });
-      if (results.empty()) break;  // every worker finished
-      Result result = std::move(results.front());
-      results.pop_front();
-      space_ready.notify_one();
-      lock.unlock();
-      database->WriteFeatures(result.image_id, result.features.keypoints,
-                              result.features.descriptors);
+    while (std::optional<Result> result = results.Pop()) {
+      database->WriteFeatures(result->image_id, result->features.keypoints,
+                              result->features.descriptors);
       ++summary.num_extracted;
-      if (result.extracted_before) ++summary.num_extracted_before;
-      summary.num_features += result.features.keypoints.size();
+      if (result->extracted_before) ++summary.num_extracted_before;
+      summary.num_features += result->features.keypoints.size();
       progress.Update();
     }
   } catch (...) {
     writer_error = std::current_exception();
-    std::lock_guard<std::mutex> lock(mutex);
-    stop = true;
-    space_ready.notify_all();
+    results.Abort();
   }
   for (std::thread& thread : threads) thread.join();
   progress.Finish();
