@@ -154,7 +154,7 @@ VisualInertialOdometry::VisualInertialOdometry(const SensorRig& rig,
   // static interval, which may lie before the first image.
   summary_.imu_noise = CheckImuNoise(
       rig_.imu_noise, imu_, summary_.static_init.is_static() ? &summary_.static_init : nullptr,
-      options_.imu_noise);
+      options_.imu_noise, rig_.CamToImuTime(first_frame_ns), rig_.CamToImuTime(last_frame_ns));
   rig_.imu_noise = summary_.imu_noise.used;
   if (summary_.imu_noise.changes.empty()) {
     VIOSFM_LOG(INFO) << "vio: " << summary_.imu_noise.message;
@@ -977,6 +977,10 @@ std::string FormatVioSummary(const VioSummary& summary) {
   }
   out << "time_offset_ns: " << summary.time_offset.offset_ns << "\n";
   out << "time_offset_estimated: " << (summary.time_offset.estimated ? "true" : "false") << "\n";
+  out << "time_offset_sigma_s: " << summary.time_offset.sigma_s
+      << "  # standard error the images and the gyro give (0: not computed)\n";
+  out << "time_offset_determined: " << (summary.time_offset.sigma_bounded ? "true" : "false")
+      << "  # false: undetermined within +-time_offset_sigma_s\n";
   out << "time_offset_message: \"" << summary.time_offset.message << "\"\n";
   out << "rolling_shutter_readout_s: " << summary.time_offset.readout_s
       << "  # 0: a global shutter\n";

@@ -343,6 +343,17 @@ struct VioOptions {
     visit({"time_offset.min_cost_reduction", "relative cost reduction needed to replace the offset",
            kShapesStoredData},
           self.time_offset.min_cost_reduction);
+    visit({"time_offset.uncertainty_range_s",
+           "s, range around the estimate searched for its standard error", kShapesStoredData},
+          self.time_offset.uncertainty_range_s);
+    visit({"time_offset.max_sigma_s",
+           "s, largest standard error with which the estimate replaces the calibration's",
+           kShapesStoredData},
+          self.time_offset.max_sigma_s);
+    visit({"time_offset.min_significance",
+           "standard errors the estimate must lie from the calibration's to replace it",
+           kShapesStoredData},
+          self.time_offset.min_significance);
     visit({"imu_noise.enabled", "check the IMU noise figures; false uses them as they are",
            kShapesStoredData},
           self.imu_noise.enabled);
@@ -358,6 +369,15 @@ struct VioOptions {
     visit(
         {"imu_noise.min_static_s", "s, shortest static interval to measure on", kShapesStoredData},
         self.imu_noise.min_static_s);
+    visit({"imu_noise.check_in_motion",
+           "raise densities below min_ratio times the high-frequency content in motion",
+           kShapesStoredData},
+          self.imu_noise.check_in_motion);
+    visit({"imu_noise.motion_span_s", "s, motion measured from its start", kShapesStoredData},
+          self.imu_noise.motion_span_s);
+    visit({"imu_noise.motion_window_s", "s, window of the in-motion measurement (median over them)",
+           kShapesStoredData},
+          self.imu_noise.motion_window_s);
     visit({"use_static_init", "try the static start first", kShapesStoredData},
           self.use_static_init);
     VisitSigmas("static_start_sigmas", self.static_start_sigmas, visit);

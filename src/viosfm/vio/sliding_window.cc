@@ -150,7 +150,6 @@ std::vector<ImuState> SlidingWindowEstimator::States() const {
 void SlidingWindowEstimator::Initialize(const ImuState& state, const InitialStateSigmas& sigmas_in,
                                         const FrameFeatures& features) {
   ClearWindow();
-  rejected_tracks_.clear();
   InitialStateSigmas sigmas = sigmas_in;
   restart_ns_ = state.timestamp_ns;
   relocalization_observations_ = 0;
@@ -625,9 +624,13 @@ void SlidingWindowEstimator::RemoveOutliers(const std::vector<Landmark*>& landma
       }
     }
     if (bad) {
-      // Drop the track for good: its observations are probably wrong.
+      // The landmark and the track's observations in the window are
+      // dropped; the track's next observation starts a new landmark. A
+      // track that drifted is rejected again once it has parallax; a good
+      // one rejected under a wrong state (a wrong time offset, a stretch on
+      // the IMU alone) comes back instead of holding one of the tracker's
+      // corners without ever being used.
       const uint64_t track_id = landmark->track_id;
-      rejected_tracks_.insert(track_id);
       for (auto& frame : frames_) frame->observations.erase(track_id);
       landmarks_.erase(track_id);
     }
@@ -774,7 +777,6 @@ WindowFrameEstimate SlidingWindowEstimator::AddFrame(const FrameFeatures& featur
   const ImuState predicted = frame->preintegration->Predict(previous_state);
   frame->parameters = ImuStateParameters::FromState(predicted);
   for (const FeatureObservation& observation : features.observations) {
-    if (rejected_tracks_.count(observation.track_id) > 0) continue;
     frame->observations[observation.track_id] = observation.normalized;
   }
   frame->is_keyframe = IsKeyframe(*frame, features);
