@@ -348,23 +348,61 @@ void SlidingWindowEstimator::TriangulateLandmarks() {
       frame_indices.push_back(k);
     }
     if (points.size() < 2) continue;
-    const std::optional<Eigen::Vector3d> point = TriangulateDlt(poses, points);
-    if (!point || !point->allFinite()) continue;
-    // The widest ray angle: first against the others.
-    double best_angle = 0.0;
-    for (size_t k = 1; k < frame_indices.size(); ++k) {
-      best_angle = std::max(best_angle, TriangulationAngle(centers[frame_indices.front()],
-                                                           centers[frame_indices[k]], *point));
+    // The observations from `first` on: the point, its widest ray angle
+    // (first against the others), and whether every observation lies in the
+    // depth range and within max_reprojection_error_px of it.
+    struct Triangulated {
+      Eigen::Vector3d point;
+      double angle = 0.0;
+      bool consistent = true;
+    };
+    const auto triangulate = [&](size_t first) -> std::optional<Triangulated> {
+      const std::vector<Matrix3x4d> used_poses(poses.begin() + first, poses.end());
+      const std::vector<Eigen::Vector2d> used_points(points.begin() + first, points.end());
+      const std::optional<Eigen::Vector3d> point = TriangulateDlt(used_poses, used_points);
+      if (!point || !point->allFinite()) return std::nullopt;
+      Triangulated result{*point};
+      for (size_t k = first + 1; k < frame_indices.size(); ++k) {
+        result.angle = std::max(
+            result.angle,
+            TriangulationAngle(centers[frame_indices[first]], centers[frame_indices[k]], *point));
+      }
+      for (size_t k = first; k < poses.size() && result.consistent; ++k) {
+        const Eigen::Vector3d in_cam = poses[k] * point->homogeneous();
+        if (in_cam.z() < options_.min_depth_m || in_cam.z() > options_.max_depth_m) {
+          result.consistent = false;
+        }
+        const double error_px = (in_cam.hnormalized() - points[k]).norm() * focal_length_px_;
+        if (error_px > options_.max_reprojection_error_px) result.consistent = false;
+      }
+      return result;
+    };
+    std::optional<Triangulated> triangulated = triangulate(0);
+    if (!triangulated || triangulated->angle < std::min(min_angle, fallback_angle)) continue;
+    if (!triangulated->consistent) {
+      // Some observation disagrees (the track drifted, or a frame's corners
+      // were off): the track goes on from the longest run of its newest
+      // observations that agree, its older ones dropped, so that a stretch
+      // of bad frames in the window does not hold it back until they leave.
+      size_t first = 1;
+      for (; first + 1 < points.size(); ++first) {
+        triangulated = triangulate(first);
+        if (triangulated && triangulated->consistent) break;
+      }
+      if (first + 1 >= points.size()) continue;
+      for (size_t k = 0; k < first; ++k) {
+        frames_[frame_indices[k]]->observations.erase(track_id);
+        --landmark.num_observations;
+      }
+      landmark.anchor = frames_[frame_indices[first]].get();
+      poses.erase(poses.begin(), poses.begin() + static_cast<std::ptrdiff_t>(first));
+      points.erase(points.begin(), points.begin() + static_cast<std::ptrdiff_t>(first));
+      frame_indices.erase(frame_indices.begin(),
+                          frame_indices.begin() + static_cast<std::ptrdiff_t>(first));
+      if (triangulated->angle < std::min(min_angle, fallback_angle)) continue;
     }
-    if (best_angle < std::min(min_angle, fallback_angle)) continue;
-    bool good = true;
-    for (size_t k = 0; k < poses.size() && good; ++k) {
-      const Eigen::Vector3d in_cam = poses[k] * point->homogeneous();
-      if (in_cam.z() < options_.min_depth_m || in_cam.z() > options_.max_depth_m) good = false;
-      const double error_px = (in_cam.hnormalized() - points[k]).norm() * focal_length_px_;
-      if (error_px > options_.max_reprojection_error_px) good = false;
-    }
-    if (!good) continue;
+    const std::optional<Eigen::Vector3d> point = triangulated->point;
+    const double best_angle = triangulated->angle;
     const Frame& anchor = *frames_[frame_indices.front()];
     VIOSFM_CHECK(&anchor == landmark.anchor);
     const double inverse_depth = InverseDepthOfPoint(
