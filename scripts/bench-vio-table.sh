@@ -29,7 +29,7 @@ echo "|---|---|---|---|---|---|---|"
 declare -A sums counts
 for scenario in $SCENARIOS; do
   rate=10
-  [ "$scenario" = room ] && rate=20
+  [ "$scenario" = room ] || [ "$scenario" = mav ] && rate=20
   for seed in $SEEDS; do
     seq="$WORK/${scenario}_${DURATION}s_${rate}hz_s$seed"
     if [ ! -f "$seq/simulation.yaml" ]; then
