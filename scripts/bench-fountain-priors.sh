@@ -41,59 +41,7 @@ out=$(cd "$out" && pwd)
 # ground truth as world_from_cam, its world turned so that z points up (the
 # photos are upright: up is minus the mean of the cameras' y axes), as a
 # gravity-aligned VIO's world would be.
-/usr/bin/python3 - "$data" "$out" <<'PY'
-import sys, os, numpy as np
-data, out = sys.argv[1], sys.argv[2]
-names = sorted(f[:-4] for f in os.listdir(os.path.join(data, "images")) if f.endswith(".jpg"))
-cams = []
-for n in names:
-    v = np.array(open(os.path.join(data, "gt_dense_cameras", n + ".jpg.camera")).read().split(), float)
-    K, R, C, wh = v[0:9].reshape(3, 3), v[12:21].reshape(3, 3), v[21:24], v[24:26]
-    cams.append((K, R, C, wh))
-up = -np.mean([R[:, 1] for _, R, _, _ in cams], axis=0)
-up /= np.linalg.norm(up)
-z = np.array([0.0, 0.0, 1.0])
-axis = np.cross(up, z)
-s, c = np.linalg.norm(axis), up @ z
-if s < 1e-12:
-    W = np.eye(3) if c > 0 else np.diag([1.0, -1.0, -1.0])
-else:
-    a = axis / s
-    A = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
-    W = np.eye(3) + s * A + (1 - c) * A @ A  # turns up onto z
-def quat(R):  # Hamilton, x y z w
-    w = np.sqrt(max(0.0, 1 + R[0, 0] + R[1, 1] + R[2, 2])) / 2
-    x = np.copysign(np.sqrt(max(0.0, 1 + R[0, 0] - R[1, 1] - R[2, 2])) / 2, R[2, 1] - R[1, 2])
-    y = np.copysign(np.sqrt(max(0.0, 1 - R[0, 0] + R[1, 1] - R[2, 2])) / 2, R[0, 2] - R[2, 0])
-    zq = np.copysign(np.sqrt(max(0.0, 1 - R[0, 0] - R[1, 1] + R[2, 2])) / 2, R[1, 0] - R[0, 1])
-    return x, y, zq, w
-with open(os.path.join(out, "timestamps.txt"), "w") as ts, \
-     open(os.path.join(out, "groundtruth_cam.tum"), "w") as gt:
-    gt.write("# timestamp tx ty tz qx qy qz qw (world z up)\n")
-    for i, (n, (K, R, C, wh)) in enumerate(zip(names, cams)):
-        t = i + 1
-        ts.write(f"{n}.jpg {t}.0\n")
-        Rw, Cw = W @ R, W @ C
-        gt.write(f"{t}.000000000 {Cw[0]:.9f} {Cw[1]:.9f} {Cw[2]:.9f} " + " ".join(f"{q:.12f}" for q in quat(Rw)) + "\n")
-K, _, _, wh = cams[0]
-with open(os.path.join(out, "camera.yaml"), "w") as f:
-    f.write(f"""%YAML:1.0
-sensor_type: camera
-comment: Strecha fountain-P11 (gt_dense_cameras K, no distortion)
-T_BS:
-  cols: 4
-  rows: 4
-  data: [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0]
-rate_hz: 1
-resolution: [{int(wh[0])}, {int(wh[1])}]
-camera_model: pinhole
-intrinsics: [{K[0,0]}, {K[1,1]}, {K[0,2]}, {K[1,2]}]
-distortion_model: radial-tangential
-distortion_coefficients: [0.0, 0.0, 0.0, 0.0]
-""")
-path = sum(np.linalg.norm(cams[i][2] - cams[i - 1][2]) for i in range(1, len(cams)))
-print(f"{len(names)} photos, path {path:.2f} m between the first and the last camera")
-PY
+/usr/bin/python3 "$here/scripts/lib/fountain_truth.py" "$data" "$out"
 
 ate() {  # estimate reference -> "sim3_mm se3_mm scale_error_percent" (scale error: 1 / the Sim(3) fit's - 1)
   local j=$out/eval.tmp.json sim3 se3
@@ -158,24 +106,8 @@ fi
     mkdir -p "$out/colmap/txt"
     colmap model_converter --input_path "$out/colmap/sparse/0" --output_path "$out/colmap/txt" \
       --output_type TXT > /dev/null 2>&1
-    /usr/bin/python3 - "$out" <<'PY'
-import sys, numpy as np
-out = sys.argv[1]
-stamps = dict(line.split() for line in open(f"{out}/timestamps.txt"))
-rows = []
-lines = [l for l in open(f"{out}/colmap/txt/images.txt") if not l.startswith("#")]
-for header in lines[0::2]:
-    v = header.split()
-    qw, qx, qy, qz, tx, ty, tz = map(float, v[1:8])
-    q = np.array([qw, qx, qy, qz]); w, x, y, z = q / np.linalg.norm(q)
-    R = np.array([[1-2*(y*y+z*z), 2*(x*y-z*w), 2*(x*z+y*w)], [2*(x*y+z*w), 1-2*(x*x+z*z), 2*(y*z-x*w)], [2*(x*z-y*w), 2*(y*z+x*w), 1-2*(x*x+y*y)]])
-    C = -R.T @ np.array([tx, ty, tz])
-    # world_from_cam rotation R^T: its quaternion is the conjugate
-    rows.append((float(stamps[v[9]]), C, (-x, -y, -z, w)))
-with open(f"{out}/colmap/trajectory_cam.tum", "w") as f:
-    for t, C, q in sorted(rows, key=lambda r: r[0]):
-        f.write(f"{t:.9f} {C[0]:.9f} {C[1]:.9f} {C[2]:.9f} " + " ".join(f"{c:.12f}" for c in q) + "\n")
-PY
+    /usr/bin/python3 "$here/scripts/lib/colmap_to_tum.py" "$out/colmap/txt" "$out/timestamps.txt" \
+      "$out/colmap/trajectory_cam.tum"
     read -r s e sc <<< "$(ate "$out/colmap/trajectory_cam.tum" "$out/groundtruth_cam.tum")"
     echo
     echo "COLMAP 3.8 (the same photos, exhaustive matching, K fixed): $(wc -l < "$out/colmap/trajectory_cam.tum") of 11 photos, Sim(3) ATE $s mm, $(awk '{ printf "%.0f", $1 }' "$out/colmap/seconds.txt") s"

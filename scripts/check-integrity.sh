@@ -6,19 +6,25 @@
 #      and so do two with --realtime;
 #   2. a second dataset (another seed: the same image names and stamps) into
 #      the first one's folder is refused and leaves it as it was; with
-#      --overwrite it is recomputed, as a run of it from scratch;
+#      --overwrite it is recomputed, as a run of it from scratch, the earlier
+#      report.html and export/ are gone and the user's files stay;
 #   3. SIGKILL at 5 points spread over the stages, then the same command
 #      again: no killed folder looks complete, each re-run ends identical to
 #      the uninterrupted run;
 #   4. threads: runs with --threads 2 against --threads 1 (ATE, points, poses);
 #   5. hostile inputs: the fuzz seed corpora (fuzz/corpus) and deterministic
 #      mutations of them, read through the viosfm command; a crash is any
-#      exit other than 0, 1 (usage) or 2 (input error), or a time-out.
+#      exit other than 0, 1 (usage) or 2 (input error), or a time-out;
+#   6. what a careless or hostile user tries (docs/robustness.md's table):
+#      each command's exit code, the file its message names, every file of
+#      the user's byte-identical afterwards, the peak memory where it is
+#      bounded, and for the IMU rows an input error or a model whose scale is
+#      within 1 % of the clean run's.
 #
 # Usage: scripts/check-integrity.sh [BUILD_DIR [WORK_DIR]]
 #   BUILD_DIR  default build (needs build/src/viosfm/cli/viosfm)
 #   WORK_DIR   default BUILD_DIR/integrity (emptied first); logs in WORK_DIR/logs
-# Takes about 8 minutes on 2 cores (measured 2026-11-29: 7 min 37 s). Exit status 1 if any check fails.
+# Takes about 20 minutes on 2 cores. Exit status 1 if any check fails.
 set -uo pipefail
 
 BUILD_DIR=${1:-build}
@@ -142,6 +148,16 @@ print([x['seconds'] for x in s['stages'] if x['name']=='$1'][0])"
 # Every file of a folder with its checksum.
 checksums() { (cd "$1" && find . -type f -print0 | sort -z | xargs -0 sha256sum); }
 cp -r "$WORK/ref" "$WORK/second"
+# The earlier model's report and export, and files of the user's beside and
+# inside viosfm's folders: --overwrite removes the first two, never the rest.
+"$VIOSFM" --log-level error report "$WORK/second" >/dev/null 2>&1 || fail "report of $WORK/second"
+"$VIOSFM" --log-level error export "$WORK/second" >/dev/null 2>&1 || fail "export of $WORK/second"
+echo "the user's notes" >"$WORK/second/notes.txt"
+echo "the user's plot" >"$WORK/second/vio/my_plot.svg"
+mkdir -p "$WORK/second/export/colmap_sparse/0"
+echo "COLMAP's model, the user's" >"$WORK/second/export/colmap_sparse/0/images.bin"
+user_files=(notes.txt vio/my_plot.svg export/colmap_sparse/0/images.bin)
+user_before=$(cd "$WORK/second" && sha256sum "${user_files[@]}")
 before=$(checksums "$WORK/second")
 run second_refused "$WORK/simB" "$WORK/second" --threads 1
 code=$?
@@ -164,6 +180,16 @@ if result=$(compare "$WORK/freshB" "$WORK/second"); then
   say "second dataset into the same folder: $refused; with --overwrite recomputed ($extracted), as a run of it from scratch: $result"
 else
   fail "second dataset with --overwrite: $result"
+fi
+stale=""
+for file in report.html export/transforms.json export/database.db export/sparse/0/images.bin; do
+  [[ -e "$WORK/second/$file" ]] && stale="$stale $file"
+done
+if [[ -z $stale && "$(cd "$WORK/second" && sha256sum "${user_files[@]}")" == "$user_before" ]]; then
+  overwrite_row="--overwrite removed the earlier report.html and export/ (viosfm's), kept the user's ${#user_files[@]} files byte for byte"
+  say "  $overwrite_row"
+else
+  fail "--overwrite: stale files left:${stale:- none}; the user's files $( [[ "$(cd "$WORK/second" && sha256sum "${user_files[@]}" 2>&1)" == "$user_before" ]] && echo unchanged || echo CHANGED)"
 fi
 
 # ----------------------------------------------------------- 3. SIGKILL points
@@ -418,6 +444,332 @@ if [[ $num_crashes -eq 0 ]]; then
 else
   fail "hostile inputs: $num_crashes crashes of $num_runs commands:$crashes"
 fi
+
+# ------------------------------------------- 6. what a careless or hostile user tries
+# The rows of docs/robustness.md's table "What a careless or hostile user
+# tried": each command must give its exit code, its message must name the
+# file (or the flag) at fault, and every file below the folders it lists
+# (none of them written by viosfm) must be byte-identical afterwards; an IMU
+# row passes with an input error or with a model whose metric scale (Sim(3)
+# against the ground truth) is within 1 % of the clean run's.
+A=$WORK/attacks
+mkdir -p "$A"
+SEQ=$WORK/simA
+num_rows=0
+num_rows_ok=0
+# Every file and link below the given paths with its checksum.
+tree_sums() {
+  local path
+  for path in "$@"; do
+    if [[ ! -e $path ]]; then
+      echo "absent $path"
+      continue
+    fi
+    (cd "$path" && find . \( -type f -o -type l \) -print0 | sort -z | xargs -0 -r sha256sum --)
+  done
+}
+# The line a user reads: the error, else the first warning.
+message_of() { grep -m1 "^error:" "$1" || grep -m1 "^W " "$1" || true; }
+row_result() {  # NAME ok|bad DETAIL
+  num_rows=$((num_rows + 1))
+  if [[ $2 == ok ]]; then
+    num_rows_ok=$((num_rows_ok + 1))
+    say "  $1: $3"
+  else
+    fail "attack $1: $3"
+  fi
+}
+# measured LOG ARGS...: viosfm ARGS with its output in LOG; prints its exit
+# code and its peak resident memory (MB).
+measured() {
+  local log=$1
+  shift
+  python3 - "$log" "$VIOSFM" "$@" <<'PY'
+import resource, subprocess, sys
+log, command = sys.argv[1], sys.argv[2:]
+with open(log, "w") as out:
+    code = subprocess.call(command, stdout=out, stderr=subprocess.STDOUT)
+print(code, int(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024))
+PY
+}
+# attack NAME CODE NAMED KEEP... -- ARGS...: viosfm ARGS must exit with
+# CODE, name NAMED in its output, leave every file below each KEEP path as it
+# was, and (with LIMIT_MB set) stay below LIMIT_MB of resident memory.
+attack() {
+  local name=$1 code=$2 named=$3
+  shift 3
+  local keep=()
+  while [[ $1 != -- ]]; do
+    keep+=("$1")
+    shift
+  done
+  shift
+  local log=$LOGS/attack_$name.log before after got peak problems=""
+  before=$(tree_sums "${keep[@]}")
+  read -r got peak < <(measured "$log" "$@")
+  after=$(tree_sums "${keep[@]}")
+  [[ $got -eq $code ]] || problems+="exit $got (expected $code); "
+  grep -qF -- "$named" "$log" || problems+="the message does not name '$named'; "
+  [[ "$before" == "$after" ]] || problems+="files viosfm did not write changed; "
+  [[ -z ${LIMIT_MB:-} || $peak -le ${LIMIT_MB:-0} ]] || problems+="peak memory $peak MB > $LIMIT_MB MB; "
+  if [[ -z $problems ]]; then
+    row_result "$name" ok "exit $got, peak $peak MB, ${#keep[@]} folder(s) unchanged: $(message_of "$log" | cut -c1-240)"
+  else
+    row_result "$name" bad "${problems}log $log"
+  fi
+}
+# A copy of the clean dataset (images hard-linked: no command writes into a
+# dataset, and a file replaced below is a new file).
+dataset_copy() {
+  rm -rf "$A/$1"
+  cp -al "$SEQ" "$A/$1"
+}
+# replace_file FILE: FILE's content from stdin, as a new file (a hard link
+# to the clean dataset is not written through).
+replace_file() {
+  local tmp
+  tmp=$(mktemp "$1.XXXX")
+  cat >"$tmp"
+  rm -f "$1"
+  mv "$tmp" "$1"
+}
+RUN_ONE=("${RUN_ARGS[@]}" --threads 1)
+
+# The output folder of an export: never a folder of the user's, the run, or
+# a folder holding it; an earlier export is replaced, the user's files in it
+# kept.
+mkdir -p "$A/users_folder/model"
+echo "the user's notes" >"$A/users_folder/notes.txt"
+echo "the user's model" >"$A/users_folder/model/cameras.bin"
+attack export_into_a_users_folder 2 "$A/users_folder: --out" "$A/users_folder" "$WORK/ref" -- \
+  export "$WORK/ref" --out "$A/users_folder"
+attack export_into_the_run 2 "$WORK/ref: --out is the run folder itself" "$WORK/ref" -- \
+  export "$WORK/ref" --out "$WORK/ref"
+mkdir -p "$A/parent"
+cp -r "$WORK/ref" "$A/parent/run"
+echo "the user's notes" >"$A/parent/notes.txt"
+attack export_into_the_runs_parent 2 "$A/parent: --out holds the run folder" "$A/parent" -- \
+  export "$A/parent/run" --out "$A/parent"
+"$VIOSFM" --log-level error export "$WORK/ref" --out "$A/exported" >/dev/null 2>&1 ||
+  fail "export into a new folder"
+mkdir -p "$A/exported/colmap_sparse/0"
+echo "COLMAP's model, the user's" >"$A/exported/colmap_sparse/0/images.bin"
+attack export_again_into_an_earlier_export 0 "-> $A/exported" "$A/exported/colmap_sparse" "$WORK/ref" -- \
+  export "$WORK/ref" --out "$A/exported"
+
+# run --out into a folder of the user's that holds a model/, with and
+# without --overwrite.
+mkdir -p "$A/unrelated/model"
+echo "the user's model" >"$A/unrelated/model/cameras.bin"
+echo '{"mine": 1}' >"$A/unrelated/summary.json"
+attack run_into_a_users_folder 2 "$A/unrelated: --out: the folder holds files and viosfm did not make it" \
+  "$A/unrelated" "$SEQ" -- run "$SEQ" --out "$A/unrelated" "${RUN_ONE[@]}"
+attack overwrite_a_users_folder 2 "$A/unrelated: --out: the folder holds files and viosfm did not make it" \
+  "$A/unrelated" "$SEQ" -- run "$SEQ" --out "$A/unrelated" "${RUN_ONE[@]}" --overwrite
+if [[ -n ${overwrite_row:-} ]]; then
+  row_result overwrite_with_another_dataset ok "$overwrite_row (check 2)"
+else
+  row_result overwrite_with_another_dataset bad "check 2 failed"
+fi
+
+# IMU values no IMU measures: an input error naming the file and line.
+imu_value() {  # NAME LINE COLUMN VALUE
+  dataset_copy "$1"
+  python3 - "$SEQ/mav0/imu0/data.csv" "$2" "$3" "$4" <<'PY' | replace_file "$A/$1/mav0/imu0/data.csv"
+import sys
+path, line, column, value = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), sys.argv[4]
+lines = open(path).read().split("\n")
+fields = lines[line - 1].split(",")
+fields[column] = value
+lines[line - 1] = ",".join(fields)
+sys.stdout.write("\n".join(lines))
+PY
+  attack "$1" 2 "$A/$1/mav0/imu0/data.csv:$2: " "$A/$1" -- run "$A/$1" --out "$A/out_$1" "${RUN_ONE[@]}"
+}
+imu_value imu_accel_1e6 201 6 1e6
+imu_value imu_gyro_1e308 301 2 1e308
+imu_value imu_accel_1e30 401 4 -1e30
+imu_value imu_gyro_1e12 501 1 1e12
+
+# Calibrations no camera has: an input error naming sensor.yaml and the line.
+calibration() {  # NAME PYTHON-REPLACEMENT
+  dataset_copy "$1"
+  python3 -c "import re,sys; t=open(sys.argv[1]).read(); sys.stdout.write($2)" \
+    "$SEQ/mav0/cam0/sensor.yaml" | replace_file "$A/$1/mav0/cam0/sensor.yaml"
+  attack "$1" 2 "$A/$1/mav0/cam0/sensor.yaml:" "$A/$1" -- run "$A/$1" --out "$A/out_$1" "${RUN_ONE[@]}"
+}
+calibration calibration_principal_point \
+  're.sub(r"intrinsics: \[([^,]*), ([^,]*), [^,]*, [^\]]*\]", r"intrinsics: [\1, \2, -5000, 1e9]", t)'
+calibration calibration_distortion_1e200 \
+  're.sub(r"distortion_coefficients: \[[^,]*,", "distortion_coefficients: [1e200,", t)'
+calibration calibration_translation_1e300 \
+  're.sub(r"data: \[([^,]*), ([^,]*), ([^,]*), [^,]*,", r"data: [\1, \2, \3, 1e300,", t, count=1)'
+# A key twice in a yaml; an image under two stamps.
+calibration duplicate_yaml_key 't + "\nrate_hz: 20\n"'
+dataset_copy image_under_two_stamps
+python3 - "$SEQ/mav0/cam0/data.csv" <<'PY' | replace_file "$A/image_under_two_stamps/mav0/cam0/data.csv"
+import sys
+lines = open(sys.argv[1]).read().split("\n")
+stamp = lines[5].split(",")[0]
+lines[5] = stamp + "," + lines[4].split(",")[1]  # line 6 names line 5's image
+sys.stdout.write("\n".join(lines))
+PY
+attack image_under_two_stamps 2 "$A/image_under_two_stamps/mav0/cam0/data.csv:6: image" \
+  "$A/image_under_two_stamps" -- run "$A/image_under_two_stamps" --out "$A/out_two_stamps" "${RUN_ONE[@]}"
+
+# An image replaced by another of the same byte size (one pixel changed, the
+# PNG padded to its old size), then the same command again: refused, naming it.
+dataset_copy replaced
+image=$(sed -n 4p "$SEQ/mav0/cam0/data.csv" | cut -d, -f2 | tr -d '\r ')
+python3 - "$SEQ/mav0/cam0/data/$image" <<'PY' | replace_file "$A/replaced/mav0/cam0/data/$image"
+import struct, sys, zlib
+data = open(sys.argv[1], "rb").read()
+chunks, pos = [], 8
+while pos < len(data):
+    length = struct.unpack(">I", data[pos:pos + 4])[0]
+    chunks.append((data[pos + 4:pos + 8], data[pos + 8:pos + 8 + length]))
+    pos += 12 + length
+width, height = struct.unpack(">II", chunks[0][1][:8])
+raw = bytearray(zlib.decompress(b"".join(body for kind, body in chunks if kind == b"IDAT")))
+row = height // 2 * (width + 1)  # 8-bit grey: a filter byte, then the row
+raw[row:row + width + 1] = bytes(width + 1)  # the middle row black, unfiltered
+def chunk(kind, body):
+    return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body))
+head = data[:8] + b"".join(chunk(k, b) for k, b in chunks if k not in (b"IDAT", b"IEND"))
+def deflate(level, strategy):
+    stream = zlib.compressobj(level, zlib.DEFLATED, 15, 9, strategy)
+    return stream.compress(bytes(raw)) + stream.flush()
+idat = min((deflate(level, strategy) for level in range(1, 10)
+            for strategy in (zlib.Z_DEFAULT_STRATEGY, zlib.Z_FILTERED)), key=len)
+out = head + chunk(b"IDAT", idat)
+pad = len(data) - len(out) - 12 - 12
+assert pad >= 0, "recompressed image larger than the original"
+out += chunk(b"vsFm", b"\0" * pad) + chunk(b"IEND", b"")
+assert len(out) == len(data)
+sys.stdout.buffer.write(out)
+PY
+cp -r "$WORK/ref" "$A/replaced_run"
+attack image_replaced_same_size 2 "changed: $image" "$A/replaced" "$A/replaced_run" -- \
+  run "$A/replaced" --out "$A/replaced_run" "${RUN_ONE[@]}"
+
+# viosfm features and match into a run's database: other options or another
+# VIO refused before anything changes; the run then finds its own rows.
+cp -r "$WORK/ref" "$A/featured"
+attack features_into_a_runs_database 2 "$A/featured/fingerprint.json: " "$A/featured" "$SEQ" -- \
+  features "$SEQ" --database "$A/featured/database.db" --max-features 100
+attack match_into_a_runs_database 2 "$A/featured/fingerprint.json: " "$A/featured" "$SEQ" -- \
+  match "$SEQ" --database "$A/featured/database.db" --vio-trajectory "$WORK/ref/vio_body.tum"
+if run featured_rerun "$SEQ" "$A/featured" --threads 1 && result=$(compare "$WORK/ref" "$A/featured"); then
+  row_result run_after_the_refused_commands ok "$result to the uninterrupted run"
+else
+  row_result run_after_the_refused_commands bad "${result:-exit code}; log $LOGS/featured_rerun.log"
+fi
+
+# Paths that leave the dataset: --timestamps names, a symbolic link.
+mkdir -p "$A/image_folder"
+for k in 2 3; do
+  name=$(sed -n ${k}p "$SEQ/mav0/cam0/data.csv" | cut -d, -f2 | tr -d '\r ')
+  cp "$SEQ/mav0/cam0/data/$name" "$A/image_folder/$((k - 1)).png"
+done
+cp "$SEQ/mav0/cam0/data/$name" "$WORK/outside.png"
+printf '1.png 1.0\n2.png 1.1\n../../outside.png 1.2\n' >"$A/timestamps_up.txt"
+printf '1.png 1.0\n2.png 1.1\n/etc/passwd 1.2\n' >"$A/timestamps_absolute.txt"
+for kind in up absolute; do
+  attack "timestamps_$kind" 2 "$A/timestamps_$kind.txt:3: image name" "$A/image_folder" "$SEQ" -- \
+    run "$A/image_folder" --out "$A/out_timestamps_$kind" --timestamps "$A/timestamps_$kind.txt" \
+    --camera-yaml "$SEQ/mav0/cam0/sensor.yaml" --vio-trajectory "$WORK/ref/vio_body.tum" "${RUN_ONE[@]}"
+done
+dataset_copy link_outside
+rm "$A/link_outside/mav0/cam0/data/$image"
+ln -s "$WORK/outside.png" "$A/link_outside/mav0/cam0/data/$image"
+attack link_outside_the_dataset 2 "$A/link_outside/mav0/cam0/data/$image: " "$A/link_outside" -- \
+  run "$A/link_outside" --out "$A/out_link" "${RUN_ONE[@]}"
+
+# Bounded resources: 10 million rows naming one image; a PNG that declares
+# 32000 x 32000 pixels; 20000 threads.
+dataset_copy ten_million_rows
+python3 - "$SEQ/mav0/cam0/data.csv" "$image" <<'PY' | replace_file "$A/ten_million_rows/mav0/cam0/data.csv"
+import sys
+first = int(open(sys.argv[1]).read().split("\n")[1].split(",")[0])
+out = sys.stdout
+out.write("#timestamp [ns],filename\n")
+row = "," + sys.argv[2] + "\n"
+for i in range(10_000_000):
+    out.write(str(first + 1000 * i) + row)
+PY
+LIMIT_MB=256 attack ten_million_rows_one_image 2 "$A/ten_million_rows/mav0/cam0/data.csv:3: image" \
+  "$A/ten_million_rows" -- run "$A/ten_million_rows" --out "$A/out_rows" "${RUN_ONE[@]}"
+dataset_copy huge_png
+python3 - <<'PY' | replace_file "$A/huge_png/mav0/cam0/data/$image"
+import struct, sys, zlib
+def chunk(kind, body):
+    return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body))
+ihdr = struct.pack(">IIBBBBB", 32000, 32000, 8, 0, 0, 0, 0)
+data = zlib.compress(b"\0" * (8 << 20), 9)[:1 << 20]  # 1 MB of a stream that would go on
+sys.stdout.buffer.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", ihdr) + chunk(b"IDAT", data) +
+                        chunk(b"IEND", b""))
+PY
+LIMIT_MB=256 attack png_declaring_32000x32000 2 "$A/huge_png/mav0/cam0/data/$image: " "$A/huge_png" -- \
+  run "$A/huge_png" --out "$A/out_png" "${RUN_ONE[@]}"
+LIMIT_MB=1024 attack threads_20000 0 "--threads 20000: capped at" "$SEQ" -- \
+  run "$SEQ" --out "$A/out_threads" "${RUN_ARGS[@]}" --threads 20000
+
+# Command lines that cannot be parsed: exit 2, the flag named.
+attack parse_missing_out 2 "--out is required" "$SEQ" -- run "$SEQ"
+attack parse_unknown_flag 2 "--no-such-flag" "$SEQ" -- run "$SEQ" --out "$A/out_parse" --no-such-flag
+attack parse_bad_value 2 "--first-octave" "$SEQ" -- features "$SEQ" --database "$A/parse.db" --first-octave 5
+
+# IMU gaps, and a gap over the static start: an input error, or a model
+# whose scale is within 1 % of the clean run's (clean and gapped runs of a
+# 12 s sequence and of one with a 2 s static start).
+"$VIOSFM" simulate --out "$A/sim12" --seed 1 --scenario room --duration 12 --rate 10 --threads 1 \
+  >"$LOGS/sim12.log" 2>&1 &
+"$VIOSFM" simulate --out "$A/simS" --seed 1 --scenario room --duration 10 --static-start 2 --rate 10 \
+  --threads 1 >"$LOGS/simS.log" 2>&1 &
+wait
+imu_gap() {  # NAME SOURCE FROM_S TO_S: the IMU's samples from FROM_S to TO_S (after its first) removed
+  rm -rf "$A/$1"
+  cp -al "$2" "$A/$1"
+  python3 - "$2/mav0/imu0/data.csv" "$3" "$4" <<'PY' | replace_file "$A/$1/mav0/imu0/data.csv"
+import sys
+lines = open(sys.argv[1]).read().split("\n")
+rows = [l for l in lines if l and not l.startswith("#")]
+first = int(rows[0].split(",")[0])
+start, end = first + int(float(sys.argv[2]) * 1e9), first + int(float(sys.argv[3]) * 1e9)
+kept = [l for l in lines if not l or l.startswith("#") or not start < int(l.split(",")[0]) < end]
+sys.stdout.write("\n".join(kept))
+PY
+}
+imu_gap gap_5s "$A/sim12" 4 9
+imu_gap gap_1s "$A/sim12" 5 6
+imu_gap gap_over_static_start "$A/simS" 0.3 1.7
+run clean12 "$A/sim12" "$A/clean12" --threads 1 &
+run cleanS "$A/simS" "$A/cleanS" --threads 1 &
+wait
+for name in gap_5s gap_1s gap_over_static_start; do
+  run "$name" "$A/$name" "$A/out_$name" --threads 1 &
+  [[ $name == gap_1s ]] && wait
+done
+wait
+scale_of() { python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['eval']['metric']['scale'])" "$1/summary.json" 2>/dev/null; }
+for name in gap_5s gap_1s gap_over_static_start; do
+  clean=$A/clean12
+  [[ $name == gap_over_static_start ]] && clean=$A/cleanS
+  log=$LOGS/$name.log
+  named="$A/$name/mav0/imu0/data.csv"
+  if grep -q "^error: $named" "$log"; then
+    row_result "$name" ok "input error: $(message_of "$log" | cut -c1-240)"
+  elif [[ -f $A/out_$name/summary.json ]]; then
+    verdict=$(python3 -c "
+s, c = float('$(scale_of "$A/out_$name")'), float('$(scale_of "$clean")')
+print(('ok' if abs(s / c - 1) <= 0.01 else 'bad') + f' scale {s:.4f} against the clean run\'s {c:.4f} ({100 * (s / c - 1):+.2f} %)')")
+    grep -qF "$named: " "$log" || verdict="bad ${verdict#* }; no warning naming $named"
+    row_result "$name" "${verdict%% *}" "exit 0, ${verdict#* }; $(grep -m1 -F "W " "$log" | cut -c1-200)"
+  else
+    row_result "$name" bad "neither an input error nor a model (log $log)"
+  fi
+done
+say "a careless or hostile user: $num_rows_ok of $num_rows rows as they must be"
 
 [[ -f "$WORK/failed" ]] && FAILED=1
 say "time: ${SECONDS} s; logs in $LOGS"

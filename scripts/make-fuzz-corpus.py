@@ -235,6 +235,76 @@ def io_other(sim):
     write("io_other", "scene.csv", head(os.path.join(sim, "scene.csv"), 6))
 
 
+def cdr_string(text):
+    data = text.encode() + b"\0"
+    message = b"\x00\x01\x00\x00" + struct.pack("<I", len(data)) + data
+    return message + b"\0" * ((4 - len(message) % 4) % 4)
+
+
+def cdr_imu():
+    # Little-endian CDR: stamp, frame_id "imu", then (aligned to 8) the
+    # orientation, angular velocity and linear acceleration, each followed by
+    # its covariance.
+    body = struct.pack("<iI", 1700000000, 5) + struct.pack("<I", 4) + b"imu\0"
+    body += b"\0" * ((8 - len(body) % 8) % 8)
+    body += struct.pack("<4d", 0, 0, 0, 1) + struct.pack("<9d", -1, *([0] * 8))
+    body += struct.pack("<3d", 0.1, 0.2, 0.3) + struct.pack("<9d", *([0] * 9))
+    body += struct.pack("<3d", 0, 0, 9.81) + struct.pack("<9d", *([0] * 9))
+    return b"\x00\x01\x00\x00" + body
+
+
+def rosbags():
+    testdata = os.path.join(ROOT, "src", "viosfm", "io", "testdata")
+    # ROS 1: the bags librosbag wrote.
+    for compression in ("none", "bz2", "lz4"):
+        name = "librosbag_%s.bag" % compression
+        with open(os.path.join(testdata, name), "rb") as f:
+            write("rosbag", name, f.read())
+    # MCAP: the fixtures written from the specification (lz4 chunks without a
+    # summary; messages outside chunks with a summary).
+    for name in ("mcap_lz4_no_summary.mcap", "mcap_unchunked_summary.mcap"):
+        with open(os.path.join(testdata, name), "rb") as f:
+            write("mcap", name, f.read())
+    # rosbag2 sqlite3: the early layout and the current one, each with a
+    # String and an Imu topic (raw mode: first byte odd), and rows of the
+    # fuzzer's own encoding (structured mode: first byte even).
+    for layout in ("early", "current"):
+        with tempfile.TemporaryDirectory() as tmp:
+            path = os.path.join(tmp, "bag_0.db3")
+            db = sqlite3.connect(path)
+            db.execute("PRAGMA page_size = 512")
+            if layout == "early":
+                db.execute("CREATE TABLE topics(id INTEGER PRIMARY KEY,name TEXT NOT NULL,type "
+                           "TEXT NOT NULL,serialization_format TEXT NOT NULL)")
+                types = ("std_msgs/String", "sensor_msgs/Imu")
+            else:
+                db.execute("CREATE TABLE schema(schema_version INTEGER PRIMARY KEY,ros_distro "
+                           "TEXT NOT NULL)")
+                db.execute("INSERT INTO schema VALUES(4, 'jazzy')")
+                db.execute("CREATE TABLE metadata(id INTEGER PRIMARY KEY,metadata_version "
+                           "INTEGER NOT NULL,metadata TEXT NOT NULL)")
+                db.execute("INSERT INTO metadata VALUES(1, 7, ?)",
+                           ("version: 7\nstorage_identifier: sqlite3\ncompression_format: \"\"\n"
+                            "compression_mode: \"\"\nrelative_file_paths:\n  - bag_0.db3\n",))
+                db.execute("CREATE TABLE topics(id INTEGER PRIMARY KEY,name TEXT NOT NULL,type "
+                           "TEXT NOT NULL,serialization_format TEXT NOT NULL,offered_qos_profiles "
+                           "TEXT NOT NULL,type_description_hash TEXT NOT NULL)")
+                types = ("std_msgs/msg/String", "sensor_msgs/msg/Imu")
+            db.execute("CREATE TABLE messages(id INTEGER PRIMARY KEY,topic_id INTEGER NOT NULL,"
+                       "timestamp INTEGER NOT NULL, data BLOB NOT NULL)")
+            extra = ", '', ''" if layout == "current" else ""
+            db.execute("INSERT INTO topics VALUES(1, '/text', ?, 'cdr'%s)" % extra, (types[0],))
+            db.execute("INSERT INTO topics VALUES(2, '/imu', ?, 'cdr'%s)" % extra, (types[1],))
+            db.execute("INSERT INTO messages VALUES(1, 1, 100, ?)", (cdr_string("hello"),))
+            db.execute("INSERT INTO messages VALUES(2, 2, 150, ?)", (cdr_imu(),))
+            db.execute("INSERT INTO messages VALUES(3, 1, 200, ?)", (cdr_string("world"),))
+            db.commit()
+            db.close()
+            with open(path, "rb") as f:
+                write("rosbag2_sqlite", "%s_layout.bin" % layout, b"\x01" + f.read())
+    write("rosbag2_sqlite", "structured_rows.bin", b"\x00" + bytes(range(256)))
+
+
 def main():
     if len(sys.argv) != 2:
         sys.exit(__doc__)
@@ -252,6 +322,7 @@ def main():
     kalibr()
     colmap_models()
     colmap_database()
+    rosbags()
     total = sum(len(files) for _, _, files in os.walk(CORPUS))
     print("wrote %d seed files under %s" % (total, CORPUS))
 

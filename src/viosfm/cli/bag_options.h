@@ -1,4 +1,4 @@
-// The options of a ROS 1 bag given as a dataset (io/rosbag_dataset.h), shared
+// The options of a bag (ROS 1 or 2) given as a dataset (io/rosbag_dataset.h), shared
 // by the subcommands that take one: topics and calibration files.
 #pragma once
 

@@ -11,6 +11,10 @@
 #include "viosfm/io/colmap_database.h"
 #include "viosfm/io/dataset.h"
 #include "viosfm/io/image_folder.h"
+#include "viosfm/io/rosbag.h"
+#include "viosfm/pipeline/pipeline_options.h"
+#include "viosfm/pipeline/run_fingerprint.h"
+#include "viosfm/pipeline/run_folder.h"
 #include "viosfm/sensor/camera_models.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/logging.h"
@@ -30,6 +34,7 @@ struct FeaturesArguments {
   BagArguments bag;
   std::string timestamps;
   CalibrationFiles calibration;
+  DatasetChecks checks;
 };
 
 // "MODEL,WIDTH,HEIGHT,p1,p2,..." e.g. "PINHOLE,752,480,458.6,457.3,367.2,248.4".
@@ -58,26 +63,55 @@ Camera ParseCameraOption(const std::string& text) {
                     std::move(params));
 }
 
+// Where a bag's images go: beside the database, as a EuRoC folder (bag/).
+fs::path BagFolder(const FeaturesArguments& args) {
+  return HasRosbagExtension(args.dataset) ? fs::absolute(args.database).parent_path() / "bag"
+                                          : fs::path();
+}
+
 Sequence ReadFeaturesDataset(const FeaturesArguments& args) {
   DatasetReadOptions options;
-  // A bag's images go beside the database, as a EuRoC folder (OUT/bag).
   options.rosbag = MakeRosbagOptions(args.bag, fs::absolute(args.database).parent_path() / "bag");
   options.image_folder.timestamps_file = args.timestamps;
   options.image_folder.camera_yaml = args.bag.camera_yaml;
   if (!args.camera.empty()) options.image_folder.camera = ParseCameraOption(args.camera);
   options.calibration = args.calibration;
+  options.checks = args.checks;
   return ReadDataset(args.dataset, options);
+}
+
+// What the features stored in the database are made from, under the keys a
+// run's fingerprint gives them (pipeline/run_fingerprint.h).
+RunFingerprint FeaturesFingerprint(const FeaturesArguments& args, const SiftOptions& sift,
+                                   const Sequence& sequence) {
+  PipelineOptions options;
+  options.dataset = args.dataset;
+  options.image_folder.timestamps_file = args.timestamps;
+  options.image_folder.camera_yaml = args.bag.camera_yaml;
+  options.rosbag = MakeRosbagOptions(args.bag, BagFolder(args));
+  options.calibration = args.calibration;
+  options.sift = sift;
+  RunFingerprint fingerprint = FingerprintOfInputs(options);
+  AddSequenceToFingerprint(sequence, &fingerprint);
+  return FingerprintPart(fingerprint, FeaturesFingerprintPrefixes());
 }
 
 void RunFeatures(const FeaturesArguments& args) {
   SiftOptions options = args.sift;
   options.root_sift = !args.no_root_sift;
+  options.num_threads = CapNumThreads(options.num_threads, "--threads");
   if (const std::string error = options.Validate(); !error.empty()) {
     throw InputError("invalid feature options: " + error);
   }
-  const Sequence sequence = ReadFeaturesDataset(args);
+  CheckDatasetExists(args.dataset);
   const fs::path database_path = args.database;
-  if (database_path.has_parent_path()) fs::create_directories(database_path.parent_path());
+  // The database's folder locked as a run's, its files that viosfm did not
+  // write never written over; the database's record checked and written
+  // before its rows change.
+  DatabaseFolder folder(database_path, BagFolder(args));
+  if (!BagFolder(args).empty()) folder.MarkWriting();
+  const Sequence sequence = ReadFeaturesDataset(args);
+  folder.CheckAndRecord(FeaturesFingerprint(args, options, sequence));
   ColmapDatabase database = ColmapDatabase::Open(database_path);
   VIOSFM_LOG(INFO) << "features: " << sequence.images.size() << " images of " << args.dataset
                    << " -> " << database_path.string() << " (max " << options.max_num_features
@@ -87,6 +121,7 @@ void RunFeatures(const FeaturesArguments& args) {
   VIOSFM_LOG(INFO) << "features: " << summary.ToString() << "; database holds "
                    << database.NumImages() << " images, " << database.NumKeypoints()
                    << " keypoints";
+  folder.Finish();
 }
 
 }  // namespace
@@ -96,14 +131,17 @@ void RegisterFeatures(CLI::App& app) {
   CLI::App* command = app.add_subcommand(
       "features",
       "Extract SIFT (RootSIFT) features of every image into a COLMAP 3.8 database; a re-run "
-      "skips the images already stored");
+      "skips the images already stored, and a database whose features other inputs or options "
+      "made is refused (fingerprint.json beside it, as a run's)");
   command
       ->add_option("dataset", args->dataset,
-                   "EuRoC dataset (folder containing mav0/), a folder of images or a ROS 1 bag")
+                   "EuRoC dataset (folder containing mav0/), a folder of images or a bag (ROS 1 "
+                   ".bag; ROS 2 .db3, .mcap or bag folder)")
       ->required();
   command->add_option("--database", args->database, "COLMAP database (created if missing)")
       ->required();
   AddCalibrationOptions(command, &args->calibration);
+  AddDatasetCheckOptions(command, &args->checks);
   command->add_option("--max-features", args->sift.max_num_features, "Features kept per image")
       ->capture_default_str();
   command->add_flag("--no-root-sift", args->no_root_sift,

@@ -33,7 +33,11 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    // --help and --version exit with 0; a command line that cannot be
+    // parsed is a usage error, exit 2 like any bad input.
+    if (e.get_exit_code() == 0) return app.exit(e);
+    std::cerr << "error: " << e.what() << "\nRun with --help for more information.\n";
+    return viosfm::kExitInputError;
   } catch (const std::exception& e) {
     // Bad input and filesystem errors (naming the path) exit with 2, bugs with 3.
     const viosfm::TopLevelError error = viosfm::DescribeTopLevelError(e);

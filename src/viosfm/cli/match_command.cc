@@ -1,6 +1,7 @@
 // `viosfm match`: pairs, descriptor matching and the paper's two-step
 // VIO-aided geometric verification into a COLMAP database whose features
 // `viosfm features` extracted (see matching/verification_driver.h).
+#include <algorithm>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -10,10 +11,13 @@
 #include "viosfm/cli/vio_uncertainty_options.h"
 #include "viosfm/io/colmap_database.h"
 #include "viosfm/io/dataset.h"
+#include "viosfm/io/rosbag.h"
 #include "viosfm/io/trajectory_io.h"
 #include "viosfm/io/verification_report.h"
 #include "viosfm/matching/verification_driver.h"
 #include "viosfm/pipeline/pipeline_options.h"
+#include "viosfm/pipeline/run_fingerprint.h"
+#include "viosfm/pipeline/run_folder.h"
 #include "viosfm/pipeline/stage_vio.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/logging.h"
@@ -41,7 +45,37 @@ struct MatchArguments {
   std::string report;
   VerificationOptions options;
   BagArguments bag;
+  DatasetChecks checks;
 };
+
+// What the matches stored in the database are made from, under the keys a
+// run's fingerprint gives them (pipeline/run_fingerprint.h).
+RunFingerprint MatchFingerprint(const MatchArguments& args, VioFrame vio_frame,
+                                const Sequence& sequence) {
+  PipelineOptions options;
+  options.dataset = args.dataset;
+  options.rosbag = MakeRosbagOptions(args.bag, fs::absolute(args.database).parent_path() / "bag");
+  options.calibration = args.calibration;
+  options.verification = args.options;
+  if (args.options.use_vio_prior) {
+    options.vio_trajectory = args.vio_trajectory;
+    options.vio_format = GuessTrajectoryFormat(args.vio_trajectory);
+  }
+  options.vio_frame = vio_frame;
+  options.max_vio_time_difference_ns = args.options.max_pose_time_difference_ns;
+  options.vio_max_gap_ns = SecondsToNs(args.vio_max_gap_s);
+  options.vio_uncertainty = args.options.vio_uncertainty;
+  RunFingerprint fingerprint = FingerprintOfInputs(options);
+  AddSequenceToFingerprint(sequence, &fingerprint);
+  std::vector<std::string> prefixes = MatchesFingerprintPrefixes();
+  if (!args.options.use_vio_prior) {
+    prefixes.erase(
+        std::remove_if(prefixes.begin(), prefixes.end(),
+                       [](const std::string& prefix) { return prefix.rfind("vio", 0) == 0; }),
+        prefixes.end());
+  }
+  return FingerprintPart(fingerprint, prefixes);
+}
 
 void RunMatch(MatchArguments args) {
   VerificationOptions& options = args.options;
@@ -49,6 +83,7 @@ void RunMatch(MatchArguments args) {
   options.use_vio_prior = !args.no_vio_prior;
   options.prior.check_depth = !args.no_depth_check;
   options.max_pose_time_difference_ns = SecondsToNs(args.max_pose_time_difference_s);
+  options.num_threads = CapNumThreads(options.num_threads, "--threads");
   options.retrieval.num_threads = options.num_threads;
   options.vio_uncertainty = args.vio_uncertainty.Model();
   args.band.ApplyTo(&options);
@@ -60,10 +95,24 @@ void RunMatch(MatchArguments args) {
     throw InputError("--vio-trajectory is required unless --no-vio-prior is given");
   }
 
+  const fs::path database_path = args.database;
+  if (!fs::exists(database_path)) {
+    throw InputError(args.database, 0, "database not found (run `viosfm features` first)");
+  }
+  CheckDatasetExists(args.dataset);
+  // The database's folder locked as a run's; its record checked and written
+  // before its rows change (as `viosfm features` does).
+  const fs::path bag_folder = HasRosbagExtension(args.dataset)
+                                  ? fs::absolute(args.database).parent_path() / "bag"
+                                  : fs::path();
+  DatabaseFolder folder(database_path, bag_folder);
+  if (!bag_folder.empty()) folder.MarkWriting();
+
   DatasetReadOptions read;
   // As `viosfm features` does: a bag's images go beside the database (OUT/bag).
   read.rosbag = MakeRosbagOptions(args.bag, fs::absolute(args.database).parent_path() / "bag");
   read.calibration = args.calibration;
+  read.checks = args.checks;
   const Sequence sequence = ReadDataset(args.dataset, read);
 
   Trajectory vio;
@@ -72,10 +121,7 @@ void RunMatch(MatchArguments args) {
                                 vio_frame, sequence.rig.body_from_cam);
   }
 
-  const fs::path database_path = args.database;
-  if (!fs::exists(database_path)) {
-    throw InputError(args.database, 0, "database not found (run `viosfm features` first)");
-  }
+  folder.CheckAndRecord(MatchFingerprint(args, vio_frame, sequence));
   ColmapDatabase database = ColmapDatabase::Open(database_path);
   VIOSFM_LOG(INFO) << "match: " << sequence.images.size() << " images of " << args.dataset
                    << ", pairs " << PairModeName(options.pairs.mode) << " (N1 "
@@ -110,6 +156,7 @@ void RunMatch(MatchArguments args) {
     WriteVerificationJson(report / "verification.json", result.summary, result.decisions);
     VIOSFM_LOG(INFO) << "match: report in " << report.string() << " (pairs.csv, verification.json)";
   }
+  folder.Finish();
 }
 
 }  // namespace
@@ -125,11 +172,13 @@ void RegisterMatch(CLI::App& app) {
                          "database; a re-run skips the pairs already stored");
   command
       ->add_option("dataset", args->dataset,
-                   "EuRoC dataset (folder containing mav0/) or a ROS 1 bag")
+                   "EuRoC dataset (folder containing mav0/) or a bag (ROS 1 .bag; ROS 2 .db3, "
+                   ".mcap or bag folder)")
       ->required();
   command->add_option("--database", args->database, "COLMAP database with features")->required();
   AddBagOptions(command, &args->bag, /*add_camera_yaml=*/true);
   AddCalibrationOptions(command, &args->calibration);
+  AddDatasetCheckOptions(command, &args->checks);
   command->add_option("--vio-trajectory", args->vio_trajectory,
                       "VIO trajectory (TUM, EuRoC or KITTI-with-stamps file), world_from_body "
                       "unless --vio-frame cam");

@@ -35,6 +35,7 @@ struct RunArguments {
   bool no_verify_registration = false;
   VerificationBandArguments band;
   bool no_imu_scale = false;
+  bool no_imu = false;
   VioUncertaintyArguments vio_uncertainty;
   std::string timestamps;
   BagArguments bag;
@@ -72,6 +73,7 @@ void RunRun(RunArguments args) {
   options.mapper.registration.verify_with_images = !args.no_verify_registration;
   args.band.ApplyTo(&options.verification);
   options.use_imu_scale = !args.no_imu_scale;
+  options.use_imu = !args.no_imu;
   options.image_folder.camera_yaml = args.bag.camera_yaml;
   options.rosbag = MakeRosbagOptions(args.bag, {});  // extract folder: OUT/bag
   options.image_folder.timestamps_file = args.timestamps;
@@ -89,6 +91,7 @@ void RunRun(RunArguments args) {
     SetOptionFromText(options, key, assignment.substr(equals + 1));
     if (SettledByTextureProbe(key)) options.texture_probe.enable = false;
   }
+  options.num_threads = CapNumThreads(options.num_threads, "--threads");
   if (const std::string error = options.Validate(); !error.empty()) {
     throw InputError("invalid run options: " + error);
   }
@@ -182,10 +185,12 @@ void RegisterRun(CLI::App& app) {
       "says they were made from the same inputs and options");
   command
       ->add_option("dataset", args->dataset,
-                   "EuRoC dataset (folder containing mav0/), a folder of images or a ROS 1 bag")
+                   "EuRoC dataset (folder containing mav0/), a folder of images or a bag (ROS 1 "
+                   ".bag; ROS 2 .db3, .mcap or bag folder)")
       ->required();
   command->add_option("--out", args->out, "Output folder (created if missing)")->required();
   AddCalibrationOptions(command, &args->options.calibration);
+  AddDatasetCheckOptions(command, &args->options.dataset_checks);
   // Defined before the flags that set one option each: CLI11 runs the
   // callbacks in the order of definition, so those flags (and --set) override
   // the settings it applies.
@@ -272,14 +277,18 @@ void RegisterRun(CLI::App& app) {
   command->add_flag("--no-verify-registration", args->no_verify_registration,
                     "Place frames by the VIO alone (the paper's), without checking them "
                     "against their 2D-3D matches; frames without a VIO pose stay unposed");
+  command->add_flag("--no-imu", args->no_imu,
+                    "Leave the dataset's IMU out: the images alone (and a VIO trajectory file, "
+                    "if given) make the model");
   command->add_flag("--no-imu-scale", args->no_imu_scale,
                     "Keep the VIO's metric scale instead of estimating it from the dataset's "
                     "IMU over the registered frames");
   AddVerificationBandOptions(command, &args->band);
   command
       ->add_option("--vio-max-gap", args->vio_max_gap_s,
-                   "A VIO trajectory file is split into segments (no relative pose across) "
-                   "at time gaps longer than this, s (0: never)")
+                   "Time gaps in a VIO trajectory file longer than this (s) are judged by the "
+                   "images: one segment where they confirm the VIO's relative pose across, a "
+                   "break where they contradict it or see nothing (0: no gap is judged)")
       ->capture_default_str();
   AddVioUncertaintyOptions(command, &args->vio_uncertainty);
   command->add_flag("--guided-matching", args->options.verification.guided_matching,

@@ -35,6 +35,7 @@ void RunSimulate(const SimulateArgs& args) {
   options.imu.add_noise = !args.no_imu_noise;
   options.render_images = !args.no_images;
   options.threads_over_frames = !args.row_parallel;
+  options.num_threads = CapNumThreads(options.num_threads, "--threads");
   if (!args.imu_noise_file_scale.empty()) {
     options.imu_noise_file_scale_gyro = args.imu_noise_file_scale[0];
     options.imu_noise_file_scale_accel = args.imu_noise_file_scale[1];

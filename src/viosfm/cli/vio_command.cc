@@ -23,6 +23,7 @@ struct VioArguments {
   std::string dataset;
   std::string out;
   CalibrationFiles calibration;
+  DatasetChecks checks;
   VioOptions options;
   BagArguments bag;
   std::vector<std::string> set_options;
@@ -37,6 +38,7 @@ void RunVioCommand(VioArguments args) {
     }
     SetOptionFromText(args.options, assignment.substr(0, equals), assignment.substr(equals + 1));
   }
+  args.options.window.num_threads = CapNumThreads(args.options.window.num_threads, "--threads");
   if (const std::string error = args.options.Validate(); !error.empty()) {
     throw InputError("invalid vio options: " + error);
   }
@@ -44,6 +46,7 @@ void RunVioCommand(VioArguments args) {
   read.rosbag = MakeRosbagOptions(args.bag, fs::path(args.out) / "bag");
   read.calibration = args.calibration;
   read.require_imu = true;
+  read.checks = args.checks;
   const Sequence sequence = ReadDataset(root, read);
   VIOSFM_LOG(INFO) << "vio: " << sequence.images.size() << " images, " << sequence.imu.size()
                    << " IMU samples from " << args.dataset;
@@ -71,10 +74,12 @@ void RegisterVio(CLI::App& app) {
       "preintegration and marginalisation): a pose, velocity, biases and status for every frame");
   command
       ->add_option("dataset", args->dataset,
-                   "EuRoC dataset (folder containing mav0/) or a ROS 1 bag")
+                   "EuRoC dataset (folder containing mav0/) or a bag (ROS 1 .bag; ROS 2 .db3, "
+                   ".mcap or bag folder)")
       ->required();
   command->add_option("--out", args->out, "Output folder")->required();
   AddCalibrationOptions(command, &args->calibration);
+  AddDatasetCheckOptions(command, &args->checks);
   command
       ->add_option("--max-frames", args->options.max_frames,
                    "Process only the first N images (0: all)")

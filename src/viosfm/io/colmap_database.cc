@@ -2,6 +2,7 @@
 
 #include <sqlite3.h>
 
+#include <cstdlib>
 #include <cstring>
 #include <limits>
 #include <map>
@@ -10,6 +11,7 @@
 #include "viosfm/io/colmap_convention.h"
 #include "viosfm/io/rotation_checks.h"
 #include "viosfm/util/errors.h"
+#include "viosfm/util/hash.h"
 #include "viosfm/util/logging.h"
 
 namespace viosfm {
@@ -345,6 +347,87 @@ ColmapDatabase ColmapDatabase::Open(const std::filesystem::path& path) {
   }
   transaction.Commit();
   return database;
+}
+
+// ------------------------------------------------------------- viosfm's record
+
+namespace {
+
+constexpr const char* kCreateViosfmTables[] = {
+    "CREATE TABLE IF NOT EXISTS viosfm_fingerprint (position INTEGER PRIMARY KEY NOT NULL, "
+    "key TEXT NOT NULL, value TEXT NOT NULL)",
+    "CREATE TABLE IF NOT EXISTS viosfm_image_files (name TEXT PRIMARY KEY NOT NULL, "
+    "size INTEGER NOT NULL, xxh3 TEXT NOT NULL)",
+};
+
+}  // namespace
+
+void ColmapDatabase::WriteViosfmRecord(const ViosfmDatabaseRecord& record) {
+  Transaction transaction(*this);
+  for (const char* sql : kCreateViosfmTables) impl_->Execute(sql);
+  impl_->Execute("DELETE FROM viosfm_fingerprint");
+  impl_->Execute("DELETE FROM viosfm_image_files");
+  for (size_t i = 0; i < record.fingerprint.size(); ++i) {
+    Query query(*impl_, "INSERT INTO viosfm_fingerprint (position, key, value) VALUES (?, ?, ?)");
+    query.Int64(1, static_cast<int64_t>(i));
+    query.Text(2, record.fingerprint[i].first);
+    query.Text(3, record.fingerprint[i].second);
+    query.Step();
+  }
+  for (const ViosfmDatabaseRecord::ImageFile& file : record.image_files) {
+    Query query(*impl_,
+                "INSERT OR REPLACE INTO viosfm_image_files (name, size, xxh3) VALUES (?, ?, ?)");
+    query.Text(1, file.name);
+    query.Int64(2, static_cast<int64_t>(file.size));
+    query.Text(3, HashToHex(file.xxh3));
+    query.Step();
+  }
+  transaction.Commit();
+}
+
+std::optional<ViosfmDatabaseRecord> ColmapDatabase::ReadViosfmRecord() const {
+  {
+    Query query(*impl_,
+                "SELECT COUNT(*) FROM sqlite_master WHERE type = 'table' AND name IN "
+                "('viosfm_fingerprint', 'viosfm_image_files')");
+    if (!query.Step() || query.ColumnInt64(0) != 2) return std::nullopt;
+  }
+  ViosfmDatabaseRecord record;
+  {
+    Query query(*impl_, "SELECT key, value FROM viosfm_fingerprint ORDER BY position");
+    while (query.Step()) record.fingerprint.emplace_back(query.ColumnText(0), query.ColumnText(1));
+  }
+  Query query(*impl_, "SELECT name, size, xxh3 FROM viosfm_image_files ORDER BY name");
+  while (query.Step()) {
+    ViosfmDatabaseRecord::ImageFile file;
+    file.name = query.ColumnText(0);
+    file.size = static_cast<uint64_t>(query.ColumnInt64(1));
+    const std::string hex = query.ColumnText(2);
+    file.xxh3 = hex.size() == 16 ? std::strtoull(hex.c_str(), nullptr, 16) : 0;
+    record.image_files.push_back(std::move(file));
+  }
+  return record;
+}
+
+std::optional<ViosfmDatabaseRecord> ColmapDatabase::ReadViosfmRecordOf(
+    const std::filesystem::path& path) {
+  auto impl = std::make_unique<Impl>();
+  impl->path = path;
+  // Opened for writing but only read: as the last connection to close, it
+  // removes the -wal and -shm files a WAL database makes it open (a
+  // read-only connection would leave them behind), and the file itself is
+  // not written.
+  if (sqlite3_open_v2(path.c_str(), &impl->db, SQLITE_OPEN_READWRITE | SQLITE_OPEN_NOMUTEX,
+                      nullptr) != SQLITE_OK) {
+    sqlite3_close_v2(impl->db);
+    impl->db = nullptr;
+    if (sqlite3_open_v2(path.c_str(), &impl->db, SQLITE_OPEN_READONLY | SQLITE_OPEN_NOMUTEX,
+                        nullptr) != SQLITE_OK) {
+      impl->Fail("cannot open the SQLite database to read it");
+    }
+  }
+  const ColmapDatabase database(std::move(impl));
+  return database.ReadViosfmRecord();
 }
 
 // ---------------------------------------------------------------- transactions

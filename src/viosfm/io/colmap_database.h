@@ -87,6 +87,24 @@ struct DatabaseSchemaEntry {
   std::string sql;
 };
 
+// viosfm's record in a database it writes: what the database's rows were
+// made from (the run fingerprint's entries, pipeline/run_fingerprint.h) and
+// each image file's size and content hash (XXH3), in tables of its own
+// (viosfm_fingerprint, viosfm_image_files) that COLMAP ignores. Written
+// before the rows it describes, so a database whose rows another input or
+// command made is told apart from the one its folder's fingerprint.json
+// describes.
+struct ViosfmDatabaseRecord {
+  struct ImageFile {
+    std::string name;  // as the images table names it
+    uint64_t size = 0;
+    uint64_t xxh3 = 0;
+    bool operator==(const ImageFile&) const = default;
+  };
+  std::vector<std::pair<std::string, std::string>> fingerprint;
+  std::vector<ImageFile> image_files;
+};
+
 // COLMAP 3.8 writes this PRAGMA user_version.
 inline constexpr int kColmapDatabaseUserVersion = 3800;
 
@@ -190,6 +208,16 @@ class ColmapDatabase {
   size_t NumMatches() const;
   size_t NumMatchedImagePairs() const;
   size_t NumVerifiedImagePairs() const;
+
+  // viosfm's record (above): replaced as a whole in one transaction; read
+  // back, or none in a database without one (another tool's, an older
+  // viosfm's).
+  void WriteViosfmRecord(const ViosfmDatabaseRecord& record);
+  std::optional<ViosfmDatabaseRecord> ReadViosfmRecord() const;
+  // The record of the database file at `path`, read through a read-only
+  // connection (the file is not changed). InputError naming the file if it
+  // is not a SQLite database.
+  static std::optional<ViosfmDatabaseRecord> ReadViosfmRecordOf(const std::filesystem::path& path);
 
   // The rows of sqlite_master that have SQL, in creation order, and the
   // PRAGMA user_version (for comparing with a database COLMAP created).

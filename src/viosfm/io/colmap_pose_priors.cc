@@ -168,7 +168,10 @@ void CopyColmapDatabase(const fs::path& source, const fs::path& destination) {
   if (fs::exists(destination)) {
     throw InputError(destination.string(), 0, "exists already (not overwritten)");
   }
-  Connection connection(source, /*write=*/false);
+  // Opened for writing, only read: as the last connection it removes the
+  // -wal and -shm files it made beside the source (a read-only connection
+  // would leave them in the run's folder).
+  Connection connection(source, /*write=*/true);
   auto vacuum = connection.Prepare("VACUUM INTO ?");
   const std::string target = destination.string();
   sqlite3_bind_text(vacuum->stmt, 1, target.c_str(), -1, SQLITE_TRANSIENT);

@@ -13,7 +13,7 @@ bool IsEurocDatasetFolder(const fs::path& folder) {
 }
 
 void CheckDatasetExists(const fs::path& path) {
-  if (HasRosbagExtension(path)) {
+  if (HasBagExtension(path)) {
     if (!fs::is_regular_file(path)) throw InputError(path.string(), 0, "bag file not found");
   } else if (!fs::is_directory(path)) {
     throw InputError(path.string(), 0, "dataset folder not found");
@@ -23,13 +23,16 @@ void CheckDatasetExists(const fs::path& path) {
 Sequence ReadDataset(const fs::path& path, const DatasetReadOptions& options) {
   CheckDatasetExists(path);
   Sequence sequence;
-  if (HasRosbagExtension(path)) {
+  if (IsBagPath(path)) {
     RosbagDatasetOptions rosbag = options.rosbag;
     rosbag.require_imu = rosbag.require_imu || options.require_imu;
     sequence = ReadRosbagDataset(path, rosbag);
+    CheckImuSamples(sequence.imu, options.checks, path);
+    ReportImuGaps(sequence.imu, path);
   } else if (IsEurocDatasetFolder(path)) {
     EurocReadOptions euroc;
     euroc.require_imu = options.require_imu;
+    euroc.checks = options.checks;
     sequence = ReadEurocDataset(path, euroc);
   } else {
     if (options.require_imu) {
@@ -41,7 +44,7 @@ Sequence ReadDataset(const fs::path& path, const DatasetReadOptions& options) {
                        "not a EuRoC dataset (no mav0/), so read as an image folder: " + error +
                            " (give the camera: --camera-yaml or --camera)");
     }
-    sequence = ReadImageFolder(path, options.image_folder);
+    sequence = ReadImageFolder(path, options.image_folder, options.checks);
   }
   if (sequence.images.empty()) throw InputError(path.string(), 0, "the dataset has no images");
   ApplyCalibrationFiles(options.calibration, &sequence);

@@ -1,5 +1,6 @@
 // Reading any dataset viosfm takes, by what it is: a EuRoC ASL folder (one
-// holding mav0/, or mav0/ itself), a ROS 1 bag (".bag", rosbag_dataset.h)
+// holding mav0/, or mav0/ itself), a bag (rosbag_dataset.h: a ROS 1 ".bag",
+// a ROS 2 ".db3" or ".mcap", or a rosbag2 folder holding metadata.yaml)
 // or a folder of images with a camera (image_folder.h); then the Kalibr or
 // EuRoC calibration files, if given, replace what the dataset says
 // (kalibr.h). Every command that takes a dataset reads it here.
@@ -7,6 +8,7 @@
 
 #include <filesystem>
 
+#include "viosfm/io/dataset_checks.h"
 #include "viosfm/io/image_folder.h"
 #include "viosfm/io/kalibr.h"
 #include "viosfm/io/rosbag_dataset.h"
@@ -26,13 +28,17 @@ struct DatasetReadOptions {
   // The dataset must have an IMU (the VIO). Default false: the IMU only
   // helps (frame selection, metric scale).
   bool require_imu = false;
+  // What the sensors may say and where the dataset's files may lie
+  // (dataset_checks.h).
+  DatasetChecks checks;
 };
 
 // Whether `folder` is a EuRoC dataset: it holds mav0/, or is mav0/ with cam0/.
 bool IsEurocDatasetFolder(const std::filesystem::path& folder);
 
 // Throws InputError naming `path` when no dataset can be there: a bag
-// (".bag") that is not a file, or anything else that is not a folder. A run
+// file (".bag", ".db3", ".mcap") that is not a file, or anything else that is
+// not a folder. A run
 // checks it before it creates its output folder.
 void CheckDatasetExists(const std::filesystem::path& path);
 

@@ -7,6 +7,7 @@
 #include <optional>
 #include <sstream>
 #include <string_view>
+#include <unordered_map>
 
 #include "viosfm/io/kalibr_yaml.h"
 #include "viosfm/io/rotation_checks.h"
@@ -201,7 +202,8 @@ SequenceImage ParseEurocImageRow(const fs::path& csv, int64_t line,
 }
 
 ImuSample ParseEurocImuRow(const fs::path& csv, int64_t line,
-                           const std::vector<std::string_view>& fields) {
+                           const std::vector<std::string_view>& fields,
+                           const DatasetChecks& checks) {
   if (fields.size() != 7) {
     throw InputError(csv.string(), line,
                      "expected 7 comma-separated fields (timestamp [ns], w_x, w_y, w_z [rad/s], "
@@ -214,6 +216,7 @@ ImuSample ParseEurocImuRow(const fs::path& csv, int64_t line,
     sample.gyro[i] = ParseNumberField(csv, line, 1 + i, fields[1 + i]);
     sample.accel[i] = ParseNumberField(csv, line, 4 + i, fields[4 + i]);
   }
+  CheckImuSample(sample, checks, csv, line);
   return sample;
 }
 
@@ -228,9 +231,19 @@ std::vector<SequenceImage> ReadEurocImageList(const fs::path& csv, const fs::pat
   std::vector<SequenceImage> images;
   std::optional<timestamp_ns_t> previous;
   int64_t previous_line = 0;
+  // Each image once: one image under two stamps is not a recording.
+  std::unordered_map<std::string, int64_t> line_of_name;
   ForEachCsvRow(csv, "EuRoC image list", [&](int64_t line, const auto& fields) {
     SequenceImage image = ParseEurocImageRow(csv, line, fields, image_folder);
     CheckIncreasing(csv, line, image.timestamp_ns, previous, previous_line);
+    const auto [it, inserted] =
+        line_of_name.emplace(fs::path(std::string(fields[1])).lexically_normal().string(), line);
+    if (!inserted) {
+      throw InputError(csv.string(), line,
+                       "image " + Quoted(fields[1]) + " is already listed on line " +
+                           std::to_string(it->second) +
+                           ": one image under two stamps (expected each image once)");
+    }
     if (check_images_exist && !fs::is_regular_file(image.path)) {
       throw InputError(
           csv.string(), line,
@@ -244,12 +257,12 @@ std::vector<SequenceImage> ReadEurocImageList(const fs::path& csv, const fs::pat
   return images;
 }
 
-std::vector<ImuSample> ReadEurocImu(const fs::path& csv) {
+std::vector<ImuSample> ReadEurocImu(const fs::path& csv, const DatasetChecks& checks) {
   std::vector<ImuSample> samples;
   std::optional<timestamp_ns_t> previous;
   int64_t previous_line = 0;
   ForEachCsvRow(csv, "EuRoC IMU file", [&](int64_t line, const auto& fields) {
-    const ImuSample sample = ParseEurocImuRow(csv, line, fields);
+    const ImuSample sample = ParseEurocImuRow(csv, line, fields, checks);
     CheckIncreasing(csv, line, sample.timestamp_ns, previous, previous_line);
     samples.push_back(sample);
     previous = sample.timestamp_ns;
@@ -265,6 +278,7 @@ std::string EurocReadOptions::Validate() const {
   };
   if (!is_plain_name(cam_name)) return "cam_name must be a folder name such as 'cam0'";
   if (!is_plain_name(imu_name)) return "imu_name must be a folder name such as 'imu0'";
+  if (const std::string problem = checks.Validate(); !problem.empty()) return "checks." + problem;
   return "";
 }
 
@@ -354,6 +368,10 @@ Sequence ReadEurocDataset(const fs::path& root, const EurocReadOptions& options)
   RequireFolder(root, "EuRoC dataset folder");
   const fs::path mav0 = EurocMav0Folder(root, options);
 
+  // The lists and calibrations too stay inside the dataset.
+  for (const fs::path& file : EurocDatasetFiles(root, options)) {
+    CheckInsideDataset(root, root / file, options.checks, "");
+  }
   Sequence sequence;
   sequence.root = root;
   // The body frame of a Sequence is the IMU frame.
@@ -364,14 +382,17 @@ Sequence ReadEurocDataset(const fs::path& root, const EurocReadOptions& options)
   if (options.check_images_exist) RequireFolder(cam_folder / "data", "image folder");
   sequence.images =
       ReadEurocImageList(cam_folder / "data.csv", cam_folder / "data", options.check_images_exist);
+  if (options.check_images_exist) CheckSequenceImages(sequence, root, options.checks);
   if (!(sequence.rig.camera_rate_hz > 0)) {
     sequence.rig.camera_rate_hz = EstimateFrameRateHz(sequence.images);  // no rate_hz in the yaml
   }
 
   const fs::path imu_folder = mav0 / options.imu_name;
   if (fs::exists(imu_folder) || options.require_imu) {
-    sequence.imu = ReadEurocImu(imu_folder / "data.csv");
     const fs::path imu_csv = imu_folder / "data.csv";
+    sequence.imu = ReadEurocImu(imu_csv, options.checks);
+    // Reported, never bridged here: what uses the IMU decides.
+    ReportImuGaps(sequence.imu, imu_csv);
     const ImuCoverage coverage = CheckImuCoverage(sequence);
     if (!coverage.overlaps) {
       throw InputError(

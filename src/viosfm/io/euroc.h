@@ -47,6 +47,7 @@
 #include <string_view>
 #include <vector>
 
+#include "viosfm/io/dataset_checks.h"
 #include "viosfm/scene/sequence.h"
 
 namespace viosfm {
@@ -99,13 +100,17 @@ EurocImuCalibration ReadEurocImuYaml(const std::filesystem::path& yaml);
 // Reads "#timestamp [ns],filename" rows; paths are image_folder/filename.
 // A filename must stay inside image_folder: an absolute path or one with a
 // '..' component is an error (a dataset cannot make viosfm open files
-// elsewhere). With check_images_exist, a listed file that does not exist is
-// an error.
+// elsewhere), and so is a filename listed twice (one image under two
+// stamps). With check_images_exist, a listed file that does not exist is an
+// error.
 std::vector<SequenceImage> ReadEurocImageList(const std::filesystem::path& csv,
                                               const std::filesystem::path& image_folder,
                                               bool check_images_exist);
-// Reads imu0/data.csv rows (7 columns, see above).
-std::vector<ImuSample> ReadEurocImu(const std::filesystem::path& csv);
+// Reads imu0/data.csv rows (7 columns, see above), each checked against
+// `checks`' bounds (dataset_checks.h): a value beyond them is an InputError
+// naming the file and line. Gaps are left as they are (FindImuGaps).
+std::vector<ImuSample> ReadEurocImu(const std::filesystem::path& csv,
+                                    const DatasetChecks& checks = {});
 
 // One data row of each list, as the readers above parse it (`fields`: the
 // line split at commas, trimmed; InputError naming csv and line). The
@@ -114,7 +119,8 @@ SequenceImage ParseEurocImageRow(const std::filesystem::path& csv, int64_t line,
                                  const std::vector<std::string_view>& fields,
                                  const std::filesystem::path& image_folder);
 ImuSample ParseEurocImuRow(const std::filesystem::path& csv, int64_t line,
-                           const std::vector<std::string_view>& fields);
+                           const std::vector<std::string_view>& fields,
+                           const DatasetChecks& checks = {});
 // InputError naming csv and line unless `stamp` follows `previous` (of
 // previous_line), as the readers above require.
 void CheckEurocStampIncreasing(const std::filesystem::path& csv, int64_t line, timestamp_ns_t stamp,
@@ -139,6 +145,10 @@ struct EurocReadOptions {
   // warning naming its file and line, and the sequence has no ground truth:
   // it only serves evaluation, so a run goes on without it. Default false.
   bool strict_ground_truth = false;
+  // The IMU's bounds and whether links may leave the dataset's folder
+  // (dataset_checks.h): ReadEurocDataset checks every IMU sample, every
+  // image (inside the folder, once, its header's size) and reports IMU gaps.
+  DatasetChecks checks;
 
   // Empty if valid; otherwise names the bad field.
   std::string Validate() const;

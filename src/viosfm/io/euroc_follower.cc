@@ -78,7 +78,8 @@ std::vector<std::pair<int64_t, std::string>> EurocFollower::NewLines(Tail* tail,
 EurocFollower::Rows EurocFollower::Read(bool ended) {
   Rows rows;
   for (const auto& [line, text] : NewLines(&imu_, ended)) {
-    const ImuSample sample = ParseEurocImuRow(imu_.path, line, SplitFields(text, ","));
+    const ImuSample sample =
+        ParseEurocImuRow(imu_.path, line, SplitFields(text, ","), options_.checks);
     CheckEurocStampIncreasing(imu_.path, line, sample.timestamp_ns, imu_.previous,
                               imu_.previous_line);
     imu_.previous = sample.timestamp_ns;

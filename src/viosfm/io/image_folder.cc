@@ -6,6 +6,8 @@
 #include <tuple>
 
 #include "viosfm/io/euroc.h"
+#include "viosfm/io/image_io.h"
+#include "viosfm/sensor/camera_models.h"
 #include "viosfm/io/text_lines.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/file_util.h"
@@ -16,6 +18,10 @@ namespace viosfm {
 namespace fs = std::filesystem;
 
 namespace {
+
+// A file name read as a timestamp is at least 1 s in nanoseconds: smaller
+// numbers ("0001.jpg") number the photos.
+constexpr timestamp_ns_t kMinNameStampNs = 1'000'000'000;
 
 bool IsAllDigits(std::string_view text) {
   return !text.empty() &&
@@ -33,26 +39,53 @@ struct StampedImage {
   }
 };
 
-std::vector<StampedImage> ImagesFromNames(const fs::path& folder) {
+// The images named by their stamps; when some name is not a stamp (or a
+// number below kMinNameStampNs: a frame number, not nanoseconds), the
+// folder is an unordered photo collection: the images in name order, 1 s
+// apart (`unordered` set).
+std::vector<StampedImage> ImagesFromNames(const fs::path& folder, bool* unordered) {
   std::vector<StampedImage> images;
+  std::vector<fs::path> paths;
   for (const fs::directory_entry& entry : fs::directory_iterator(folder)) {
     if (!entry.is_regular_file() || !HasImageExtension(entry.path())) continue;
-    const std::string stem = entry.path().stem().string();
+    paths.push_back(entry.path());
+  }
+  if (paths.empty()) {
+    throw InputError(folder.string(), 0, "expected image files (.png, .jpg, .jpeg), found none");
+  }
+  std::sort(paths.begin(), paths.end());
+  *unordered = false;
+  for (const fs::path& path : paths) {
+    const std::string stem = path.stem().string();
     const std::optional<timestamp_ns_t> stamp =
         IsAllDigits(stem) ? ParseNs(stem) : std::optional<timestamp_ns_t>();
-    if (!stamp || !IsTimestampInRange(*stamp)) {
-      throw InputError(entry.path().string(), 0,
-                       "expected the image file name to be its timestamp in integer nanoseconds "
-                       "(e.g. 1403715273262142976.png), or give a timestamps file");
+    if (!stamp || !IsTimestampInRange(*stamp) || *stamp < kMinNameStampNs) {
+      *unordered = true;
+      break;
     }
-    images.push_back({{*stamp, entry.path()}, entry.path().string(), 0});
+    images.push_back({{*stamp, path}, path.string(), 0});
   }
-  if (images.empty()) {
-    throw InputError(folder.string(), 0,
-                     "expected image files (.png, .jpg, .jpeg) named by their timestamp in "
-                     "nanoseconds, found none");
+  if (*unordered) {
+    images.clear();
+    for (size_t i = 0; i < paths.size(); ++i) {
+      images.push_back({{static_cast<timestamp_ns_t>(i + 1) * 1'000'000'000, paths[i]},
+                        paths[i].string(), 0});
+    }
   }
   return images;
+}
+
+// The camera of a folder without calibration: a simple radial camera with
+// the focal length COLMAP assumes without EXIF data (1.2 times the larger
+// side), centred, undistorted; the bundle adjustment refines it.
+Camera GuessCamera(const fs::path& first_image) {
+  const GreyImage image = ReadGreyImage(first_image);
+  const double width = static_cast<double>(image.width);
+  const double height = static_cast<double>(image.height);
+  Camera camera = MakeCamera(CameraModelId::kSimpleRadial, image.width, image.height,
+                             {1.2 * std::max(width, height), 0.5 * (width - 1.0), 0.5 * (height - 1.0), 0.0});
+  camera.camera_id = 1;
+  return camera;
 }
 
 std::vector<StampedImage> ImagesFromTimestampsFile(const fs::path& folder, const fs::path& file) {
@@ -81,7 +114,19 @@ std::vector<StampedImage> ImagesFromTimestampsFile(const fs::path& folder, const
                        "column 2, within +-2^62 ns (146 years) of the epoch, got '" +
                            std::string(stamp_text) + "'");
     }
-    const fs::path path = folder / std::string(fields[0]);
+    // A name resolved inside the folder: never an absolute path or one that
+    // climbs out of it.
+    const fs::path name{std::string(fields[0])};
+    const bool inside =
+        !name.has_root_path() && fields[0].find('\0') == std::string_view::npos &&
+        std::none_of(name.begin(), name.end(), [](const fs::path& part) { return part == ".."; });
+    if (!inside) {
+      throw InputError(file.string(), line_number,
+                       "image name '" + std::string(fields[0]) +
+                           "' must be a relative path inside the image folder " + folder.string() +
+                           " (not absolute, no '..')");
+    }
+    const fs::path path = folder / name;
     if (!fs::is_regular_file(path)) {
       throw InputError(
           file.string(), line_number,
@@ -109,8 +154,8 @@ bool HasImageExtension(const fs::path& path) {
 }
 
 std::string ImageFolderOptions::Validate() const {
-  if (camera.has_value() == !camera_yaml.empty()) {
-    return "give exactly one of camera and camera_yaml";
+  if (camera.has_value() && !camera_yaml.empty()) {
+    return "give at most one of camera and camera_yaml";
   }
   if (camera && (!camera->HasValidParams() || camera->width == 0 || camera->height == 0)) {
     return "camera must have a known model, its number of params and a positive size";
@@ -118,7 +163,8 @@ std::string ImageFolderOptions::Validate() const {
   return "";
 }
 
-Sequence ReadImageFolder(const fs::path& folder, const ImageFolderOptions& options) {
+Sequence ReadImageFolder(const fs::path& folder, const ImageFolderOptions& options,
+                         const DatasetChecks& checks) {
   if (const std::string problem = options.Validate(); !problem.empty()) {
     throw InputError("image folder options: " + problem);
   }
@@ -127,10 +173,14 @@ Sequence ReadImageFolder(const fs::path& folder, const ImageFolderOptions& optio
   Sequence sequence;
   sequence.root = folder;
   if (options.camera) {
+    if (const std::string problem = CheckCameraCalibration(*options.camera); !problem.empty()) {
+      throw InputError("the image folder's camera " + options.camera->ModelName() +
+                       " is not one a camera can have: " + problem);
+    }
     sequence.rig.camera = *options.camera;
     sequence.rig.camera.camera_id = 1;
     sequence.rig.camera_rate_hz = 0.0;  // estimated from the stamps below
-  } else {
+  } else if (!options.camera_yaml.empty()) {
     const EurocCameraCalibration calibration = ReadEurocCameraYaml(options.camera_yaml);
     sequence.rig.camera = calibration.camera;
     sequence.rig.body_from_cam = calibration.body_from_cam;
@@ -138,8 +188,14 @@ Sequence ReadImageFolder(const fs::path& folder, const ImageFolderOptions& optio
   }
 
   std::vector<StampedImage> images =
-      options.timestamps_file.empty() ? ImagesFromNames(folder)
-                                      : ImagesFromTimestampsFile(folder, options.timestamps_file);
+      options.timestamps_file.empty()
+          ? ImagesFromNames(folder, &sequence.unordered)
+          : ImagesFromTimestampsFile(folder, options.timestamps_file);
+  if (sequence.unordered) {
+    VIOSFM_LOG(WARNING) << "image folder " << folder.string()
+                        << ": the image names are not timestamps: taken as an unordered photo "
+                           "collection, in name order (--timestamps FILE gives their stamps)";
+  }
   // Sort by stamp, then by source so that the duplicate message is stable.
   std::sort(images.begin(), images.end(), [](const StampedImage& a, const StampedImage& b) {
     return a.image.timestamp_ns != b.image.timestamp_ns
@@ -159,7 +215,17 @@ Sequence ReadImageFolder(const fs::path& folder, const ImageFolderOptions& optio
   if (!(sequence.rig.camera_rate_hz > 0)) {
     sequence.rig.camera_rate_hz = EstimateFrameRateHz(sequence.images);
   }
+  CheckSequenceImages(sequence, folder, checks);
 
+  if (!options.camera && options.camera_yaml.empty()) {
+    sequence.rig.camera = GuessCamera(sequence.images.front().path);
+    sequence.camera_guessed = true;
+    VIOSFM_LOG(WARNING) << "image folder " << folder.string()
+                        << ": no calibration given (--camera-yaml, --calibration): the camera is "
+                           "guessed from the image size (focal length "
+                        << sequence.rig.camera.params[0]
+                        << " px, no distortion) and refined by the bundle adjustment";
+  }
   VIOSFM_LOG(INFO) << "image folder " << folder.string() << ": " << sequence.images.size()
                    << " images (" << sequence.rig.camera.ModelName() << " "
                    << sequence.rig.camera.width << "x" << sequence.rig.camera.height << "), no IMU";

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "viosfm/io/euroc.h"
+#include "viosfm/io/image_io.h"
 #include "viosfm/sensor/camera_models.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/testing.h"
@@ -33,7 +34,7 @@ ImageFolderOptions PinholeOptions() {
 
 TEST(ReadImageFolder, StampsFromFileNames) {
   const fs::path folder = testing::MakeScratchFolder("images_by_name");
-  for (const char* name : {"300.png", "100.jpg", "200.JPEG", "notes.txt"}) {
+  for (const char* name : {"1000000300.png", "1000000100.jpg", "1000000200.JPEG", "notes.txt"}) {
     WriteTextFile(folder / name, "x");
   }
   fs::create_directory(folder / "sub");
@@ -42,12 +43,13 @@ TEST(ReadImageFolder, StampsFromFileNames) {
   const Sequence sequence = ReadImageFolder(folder, PinholeOptions());
   EXPECT_EQ(sequence.root, folder);
   ASSERT_EQ(sequence.images.size(), 3u);
-  EXPECT_EQ(sequence.images[0].timestamp_ns, 100);
-  EXPECT_EQ(sequence.images[0].path, folder / "100.jpg");
-  EXPECT_EQ(sequence.images[1].timestamp_ns, 200);
-  EXPECT_EQ(sequence.images[1].path, folder / "200.JPEG");
-  EXPECT_EQ(sequence.images[2].timestamp_ns, 300);
-  EXPECT_EQ(sequence.images[2].path, folder / "300.png");
+  EXPECT_FALSE(sequence.unordered);
+  EXPECT_EQ(sequence.images[0].timestamp_ns, 1000000100);
+  EXPECT_EQ(sequence.images[0].path, folder / "1000000100.jpg");
+  EXPECT_EQ(sequence.images[1].timestamp_ns, 1000000200);
+  EXPECT_EQ(sequence.images[1].path, folder / "1000000200.JPEG");
+  EXPECT_EQ(sequence.images[2].timestamp_ns, 1000000300);
+  EXPECT_EQ(sequence.images[2].path, folder / "1000000300.png");
   EXPECT_EQ(sequence.rig.camera.camera_id, 1u);
   EXPECT_EQ(sequence.rig.camera.model_id, CameraModelId::kPinhole);
   EXPECT_THAT(sequence.rig.camera.params, ::testing::ElementsAre(50.0, 51.0, 32.0, 24.0));
@@ -80,7 +82,7 @@ TEST(ReadImageFolder, StampsFromTimestampsFile) {
 
 TEST(ReadImageFolder, CameraFromSensorYaml) {
   const fs::path folder = testing::MakeScratchFolder("images_yaml");
-  WriteTextFile(folder / "5.png", "x");
+  WriteTextFile(folder / "1000000005.png", "x");
   WriteTextFile(folder / "sensor.yaml",
                 "%YAML:1.0\n"
                 "T_BS:\n  cols: 4\n  rows: 4\n"
@@ -93,12 +95,38 @@ TEST(ReadImageFolder, CameraFromSensorYaml) {
   options.camera_yaml = folder / "sensor.yaml";
   const Sequence sequence = ReadImageFolder(folder, options);
   ASSERT_EQ(sequence.images.size(), 1u);
-  EXPECT_EQ(sequence.images[0].timestamp_ns, 5);
+  EXPECT_EQ(sequence.images[0].timestamp_ns, 1000000005);
   EXPECT_EQ(sequence.rig.camera.model_id, CameraModelId::kOpenCV);
   EXPECT_THAT(sequence.rig.camera.params,
               ::testing::ElementsAre(500, 501, 320, 240, -0.1, 0.01, 0.001, 0.002));
   EXPECT_EQ(sequence.rig.body_from_cam.translation, Eigen::Vector3d(0.1, 0.2, 0.3));
   EXPECT_DOUBLE_EQ(sequence.rig.camera_rate_hz, 15.0);
+}
+
+TEST(ReadImageFolder, PhotosWithoutStampsOrCalibration) {
+  // Names that are no timestamps, or frame numbers: an unordered collection
+  // in name order; no calibration: the camera guessed from the image size.
+  const fs::path folder = testing::MakeScratchFolder("images_unordered");
+  const GreyImage image(64, 48, 128);
+  for (const char* name : {"IMG_0002.png", "0001.png", "IMG_0010.png"}) {
+    WriteGreyPng(folder / name, image);
+  }
+  const Sequence sequence = ReadImageFolder(folder, ImageFolderOptions());
+  EXPECT_TRUE(sequence.unordered);
+  ASSERT_EQ(sequence.images.size(), 3u);
+  EXPECT_EQ(sequence.images[0].path, folder / "0001.png");
+  EXPECT_EQ(sequence.images[1].path, folder / "IMG_0002.png");
+  EXPECT_EQ(sequence.images[2].path, folder / "IMG_0010.png");
+  EXPECT_EQ(sequence.images[0].timestamp_ns, 1'000'000'000);
+  EXPECT_EQ(sequence.images[2].timestamp_ns, 3'000'000'000);
+  EXPECT_TRUE(sequence.camera_guessed);
+  EXPECT_EQ(sequence.rig.camera.model_id, CameraModelId::kSimpleRadial);
+  EXPECT_EQ(sequence.rig.camera.width, 64u);
+  EXPECT_EQ(sequence.rig.camera.height, 48u);
+  // COLMAP's guess: 1.2 times the larger side, the centre, no distortion.
+  EXPECT_THAT(sequence.rig.camera.params,
+              ::testing::ElementsAre(::testing::DoubleEq(76.8), ::testing::DoubleEq(31.5),
+                                     ::testing::DoubleEq(23.5), ::testing::DoubleEq(0.0)));
 }
 
 TEST(ReadImageFolder, EurocImageFolderMatchesEurocReader) {
@@ -128,20 +156,13 @@ TEST(ReadImageFolder, Errors) {
   EXPECT_EQ(error.path(), folder.string());
   EXPECT_THAT(error.what(), HasSubstr("found none"));
 
-  // A non-numeric name.
-  WriteTextFile(folder / "100.png", "x");
-  WriteTextFile(folder / "frame_7.png", "x");
+  // Duplicate stamps: 01000000100 and 1000000100.
+  WriteTextFile(folder / "1000000100.png", "x");
+  WriteTextFile(folder / "01000000100.jpg", "x");
   error = ExpectInputError([&] { ReadImageFolder(folder, options); });
-  EXPECT_EQ(error.path(), (folder / "frame_7.png").string());
-  EXPECT_THAT(error.what(), HasSubstr("timestamp in integer nanoseconds"));
-  fs::remove(folder / "frame_7.png");
-
-  // Duplicate stamps: 0100 and 100.
-  WriteTextFile(folder / "0100.jpg", "x");
-  error = ExpectInputError([&] { ReadImageFolder(folder, options); });
-  EXPECT_EQ(error.path(), (folder / "100.png").string());
-  EXPECT_THAT(error.what(), HasSubstr("duplicate timestamp 100 ns, also given by " +
-                                      (folder / "0100.jpg").string()));
+  EXPECT_EQ(error.path(), (folder / "1000000100.png").string());
+  EXPECT_THAT(error.what(), HasSubstr("duplicate timestamp 1000000100 ns, also given by " +
+                                      (folder / "01000000100.jpg").string()));
 
   // Timestamps file problems, each on line 3.
   ImageFolderOptions with_file = options;
@@ -152,16 +173,16 @@ TEST(ReadImageFolder, Errors) {
   };
   const Case cases[] = {
       {"missing.png 200", "listed image 'missing.png' does not exist"},
-      {"0100.jpg 100",
+      {"01000000100.jpg 100",
        "duplicate timestamp 100 ns, also given by " + (folder / "times.txt").string() + ":2"},
-      {"0100.jpg 1e5", "got '1e5'"},
-      {"0100.jpg 12abc", "got '12abc'"},
-      {"0100.jpg", "expected 'filename timestamp'"},
-      {"0100.jpg 5 6", "got 3 fields"},
-      {"100.png 300", "already listed on line 2"},
+      {"01000000100.jpg 1e5", "got '1e5'"},
+      {"01000000100.jpg 12abc", "got '12abc'"},
+      {"01000000100.jpg", "expected 'filename timestamp'"},
+      {"01000000100.jpg 5 6", "got 3 fields"},
+      {"1000000100.png 300", "already listed on line 2"},
   };
   for (const Case& c : cases) {
-    WriteTextFile(folder / "times.txt", "# header\n100.png 100\n" + c.line3 + "\n");
+    WriteTextFile(folder / "times.txt", "# header\n1000000100.png 100\n" + c.line3 + "\n");
     error = ExpectInputError([&] { ReadImageFolder(folder, with_file); });
     EXPECT_EQ(error.path(), (folder / "times.txt").string()) << c.line3;
     EXPECT_EQ(error.line(), 3) << c.line3;
@@ -172,9 +193,10 @@ TEST(ReadImageFolder, Errors) {
               HasSubstr("found none"));
 
   // Options.
-  ImageFolderOptions no_camera;
-  EXPECT_THAT(ExpectInputError([&] { ReadImageFolder(folder, no_camera); }).what(),
-              HasSubstr("exactly one of camera and camera_yaml"));
+  ImageFolderOptions two_cameras = options;
+  two_cameras.camera_yaml = folder / "sensor.yaml";
+  EXPECT_THAT(ExpectInputError([&] { ReadImageFolder(folder, two_cameras); }).what(),
+              HasSubstr("at most one of camera and camera_yaml"));
   ImageFolderOptions bad_camera = options;
   bad_camera.camera->params.pop_back();
   EXPECT_FALSE(bad_camera.Check());

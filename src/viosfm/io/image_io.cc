@@ -5,10 +5,12 @@
 #include <algorithm>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <optional>
 #include <string>
 #include <system_error>
 #include <vector>
 
+#include "viosfm/io/image_header.h"
 #include "viosfm/util/errors.h"
 
 namespace viosfm {
@@ -47,6 +49,14 @@ GreyImage ReadGreyImage(const std::filesystem::path& path) {
   std::error_code error;
   if (!std::filesystem::is_regular_file(path, error)) {
     throw InputError(path.string(), 0, "image file not found (expected a PNG/JPEG file)");
+  }
+  // The size its header states, before the decoder allocates for it.
+  if (const std::optional<ImageHeaderSize> size = ReadImageHeaderSize(path);
+      size && size->width > kMaxImagePixels / size->height) {
+    throw InputError(path.string(), 0,
+                     "the image's header states " + std::to_string(size->width) + "x" +
+                         std::to_string(size->height) + " pixels, more than the " +
+                         std::to_string(kMaxImagePixels) + " an image may have");
   }
   cv::Mat mat;
   try {

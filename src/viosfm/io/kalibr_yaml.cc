@@ -3,6 +3,7 @@
 #include <cmath>
 #include <vector>
 
+#include "viosfm/io/dataset_checks.h"
 #include "viosfm/io/rotation_checks.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/string_util.h"
@@ -71,6 +72,11 @@ Camera ReadKalibrCameraIntrinsics(const YamlMap& yaml, const std::string& coeffi
                                       "'; supported: " + kSupportedDistortionModels);
   }
   VIOSFM_CHECK(camera.HasValidParams());
+  if (const std::string problem = CheckCameraCalibration(camera); !problem.empty()) {
+    const bool distortion = problem.find("distortion") != std::string::npos;
+    yaml.Fail(distortion ? coefficients_key : "intrinsics",
+              "expected a calibration a camera can have: " + problem);
+  }
   return camera;
 }
 
@@ -83,7 +89,12 @@ Rigid3d ReadRigidTransform(const YamlMap& yaml, const std::string& key) {
       !problem.empty()) {
     yaml.Fail(key, "expected the top-left 3x3 block to be a rotation matrix: " + problem);
   }
-  return Rigid3d::FromMatrix(matrix.topRows<3>());
+  const Rigid3d transform = Rigid3d::FromMatrix(matrix.topRows<3>());
+  // |t| is the same for a transform and its inverse (T_BS, T_cam_imu).
+  if (const std::string problem = CheckRigTranslation(transform); !problem.empty()) {
+    yaml.Fail(key, "expected a sensor's place on the rig: " + problem);
+  }
+  return transform;
 }
 
 }  // namespace viosfm

@@ -3,6 +3,7 @@
 #include <bit>
 #include <cstring>
 
+#include "viosfm/io/cdr.h"
 #include "viosfm/util/errors.h"
 
 namespace viosfm {
@@ -72,6 +73,67 @@ const std::string kTransformStampedDefinition =
         "string child_frame_id\n"
         "geometry_msgs/Transform transform\n") +
     kHeaderDefinition +
+    "================================================================================\n"
+    "MSG: geometry_msgs/Transform\n"
+    "geometry_msgs/Vector3 translation\n"
+    "geometry_msgs/Quaternion rotation\n" +
+    kVector3Definition + kQuaternionDefinition;
+
+// ROS 2 (ros2msg): the same texts with ROS 2's Header and type names.
+constexpr char kRos2HeaderDefinition[] =
+    "================================================================================\n"
+    "MSG: std_msgs/Header\n"
+    "builtin_interfaces/Time stamp\n"
+    "string frame_id\n"
+    "================================================================================\n"
+    "MSG: builtin_interfaces/Time\n"
+    "int32 sec\n"
+    "uint32 nanosec\n";
+const std::string kRos2ImageDefinition = std::string(
+                                             "std_msgs/Header header\n"
+                                             "uint32 height\n"
+                                             "uint32 width\n"
+                                             "string encoding\n"
+                                             "uint8 is_bigendian\n"
+                                             "uint32 step\n"
+                                             "uint8[] data\n") +
+                                         kRos2HeaderDefinition;
+const std::string kRos2CompressedImageDefinition = std::string(
+                                                       "std_msgs/Header header\n"
+                                                       "string format\n"
+                                                       "uint8[] data\n") +
+                                                   kRos2HeaderDefinition;
+const std::string kRos2ImuDefinition = std::string(
+                                           "std_msgs/Header header\n"
+                                           "geometry_msgs/Quaternion orientation\n"
+                                           "float64[9] orientation_covariance\n"
+                                           "geometry_msgs/Vector3 angular_velocity\n"
+                                           "float64[9] angular_velocity_covariance\n"
+                                           "geometry_msgs/Vector3 linear_acceleration\n"
+                                           "float64[9] linear_acceleration_covariance\n") +
+                                       kRos2HeaderDefinition + kQuaternionDefinition +
+                                       kVector3Definition;
+const std::string kRos2PoseStampedDefinition =
+    std::string(
+        "std_msgs/Header header\n"
+        "geometry_msgs/Pose pose\n") +
+    kRos2HeaderDefinition +
+    "================================================================================\n"
+    "MSG: geometry_msgs/Pose\n"
+    "geometry_msgs/Point position\n"
+    "geometry_msgs/Quaternion orientation\n"
+    "================================================================================\n"
+    "MSG: geometry_msgs/Point\n"
+    "float64 x\n"
+    "float64 y\n"
+    "float64 z\n" +
+    kQuaternionDefinition;
+const std::string kRos2TransformStampedDefinition =
+    std::string(
+        "std_msgs/Header header\n"
+        "string child_frame_id\n"
+        "geometry_msgs/Transform transform\n") +
+    kRos2HeaderDefinition +
     "================================================================================\n"
     "MSG: geometry_msgs/Transform\n"
     "geometry_msgs/Vector3 translation\n"
@@ -223,6 +285,78 @@ class Reader {
   const char* type_;
 };
 
+// The fields ROS 2 messages share, in CDR.
+class CdrMessageWriter {
+ public:
+  void PutHeader(const RosHeader& header) {
+    VIOSFM_CHECK(header.stamp_ns >= 0 && header.stamp_ns / 1'000'000'000 <= 0x7fffffffLL)
+        << "stamp " << header.stamp_ns << " ns is outside ROS 2 time (int32 seconds)";
+    writer.Put<int32_t>(static_cast<int32_t>(header.stamp_ns / 1'000'000'000));
+    writer.Put<uint32_t>(static_cast<uint32_t>(header.stamp_ns % 1'000'000'000));
+    writer.PutString(header.frame_id);
+  }
+  void PutVector3(const Eigen::Vector3d& v) {
+    for (int i = 0; i < 3; ++i) writer.Put<double>(v[i]);
+  }
+  void PutQuaternion(const Eigen::Quaterniond& q) {
+    writer.Put<double>(q.x());
+    writer.Put<double>(q.y());
+    writer.Put<double>(q.z());
+    writer.Put<double>(q.w());
+  }
+  void PutCovariance(const Eigen::Matrix3d& m) {  // float64[9], row-major
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) writer.Put<double>(m(r, c));
+    }
+  }
+  CdrWriter writer;
+};
+
+class CdrMessageReader {
+ public:
+  CdrMessageReader(std::span<const uint8_t> bytes, const std::string& where, const char* type)
+      : reader(bytes, where, type) {}
+
+  RosHeader GetHeader() {
+    RosHeader header;
+    const int32_t sec = reader.Get<int32_t>("header.stamp.sec");
+    const uint32_t nanosec = reader.Get<uint32_t>("header.stamp.nanosec");
+    if (sec < 0) {
+      reader.Fail("header.stamp.sec is " + std::to_string(sec) + " (before 1970: not a stamp)");
+    }
+    if (nanosec >= 1'000'000'000u) {
+      reader.Fail("header.stamp.nanosec is " + std::to_string(nanosec) + " (expected < 1e9)");
+    }
+    header.stamp_ns = static_cast<timestamp_ns_t>(sec) * 1'000'000'000 + nanosec;
+    header.frame_id = reader.GetString("header.frame_id");
+    return header;
+  }
+  Eigen::Vector3d GetVector3(const char* field) {
+    Eigen::Vector3d v;
+    for (int i = 0; i < 3; ++i) v[i] = reader.Get<double>(field);
+    return v;
+  }
+  Eigen::Quaterniond GetQuaternion(const char* field) {
+    const double x = reader.Get<double>(field);
+    const double y = reader.Get<double>(field);
+    const double z = reader.Get<double>(field);
+    const double w = reader.Get<double>(field);
+    return Eigen::Quaterniond(w, x, y, z);
+  }
+  Eigen::Matrix3d GetCovariance(const char* field) {
+    Eigen::Matrix3d m;
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) m(r, c) = reader.Get<double>(field);
+    }
+    return m;
+  }
+  std::vector<uint8_t> GetByteVector(const char* field) {
+    const std::span<const uint8_t> bytes = reader.GetByteSequence(field);
+    return std::vector<uint8_t>(bytes.begin(), bytes.end());
+  }
+  CdrReader reader;
+};
+
 }  // namespace
 
 const RosMessageType kRosImageType = {"sensor_msgs/Image", "060021388200f6f0f447d0fcd9c64743",
@@ -240,6 +374,22 @@ const RosMessageType kRosTransformStampedType = {"geometry_msgs/TransformStamped
                                                  kTransformStampedDefinition.c_str()};
 const RosMessageType kRosStringType = {"std_msgs/String", "992ce8a1687cec8c8bd883ec73ca41d1",
                                        "string data\n"};
+
+const RosMessageType kRos2ImageType = {"sensor_msgs/msg/Image", "", kRos2ImageDefinition.c_str()};
+const RosMessageType kRos2CompressedImageType = {"sensor_msgs/msg/CompressedImage", "",
+                                                 kRos2CompressedImageDefinition.c_str()};
+const RosMessageType kRos2ImuType = {"sensor_msgs/msg/Imu", "", kRos2ImuDefinition.c_str()};
+const RosMessageType kRos2PoseStampedType = {"geometry_msgs/msg/PoseStamped", "",
+                                             kRos2PoseStampedDefinition.c_str()};
+const RosMessageType kRos2TransformStampedType = {"geometry_msgs/msg/TransformStamped", "",
+                                                  kRos2TransformStampedDefinition.c_str()};
+const RosMessageType kRos2StringType = {"std_msgs/msg/String", "", "string data\n"};
+
+std::string NormalizeRos2TypeName(const std::string& type) {
+  const size_t slash = type.find('/');
+  if (slash == std::string::npos || type.find('/', slash + 1) != std::string::npos) return type;
+  return type.substr(0, slash) + "/msg/" + type.substr(slash + 1);
+}
 
 std::vector<uint8_t> SerializeRosImage(const RosImage& message) {
   Writer writer;
@@ -359,6 +509,132 @@ RosTransformStamped DeserializeRosTransformStamped(std::span<const uint8_t> byte
 
 std::string DeserializeRosString(std::span<const uint8_t> bytes, const std::string& where) {
   Reader reader(bytes, where, kRosStringType.name);
+  std::string message = reader.GetString("data");
+  reader.ExpectEnd();
+  return message;
+}
+
+// ----------------------------------------------------------------------------
+// ROS 2 (CDR)
+
+std::vector<uint8_t> SerializeCdrImage(const RosImage& message) {
+  CdrMessageWriter out;
+  out.PutHeader(message.header);
+  out.writer.Put<uint32_t>(message.height);
+  out.writer.Put<uint32_t>(message.width);
+  out.writer.PutString(message.encoding);
+  out.writer.Put<uint8_t>(message.is_bigendian);
+  out.writer.Put<uint32_t>(message.step);
+  out.writer.PutByteSequence(message.data);
+  return out.writer.Take();
+}
+
+std::vector<uint8_t> SerializeCdrCompressedImage(const RosCompressedImage& message) {
+  CdrMessageWriter out;
+  out.PutHeader(message.header);
+  out.writer.PutString(message.format);
+  out.writer.PutByteSequence(message.data);
+  return out.writer.Take();
+}
+
+std::vector<uint8_t> SerializeCdrImu(const RosImu& message) {
+  CdrMessageWriter out;
+  out.PutHeader(message.header);
+  out.PutQuaternion(message.orientation);
+  out.PutCovariance(message.orientation_covariance);
+  out.PutVector3(message.angular_velocity);
+  out.PutCovariance(message.angular_velocity_covariance);
+  out.PutVector3(message.linear_acceleration);
+  out.PutCovariance(message.linear_acceleration_covariance);
+  return out.writer.Take();
+}
+
+std::vector<uint8_t> SerializeCdrPoseStamped(const RosPoseStamped& message) {
+  CdrMessageWriter out;
+  out.PutHeader(message.header);
+  out.PutVector3(message.pose.translation);
+  out.PutQuaternion(message.pose.rotation);
+  return out.writer.Take();
+}
+
+std::vector<uint8_t> SerializeCdrTransformStamped(const RosTransformStamped& message) {
+  CdrMessageWriter out;
+  out.PutHeader(message.header);
+  out.writer.PutString(message.child_frame_id);
+  out.PutVector3(message.transform.translation);
+  out.PutQuaternion(message.transform.rotation);
+  return out.writer.Take();
+}
+
+std::vector<uint8_t> SerializeCdrString(const std::string& message) {
+  CdrWriter writer;
+  writer.PutString(message);
+  return writer.Take();
+}
+
+RosImage DeserializeCdrImage(std::span<const uint8_t> bytes, const std::string& where) {
+  CdrMessageReader in(bytes, where, kRos2ImageType.name);
+  RosImage message;
+  message.header = in.GetHeader();
+  message.height = in.reader.Get<uint32_t>("height");
+  message.width = in.reader.Get<uint32_t>("width");
+  message.encoding = in.reader.GetString("encoding");
+  message.is_bigendian = in.reader.Get<uint8_t>("is_bigendian");
+  message.step = in.reader.Get<uint32_t>("step");
+  message.data = in.GetByteVector("data");
+  in.reader.ExpectEnd();
+  return message;
+}
+
+RosCompressedImage DeserializeCdrCompressedImage(std::span<const uint8_t> bytes,
+                                                 const std::string& where) {
+  CdrMessageReader in(bytes, where, kRos2CompressedImageType.name);
+  RosCompressedImage message;
+  message.header = in.GetHeader();
+  message.format = in.reader.GetString("format");
+  message.data = in.GetByteVector("data");
+  in.reader.ExpectEnd();
+  return message;
+}
+
+RosImu DeserializeCdrImu(std::span<const uint8_t> bytes, const std::string& where) {
+  CdrMessageReader in(bytes, where, kRos2ImuType.name);
+  RosImu message;
+  message.header = in.GetHeader();
+  message.orientation = in.GetQuaternion("orientation");
+  message.orientation_covariance = in.GetCovariance("orientation_covariance");
+  message.angular_velocity = in.GetVector3("angular_velocity");
+  message.angular_velocity_covariance = in.GetCovariance("angular_velocity_covariance");
+  message.linear_acceleration = in.GetVector3("linear_acceleration");
+  message.linear_acceleration_covariance = in.GetCovariance("linear_acceleration_covariance");
+  in.reader.ExpectEnd();
+  return message;
+}
+
+RosPoseStamped DeserializeCdrPoseStamped(std::span<const uint8_t> bytes, const std::string& where) {
+  CdrMessageReader in(bytes, where, kRos2PoseStampedType.name);
+  RosPoseStamped message;
+  message.header = in.GetHeader();
+  message.pose.translation = in.GetVector3("pose.position");
+  message.pose.rotation = in.GetQuaternion("pose.orientation");
+  in.reader.ExpectEnd();
+  return message;
+}
+
+RosTransformStamped DeserializeCdrTransformStamped(std::span<const uint8_t> bytes,
+                                                   const std::string& where) {
+  CdrMessageReader in(bytes, where, kRos2TransformStampedType.name);
+  RosTransformStamped message;
+  message.header = in.GetHeader();
+  message.child_frame_id = in.reader.GetString("child_frame_id");
+  message.transform.translation = in.GetVector3("transform.translation");
+  message.transform.rotation = in.GetQuaternion("transform.rotation");
+  in.reader.ExpectEnd();
+  return message;
+}
+
+std::string DeserializeCdrString(std::span<const uint8_t> bytes, const std::string& where) {
+  CdrReader reader(bytes, where, kRos2StringType.name);
   std::string message = reader.GetString("data");
   reader.ExpectEnd();
   return message;

@@ -1,11 +1,14 @@
-// The ROS 1 messages viosfm reads from and writes to bags (rosbag.h), in
+// The ROS messages viosfm reads from and writes to bags: ROS 1's (rosbag.h)
+// and ROS 2's (rosbag2.h, mcap.h).
+//
 // ROS 1's serialization: little-endian; a string or a variable-length array
 // is a uint32 length then its bytes or elements; fixed arrays have no length;
 // time is uint32 seconds, uint32 nanoseconds; nested messages are inlined.
 //
 //   sensor_msgs/Image            header, height, width, encoding, is_bigendian, step, data
-//   sensor_msgs/CompressedImage  header, format ("jpeg", "png", "mono8; jpeg compressed mono8"),
-//   data sensor_msgs/Imu              header, orientation, orientation_covariance[9],
+//   sensor_msgs/CompressedImage  header, format ("jpeg", "png",
+//                                "mono8; jpeg compressed mono8"), data
+//   sensor_msgs/Imu              header, orientation, orientation_covariance[9],
 //                                angular_velocity, .._covariance[9],
 //                                linear_acceleration, .._covariance[9]
 //   geometry_msgs/PoseStamped    header, pose (position, orientation x y z w)
@@ -17,6 +20,14 @@
 // and libstd-msgs-dev headers state them); the definitions are the .msg
 // texts without comments, which is what tools that decode a bag without the
 // message packages (rosbag's Python reader, rosbags, Foxglove) need.
+//
+// ROS 2's serialization is CDR (cdr.h); its types are named
+// "sensor_msgs/msg/Image" (rosbag2 before 2020: "sensor_msgs/Image"), its
+// std_msgs/Header is (builtin_interfaces/Time stamp: int32 sec, uint32
+// nanosec; string frame_id), without seq; the other fields are ROS 1's. The
+// definitions are the ros2msg texts (the .msg files without comments, the
+// types they use appended after "====...\nMSG: pkg/Type" lines), which MCAP
+// schemas and rosbag2's message_definitions table hold.
 //
 // Deserialize* throw InputError("<where>: <what>") when the bytes do not hold
 // the message (too short, a length past the end, bytes left over).
@@ -35,8 +46,8 @@
 namespace viosfm {
 
 struct RosMessageType {
-  const char* name;  // "sensor_msgs/Image"
-  const char* md5sum;
+  const char* name;    // "sensor_msgs/Image" (ROS 1), "sensor_msgs/msg/Image" (ROS 2)
+  const char* md5sum;  // ROS 1 only ("" for ROS 2)
   const char* definition;
 };
 
@@ -47,8 +58,19 @@ extern const RosMessageType kRosPoseStampedType;
 extern const RosMessageType kRosTransformStampedType;
 extern const RosMessageType kRosStringType;
 
+extern const RosMessageType kRos2ImageType;
+extern const RosMessageType kRos2CompressedImageType;
+extern const RosMessageType kRos2ImuType;
+extern const RosMessageType kRos2PoseStampedType;
+extern const RosMessageType kRos2TransformStampedType;
+extern const RosMessageType kRos2StringType;
+
+// A ROS 2 type name in its current form: "sensor_msgs/msg/Image" for
+// "sensor_msgs/Image" or "sensor_msgs/msg/Image"; other names unchanged.
+std::string NormalizeRos2TypeName(const std::string& type);
+
 struct RosHeader {
-  uint32_t seq = 0;
+  uint32_t seq = 0;  // ROS 1 only
   timestamp_ns_t stamp_ns = 0;
   std::string frame_id;
 };
@@ -106,5 +128,23 @@ RosPoseStamped DeserializeRosPoseStamped(std::span<const uint8_t> bytes, const s
 RosTransformStamped DeserializeRosTransformStamped(std::span<const uint8_t> bytes,
                                                    const std::string& where);
 std::string DeserializeRosString(std::span<const uint8_t> bytes, const std::string& where);
+
+// ROS 2 (CDR). Serialize* write little-endian CDR; Deserialize* read either
+// byte order. header.seq is not part of a ROS 2 message (read as 0).
+std::vector<uint8_t> SerializeCdrImage(const RosImage& message);
+std::vector<uint8_t> SerializeCdrCompressedImage(const RosCompressedImage& message);
+std::vector<uint8_t> SerializeCdrImu(const RosImu& message);
+std::vector<uint8_t> SerializeCdrPoseStamped(const RosPoseStamped& message);
+std::vector<uint8_t> SerializeCdrTransformStamped(const RosTransformStamped& message);
+std::vector<uint8_t> SerializeCdrString(const std::string& message);
+
+RosImage DeserializeCdrImage(std::span<const uint8_t> bytes, const std::string& where);
+RosCompressedImage DeserializeCdrCompressedImage(std::span<const uint8_t> bytes,
+                                                 const std::string& where);
+RosImu DeserializeCdrImu(std::span<const uint8_t> bytes, const std::string& where);
+RosPoseStamped DeserializeCdrPoseStamped(std::span<const uint8_t> bytes, const std::string& where);
+RosTransformStamped DeserializeCdrTransformStamped(std::span<const uint8_t> bytes,
+                                                   const std::string& where);
+std::string DeserializeCdrString(std::span<const uint8_t> bytes, const std::string& where);
 
 }  // namespace viosfm

@@ -333,8 +333,8 @@ RosbagReader::RosbagReader(const fs::path& path) : path_(path) {
   if (version != kRosbagVersionLine) {
     if (version.starts_with("SQLite format")) {
       throw InputError(p, 0,
-                       "a SQLite file, not a ROS 1 bag: ROS 2 bags (.db3) are not read; convert "
-                       "it to a ROS 1 bag (e.g. `rosbags-convert`) or to a EuRoC folder");
+                       "a SQLite file, not a ROS 1 bag: a ROS 2 bag (rosbag2's sqlite3 "
+                       "storage), which viosfm reads as a .db3 file or its bag folder");
     }
     if (version.starts_with("#ROSBAG V")) {
       throw InputError(p, 0,

@@ -9,9 +9,11 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 #include <set>
 #include <sstream>
 
+#include "viosfm/io/bag_container.h"
 #include "viosfm/io/euroc.h"
 #include "viosfm/io/euroc_writer.h"
 #include "viosfm/io/image_io.h"
@@ -37,64 +39,100 @@ std::string Join(const std::vector<std::string>& parts, const std::string& separ
   return out;
 }
 
-const RosMessageType* KnownType(const std::string& type) {
-  for (const RosMessageType* known :
-       {&kRosImageType, &kRosCompressedImageType, &kRosImuType, &kRosPoseStampedType,
-        &kRosTransformStampedType, &kRosStringType}) {
-    if (type == known->name) return known;
+// The message types viosfm reads, by what they hold.
+enum class Kind { kImage, kCompressedImage, kImu, kPoseStamped, kTransformStamped, kString };
+
+const RosMessageType& TypeOf(BagFormat format, Kind kind) {
+  const bool ros1 = format == BagFormat::kRos1;
+  switch (kind) {
+    case Kind::kImage: return ros1 ? kRosImageType : kRos2ImageType;
+    case Kind::kCompressedImage: return ros1 ? kRosCompressedImageType : kRos2CompressedImageType;
+    case Kind::kImu: return ros1 ? kRosImuType : kRos2ImuType;
+    case Kind::kPoseStamped: return ros1 ? kRosPoseStampedType : kRos2PoseStampedType;
+    case Kind::kTransformStamped:
+      return ros1 ? kRosTransformStampedType : kRos2TransformStampedType;
+    case Kind::kString: return ros1 ? kRosStringType : kRos2StringType;
   }
-  return nullptr;
+  return kRosStringType;
+}
+
+// The kind of a connection's type, if viosfm reads it. ROS 2 types are
+// compared in their current form ("sensor_msgs/msg/Image").
+std::optional<Kind> KindOf(BagFormat format, const std::string& type) {
+  const std::string name = format == BagFormat::kRos2 ? NormalizeRos2TypeName(type) : type;
+  for (const Kind kind : {Kind::kImage, Kind::kCompressedImage, Kind::kImu, Kind::kPoseStamped,
+                          Kind::kTransformStamped, Kind::kString}) {
+    if (name == TypeOf(format, kind).name) return kind;
+  }
+  return std::nullopt;
 }
 
 // The connections of each topic.
-using TopicMap = std::map<std::string, std::vector<const RosbagConnection*>>;
+using TopicMap = std::map<std::string, std::vector<const BagConnection*>>;
 
-TopicMap GroupByTopic(const RosbagReader& reader) {
+TopicMap GroupByTopic(const BagReader& reader) {
   TopicMap topics;
-  for (const RosbagConnection& connection : reader.connections()) {
+  for (const BagConnection& connection : reader.connections()) {
     topics[connection.topic].push_back(&connection);
   }
   return topics;
 }
 
+// The serialization a connection must have for viosfm to decode it.
+bool DecodableSerialization(const BagReader& reader, const BagConnection& connection) {
+  return reader.format() == BagFormat::kRos1 || connection.serialization == "cdr";
+}
+
 // Picks a topic: the requested one (which must exist and have an accepted
 // type), else the only topic of an accepted type, else `preferred` among
 // several. Returns "" when the bag has none and `required` is false.
-std::string ChooseTopic(const RosbagReader& reader, const TopicMap& topics,
-                        const std::string& requested, const std::vector<std::string>& types,
+std::string ChooseTopic(const BagReader& reader, const TopicMap& topics,
+                        const std::string& requested, const std::vector<Kind>& kinds,
                         const std::string& preferred, const std::string& what,
                         const std::string& flag, bool required) {
   const std::string p = reader.path().string();
-  const std::string type_list = Join(types, " or ");
-  const auto accepted = [&types](const std::string& type) {
-    return std::find(types.begin(), types.end(), type) != types.end();
+  std::vector<std::string> type_names;
+  for (const Kind kind : kinds) type_names.push_back(TypeOf(reader.format(), kind).name);
+  const std::string type_list = Join(type_names, " or ");
+  const auto accepted = [&](const BagConnection& connection) {
+    const std::optional<Kind> kind = KindOf(reader.format(), connection.type);
+    return kind && std::find(kinds.begin(), kinds.end(), *kind) != kinds.end();
   };
   if (!requested.empty()) {
     const auto it = topics.find(requested);
     if (it == topics.end()) {
       throw InputError(p, 0,
                        "no topic '" + requested + "' (" + flag + "); the bag has:\n" +
-                           DescribeRosbagTopics(reader));
+                           DescribeBagTopics(reader));
     }
-    for (const RosbagConnection* connection : it->second) {
-      if (!accepted(connection->type)) {
+    for (const BagConnection* connection : it->second) {
+      if (!accepted(*connection)) {
         throw InputError(p, 0,
                          "topic '" + requested + "' (" + flag + ") has type " + connection->type +
                              ", expected " + type_list);
+      }
+      if (!DecodableSerialization(reader, *connection)) {
+        throw InputError(p, 0,
+                         "topic '" + requested + "' (" + flag + ") is serialized as '" +
+                             connection->serialization +
+                             "': viosfm reads ROS 2 messages in CDR (rmw_fastrtps_cpp, "
+                             "rmw_cyclonedds_cpp)");
       }
     }
     return requested;
   }
   std::vector<std::string> candidates;
   for (const auto& [topic, connections] : topics) {
-    if (accepted(connections.front()->type)) candidates.push_back(topic);
+    if (accepted(*connections.front()) && DecodableSerialization(reader, *connections.front())) {
+      candidates.push_back(topic);
+    }
   }
   if (candidates.size() == 1) return candidates.front();
   if (candidates.empty()) {
     if (!required) return "";
     throw InputError(
         p, 0,
-        "no " + what + " topic (" + type_list + "); the bag has:\n" + DescribeRosbagTopics(reader));
+        "no " + what + " topic (" + type_list + "); the bag has:\n" + DescribeBagTopics(reader));
   }
   if (std::find(candidates.begin(), candidates.end(), preferred) != candidates.end()) {
     VIOSFM_LOG(INFO) << p << ": " << candidates.size() << " " << what << " topics, reading "
@@ -106,18 +144,39 @@ std::string ChooseTopic(const RosbagReader& reader, const TopicMap& topics,
                        Join(candidates, ", ") + "): choose one with " + flag);
 }
 
-void CheckMd5(const RosbagReader& reader, const TopicMap& topics, const std::string& topic) {
-  if (topic.empty()) return;
-  for (const RosbagConnection* connection : topics.at(topic)) {
-    const RosMessageType* known = KnownType(connection->type);
-    VIOSFM_CHECK(known != nullptr) << connection->type;
-    if (connection->md5sum != "*" && connection->md5sum != known->md5sum) {
+// ROS 1 only: a connection's MD5 sum says which definition of the type it has.
+void CheckMd5(const BagReader& reader, const TopicMap& topics, const std::string& topic) {
+  if (topic.empty() || reader.format() != BagFormat::kRos1) return;
+  for (const BagConnection* connection : topics.at(topic)) {
+    const std::optional<Kind> kind = KindOf(reader.format(), connection->type);
+    VIOSFM_CHECK(kind.has_value()) << connection->type;
+    const RosMessageType& known = TypeOf(reader.format(), *kind);
+    if (connection->md5sum != "*" && connection->md5sum != known.md5sum) {
       throw InputError(reader.path().string(), 0,
                        "topic '" + topic + "': " + connection->type + " with MD5 sum " +
-                           connection->md5sum + ", expected " + known->md5sum +
+                           connection->md5sum + ", expected " + known.md5sum +
                            " (a different definition of the message)");
     }
   }
+}
+
+// The message decoders of a bag's serialization.
+struct Decoders {
+  RosImage (*image)(std::span<const uint8_t>, const std::string&);
+  RosCompressedImage (*compressed_image)(std::span<const uint8_t>, const std::string&);
+  RosImu (*imu)(std::span<const uint8_t>, const std::string&);
+  RosPoseStamped (*pose_stamped)(std::span<const uint8_t>, const std::string&);
+  RosTransformStamped (*transform_stamped)(std::span<const uint8_t>, const std::string&);
+  std::string (*string)(std::span<const uint8_t>, const std::string&);
+};
+
+Decoders DecodersOf(BagFormat format) {
+  if (format == BagFormat::kRos1) {
+    return {DeserializeRosImage,       DeserializeRosCompressedImage,  DeserializeRosImu,
+            DeserializeRosPoseStamped, DeserializeRosTransformStamped, DeserializeRosString};
+  }
+  return {DeserializeCdrImage,       DeserializeCdrCompressedImage,  DeserializeCdrImu,
+          DeserializeCdrPoseStamped, DeserializeCdrTransformStamped, DeserializeCdrString};
 }
 
 // Converts a sensor_msgs/Image to grey; InputError for encodings viosfm
@@ -205,6 +264,20 @@ GreyImage CompressedImageToGrey(const RosCompressedImage& image, const std::stri
   return out;
 }
 
+// ".jpg" or ".png" when `data` is a JPEG or PNG file (by its first bytes),
+// else "".
+std::string FileExtensionOf(const std::vector<uint8_t>& data) {
+  static constexpr uint8_t kJpeg[] = {0xff, 0xd8, 0xff};
+  static constexpr uint8_t kPng[] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  if (data.size() >= sizeof(kJpeg) && std::equal(kJpeg, kJpeg + sizeof(kJpeg), data.begin())) {
+    return ".jpg";
+  }
+  if (data.size() >= sizeof(kPng) && std::equal(kPng, kPng + sizeof(kPng), data.begin())) {
+    return ".png";
+  }
+  return "";
+}
+
 struct Located {
   timestamp_ns_t stamp_ns = 0;
   std::string location;
@@ -262,15 +335,19 @@ std::string RosbagWriteOptions::Validate() const {
   return "";
 }
 
-std::string DescribeRosbagTopics(const RosbagReader& reader) {
+std::string DescribeBagTopics(const BagReader& reader) {
   std::ostringstream out;
   const TopicMap topics = GroupByTopic(reader);
   if (topics.empty()) return "  (no topics)";
   bool first = true;
   for (const auto& [topic, connections] : topics) {
     uint64_t count = 0;
-    for (const RosbagConnection* connection : connections) count += connection->num_messages;
-    out << (first ? "" : "\n") << "  " << topic << " (" << connections.front()->type << ", "
+    for (const BagConnection* connection : connections) count += connection->num_messages;
+    const BagConnection& connection = *connections.front();
+    out << (first ? "" : "\n") << "  " << topic << " (" << connection.type << ", "
+        << (DecodableSerialization(reader, connection)
+                ? ""
+                : "serialized as '" + connection.serialization + "', ")
         << count << (count == 1 ? " message)" : " messages)");
     first = false;
   }
@@ -281,24 +358,26 @@ Sequence ReadRosbagDataset(const fs::path& bag, const RosbagDatasetOptions& opti
   if (const std::string problem = options.Validate(); !problem.empty()) {
     throw InputError("bag read options: " + problem);
   }
-  RosbagReader reader(bag);
+  const std::unique_ptr<BagReader> bag_reader = OpenBag(bag);
+  BagReader& reader = *bag_reader;
+  const BagFormat format = reader.format();
+  const Decoders decode = DecodersOf(format);
   const std::string p = bag.string();
   const TopicMap topics = GroupByTopic(reader);
 
-  const std::string image_topic = ChooseTopic(
-      reader, topics, options.image_topic, {kRosImageType.name, kRosCompressedImageType.name},
-      kEurocImageTopic, "image", "--image-topic", /*required=*/true);
+  const std::string image_topic =
+      ChooseTopic(reader, topics, options.image_topic, {Kind::kImage, Kind::kCompressedImage},
+                  kEurocImageTopic, "image", "--image-topic", /*required=*/true);
   const std::string imu_topic =
-      ChooseTopic(reader, topics, options.imu_topic, {kRosImuType.name}, kEurocImuTopic, "IMU",
+      ChooseTopic(reader, topics, options.imu_topic, {Kind::kImu}, kEurocImuTopic, "IMU",
                   "--imu-topic", options.require_imu);
   std::string groundtruth_topic = options.groundtruth_topic;
   if (groundtruth_topic.empty() && topics.count(kGroundTruthTopic) > 0) {
     groundtruth_topic = kGroundTruthTopic;
   }
   if (!groundtruth_topic.empty()) {
-    ChooseTopic(reader, topics, groundtruth_topic,
-                {kRosPoseStampedType.name, kRosTransformStampedType.name}, "", "ground-truth",
-                "--groundtruth-topic", true);
+    ChooseTopic(reader, topics, groundtruth_topic, {Kind::kPoseStamped, Kind::kTransformStamped},
+                "", "ground-truth", "--groundtruth-topic", true);
   }
   for (const std::string& topic : {image_topic, imu_topic, groundtruth_topic}) {
     CheckMd5(reader, topics, topic);
@@ -306,9 +385,11 @@ Sequence ReadRosbagDataset(const fs::path& bag, const RosbagDatasetOptions& opti
   if (imu_topic.empty()) {
     VIOSFM_LOG(WARNING) << p << ": no sensor_msgs/Imu topic: a sequence without IMU";
   }
-  const auto embedded = [&topics](const char* topic) {
+  const auto embedded = [&](const char* topic) {
     const auto it = topics.find(topic);
-    return it != topics.end() && it->second.front()->type == kRosStringType.name;
+    return it != topics.end() &&
+           KindOf(format, it->second.front()->type) == std::optional<Kind>(Kind::kString) &&
+           DecodableSerialization(reader, *it->second.front());
   };
   const bool read_embedded =
       !options.rig && options.camera_yaml.empty() && embedded(kCameraCalibrationTopic);
@@ -331,14 +412,14 @@ Sequence ReadRosbagDataset(const fs::path& bag, const RosbagDatasetOptions& opti
   size_t num_unstamped = 0;
 
   reader.ReadMessages(
-      [&](const RosbagConnection& connection) {
+      [&](const BagConnection& connection) {
         return connection.topic == image_topic || connection.topic == imu_topic ||
                connection.topic == groundtruth_topic ||
                (read_embedded && (connection.topic == kCameraCalibrationTopic ||
                                   connection.topic == kImuCalibrationTopic));
       },
-      [&](const RosbagMessage& message) {
-        const RosbagConnection& connection = *message.connection;
+      [&](const BagMessage& message) {
+        const BagConnection& connection = *message.connection;
         const std::string where = p + ": " + message.location + " (" + connection.topic + ")";
         // A message without a header stamp is stamped with its record time.
         const auto stamp_of = [&](const RosHeader& header) {
@@ -349,14 +430,18 @@ Sequence ReadRosbagDataset(const fs::path& bag, const RosbagDatasetOptions& opti
         if (connection.topic == image_topic) {
           GreyImage grey;
           timestamp_ns_t stamp = 0;
-          if (connection.type == kRosImageType.name) {
-            const RosImage image = DeserializeRosImage(message.data, where);
+          std::string file_extension;  // of a CompressedImage kept as its file
+          std::vector<uint8_t> file_bytes;
+          if (KindOf(format, connection.type) == std::optional<Kind>(Kind::kImage)) {
+            const RosImage image = decode.image(message.data, where);
             stamp = stamp_of(image.header);
             grey = ImageToGrey(image, where);
           } else {
-            const RosCompressedImage image = DeserializeRosCompressedImage(message.data, where);
+            RosCompressedImage image = decode.compressed_image(message.data, where);
             stamp = stamp_of(image.header);
             grey = CompressedImageToGrey(image, where);
+            file_extension = FileExtensionOf(image.data);
+            if (!file_extension.empty()) file_bytes = std::move(image.data);
           }
           if (first_image_location.empty()) {
             image_width = grey.width;
@@ -372,11 +457,24 @@ Sequence ReadRosbagDataset(const fs::path& bag, const RosbagDatasetOptions& opti
             throw InputError(where + ": a second image with the stamp " + std::to_string(stamp) +
                              " ns");
           }
-          const fs::path path = image_folder / (std::to_string(stamp) + ".png");
-          WriteGreyPng(path, grey);
+          // A JPEG or PNG file is kept as it is (its name then is the one a
+          // EuRoC folder of JPEG images has); anything else is written as PNG.
+          const fs::path path = image_folder / (std::to_string(stamp) +
+                                                (file_extension.empty() ? ".png" : file_extension));
+          if (file_extension.empty()) {
+            WriteGreyPng(path, grey);
+          } else {
+            WriteFileAtomically(
+                path,
+                [&](std::ostream& out) {
+                  out.write(reinterpret_cast<const char*>(file_bytes.data()),
+                            static_cast<std::streamsize>(file_bytes.size()));
+                },
+                /*binary=*/true);
+          }
           images.push_back({{stamp, message.location}, path});
         } else if (connection.topic == imu_topic) {
-          const RosImu message_imu = DeserializeRosImu(message.data, where);
+          const RosImu message_imu = decode.imu(message.data, where);
           ImuSample sample;
           sample.timestamp_ns = stamp_of(message_imu.header);
           sample.gyro = message_imu.angular_velocity;
@@ -390,13 +488,12 @@ Sequence ReadRosbagDataset(const fs::path& bag, const RosbagDatasetOptions& opti
         } else if (connection.topic == groundtruth_topic) {
           RosHeader header;
           Rigid3d world_from_body;
-          if (connection.type == kRosPoseStampedType.name) {
-            const RosPoseStamped pose = DeserializeRosPoseStamped(message.data, where);
+          if (KindOf(format, connection.type) == std::optional<Kind>(Kind::kPoseStamped)) {
+            const RosPoseStamped pose = decode.pose_stamped(message.data, where);
             header = pose.header;
             world_from_body = pose.pose;
           } else {
-            const RosTransformStamped transform =
-                DeserializeRosTransformStamped(message.data, where);
+            const RosTransformStamped transform = decode.transform_stamped(message.data, where);
             header = transform.header;
             world_from_body = transform.transform;
           }
@@ -412,9 +509,9 @@ Sequence ReadRosbagDataset(const fs::path& bag, const RosbagDatasetOptions& opti
           }
           ground_truth.push_back({{stamp_of(header), message.location}, world_from_body});
         } else if (connection.topic == kCameraCalibrationTopic) {
-          camera_yaml_text = DeserializeRosString(message.data, where);
+          camera_yaml_text = decode.string(message.data, where);
         } else if (connection.topic == kImuCalibrationTopic) {
-          imu_yaml_text = DeserializeRosString(message.data, where);
+          imu_yaml_text = decode.string(message.data, where);
         }
       });
 
@@ -554,19 +651,34 @@ void WriteRosbagDataset(const Sequence& sequence, const fs::path& bag,
     throw InputError("bag write options: " + problem);
   }
   if (sequence.images.empty()) throw InputError(bag.string(), 0, "no images to write");
-  RosbagWriter writer(bag, options.writer);
-  const RosMessageType& image_type =
-      options.compressed_images ? kRosCompressedImageType : kRosImageType;
-  const uint32_t image_connection = writer.AddConnection(options.image_topic, image_type.name,
-                                                         image_type.md5sum, image_type.definition);
+  const std::unique_ptr<BagWriter> bag_writer = CreateBagWriter(bag, options.writer);
+  BagWriter& writer = *bag_writer;
+  const bool ros1 = writer.format() == BagFormat::kRos1;
+  const auto serialize_string = ros1 ? SerializeRosString : SerializeCdrString;
+  // ROS time is uint32 seconds, ROS 2's builtin_interfaces/Time int32 seconds.
+  const timestamp_ns_t max_stamp =
+      (ros1 ? timestamp_ns_t{0xffffffff} : timestamp_ns_t{0x7fffffff}) * 1'000'000'000 +
+      999'999'999;
+  const auto check_stamp = [&](timestamp_ns_t stamp, const char* what) {
+    if (stamp < 0 || stamp > max_stamp) {
+      throw InputError(bag.string(), 0,
+                       std::string(what) + " stamp " + std::to_string(stamp) + " ns is outside " +
+                           (ros1 ? "ROS time (0 to 2^32 s)" : "ROS 2 time (0 to 2^31 s)"));
+    }
+  };
+  for (const SequenceImage& image : sequence.images) check_stamp(image.timestamp_ns, "image");
+  for (const ImuSample& sample : sequence.imu) check_stamp(sample.timestamp_ns, "IMU");
+  for (const GroundTruthState& state : sequence.ground_truth) {
+    check_stamp(state.timestamp_ns, "ground-truth");
+  }
+  const uint32_t image_connection = writer.AddTopic(
+      options.image_topic,
+      options.compressed_images ? BagMessageKind::kCompressedImage : BagMessageKind::kImage);
   const uint32_t imu_connection =
-      sequence.has_imu() ? writer.AddConnection(options.imu_topic, kRosImuType.name,
-                                                kRosImuType.md5sum, kRosImuType.definition)
-                         : 0;
+      sequence.has_imu() ? writer.AddTopic(options.imu_topic, BagMessageKind::kImu) : 0;
   const uint32_t groundtruth_connection =
       sequence.has_ground_truth()
-          ? writer.AddConnection(options.groundtruth_topic, kRosPoseStampedType.name,
-                                 kRosPoseStampedType.md5sum, kRosPoseStampedType.definition)
+          ? writer.AddTopic(options.groundtruth_topic, BagMessageKind::kPoseStamped)
           : 0;
 
   timestamp_ns_t first = sequence.images.front().timestamp_ns;
@@ -575,16 +687,19 @@ void WriteRosbagDataset(const Sequence& sequence, const fs::path& bag,
     first = std::min(first, sequence.ground_truth.front().timestamp_ns);
   }
   if (options.embed_calibration) {
-    const uint32_t camera = writer.AddConnection(kCameraCalibrationTopic, kRosStringType.name,
-                                                 kRosStringType.md5sum, kRosStringType.definition);
+    const uint32_t camera = writer.AddTopic(kCameraCalibrationTopic, BagMessageKind::kString);
     writer.Write(
         camera, first,
-        SerializeRosString(EurocCameraYamlText(sequence.rig.camera, sequence.rig.body_from_cam,
-                                               sequence.rig.camera_rate_hz)));
+        serialize_string(!options.camera_yaml_text.empty()
+                             ? options.camera_yaml_text
+                             : EurocCameraYamlText(sequence.rig.camera, sequence.rig.body_from_cam,
+                                                   sequence.rig.camera_rate_hz)));
     if (sequence.has_imu()) {
-      const uint32_t imu = writer.AddConnection(kImuCalibrationTopic, kRosStringType.name,
-                                                kRosStringType.md5sum, kRosStringType.definition);
-      writer.Write(imu, first, SerializeRosString(EurocImuYamlText(sequence.rig.imu_noise)));
+      const uint32_t imu = writer.AddTopic(kImuCalibrationTopic, BagMessageKind::kString);
+      writer.Write(imu, first,
+                   serialize_string(!options.imu_yaml_text.empty()
+                                        ? options.imu_yaml_text
+                                        : EurocImuYamlText(sequence.rig.imu_noise)));
     }
   }
 
@@ -617,7 +732,7 @@ void WriteRosbagDataset(const Sequence& sequence, const fs::path& bag,
         }
         const std::string file = ReadTextFile(image.path);
         message.data.assign(file.begin(), file.end());
-        bytes = SerializeRosCompressedImage(message);
+        bytes = ros1 ? SerializeRosCompressedImage(message) : SerializeCdrCompressedImage(message);
       } else {
         const GreyImage grey = ReadGreyImage(image.path);
         RosImage message;
@@ -627,7 +742,7 @@ void WriteRosbagDataset(const Sequence& sequence, const fs::path& bag,
         message.encoding = "mono8";
         message.step = static_cast<uint32_t>(grey.width);
         message.data = grey.pixels;
-        bytes = SerializeRosImage(message);
+        bytes = ros1 ? SerializeRosImage(message) : SerializeCdrImage(message);
       }
       writer.Write(image_connection, image.timestamp_ns, bytes);
       ++i_image;
@@ -639,14 +754,16 @@ void WriteRosbagDataset(const Sequence& sequence, const fs::path& bag,
       message.linear_acceleration = sample.accel;
       // ROS: orientation_covariance[0] = -1 says "no orientation estimate".
       message.orientation_covariance(0, 0) = -1.0;
-      writer.Write(imu_connection, sample.timestamp_ns, SerializeRosImu(message));
+      writer.Write(imu_connection, sample.timestamp_ns,
+                   ros1 ? SerializeRosImu(message) : SerializeCdrImu(message));
       ++i_imu;
     } else {
       const GroundTruthState& state = sequence.ground_truth[i_gt];
       RosPoseStamped message;
       message.header = {static_cast<uint32_t>(i_gt), state.timestamp_ns, "world"};
       message.pose = state.world_from_body;
-      writer.Write(groundtruth_connection, state.timestamp_ns, SerializeRosPoseStamped(message));
+      writer.Write(groundtruth_connection, state.timestamp_ns,
+                   ros1 ? SerializeRosPoseStamped(message) : SerializeCdrPoseStamped(message));
       ++i_gt;
     }
   }
@@ -655,6 +772,20 @@ void WriteRosbagDataset(const Sequence& sequence, const fs::path& bag,
                    << " images on " << options.image_topic << ", " << sequence.imu.size()
                    << " IMU samples on " << options.imu_topic << ", "
                    << sequence.ground_truth.size() << " ground-truth poses";
+}
+
+void UseEurocCalibrationTexts(const fs::path& folder, RosbagWriteOptions* options) {
+  options->camera_yaml_text.clear();
+  options->imu_yaml_text.clear();
+  const fs::path mav0 = fs::is_directory(folder / "mav0") ? folder / "mav0" : folder;
+  const fs::path camera = mav0 / "cam0" / "sensor.yaml";
+  const fs::path imu = mav0 / "imu0" / "sensor.yaml";
+  if (!fs::is_regular_file(camera)) return;
+  if (fs::is_regular_file(imu)) {
+    if (!IsIdentity(ReadEurocImuYaml(imu).body_from_imu)) return;
+    options->imu_yaml_text = ReadTextFile(imu);
+  }
+  options->camera_yaml_text = ReadTextFile(camera);
 }
 
 }  // namespace viosfm

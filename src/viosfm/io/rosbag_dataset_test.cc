@@ -9,6 +9,7 @@
 #include "viosfm/io/image_io.h"
 #include "viosfm/io/ros_messages.h"
 #include "viosfm/sensor/camera_models.h"
+#include "viosfm/util/file_util.h"
 #include "viosfm/util/random.h"
 #include "viosfm/util/testing.h"
 
@@ -97,18 +98,30 @@ RosbagDatasetOptions Extract(const fs::path& folder) {
 
 // Written with the EuRoC topics and the embedded calibration, a bag is read
 // back without any option: same pixels, stamps, IMU values, ground truth and
-// calibration. The same for CompressedImage (PNG bytes) and lz4 chunks.
+// calibration. The same for CompressedImage (PNG bytes), in every container
+// (ROS 1 .bag, rosbag2 .db3, MCAP) and compression.
 TEST(RosbagDataset, RoundTripsWithoutOptions) {
   const fs::path folder = testing::MakeScratchFolder("rosbag_dataset_roundtrip");
   const Sequence original = MakeSequence(folder / "original");
-  for (const bool compressed : {false, true}) {
-    SCOPED_TRACE(compressed ? "CompressedImage, lz4" : "Image mono8");
+  struct Case {
+    const char* name;
+    bool compressed_images;
+    BagCompression compression;
+  };
+  for (const Case& c :
+       {Case{"r.bag", false, BagCompression::kDefault}, Case{"c.bag", true, BagCompression::kLz4},
+        Case{"r.db3", false, BagCompression::kDefault}, Case{"c.db3", true, BagCompression::kZstd},
+        Case{"r.mcap", false, BagCompression::kDefault}, Case{"c.mcap", true, BagCompression::kLz4},
+        Case{"n.mcap", false, BagCompression::kNone}}) {
+    SCOPED_TRACE(std::string(c.name) + ", " + BagCompressionName(c.compression));
     RosbagWriteOptions write;
-    write.compressed_images = compressed;
-    if (compressed) write.writer.compression = RosbagCompression::kLz4;
-    const fs::path bag = folder / (compressed ? "c.bag" : "r.bag");
+    write.compressed_images = c.compressed_images;
+    write.writer.compression = c.compression;
+    write.writer.chunk_threshold_bytes = 4096;  // several chunks
+    const fs::path bag = folder / c.name;
+    const fs::path extract = folder / ("x_" + std::string(c.name));
     WriteRosbagDataset(original, bag, write);
-    const Sequence read = ReadRosbagDataset(bag, Extract(folder / (compressed ? "xc" : "xr")));
+    const Sequence read = ReadRosbagDataset(bag, Extract(extract));
     ExpectSameSequence(original, read);
     EXPECT_EQ(read.root, bag);
     for (size_t i = 0; i < read.ground_truth.size(); ++i) {  // bit for bit
@@ -117,8 +130,64 @@ TEST(RosbagDataset, RoundTripsWithoutOptions) {
     }
     // The extract folder is a EuRoC folder of the same recording.
     EurocReadOptions euroc;
-    ExpectSameSequence(original, ReadEurocDataset(folder / (compressed ? "xc" : "xr"), euroc));
+    ExpectSameSequence(original, ReadEurocDataset(extract, euroc));
   }
+}
+
+// ROS 2 bags recorded by others: the topics chosen as for a ROS 1 bag, the
+// reasons given when they cannot be.
+TEST(RosbagDataset, ReadsRos2BagsRecordedElsewhere) {
+  VIOSFM_REQUIRE_DATASET(root, "ros2_bags");
+  const fs::path folder = testing::MakeScratchFolder("rosbag_dataset_ros2");
+  const fs::path sample = root / "image_imu" / "rosbag2js_sample.db3";
+  RosbagDatasetOptions options = Extract(folder / "x");
+  const std::string two = testing::InputErrorMessage([&] { ReadRosbagDataset(sample, options); });
+  EXPECT_NE(two.find("2 image topics (/image, /image/compressed): choose one with --image-topic"),
+            std::string::npos)
+      << two;
+  options.image_topic = "/image";
+  options.rig = SensorRig();
+  options.rig->camera = MakeCamera(CameraModelId::kPinhole, 640, 480, {500, 500, 320, 240});
+  // One image stamped 0 (so stamped with its record time), one IMU sample
+  // three days later: the IMU does not cover the image.
+  const std::string coverage =
+      testing::InputErrorMessage([&] { ReadRosbagDataset(sample, options); });
+  EXPECT_NE(coverage.find("no IMU sample over the images"), std::string::npos) << coverage;
+  options.imu_topic = "/image/compressed";
+  const std::string wrong = testing::InputErrorMessage([&] { ReadRosbagDataset(sample, options); });
+  EXPECT_NE(wrong.find("topic '/image/compressed' (--imu-topic) has type "
+                       "sensor_msgs/CompressedImage, expected sensor_msgs/msg/Imu"),
+            std::string::npos)
+      << wrong;
+
+  // The MCAP sample: one rgb8 image and one IMU sample at the same stamp.
+  options = Extract(folder / "y");
+  options.image_topic = "/image";
+  options.rig = SensorRig();
+  options.rig->camera = MakeCamera(CameraModelId::kPinhole, 640, 480, {500, 500, 320, 240});
+  const Sequence sequence = ReadRosbagDataset(root / "image_imu" / "rerun_sensors.mcap", options);
+  ASSERT_EQ(sequence.images.size(), 1u);
+  EXPECT_EQ(sequence.images[0].timestamp_ns, 1757502238482648699);
+  EXPECT_EQ(sequence.images[0].path.filename(), "1757502238482648699.png");
+  const GreyImage grey = ReadGreyImage(sequence.images[0].path);
+  EXPECT_EQ(grey.width, 640);
+  EXPECT_EQ(grey.height, 480);
+  ASSERT_EQ(sequence.imu.size(), 1u);
+  EXPECT_EQ(sequence.imu[0].gyro, Eigen::Vector3d(0.1, 0.2, 0.3));
+  EXPECT_EQ(sequence.imu[0].accel, Eigen::Vector3d(0, 0, 9.81));
+
+  // A bag whose messages are not CDR, one without images.
+  const fs::path wrong_rmw = root / "format" / "wrong_rmw_mcap";
+  const std::string rmw =
+      testing::InputErrorMessage([&] { ReadRosbagDataset(wrong_rmw, Extract(folder / "z")); });
+  EXPECT_NE(rmw.find("wrong_format"), std::string::npos) << rmw;
+  const fs::path imu_only = root / "broken" / "ros2_imu.mcap";
+  const std::string no_image =
+      testing::InputErrorMessage([&] { ReadRosbagDataset(imu_only, Extract(folder / "w")); });
+  EXPECT_NE(no_image.find(imu_only.string() + ": no image topic"), std::string::npos) << no_image;
+  EXPECT_NE(no_image.find("/vehicle/imu/data_raw (sensor_msgs/msg/Imu, 3 messages)"),
+            std::string::npos)
+      << no_image;
 }
 
 // A bag in EuRoC's conventions without embedded calibration (as EuRoC ships
@@ -325,26 +394,69 @@ TEST(RosbagDataset, RealEurocExcerptRoundTrips) {
 }
 
 // The real RealSense recording (JPEG images) as sensor_msgs/CompressedImage
-// holding the JPEG bytes: the grey pixels read from the bag are the ones
-// OpenCV decodes from the files (first 30 images, to stay fast).
+// holding the JPEG files, in every container: read back, each image is the
+// recording's JPEG file itself, under its name, and the grey pixels are the
+// ones OpenCV decodes from the files (first 30 images, to stay fast).
 TEST(RosbagDataset, RealJpegRecordingAsCompressedImages) {
   VIOSFM_REQUIRE_DATASET(root, "realsense_room_30s");
   Sequence original = ReadEurocDataset(root);
   original.images.resize(30);
   const fs::path folder = testing::MakeScratchFolder("rosbag_dataset_realsense");
-  RosbagWriteOptions write;
-  write.compressed_images = true;
-  write.writer.compression = RosbagCompression::kLz4;
-  WriteRosbagDataset(original, folder / "rs.bag", write);
-  const Sequence read = ReadRosbagDataset(folder / "rs.bag", Extract(folder / "x"));
-  ASSERT_EQ(read.images.size(), 30u);
-  for (size_t i = 0; i < read.images.size(); ++i) {
-    EXPECT_EQ(read.images[i].timestamp_ns, original.images[i].timestamp_ns);
-    EXPECT_EQ(ReadGreyImage(read.images[i].path).pixels,
-              ReadGreyImage(original.images[i].path).pixels);
+  for (const char* name : {"rs.bag", "rs.db3", "rs.mcap"}) {
+    SCOPED_TRACE(name);
+    RosbagWriteOptions write;
+    write.compressed_images = true;
+    write.writer.compression =
+        std::string(name) == "rs.db3" ? BagCompression::kZstd : BagCompression::kLz4;
+    WriteRosbagDataset(original, folder / name, write);
+    const Sequence read =
+        ReadRosbagDataset(folder / name, Extract(folder / ("x_" + std::string(name))));
+    ASSERT_EQ(read.images.size(), 30u);
+    for (size_t i = 0; i < read.images.size(); ++i) {
+      EXPECT_EQ(read.images[i].timestamp_ns, original.images[i].timestamp_ns);
+      EXPECT_EQ(read.images[i].path.filename(), original.images[i].path.filename());
+      EXPECT_TRUE(ReadTextFile(read.images[i].path) == ReadTextFile(original.images[i].path));
+    }
+    EXPECT_EQ(ReadGreyImage(read.images[29].path).pixels,
+              ReadGreyImage(original.images[29].path).pixels);
+    EXPECT_EQ(read.imu.size(), original.imu.size());
+    EXPECT_EQ(read.rig.camera.params, original.rig.camera.params);
   }
-  EXPECT_EQ(read.imu.size(), original.imu.size());
-  EXPECT_EQ(read.rig.camera.params, original.rig.camera.params);
+}
+
+// The real recording's calibration was written by others (a rotation
+// matrix of 10 digits, not quite orthonormal): written from the rig and read
+// again, its rotation changes in the last bit, and a run of the bag drifts
+// from the folder's. Its own sensor.yaml files embedded as they are give the
+// folder's rig bit for bit, in every container.
+TEST(RosbagDataset, RealRecordingKeepsTheFolderCalibrationBitForBit) {
+  VIOSFM_REQUIRE_DATASET(root, "realsense_room_30s");
+  Sequence original = ReadEurocDataset(root);
+  original.images.resize(10);
+  const fs::path folder = testing::MakeScratchFolder("rosbag_dataset_calibration");
+  RosbagWriteOptions write;
+  UseEurocCalibrationTexts(root, &write);
+  EXPECT_EQ(write.camera_yaml_text, ReadTextFile(root / "mav0" / "cam0" / "sensor.yaml"));
+  EXPECT_EQ(write.imu_yaml_text, ReadTextFile(root / "mav0" / "imu0" / "sensor.yaml"));
+  for (const char* name : {"rs.bag", "rs.db3", "rs.mcap"}) {
+    SCOPED_TRACE(name);
+    WriteRosbagDataset(original, folder / name, write);
+    const Sequence read =
+        ReadRosbagDataset(folder / name, Extract(folder / ("x_" + std::string(name))));
+    EXPECT_EQ(read.rig.body_from_cam.rotation.coeffs(),
+              original.rig.body_from_cam.rotation.coeffs());
+    EXPECT_EQ(read.rig.body_from_cam.translation, original.rig.body_from_cam.translation);
+    EXPECT_EQ(read.rig.camera.params, original.rig.camera.params);
+    EXPECT_EQ(read.rig.camera_rate_hz, original.rig.camera_rate_hz);
+    EXPECT_EQ(read.rig.imu_noise.gyro_noise_density, original.rig.imu_noise.gyro_noise_density);
+    EXPECT_EQ(read.rig.imu_noise.gyro_random_walk, original.rig.imu_noise.gyro_random_walk);
+    EXPECT_EQ(read.rig.imu_noise.accel_noise_density, original.rig.imu_noise.accel_noise_density);
+    EXPECT_EQ(read.rig.imu_noise.accel_random_walk, original.rig.imu_noise.accel_random_walk);
+    EXPECT_EQ(read.rig.imu_noise.rate_hz, original.rig.imu_noise.rate_hz);
+    ASSERT_EQ(read.images.size(), 10u);
+    EXPECT_EQ(ReadGreyImage(read.images[9].path).pixels,
+              ReadGreyImage(original.images[9].path).pixels);
+  }
 }
 
 }  // namespace

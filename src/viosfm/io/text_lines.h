@@ -12,8 +12,13 @@
 
 namespace viosfm {
 
+// The longest line the text readers take, bytes (1 MiB): a file is read a
+// line at a time, so its size never sets the memory its reading takes.
+inline constexpr size_t kMaxTextLineBytes = size_t{1} << 20;
+
 // Calls visit(line_number, trimmed_line) for every data line of `path`.
-// `what` names the file in errors ("IMU file does not exist").
+// `what` names the file in errors ("IMU file does not exist"); a line
+// longer than kMaxTextLineBytes is an InputError naming the file and line.
 void ForEachDataLine(const std::filesystem::path& path, const std::string& what,
                      const std::function<void(int64_t, std::string_view)>& visit);
 

@@ -1,6 +1,7 @@
 #include "viosfm/io/yaml_util.h"
 
 #include <cmath>
+#include <map>
 #include <optional>
 
 #include "viosfm/util/errors.h"
@@ -10,18 +11,68 @@
 namespace viosfm {
 namespace fs = std::filesystem;
 
+namespace {
+
+// Nesting deeper, or more nodes (aliases counted each time they are used),
+// than this is not a calibration file.
+constexpr int kMaxYamlDepth = 64;
+constexpr int64_t kMaxYamlNodes = 1'000'000;
+
+// YAML forbids a key twice in one map; yaml-cpp keeps both and answers with
+// the first, so a file that says two things would be read as one of them.
+void CheckNoDuplicateKeys(const fs::path& path, const YAML::Node& node, int depth,
+                          int64_t* num_nodes) {
+  if (depth > kMaxYamlDepth || ++*num_nodes > kMaxYamlNodes) {
+    throw InputError(path.string(), YamlLine(node),
+                     "nested deeper than " + std::to_string(kMaxYamlDepth) +
+                         " levels or more than " + std::to_string(kMaxYamlNodes) +
+                         " nodes: not a calibration file");
+  }
+  if (node.IsMap()) {
+    std::map<std::string, int64_t> line_of_key;
+    for (const auto& entry : node) {
+      const std::string key = entry.first.IsScalar() ? entry.first.Scalar() : "(a non-scalar key)";
+      const auto [it, inserted] = line_of_key.emplace(key, YamlLine(entry.first));
+      if (!inserted) {
+        throw InputError(path.string(), YamlLine(entry.first),
+                         "duplicate key '" + key + "' (first on line " +
+                             std::to_string(it->second) + "): a key may appear once in a map");
+      }
+      CheckNoDuplicateKeys(path, entry.second, depth + 1, num_nodes);
+    }
+  } else if (node.IsSequence()) {
+    for (const YAML::Node& element : node) {
+      CheckNoDuplicateKeys(path, element, depth + 1, num_nodes);
+    }
+  }
+}
+
+}  // namespace
+
 YAML::Node LoadYamlFile(const fs::path& path) {
+  RequireFile(path);
+  // A calibration is a few kB; the file is read whole.
+  constexpr uintmax_t kMaxYamlBytes = 16 << 20;
+  if (fs::file_size(path) > kMaxYamlBytes) {
+    throw InputError(path.string(), 0,
+                     "a YAML file of " + std::to_string(fs::file_size(path)) +
+                         " bytes: more than the 16 MiB a calibration file may have");
+  }
   std::string text = ReadTextFile(path);
   // OpenCV's FileStorage writes "%YAML:1.0", which is not a valid YAML
   // directive; turn it into a comment of the same line.
   const size_t start = text.find_first_not_of(" \t\r\n");
   if (start != std::string::npos && text.compare(start, 6, "%YAML:") == 0) text[start] = '#';
+  YAML::Node root;
   try {
-    return YAML::Load(text);
+    root = YAML::Load(text);
   } catch (const YAML::Exception& error) {
     throw InputError(path.string(), error.mark.is_null() ? 0 : error.mark.line + 1,
                      "invalid YAML: " + error.msg);
   }
+  int64_t num_nodes = 0;
+  CheckNoDuplicateKeys(path, root, 0, &num_nodes);
+  return root;
 }
 
 int64_t YamlLine(const YAML::Node& node) {

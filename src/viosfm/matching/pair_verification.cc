@@ -129,10 +129,20 @@ void PairVerifier::Verify(const PairImage& image1, const PairImage& image2, cons
     depth_inconsistent = check.depth_inconsistent;
     seconds->vio += timer.ElapsedSeconds();
   }
+  // Across a gap in the VIO's poses its relative pose may be a
+  // re-initialisation's jump: RANSAC alone judges what step 1 rejected.
+  decision.spans_vio_gap =
+      decision.has_vio_prior && image1.odometer.gap != image2.odometer.gap;
+  const bool against_vio = decision.spans_vio_gap && decision.vio_rejected;
+  if (against_vio) {
+    decision.vio_rejected = false;
+    decision.vio_contradicted = true;
+    depth_inconsistent.clear();
+  }
   if (decision.resumed && decision.accepted) {
     // The stored geometry is the decision.
     decision.vio_rejected = false;
-    decision.reason = kPairAccepted;
+    decision.reason = decision.vio_contradicted ? kPairAcceptedAgainstVio : kPairAccepted;
     return;
   }
   // A stored pair without a geometry was rejected: decided again below
@@ -151,7 +161,7 @@ void PairVerifier::Verify(const PairImage& image1, const PairImage& image2, cons
   // the VIO pose) do not enter RANSAC.
   const FeatureMatches* ransac_matches = &matches;
   FeatureMatches consistent;
-  if (decision.has_vio_prior && decision.vio_depth_applied) {
+  if (decision.has_vio_prior && decision.vio_depth_applied && !against_vio) {
     for (size_t m = 0; m < matches.size(); ++m) {
       if (!depth_inconsistent[m]) consistent.push_back(matches[m]);
     }
@@ -169,7 +179,9 @@ void PairVerifier::Verify(const PairImage& image1, const PairImage& image2, cons
   seconds->ransac += timer.ElapsedSeconds();
   decision.num_inliers = estimate.num_inliers();
   decision.accepted = estimate.accepted();
-  decision.reason = decision.accepted ? kPairAccepted : kPairTooFewInliers;
+  decision.reason = !decision.accepted           ? kPairTooFewInliers
+                    : decision.vio_contradicted ? kPairAcceptedAgainstVio
+                                                : kPairAccepted;
   if (decision.accepted) pair_work->geometry = estimate.ToTwoViewGeometry();
 }
 

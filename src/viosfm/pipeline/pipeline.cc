@@ -184,14 +184,19 @@ PipelineSummary RunPipeline(const PipelineOptions& requested) {
   ReturnFreedMemory();
 
   if (!streamed) {
-    input = clock.Run(
-        [&] { return LoadMapperInputStage(frames, vio, verification, &features.database); });
+    input = clock.Run([&] {
+      return LoadMapperInputStage(frames, vio, verification, &features.database,
+                                  &summary.vio_gaps);
+    });
+    if (summary.vio_gaps.num_gaps > 0) summary.num_vio_segments = summary.vio_gaps.num_segments;
   } else {
     clock.Run([] {});  // loaded before the verification
   }
 
+  std::vector<Reconstruction> other_models;
   Reconstruction reconstruction = clock.Run([&] {
-    return streamed ? streamed->result.get() : MapStage(input, sequence, vio, options, &summary);
+    return streamed ? streamed->result.get()
+                    : MapStage(input, sequence, vio, options, &summary, nullptr, &other_models);
   });
 
   clock.Run([&] {
@@ -206,7 +211,8 @@ PipelineSummary RunPipeline(const PipelineOptions& requested) {
   TakeEvaluation(evaluation, &summary);
 
   clock.Run([&] {
-    WriteOutputsStage(options.output_folder, verification, reconstruction, frames, evaluation);
+    WriteOutputsStage(options.output_folder, verification, reconstruction, frames, evaluation,
+                      other_models);
   });
 
   // Every output on disk before summary.json says the run is complete (the

@@ -57,8 +57,8 @@
 // files, images and calibration, the VIO's input and poses, every option
 // that shapes the stored data) equals the stored one; otherwise it is an
 // InputError naming each changed key with its old and new value, before
-// anything in the folder changes. `overwrite` removes the run's stored
-// outputs first (RemoveRunOutputs) and starts afresh. Mapper options do not
+// anything in the folder changes. `overwrite` removes what viosfm wrote in
+// the folder first (its manifest, run_folder.h) and starts afresh. Mapper options do not
 // count: a re-run with other ones reuses the features and matches.
 //
 // Crash safety: a run killed at any point (SIGKILL included) and run again

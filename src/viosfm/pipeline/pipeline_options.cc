@@ -37,6 +37,7 @@ std::string PipelineOptions::Validate() const {
   if (output_folder.empty()) return "output_folder: an output folder is required";
   if (max_vio_time_difference_ns <= 0) return "max_vio_time_difference_ns must be positive";
   if (vio_max_gap_ns < 0) return "vio_max_gap_ns must be >= 0";
+  if (!(own_vio_max_frame_interval_s > 0.0)) return "own_vio_max_frame_interval_s must be > 0";
   if (!(rolling_shutter_readout_s >= 0.0 && rolling_shutter_readout_s < 1.0)) {
     return "rolling_shutter.readout_s must be in [0, 1) s";
   }
@@ -46,6 +47,9 @@ std::string PipelineOptions::Validate() const {
   }
   if (const std::string error = imu_scale.Validate(); !error.empty()) {
     return "imu_scale." + error;
+  }
+  if (const std::string error = dataset_checks.Validate(); !error.empty()) {
+    return "dataset_checks." + error;
   }
   if (num_threads < 1) return "num_threads must be >= 1";
   if (stream_vocabulary_frames < 1) return "stream_vocabulary_frames must be >= 1";
@@ -67,7 +71,7 @@ std::string PipelineOptions::Validate() const {
     return "follow: a recording being made has its static frames found by the IMU "
            "(frame_selection.static_source auto or imu)";
   }
-  if (follow && HasRosbagExtension(dataset)) {
+  if (follow && IsBagPath(dataset)) {
     return "follow: a EuRoC folder being recorded is followed, not a bag";
   }
   if (const std::string error = calibration.Validate(); !error.empty()) {
@@ -88,7 +92,7 @@ std::string PipelineOptions::Validate() const {
   if (const std::string error = EffectiveMapperOptions().Validate(); !error.empty()) {
     return "mapper." + error;
   }
-  if (HasRosbagExtension(dataset)) {
+  if (IsBagPath(dataset)) {
     if (const std::string error = EffectiveRosbagOptions().Validate(); !error.empty()) {
       return "rosbag." + error;
     }

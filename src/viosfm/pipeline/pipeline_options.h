@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "viosfm/features/sift.h"
+#include "viosfm/io/dataset_checks.h"
 #include "viosfm/io/image_folder.h"
 #include "viosfm/io/kalibr.h"
 #include "viosfm/io/rosbag_dataset.h"
@@ -67,6 +68,9 @@ struct PipelineOptions {
   std::filesystem::path dataset;
   // Used only when `dataset` is not a EuRoC folder.
   ImageFolderOptions image_folder;
+  // Read the dataset's IMU; false: the images alone (and a VIO file, if
+  // given). Default true.
+  bool use_imu = true;
   // Used only when `dataset` is a ROS 1 bag (".bag"): topics and calibration.
   // Its images are extracted to rosbag.extract_folder, default OUT/bag (a
   // EuRoC folder of what was read, see io/rosbag_dataset.h).
@@ -74,6 +78,9 @@ struct PipelineOptions {
   // Kalibr camchain.yaml (+ imu.yaml) replacing the dataset's calibration
   // (io/kalibr.h, ApplyCalibration). Default none.
   CalibrationFiles calibration;
+  // What the dataset's sensors may say and where its files may lie
+  // (io/dataset_checks.h: the IMU's bounds, links leaving the dataset).
+  DatasetChecks dataset_checks;
   // The output folder (created if missing). Required.
   std::filesystem::path output_folder;
 
@@ -85,6 +92,10 @@ struct PipelineOptions {
   // OUT/vio/ and every posed frame is used, each stretch between
   // re-initialisations a segment of its own (stage_vio.h).
   VioOptions own_vio;
+  // s, the median interval between images beyond which viosfm's own VIO is
+  // not run (it tracks corners from one frame to the next): the images and
+  // the IMU make the model without a VIO (stage_vio.h). Default 0.25.
+  double own_vio_max_frame_interval_s = 0.25;
   std::filesystem::path vio_trajectory;                  // trajectory file; default none
   TrajectoryFormat vio_format = TrajectoryFormat::kTum;  // default TUM
   // The frame of the file's poses; kCam poses are converted with the
@@ -93,9 +104,9 @@ struct PipelineOptions {
   // Largest gap between an image stamp and the VIO pose used for it (ns).
   // Default 5 ms.
   timestamp_ns_t max_vio_time_difference_ns = 5'000'000;
-  // A trajectory file (or vio_source) is split into segments at gaps between
-  // its stamps longer than this (ns); 0: one segment. Default 1 s
-  // (stage_vio.h).
+  // Gaps between a trajectory file's (or vio_source's) stamps longer than
+  // this (ns) are candidate breaks the images judge (sfm/vio_gaps.h); 0:
+  // none. Default 1 s.
   timestamp_ns_t vio_max_gap_ns = 1'000'000'000;
   // How far the VIO's relative poses are trusted (scene/vio_uncertainty.h):
   // the relative-pose priors' covariance (mapper.vio_uncertainty) and the
@@ -170,9 +181,10 @@ struct PipelineOptions {
   int num_threads = 2;
   // Seed of every random choice (RANSAC, vocabulary training). Default 0.
   uint64_t seed = 0;
-  // Remove the output folder's stored database and outputs of an earlier
-  // run (RunOutputNames, run_fingerprint.h) before starting, instead of
-  // reusing them or refusing a folder made from other inputs. Default false.
+  // Remove what viosfm wrote in the output folder (its manifest,
+  // run_folder.h: an earlier run's database and outputs, report.html,
+  // export/) before starting, instead of reusing them or refusing a folder
+  // made from other inputs. Default false.
   bool overwrite = false;
   // Progress bars. Default true.
   bool show_progress = true;
@@ -201,33 +213,40 @@ struct PipelineOptions {
   // their structs.
   template <class Self, class Visitor>
   static void VisitFields(Self& self, Visitor&& visit) {
-    const bool is_bag = HasRosbagExtension(self.dataset);
+    const bool is_bag = IsBagPath(self.dataset);
     const bool own_vio_runs = !self.vio_source && self.vio_trajectory.empty();
     // The uncertainty model widens the verification's epipolar band (and
     // weighs the mapper's priors, which stores nothing).
     const OptionEffect uncertainty_effect =
         self.verification.use_vio_prior && self.verification.band_follows_drift ? kShapesStoredData
                                                                                 : kRunOnly;
-    visit({"dataset", "EuRoC folder, image folder or ROS 1 bag (content hashed)", kRunOnly},
+    visit({"dataset", "EuRoC folder, image folder or bag, ROS 1 or 2 (content hashed)", kRunOnly},
           self.dataset);
     visit({"image_folder.timestamps_file", "image folder: 'filename timestamp' lines", kRunOnly},
           self.image_folder.timestamps_file);
+    visit({"use_imu", "read the dataset's IMU; false: the images alone", kShapesStoredData},
+          self.use_imu);
     visit({"image_folder.camera_yaml", "image folder: the camera's sensor.yaml", kRunOnly},
           self.image_folder.camera_yaml);
     visit({"calibration.camchain", "Kalibr camchain.yaml replacing the calibration", kRunOnly},
           self.calibration.camchain);
     visit({"calibration.imu", "Kalibr imu.yaml (needs camchain)", kRunOnly}, self.calibration.imu);
+    VisitOptionGroup({"dataset_checks", "", kRunOnly}, self.dataset_checks, visit);
     visit({"output_folder", "the output folder", kRunOnly}, self.output_folder);
     visit({"vio.source", "function (given in code) or file", kRunOnly}, self.vio_source);
     visit({"vio.trajectory", "VIO trajectory file; empty: viosfm's own VIO", kRunOnly},
           self.vio_trajectory);
+    visit({"own_vio_max_frame_interval_s",
+           "s, median image interval beyond which the own VIO is not run", kShapesStoredData,
+           own_vio_runs},
+          self.own_vio_max_frame_interval_s);
     visit({"vio.format", "tum, euroc, kitti or colmap", kShapesStoredData}, self.vio_format);
     visit({"vio.frame", "body or cam: the moving frame of the file's poses", kShapesStoredData},
           self.vio_frame);
     visit({"vio.max_time_difference_ns", "ns, largest gap between an image and its VIO pose",
            kShapesStoredData},
           self.max_vio_time_difference_ns);
-    visit({"vio.max_gap_ns", "ns, VIO segments split at longer gaps; 0: one segment",
+    visit({"vio.max_gap_ns", "ns, longer gaps in a VIO file are judged by the images; 0: none",
            kShapesStoredData},
           self.vio_max_gap_ns);
     visit({"rolling_shutter.compensate",

@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include "viosfm/pipeline/pipeline_test_fixture.h"
+#include "viosfm/util/folder_manifest.h"
 
 namespace viosfm {
 namespace {
@@ -55,6 +56,13 @@ TEST(PipelineTest, DatabaseWithoutFingerprintIsAnError) {
   const fs::path out = f.folder / "database_alone";
   fs::create_directories(out);
   fs::copy_file(f.out / "database.db", out / "database.db", fs::copy_options::overwrite_existing);
+  // A folder viosfm did not make (no manifest) is refused as a whole.
+  const std::string foreign =
+      testing::InputErrorMessage([&] { RunPipeline(SmallOptions(f, out)); });
+  EXPECT_NE(foreign.find("viosfm did not make it"), std::string::npos) << foreign;
+  // One viosfm made, whose database lost its fingerprint.json.
+  fs::copy_file(f.out / kManifestFileName, out / kManifestFileName,
+                fs::copy_options::overwrite_existing);
   const std::string message =
       testing::InputErrorMessage([&] { RunPipeline(SmallOptions(f, out)); });
   EXPECT_NE(message.find("without the fingerprint.json"), std::string::npos) << message;
@@ -92,7 +100,7 @@ TEST(PipelineTest, SecondDatasetIntoTheSameFolderIsRefused) {
        fs::directory_iterator(second / "mav0" / "cam0" / "data")) {
     const fs::path link = mixed / "mav0" / "cam0" / "data" / entry.path().filename();
     fs::remove(link);
-    fs::create_symlink(fs::absolute(entry.path()), link);
+    fs::copy_file(entry.path(), link);
   }
   options.dataset = mixed;
   options.vio_trajectory = f.vio_file;

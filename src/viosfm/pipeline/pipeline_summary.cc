@@ -26,11 +26,13 @@ ordered_json StatsJson(const PipelineEvaluation& e) {
   json["ate_median_m"] = e.ate_median_m;
   json["ate_mean_m"] = e.ate_mean_m;
   json["ate_max_m"] = e.ate_max_m;
-  json["vio_ate_rmse_m"] = e.vio_ate_rmse_m;
-  json["vio_ate_median_m"] = e.vio_ate_median_m;
+  if (e.has_vio) {
+    json["vio_ate_rmse_m"] = e.vio_ate_rmse_m;
+    json["vio_ate_median_m"] = e.vio_ate_median_m;
+  }
   json["num_poses"] = e.num_poses;
   json["metric"] = MetricJson(e.metric);
-  json["vio_metric"] = MetricJson(e.vio_metric);
+  if (e.has_vio) json["vio_metric"] = MetricJson(e.vio_metric);
   if (e.all_frames_metric) json["all_frames_metric"] = MetricJson(*e.all_frames_metric);
   return json;
 }
@@ -48,10 +50,20 @@ std::string PipelineSummary::ToString() const {
       << num_frames_without_vio_pose << " without a VIO pose), " << num_frames_registered
       << " registered (pose supported by the images), " << num_frames_vio_only
       << " placed by the VIO only, " << num_frames_unposed << " without a pose\n";
+  if (mapper.frames_per_model.size() > 1) {
+    out << "models: " << mapper.frames_per_model.size() << " (the images join "
+        << mapper.num_frames_in_other_models
+        << " frames to none of the main model's: models/1/, ...), " << mapper.num_models_merged
+        << " merged\n";
+  }
+  if (mapper.images_only) out << "images only: no VIO pose placed a frame\n";
+  if (!camera_refined.empty()) out << "camera (guessed, refined): " << camera_refined << "\n";
+  if (!mapper.imu_alignment_message.empty()) out << "IMU: " << mapper.imu_alignment_message << "\n";
   out << "every image: " << all_frames.ToString() << "\n";
   if (texture_probe.probed) {
     out << "texture: " << texture_probe_message << "\n";
   }
+  if (vio_gaps.num_gaps > 0) out << "VIO gaps: " << vio_gaps.ToString() << "\n";
   out << "VIO: " << num_vio_segments << " segment(s), " << mapper.num_vio_segments_joined
       << " joined; " << mapper.num_reposed << " frame(s) re-posed from the images, "
       << mapper.num_registered_without_vio << " registered from the images without a VIO pose, "
@@ -71,10 +83,16 @@ std::string PipelineSummary::ToString() const {
       << mean_track_length << ", mean reprojection error " << mean_reprojection_error_px << " px\n";
   if (evaluation) {
     out << "ATE (Sim(3), " << evaluation->num_poses << " poses): RMSE " << evaluation->ate_rmse_m
-        << " m, median " << evaluation->ate_median_m << " m; input VIO RMSE "
-        << evaluation->vio_ate_rmse_m << " m, median " << evaluation->vio_ate_median_m << " m\n";
+        << " m, median " << evaluation->ate_median_m << " m";
+    if (evaluation->has_vio) {
+      out << "; input VIO RMSE " << evaluation->vio_ate_rmse_m << " m, median "
+          << evaluation->vio_ate_median_m << " m";
+    }
+    out << "\n";
     out << "metric: " << FormatMetricAccuracy(evaluation->metric) << "\n";
-    out << "input VIO: " << FormatMetricAccuracy(evaluation->vio_metric) << "\n";
+    if (evaluation->has_vio) {
+      out << "input VIO: " << FormatMetricAccuracy(evaluation->vio_metric) << "\n";
+    }
     if (evaluation->all_frames_metric) {
       out << "every image: " << FormatMetricAccuracy(*evaluation->all_frames_metric) << " ("
           << evaluation->all_frames_metric->num_poses << " poses)\n";
@@ -135,7 +153,14 @@ std::string PipelineSummaryToJson(const PipelineSummary& s) {
                     {"unposed", s.num_frames_unposed},
                     {"reposed_from_images", s.mapper.num_reposed},
                     {"reposed_after_adjustment", s.mapper.num_reposed_after_adjustment},
-                    {"registered_without_vio", s.mapper.num_registered_without_vio}};
+                    {"registered_without_vio", s.mapper.num_registered_without_vio},
+                    {"in_other_models", s.mapper.num_frames_in_other_models}};
+  // The main model (model/) first, then the separate ones (models/1/, ...).
+  json["models"] = {{"frames", s.mapper.frames_per_model},
+                    {"merged", s.mapper.num_models_merged},
+                    {"images_only", s.mapper.images_only},
+                    {"imu_alignment", s.mapper.imu_alignment_message},
+                    {"camera_refined", s.camera_refined}};
   json["all_frames"] = {{"images", s.all_frames.num_images},
                         {"from_model", s.all_frames.num_from_model},
                         {"between_model_frames", s.all_frames.num_between},
@@ -175,6 +200,12 @@ std::string PipelineSummaryToJson(const PipelineSummary& s) {
   json["vio"] = {{"segments", s.num_vio_segments},
                  {"segments_joined", s.mapper.num_vio_segments_joined},
                  {"segment_rule", s.vio_segment_rule},
+                 {"gaps",
+                  {{"candidates", s.vio_gaps.num_gaps},
+                   {"confirmed", s.vio_gaps.num_confirmed},
+                   {"contradicted", s.vio_gaps.num_jumps},
+                   {"without_pairs", s.vio_gaps.num_unseen},
+                   {"pairs_dropped", s.vio_gaps.num_pairs_dropped}}},
                  {"jumps_found", s.mapper.num_vio_breaks},
                  {"jumps_refused", s.mapper.num_vio_jumps_refused}};
   ordered_json unposed = ordered_json::array();

@@ -18,6 +18,7 @@
 #include "viosfm/pipeline/metric_scale.h"
 #include "viosfm/pipeline/texture_probe.h"
 #include "viosfm/sfm/batched_mapper.h"
+#include "viosfm/sfm/vio_gaps.h"
 
 namespace viosfm {
 
@@ -41,6 +42,8 @@ struct PipelineEvaluation {
   double ate_median_m = 0.0;
   double ate_mean_m = 0.0;
   double ate_max_m = 0.0;
+  // The input VIO's figures below are there (a run without a VIO has none).
+  bool has_vio = true;
   double vio_ate_rmse_m = 0.0;  // the input VIO on the same frames
   double vio_ate_median_m = 0.0;
   size_t num_poses = 0;       // associated poses
@@ -113,8 +116,13 @@ struct PipelineSummary {
   size_t num_frames_registered = 0;
   size_t num_frames_vio_only = 0;
   size_t num_frames_unposed = 0;
-  int num_vio_segments = 0;  // in the VIO input
+  int num_vio_segments = 0;  // in the VIO input (after the gaps' decisions)
   std::string vio_segment_rule;
+  // The gaps of a VIO trajectory file judged by the images (sfm/vio_gaps.h).
+  VioGapSummary vio_gaps;
+  // A camera guessed from the image size, as the adjustment refined it
+  // ("MODEL params"); empty for a calibrated one.
+  std::string camera_refined;
   FrameSelection frame_selection;
   // The texture probe (texture_probe.h), and the frame rate (Hz) and
   // feature count the run used after it.

@@ -1,18 +1,23 @@
 #include "viosfm/pipeline/run_export.h"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cmath>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <vector>
 
+#include "viosfm/io/bag_container.h"
 #include "viosfm/io/colmap_model.h"
 #include "viosfm/io/colmap_pose_priors.h"
 #include "viosfm/io/ply.h"
-#include "viosfm/io/rosbag.h"
 #include "viosfm/io/transforms_json.h"
+#include "viosfm/pipeline/run_folder.h"
 #include "viosfm/sfm/camera_position_covariance.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/file_util.h"
+#include "viosfm/util/folder_manifest.h"
 #include "viosfm/util/logging.h"
 
 namespace viosfm {
@@ -39,7 +44,7 @@ fs::path ImageFolderOfRun(const fs::path& run_folder) {
   const fs::path dataset = text("dataset");
   if (dataset.empty()) return {};
   std::vector<fs::path> candidates;
-  if (HasRosbagExtension(dataset)) {
+  if (IsBagPath(dataset)) {
     const fs::path extract = text("rosbag.extract_folder");
     candidates = {extract / "mav0" / "cam0" / "data",
                   run_folder / "bag" / "mav0" / "cam0" / "data"};
@@ -77,6 +82,44 @@ double ScaleSigmaOfRun(const fs::path& summary_file) {
   return sigma;
 }
 
+bool IsInsideOrSame(const fs::path& path, const fs::path& folder) {
+  const auto [folder_end, path_it] =
+      std::mismatch(folder.begin(), folder.end(), path.begin(), path.end());
+  return folder_end == folder.end();
+}
+
+// InputError naming `output` when an export there would replace the run or
+// a folder holding it.
+void CheckExportFolderPlace(const fs::path& run, const fs::path& output) {
+  const fs::path run_path = fs::weakly_canonical(fs::absolute(run));
+  const fs::path output_path = fs::weakly_canonical(fs::absolute(output));
+  if (output_path == run_path) {
+    throw InputError(output.string(), 0,
+                     "--out is the run folder itself: an export goes into a folder of its own "
+                     "(default RUN/export); nothing was changed");
+  }
+  if (IsInsideOrSame(run_path, output_path)) {
+    throw InputError(output.string(), 0,
+                     "--out holds the run folder " + run.string() +
+                         ": an export goes into a folder of its own (default RUN/export); "
+                         "nothing was changed");
+  }
+}
+
+// The name of `output` in `run`, if it lies inside it; InputError naming
+// it if it lies deeper than directly inside (in one of the run's folders).
+std::optional<std::string> NameInsideRun(const fs::path& run, const fs::path& output) {
+  const fs::path run_path = fs::weakly_canonical(fs::absolute(run));
+  const fs::path output_path = fs::weakly_canonical(fs::absolute(output));
+  if (!IsInsideOrSame(output_path, run_path) || output_path == run_path) return std::nullopt;
+  if (output_path.parent_path() != run_path) {
+    throw InputError(output.string(), 0,
+                     "--out lies inside a folder of the run: an export inside the run folder goes "
+                     "directly into it (default RUN/export); nothing was changed");
+  }
+  return output_path.filename().string();
+}
+
 }  // namespace
 
 std::string RunExportOptions::Validate() const {
@@ -93,6 +136,18 @@ RunExportSummary ExportRun(const RunExportOptions& options) {
   }
   const fs::path run = options.run_folder;
   RequireFolder(run, "run folder");
+  const fs::path output = options.output_folder.empty() ? run / "export" : options.output_folder;
+  CheckExportFolderPlace(run, output);
+  const std::optional<std::string> inside_run = NameInsideRun(run, output);
+  // The run's folder is locked while it is read (and its manifest records
+  // an export written inside it); the export's folder by its manifest.
+  std::optional<ManagedFolder> run_manifest;
+  std::optional<FolderLock> run_lock;
+  if (ReadFolderManifest(run)) {
+    run_manifest.emplace(run, RunFolderManifestOptions());
+  } else {
+    run_lock.emplace(run, "another viosfm command");
+  }
   // summary.json is written last: without it the run was interrupted (or is
   // still running) and its other files may be stale or missing.
   RequireFile(run / "summary.json",
@@ -102,7 +157,7 @@ RunExportSummary ExportRun(const RunExportOptions& options) {
   const Reconstruction model = ReadColmapModel(run / "model");
 
   RunExportSummary summary;
-  summary.output_folder = options.output_folder.empty() ? run / "export" : options.output_folder;
+  summary.output_folder = output;
   summary.image_folder =
       options.image_folder.empty() ? ImageFolderOfRun(run) : fs::absolute(options.image_folder);
   if (!options.image_folder.empty()) RequireFolder(options.image_folder, "image folder");
@@ -167,19 +222,49 @@ RunExportSummary ExportRun(const RunExportOptions& options) {
   summary.num_images = ids.size();
   summary.num_points = model.NumPoints3D();
 
-  WriteFolderAtomically(summary.output_folder, [&](const fs::path& folder) {
-    CopyColmapDatabase(run / "database.db", folder / "database.db");
-    WriteColmapPosePriors(folder / "database.db", priors);
-    fs::create_directories(folder / "sparse" / "0");
-    for (const char* file : {"cameras.bin", "images.bin", "points3D.bin"}) {
-      fs::copy_file(run / "model" / file, folder / "sparse" / "0" / file);
+  // An export folder inside the run is the run's, with a manifest of its
+  // own (what the user adds there stays through the run's --overwrite).
+  if (inside_run && run_manifest) {
+    if (run_manifest->IsForeign(*inside_run) &&
+        run_manifest->manifest().subfolders.count(*inside_run) == 0) {
+      throw InputError((run / *inside_run).string(), 0,
+                       "--out: exists in the run folder and viosfm did not write it; choose "
+                       "another --out");
     }
-    WriteTransformsJson(folder / "transforms.json", transforms);
-    WritePly(folder / "sparse_pc.ply", model);
-    if (!summary.image_folder.empty()) {
-      fs::create_directory_symlink(summary.image_folder, folder / "images");
+  }
+  ManagedFolder::Options export_options;
+  export_options.kind = "export";
+  export_options.flag = "--out";
+  ManagedFolder folder(output, export_options);
+  const std::string temporary = ".viosfm-export.tmp-" + std::to_string(::getpid());
+  folder.Claim({"database.db", "sparse", "transforms.json", "sparse_pc.ply", "images", temporary});
+  if (inside_run && run_manifest) {
+    run_manifest->AddSubfolder(*inside_run);
+    run_manifest->Save();
+  }
+  // The earlier export's files go (the user's stay); the new ones are
+  // written aside, then moved in.
+  folder.RemoveWritten();
+  const fs::path staging = output / temporary;
+  fs::create_directories(staging / "sparse" / "0");
+  CopyColmapDatabase(run / "database.db", staging / "database.db");
+  WriteColmapPosePriors(staging / "database.db", priors);
+  for (const char* file : {"cameras.bin", "images.bin", "points3D.bin"}) {
+    fs::copy_file(run / "model" / file, staging / "sparse" / "0" / file);
+  }
+  WriteTransformsJson(staging / "transforms.json", transforms);
+  WritePly(staging / "sparse_pc.ply", model);
+  if (!summary.image_folder.empty()) {
+    fs::create_directory_symlink(summary.image_folder, staging / "images");
+  }
+  for (const char* name : {"database.db", "sparse", "transforms.json", "sparse_pc.ply", "images"}) {
+    if (fs::symlink_status(staging / name).type() != fs::file_type::not_found) {
+      fs::rename(staging / name, output / name);
     }
-  });
+  }
+  fs::remove_all(staging);
+  SyncToDisk(output);
+  folder.Finish();
   VIOSFM_LOG(INFO) << "export: " << summary.num_images << " images, " << summary.num_points
                    << " points -> " << summary.output_folder.string()
                    << " (database.db with pose priors, sparse/0, transforms.json, sparse_pc.ply"

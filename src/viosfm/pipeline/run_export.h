@@ -1,5 +1,9 @@
 // `viosfm export RUN`: a finished run folder (pipeline.h) turned into the
-// inputs of the next tools, in one folder (default RUN/export):
+// inputs of the next tools, in one folder (default RUN/export; a new or
+// empty folder, or an earlier export: never the run itself, a folder that
+// holds it, or a folder of the user's), whose viosfm_manifest.json lists
+// what the export wrote (util/folder_manifest.h: an export again replaces
+// those files only, so what the user added, e.g. COLMAP's output, stays):
 //
 //   images -> ...        a symbolic link to the run's image folder (EuRoC
 //                        mav0/cam0/data, the image folder, or RUN/bag/... for
@@ -43,7 +47,7 @@ inline constexpr double kFallbackPositionStddevM = 0.1;
 struct RunExportOptions {
   // The run folder (with summary.json, model/, database.db). Required.
   std::filesystem::path run_folder;
-  // Where the export is written (replaced atomically). Default RUN/export.
+  // Where the export is written. Default RUN/export.
   std::filesystem::path output_folder;
   // The images the run read; default: from RUN/options.json (the dataset,
   // or the bag's extract folder).

@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <regex>
 #include <set>
@@ -21,6 +22,7 @@
 #include "viosfm/sensor/camera_models.h"
 #include "viosfm/sim/sequence_simulator.h"
 #include "viosfm/util/file_util.h"
+#include "viosfm/util/folder_manifest.h"
 #include "viosfm/util/testing.h"
 
 namespace viosfm {
@@ -210,6 +212,64 @@ TEST(RunExport, Colmap38OpensTheExportAndReproducesThePoints) {
   EXPECT_NEAR(static_cast<double>(theirs), static_cast<double>(ours), 0.1 * ours);
   // COLMAP 3.8 left the priors alone.
   EXPECT_EQ(ReadColmapPosePriors(f.folder / "colmap.db").size(), f.summary.num_images);
+}
+
+// Every file below `folder` with its content.
+std::map<std::string, std::string> Contents(const fs::path& folder) {
+  std::map<std::string, std::string> contents;
+  for (const auto& entry : fs::recursive_directory_iterator(folder)) {
+    if (entry.is_regular_file() && !entry.is_symlink()) {
+      contents[entry.path().lexically_relative(folder).generic_string()] =
+          ReadTextFile(entry.path());
+    }
+  }
+  return contents;
+}
+
+TEST(RunExport, NeverIntoAFolderOfTheUsersTheRunOrAFolderHoldingIt) {
+  const Fixture& f = SharedFixture();
+  const fs::path users = f.folder / "users_folder";
+  fs::create_directories(users / "model");
+  testing::WriteTextFile(users / "model" / "cameras.bin", "the user's");
+  const auto run_before = Contents(f.run);
+  RunExportOptions options;
+  options.run_folder = f.run;
+  for (const fs::path& out : {users, f.run, f.folder, f.run / "model" / "sub"}) {
+    options.output_folder = out;
+    const InputError error = testing::ExpectInputError([&] { ExportRun(options); });
+    EXPECT_EQ(error.path(), out.string());
+  }
+  EXPECT_EQ(ReadTextFile(users / "model" / "cameras.bin"), "the user's");
+  EXPECT_EQ(Contents(f.run), run_before);
+  EXPECT_FALSE(fs::exists(f.run / "model" / "sub"));
+}
+
+TEST(RunExport, AnExportAgainKeepsWhatTheUserAddedAndTheRunRecordsIt) {
+  const Fixture& f = SharedFixture();
+  // The default export is the run's, with a manifest of its own.
+  EXPECT_EQ(ReadFolderManifest(f.run)->subfolders, std::set<std::string>{"export"});
+  const FolderManifest exported = *ReadFolderManifest(f.run / "export");
+  EXPECT_EQ(exported.kind, "export");
+  EXPECT_TRUE(exported.complete);
+  EXPECT_EQ(exported.files.count("transforms.json"), 1u);
+  EXPECT_EQ(exported.files.count("images"), 1u);  // the link, not what it points to
+
+  const fs::path out = f.folder / "exported";
+  RunExportOptions options;
+  options.run_folder = f.run;
+  options.output_folder = out;
+  ExportRun(options);
+  const auto first = Contents(out);
+  testing::WriteTextFile(out / "notes.txt", "the user's");
+  fs::create_directories(out / "colmap_sparse" / "0");
+  testing::WriteTextFile(out / "colmap_sparse" / "0" / "images.bin", "COLMAP's, the user's");
+  ExportRun(options);
+  std::map<std::string, std::string> second = Contents(out);
+  EXPECT_EQ(second.at("notes.txt"), "the user's");
+  EXPECT_EQ(second.at("colmap_sparse/0/images.bin"), "COLMAP's, the user's");
+  second.erase("notes.txt");
+  second.erase("colmap_sparse/0/images.bin");
+  EXPECT_EQ(second, first);  // the export's own files, written again the same
 }
 
 }  // namespace

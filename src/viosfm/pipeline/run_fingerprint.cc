@@ -23,7 +23,7 @@ namespace {
 namespace fs = std::filesystem;
 using ordered_json = nlohmann::ordered_json;
 
-// "1234 bytes, fnv1a64 ..." of an input file, or "missing" (its reader
+// "1234 bytes, xxh3 ..." of an input file, or "missing" (its reader
 // then says what is wrong with it).
 std::string FileValue(const fs::path& path) {
   if (!fs::is_regular_file(path)) return "missing";
@@ -69,9 +69,16 @@ RunFingerprint FingerprintOfInputs(const PipelineOptions& options) {
   RunFingerprint fingerprint;
   fingerprint.Set("fingerprint.version", kRunFingerprintVersion);
   const fs::path& dataset = options.dataset;
-  if (HasRosbagExtension(dataset)) {
+  if (IsBagPath(dataset)) {
     fingerprint.Set("dataset.kind", "rosbag");
-    fingerprint.Set("dataset.bag", FileValue(dataset));
+    if (fs::is_directory(dataset)) {
+      // A rosbag2 folder: metadata.yaml and its storage files.
+      for (const fs::path& file : BagFiles(dataset)) {
+        fingerprint.Set("dataset.bag." + file.filename().string(), FileValue(file));
+      }
+    } else {
+      fingerprint.Set("dataset.bag", FileValue(dataset));
+    }
     const RosbagDatasetOptions rosbag = options.EffectiveRosbagOptions();
     if (!rosbag.camera_yaml.empty()) {
       fingerprint.Set("dataset.camera_yaml", FileValue(rosbag.camera_yaml));
@@ -128,14 +135,19 @@ void AddSettledRateAndFeatures(const PipelineOptions& options, RunFingerprint* f
 void AddSequenceToFingerprint(const Sequence& sequence, RunFingerprint* fingerprint) {
   Fnv1a64 images;
   uintmax_t total_bytes = 0;
+  fingerprint->image_files.clear();
+  fingerprint->image_files.reserve(sequence.images.size());
   for (const SequenceImage& image : sequence.images) {
-    std::error_code error;
-    const uintmax_t size = fs::file_size(image.path, error);
-    if (error) throw InputError(image.path.string(), 0, "cannot read its size: " + error.message());
-    images.UpdateField(DatabaseImageName(image));
+    // The content, not only the size: an image replaced by another of the
+    // same size is another image.
+    const FileHash file = HashFile(image.path);
+    const std::string name = DatabaseImageName(image);
+    images.UpdateField(name);
     images.UpdateValue(image.timestamp_ns);
-    images.UpdateValue(size);
-    total_bytes += size;
+    images.UpdateValue(file.size);
+    images.UpdateValue(file.hash);
+    total_bytes += file.size;
+    fingerprint->image_files.push_back({name, file.size, file.hash});
   }
   std::ostringstream text;
   text << sequence.images.size() << " images";
@@ -178,6 +190,44 @@ void AddVioPosesToFingerprint(const Trajectory& world_from_body, const std::vect
   fingerprint->Set("vio.poses", std::to_string(world_from_body.size()) + " poses in " +
                                     std::to_string(num_segments) + " segment(s), fnv1a64 " +
                                     hash.HexDigest());
+}
+
+RunFingerprint FingerprintPart(const RunFingerprint& fingerprint,
+                               const std::vector<std::string>& prefixes) {
+  RunFingerprint part;
+  for (const auto& [key, value] : fingerprint.entries) {
+    for (const std::string& prefix : prefixes) {
+      if (StartsWith(key, prefix)) {
+        part.entries.emplace_back(key, value);
+        break;
+      }
+    }
+  }
+  if (std::find(prefixes.begin(), prefixes.end(), "dataset.") != prefixes.end()) {
+    part.image_files = fingerprint.image_files;
+  }
+  return part;
+}
+
+std::vector<std::string> FeaturesFingerprintPrefixes() {
+  return {"fingerprint.version", "dataset.", "calibration.", "sift."};
+}
+
+std::vector<std::string> MatchesFingerprintPrefixes() {
+  return {"fingerprint.version",
+          "dataset.",
+          "calibration.",
+          "vio.input",
+          "vio.format",
+          "vio.frame",
+          "vio.max_time_difference_ns",
+          "vio.max_gap_ns",
+          "vio_uncertainty.",
+          "verification."};
+}
+
+ViosfmDatabaseRecord DatabaseRecordOf(const RunFingerprint& fingerprint) {
+  return {fingerprint.entries, fingerprint.image_files};
 }
 
 std::string RunFingerprintToJson(const RunFingerprint& fingerprint) {

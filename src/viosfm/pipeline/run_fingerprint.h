@@ -9,7 +9,7 @@
 //   dataset.file.<path>           each file of a EuRoC folder the reader reads
 //                                 (io/euroc.h EurocDatasetFiles: the cam0 and
 //                                 imu0 data.csv and sensor.yaml, the ground
-//                                 truth csv): size and FNV-1a hash
+//                                 truth csv): size and XXH3 hash
 //                                 (util/hash.h) of the whole content
 //   dataset.bag                   a ROS 1 bag: size and hash of the whole
 //                                 file (the bag is read whole anyway)
@@ -20,7 +20,7 @@
 //                                 is the same dataset)
 //   dataset.images                the images as read: count, time span, total
 //                                 size, and a hash of every (name, stamp,
-//                                 file size)
+//                                 file size, XXH3 of the file's content)
 //   dataset.rig                   the sensor rig as read and calibrated
 //                                 (camera, body_from_cam, IMU noise, rates,
 //                                 time offset; whatever file it came from)
@@ -50,6 +50,7 @@
 #include <utility>
 #include <vector>
 
+#include "viosfm/io/colmap_database.h"
 #include "viosfm/pipeline/pipeline_options.h"
 #include "viosfm/scene/sequence.h"
 #include "viosfm/scene/trajectory.h"
@@ -59,6 +60,9 @@ namespace viosfm {
 struct RunFingerprint {
   // (key, value) in the order they were set; keys are unique.
   std::vector<std::pair<std::string, std::string>> entries;
+  // Each image file's size and content hash, as dataset.images sums them
+  // up (kept beside the database's rows, to name an image that changed).
+  std::vector<ViosfmDatabaseRecord::ImageFile> image_files;
 
   // Replaces the value of `key`, or appends it.
   void Set(const std::string& key, const std::string& value);
@@ -69,7 +73,7 @@ struct RunFingerprint {
 };
 
 // The layout version written as fingerprint.version.
-inline constexpr const char* kRunFingerprintVersion = "1";
+inline constexpr const char* kRunFingerprintVersion = "2";
 
 // Whether the option `key` of PipelineOptions::ToKeyValues shapes the
 // features or matches a run stores: whether it is one of
@@ -92,6 +96,19 @@ void AddSequenceToFingerprint(const Sequence& sequence, RunFingerprint* fingerpr
 // Adds vio.poses: the poses (world_from_body, stamped) and their segments.
 void AddVioPosesToFingerprint(const Trajectory& world_from_body, const std::vector<int>& segments,
                               RunFingerprint* fingerprint);
+
+// The part of `fingerprint` whose keys start with one of `prefixes` (the
+// record of what `viosfm features` or `viosfm match` made), image files
+// included when a "dataset." prefix is.
+RunFingerprint FingerprintPart(const RunFingerprint& fingerprint,
+                               const std::vector<std::string>& prefixes);
+// The key prefixes of what `viosfm features` stores, and of what `viosfm
+// match` stores (options named as a run's).
+std::vector<std::string> FeaturesFingerprintPrefixes();
+std::vector<std::string> MatchesFingerprintPrefixes();
+
+// What the database records of the fingerprint (io/colmap_database.h).
+ViosfmDatabaseRecord DatabaseRecordOf(const RunFingerprint& fingerprint);
 
 // fingerprint.json's text, and reading it back (InputError naming the file
 // if it is not such a file).

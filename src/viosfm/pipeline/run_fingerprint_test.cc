@@ -6,6 +6,7 @@
 #include <set>
 #include <string>
 
+#include "viosfm/io/colmap_database.h"
 #include "viosfm/pipeline/run_folder.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/file_util.h"
@@ -132,12 +133,23 @@ TEST(RunFingerprint, SequenceAndVioPoses) {
   RunFingerprint a;
   AddSequenceToFingerprint(sequence, &a);
   EXPECT_EQ(a.Find("dataset.images")->substr(0, 39), "3 images [1.000, 3.000] s, 33 bytes, fn");
+  ASSERT_EQ(a.image_files.size(), 3u);
   // One image one byte longer: other images.
   testing::WriteTextFile(sequence.images[1].path, std::string(12, 'x'));
   RunFingerprint b;
   AddSequenceToFingerprint(sequence, &b);
   EXPECT_NE(*a.Find("dataset.images"), *b.Find("dataset.images"));
   EXPECT_EQ(*a.Find("dataset.rig"), *b.Find("dataset.rig"));
+  // An image replaced by another of the same size: its content's hash
+  // tells them apart.
+  testing::WriteTextFile(sequence.images[1].path, std::string(11, 'y') + "x");
+  RunFingerprint same_size;
+  AddSequenceToFingerprint(sequence, &same_size);
+  EXPECT_EQ(same_size.image_files[1].size, b.image_files[1].size);
+  EXPECT_NE(same_size.image_files[1].xxh3, b.image_files[1].xxh3);
+  EXPECT_NE(*same_size.Find("dataset.images"), *b.Find("dataset.images"));
+  EXPECT_EQ(same_size.image_files[1].name, "1.png");
+  EXPECT_EQ(same_size.image_files[1].xxh3, HashFile(sequence.images[1].path).hash);
   // Another calibration: another rig.
   sequence.rig.body_from_cam.translation.x() += 1e-12;
   RunFingerprint c;
@@ -197,10 +209,18 @@ TEST(RunFingerprint, JsonRoundTripAndComparison) {
             std::string::npos);
 }
 
+// Writes `fingerprint` as a run does before its database's rows:
+// fingerprint.json and the database's record.
+void WriteStoredFingerprint(const fs::path& out, const RunFingerprint& fingerprint) {
+  WriteFileAtomically(out / "fingerprint.json",
+                      [&](std::ostream& stream) { stream << RunFingerprintToJson(fingerprint); });
+  ColmapDatabase::Open(out / "database.db").WriteViosfmRecord(DatabaseRecordOf(fingerprint));
+}
+
 TEST(RunFingerprint, CheckStoredRunDataNamesWhatChanged) {
   const fs::path out = testing::MakeScratchFolder("fingerprint_check");
   RunFingerprint stored;
-  stored.Set("dataset.file.mav0/imu0/data.csv", "10 bytes, fnv1a64 0000000000000001");
+  stored.Set("dataset.file.mav0/imu0/data.csv", "10 bytes, xxh3 0000000000000001");
   stored.Set("sift.max_num_features", "600");
   RunFingerprint current = stored;
   // Nothing stored: nothing to check.
@@ -212,8 +232,15 @@ TEST(RunFingerprint, CheckStoredRunDataNamesWhatChanged) {
               CheckStoredRunData(out, current, true);
             }).find("without the fingerprint.json"),
             std::string::npos);
+  // A fingerprint.json beside a database without a record of its rows (a
+  // database another tool made, or copied here).
   WriteFileAtomically(out / "fingerprint.json",
                       [&](std::ostream& stream) { stream << RunFingerprintToJson(stored); });
+  EXPECT_NE(testing::InputErrorMessage([&] {
+              CheckStoredRunData(out, stored, true);
+            }).find("holds no record of what made its features and matches"),
+            std::string::npos);
+  WriteStoredFingerprint(out, stored);
   EXPECT_NO_THROW(CheckStoredRunData(out, stored, true));
   const InputError error =
       testing::ExpectInputError([&] { CheckStoredRunData(out, current, true); });
@@ -233,43 +260,39 @@ TEST(RunFingerprint, CheckStoredRunDataNamesWhatChanged) {
             std::string::npos)
       << newer_message;
   EXPECT_NE(newer_message.find("another version"), std::string::npos) << newer_message;
+
+  // Rows written under another fingerprint (e.g. `viosfm features` with
+  // other options, or a database copied from another run): the database's
+  // record is not fingerprint.json.
+  ColmapDatabase::Open(out / "database.db").WriteViosfmRecord(DatabaseRecordOf(current));
+  const InputError rows = testing::ExpectInputError([&] { CheckStoredRunData(out, stored, true); });
+  EXPECT_EQ(rows.path(), (out / "database.db").string());
+  EXPECT_NE(std::string(rows.what()).find("written by another run or command"), std::string::npos)
+      << rows.what();
+  EXPECT_NE(std::string(rows.what()).find("sift.max_num_features was '300', is now '600'"),
+            std::string::npos)
+      << rows.what();
 }
 
-TEST(RunFingerprint, OverwriteRemovesTheRunsOutputsOnly) {
-  const fs::path out = testing::MakeScratchFolder("fingerprint_overwrite");
-  const PipelineOptions options = Options("dataset", out);
-  for (const char* file :
-       {"database.db", "database.db-wal", "fingerprint.json", "summary.json", "points.ply",
-        "trajectory_body.tum", "verification/pairs.csv", "model/images.bin", "vio/states.csv",
-        "bag/mav0/cam0/data/1.png", "notes.txt", "model_mine/x.txt", "report.html"}) {
-    fs::create_directories((out / file).parent_path());
-    testing::WriteTextFile(out / file, "x");
+TEST(RunFingerprint, AChangedImageIsNamed) {
+  const fs::path out = testing::MakeScratchFolder("fingerprint_image");
+  Sequence sequence;
+  for (int k = 0; k < 4; ++k) {
+    const fs::path image = out / "images" / (std::to_string(k) + ".png");
+    fs::create_directories(image.parent_path());
+    testing::WriteTextFile(image, "pixels " + std::to_string(k));
+    sequence.images.push_back({int64_t{1'000'000'000} * (k + 1), image});
   }
-  // Leftovers of killed atomic writes, at the top and inside the run's folders.
-  for (const char* file : {"summary.json.tmp-123", "model.old-77", "verification/pairs.csv.tmp-5",
-                           "bag/mav0/cam0/data/2.png.tmp-9.png", "notes.txt.tmp-1"}) {
-    testing::WriteTextFile(out / file, "x");
-  }
-  EXPECT_EQ(RemoveAtomicWriteLeftovers(options), 4u);
-  EXPECT_FALSE(fs::exists(out / "summary.json.tmp-123"));
-  EXPECT_FALSE(fs::exists(out / "verification/pairs.csv.tmp-5"));
-  EXPECT_FALSE(fs::exists(out / "bag/mav0/cam0/data/2.png.tmp-9.png"));
-  EXPECT_TRUE(fs::exists(out / "notes.txt.tmp-1"));  // not a file of the run
-  EXPECT_TRUE(fs::exists(out / "summary.json"));
-
-  RemoveRunOutputs(options);
-  std::set<std::string> left;
-  for (const fs::directory_entry& entry : fs::recursive_directory_iterator(out)) {
-    left.insert(fs::relative(entry.path(), out).generic_string());
-  }
-  EXPECT_EQ(left, (std::set<std::string>{"notes.txt", "notes.txt.tmp-1", "model_mine",
-                                         "model_mine/x.txt", "report.html"}));
-  // A bag extracted elsewhere: OUT/bag is not the run's.
-  PipelineOptions elsewhere = options;
-  elsewhere.rosbag.extract_folder = out / "extracted";
-  fs::create_directories(out / "bag");
-  RemoveRunOutputs(elsewhere);
-  EXPECT_TRUE(fs::exists(out / "bag"));
+  RunFingerprint stored;
+  AddSequenceToFingerprint(sequence, &stored);
+  WriteStoredFingerprint(out, stored);
+  testing::WriteTextFile(sequence.images[2].path, "pixels X");  // the same size
+  RunFingerprint current;
+  AddSequenceToFingerprint(sequence, &current);
+  const std::string message =
+      testing::InputErrorMessage([&] { CheckStoredRunData(out, current, false); });
+  EXPECT_NE(message.find("dataset.images was '4 images"), std::string::npos) << message;
+  EXPECT_NE(message.find("the content of 1 image(s) changed: 2.png"), std::string::npos) << message;
 }
 
 }  // namespace

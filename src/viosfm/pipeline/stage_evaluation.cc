@@ -98,17 +98,22 @@ TrajectoryEvaluation EvaluateStage(const Sequence& sequence, const SelectedFrame
         result.ground_truth_at_frames.poses.push_back(*truth);
       }
     }
+    // The input VIO is judged on the same frames where it posed them (a run
+    // without a VIO has none to judge).
+    const bool judge_vio = !vio.absent;
     if (result.ground_truth_at_frames.size() >= 3 && result.estimated_body.size() >= 3 &&
-        vio_registered.size() >= 3) {
+        (!judge_vio || vio_registered.size() >= 3)) {
       try {
         evaluation = EvaluateTrajectories(result.estimated_body, result.ground_truth_at_frames,
                                           eval_options);
-        evaluation_vio =
-            EvaluateTrajectories(vio_registered, result.ground_truth_at_frames, eval_options);
         metric = EvaluateMetricAccuracy(result.estimated_body, result.ground_truth_at_frames,
                                         eval_options);
-        vio_metric =
-            EvaluateMetricAccuracy(vio_registered, result.ground_truth_at_frames, eval_options);
+        if (judge_vio) {
+          evaluation_vio =
+              EvaluateTrajectories(vio_registered, result.ground_truth_at_frames, eval_options);
+          vio_metric =
+              EvaluateMetricAccuracy(vio_registered, result.ground_truth_at_frames, eval_options);
+        }
         if (result.all_frames.world_from_body.size() >= 3) {
           all_frames_metric = EvaluateMetricAccuracy(result.all_frames.world_from_body,
                                                      ground_truth_at_images, eval_options);
@@ -125,16 +130,19 @@ TrajectoryEvaluation EvaluateStage(const Sequence& sequence, const SelectedFrame
                           << " registered (3 of each needed)";
     }
   }
-  if (evaluation && evaluation_vio && metric && vio_metric) {
+  if (evaluation && metric && (vio.absent || (evaluation_vio && vio_metric))) {
     PipelineEvaluation e;
     e.metric = *metric;
-    e.vio_metric = *vio_metric;
     e.ate_rmse_m = evaluation->ate_translation_m.rmse;
     e.ate_median_m = evaluation->ate_translation_m.median;
     e.ate_mean_m = evaluation->ate_translation_m.mean;
     e.ate_max_m = evaluation->ate_translation_m.max;
-    e.vio_ate_rmse_m = evaluation_vio->ate_translation_m.rmse;
-    e.vio_ate_median_m = evaluation_vio->ate_translation_m.median;
+    e.has_vio = !vio.absent;
+    if (e.has_vio) {
+      e.vio_metric = *vio_metric;
+      e.vio_ate_rmse_m = evaluation_vio->ate_translation_m.rmse;
+      e.vio_ate_median_m = evaluation_vio->ate_translation_m.median;
+    }
     e.num_poses = evaluation->pairs.size();
     e.all_frames_metric = all_frames_metric;
     result.summary = e;

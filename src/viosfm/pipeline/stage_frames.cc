@@ -10,9 +10,10 @@ namespace viosfm {
 SelectedFrames SelectFramesStage(const Sequence& sequence, const VioPoses& vio,
                                  const PipelineOptions& options, const std::string& vio_name,
                                  FrameCache* frame_cache) {
-  return SelectedFramesOf(sequence,
-                          SelectFrames(sequence, options.frame_selection, &vio.world_from_body),
-                          vio, options, vio_name, frame_cache);
+  return SelectedFramesOf(
+      sequence,
+      SelectFrames(sequence, options.frame_selection, vio.absent ? nullptr : &vio.world_from_body),
+      vio, options, vio_name, frame_cache);
 }
 
 SelectedFrames SelectedFramesOf(const Sequence& sequence, const FrameSelection& selection,
@@ -39,7 +40,7 @@ SelectedFrames SelectedFramesOf(const Sequence& sequence, const FrameSelection& 
       ++frames.num_without_vio_pose;
     }
   }
-  if (frames.vio_at_frames.size() < 2) {
+  if (!vio.absent && frames.vio_at_frames.size() < 2) {
     throw InputError(vio_name, 0,
                      "the VIO poses " +
                          FormatNsSpan(vio.world_from_body.poses.front().timestamp_ns,
@@ -53,7 +54,7 @@ SelectedFrames SelectedFramesOf(const Sequence& sequence, const FrameSelection& 
                          FormatNsAsSeconds(options.max_vio_time_difference_ns, 3) +
                          " s (at least 2 are needed)");
   }
-  if (frames.num_without_vio_pose > 0) {
+  if (!vio.absent && frames.num_without_vio_pose > 0) {
     VIOSFM_LOG(WARNING) << "run: " << frames.num_without_vio_pose << " of "
                         << frames.sequence.images.size()
                         << " selected frames have no VIO pose within "

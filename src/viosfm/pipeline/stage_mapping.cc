@@ -1,6 +1,7 @@
 #include "viosfm/pipeline/stage_mapping.h"
 
 #include <map>
+#include <sstream>
 
 #include "viosfm/pipeline/metric_scale.h"
 #include "viosfm/scene/reprojection.h"
@@ -53,7 +54,7 @@ BatchedMapperInput LoadMapperImages(const SelectedFrames& frames, const VioPoses
 
 BatchedMapperInput LoadMapperInputStage(const SelectedFrames& frames, const VioPoses& vio,
                                         const VerificationResult& verification,
-                                        ColmapDatabase* database) {
+                                        ColmapDatabase* database, VioGapSummary* gaps) {
   BatchedMapperInput input = LoadMapperImages(frames, vio, database);
   size_t num_inlier_matches = 0;
   for (const PairDecision& decision : verification.decisions) {
@@ -63,19 +64,34 @@ BatchedMapperInput LoadMapperInputStage(const SelectedFrames& frames, const VioP
     pair.image_id2 = decision.image_id2;
     pair.matches =
         database->ReadTwoViewGeometry(decision.image_id1, decision.image_id2).inlier_matches;
+    pair.vio_contradicted = decision.vio_contradicted;
     num_inlier_matches += pair.matches.size();
     input.verified_pairs.push_back(std::move(pair));
   }
   VIOSFM_LOG(INFO) << "run: " << input.verified_pairs.size() << " accepted pairs, "
                    << num_inlier_matches << " inlier matches";
+  const VioGapSummary decided = DecideVioGaps(&input);
+  if (gaps != nullptr) *gaps = decided;
   return input;
+}
+
+BatchedMapperOptions MapperOptionsOfRun(const Sequence& sequence, const PipelineOptions& options) {
+  BatchedMapperOptions mapper = options.EffectiveMapperOptions();
+  // A guessed camera's focal length, distortion and principal point are
+  // the adjustment's to find (docs/benchmarks.md "Images alone").
+  if (sequence.camera_guessed) {
+    mapper.ba.refine_intrinsics = true;
+    mapper.ba.refine_principal_point = true;
+  }
+  return mapper;
 }
 
 Reconstruction MapStage(const BatchedMapperInput& input, const Sequence& sequence,
                         const VioPoses& vio, const PipelineOptions& options,
-                        PipelineSummary* summary, VerifiedPairStream* stream) {
-  Reconstruction reconstruction =
-      RunBatchedMapper(input, options.EffectiveMapperOptions(), &summary->mapper, stream);
+                        PipelineSummary* summary, VerifiedPairStream* stream,
+                        std::vector<Reconstruction>* other_models) {
+  Reconstruction reconstruction = RunBatchedMapper(input, MapperOptionsOfRun(sequence, options),
+                                                   &summary->mapper, stream, {}, other_models);
   FinishMapping(sequence, vio, options, summary, &reconstruction);
   return reconstruction;
 }
@@ -83,10 +99,25 @@ Reconstruction MapStage(const BatchedMapperInput& input, const Sequence& sequenc
 void FinishMapping(const Sequence& sequence, const VioPoses& vio, const PipelineOptions& options,
                    PipelineSummary* summary, Reconstruction* reconstruction) {
   VIOSFM_LOG(INFO) << "run: mapper " << summary->mapper.ToString();
-  if (options.use_imu_scale) {
-    summary->metric_scale = ApplyImuMetricScale(
-        sequence, vio.own_vio_rig.value_or(sequence.rig), options.vio_uncertainty.scale_sigma,
-        options.imu_scale, reconstruction, summary->mapper.inertial_scale);
+  if (sequence.camera_guessed) {
+    const Camera& camera = reconstruction->GetCamera(sequence.rig.camera.camera_id);
+    std::ostringstream params;
+    for (size_t k = 0; k < camera.params.size(); ++k) params << (k > 0 ? " " : "") << camera.params[k];
+    summary->camera_refined = camera.ModelName() + " " + params.str();
+    VIOSFM_LOG(INFO) << "run: the guessed camera refined by the adjustment: "
+                     << summary->camera_refined;
+  }
+  if (vio.absent && !sequence.has_imu()) {
+    summary->metric_scale.message =
+        "images only: the model has the scale and frame of its first two views, not metres";
+    VIOSFM_LOG(WARNING) << "run: " << summary->metric_scale.message;
+  } else if (options.use_imu_scale) {
+    // Without a VIO the IMU's scale is the only one (the VIO's taken as
+    // unknown).
+    const double vio_scale_sigma = vio.absent ? 1e6 : options.vio_uncertainty.scale_sigma;
+    summary->metric_scale =
+        ApplyImuMetricScale(sequence, vio.own_vio_rig.value_or(sequence.rig), vio_scale_sigma,
+                            options.imu_scale, reconstruction, summary->mapper.inertial_scale);
     if (summary->metric_scale.vio_scale_refuted) {
       VIOSFM_LOG(WARNING) << "run: metric scale: " << summary->metric_scale.message;
     } else {

@@ -12,6 +12,7 @@
 #include "viosfm/pipeline/stage_frames.h"
 #include "viosfm/pipeline/stage_vio.h"
 #include "viosfm/sfm/batched_mapper.h"
+#include "viosfm/sfm/vio_gaps.h"
 
 namespace viosfm {
 
@@ -21,18 +22,28 @@ namespace viosfm {
 BatchedMapperInput LoadMapperImages(const SelectedFrames& frames, const VioPoses& vio,
                                     ColmapDatabase* database);
 
-// The mapper's input with the inlier matches of the accepted pairs.
+// The mapper's input with the inlier matches of the accepted pairs, the
+// gaps in the VIO's poses judged by them (sfm/vio_gaps.h; `gaps`, if given,
+// receives the decisions).
 BatchedMapperInput LoadMapperInputStage(const SelectedFrames& frames, const VioPoses& vio,
                                         const VerificationResult& verification,
-                                        ColmapDatabase* database);
+                                        ColmapDatabase* database, VioGapSummary* gaps = nullptr);
 
 // Maps, applies the metric scale, and fills summary's mapper, metric_scale,
 // frame counts and model figures (logging every frame left without a pose
 // and why). With a `stream` the pairs come from it (input.verified_pairs
 // empty; sfm/batched_mapper.h).
+// The models the images could not join to the main one go to
+// `other_models` when given.
 Reconstruction MapStage(const BatchedMapperInput& input, const Sequence& sequence,
                         const VioPoses& vio, const PipelineOptions& options,
-                        PipelineSummary* summary, VerifiedPairStream* stream = nullptr);
+                        PipelineSummary* summary, VerifiedPairStream* stream = nullptr,
+                        std::vector<Reconstruction>* other_models = nullptr);
+
+// The mapper's options in a run: the run's (EffectiveMapperOptions), with
+// the camera's focal length, distortion and principal point refined where
+// it was guessed.
+BatchedMapperOptions MapperOptionsOfRun(const Sequence& sequence, const PipelineOptions& options);
 
 // MapStage after the mapper (summary->mapper holds its summary): the
 // metric scale and the summary's frame counts and model figures.

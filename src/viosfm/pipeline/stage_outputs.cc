@@ -12,7 +12,8 @@ namespace fs = std::filesystem;
 
 void WriteOutputsStage(const fs::path& out, const VerificationResult& verification,
                        const Reconstruction& reconstruction, const SelectedFrames& frames,
-                       const TrajectoryEvaluation& evaluation) {
+                       const TrajectoryEvaluation& evaluation,
+                       const std::vector<Reconstruction>& other_models) {
   const fs::path verification_folder = out / "verification";
   fs::create_directories(verification_folder);
   WritePairDecisionsCsv(verification_folder / "pairs.csv", verification.decisions);
@@ -21,6 +22,12 @@ void WriteOutputsStage(const fs::path& out, const VerificationResult& verificati
   WriteColmapModelFolder(out / "model", reconstruction, ColmapModelFormat::kBinary);
   WriteColmapModelFolder(out / "model_txt", reconstruction, ColmapModelFormat::kText);
   WritePly(out / "points.ply", reconstruction);
+  // The separate models of this run only: an earlier run's are gone.
+  fs::remove_all(out / "models");
+  for (size_t k = 0; k < other_models.size(); ++k) {
+    WriteColmapModelFolder(out / "models" / std::to_string(k + 1), other_models[k],
+                           ColmapModelFormat::kBinary);
+  }
   WriteTumTrajectory(out / "trajectory_cam.tum", evaluation.estimated_cam);
   WriteTumTrajectory(out / "trajectory_body.tum", evaluation.estimated_body);
   WriteTumTrajectory(out / "trajectory_body_all_frames.tum", evaluation.all_frames.world_from_body);
@@ -33,14 +40,17 @@ void WriteOutputsStage(const fs::path& out, const VerificationResult& verificati
   } else {
     fs::remove(out / "groundtruth_body.tum");
   }
-  if (evaluation.estimate && evaluation.vio) {
-    const std::string gt_path = (out / "groundtruth_body.tum").string();
+  const std::string gt_path = (out / "groundtruth_body.tum").string();
+  if (evaluation.estimate) {
     WriteEvaluationJson(out / "eval.json", *evaluation.estimate, evaluation.options,
                         {(out / "trajectory_body.tum").string(), "tum", gt_path, "tum"});
+  } else {
+    fs::remove(out / "eval.json");
+  }
+  if (evaluation.estimate && evaluation.vio) {
     WriteEvaluationJson(out / "eval_vio.json", *evaluation.vio, evaluation.options,
                         {(out / "vio_body.tum").string(), "tum", gt_path, "tum"});
   } else {
-    fs::remove(out / "eval.json");
     fs::remove(out / "eval_vio.json");
   }
 }

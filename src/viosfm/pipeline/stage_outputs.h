@@ -10,6 +10,7 @@
 #pragma once
 
 #include <filesystem>
+#include <vector>
 
 #include "viosfm/matching/verification_driver.h"
 #include "viosfm/pipeline/stage_evaluation.h"
@@ -18,8 +19,11 @@
 
 namespace viosfm {
 
+// The models the images could not join to the main one (`other_models`) go
+// to models/1/, models/2/, ... (COLMAP binary).
 void WriteOutputsStage(const std::filesystem::path& out, const VerificationResult& verification,
                        const Reconstruction& reconstruction, const SelectedFrames& frames,
-                       const TrajectoryEvaluation& evaluation);
+                       const TrajectoryEvaluation& evaluation,
+                       const std::vector<Reconstruction>& other_models = {});
 
 }  // namespace viosfm

@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <filesystem>
 #include <iomanip>
+#include <optional>
 #include <sstream>
+#include <vector>
 
 #include "viosfm/io/trajectory_io.h"
 #include "viosfm/util/errors.h"
@@ -16,6 +18,30 @@ namespace {
 namespace fs = std::filesystem;
 
 void CompleteVioPoses(VioPoses* poses);
+
+// Why viosfm's own VIO cannot run on the sequence, if it cannot.
+std::optional<std::string> WhyNoOwnVio(const Sequence& sequence, const PipelineOptions& options) {
+  if (!sequence.has_imu()) {
+    return std::string(
+        "no IMU and no VIO trajectory (--vio-trajectory): the images alone make the model, "
+        "in the scale and frame of its first two views");
+  }
+  std::vector<timestamp_ns_t> intervals;
+  for (size_t i = 1; i < sequence.images.size(); ++i) {
+    intervals.push_back(sequence.images[i].timestamp_ns - sequence.images[i - 1].timestamp_ns);
+  }
+  if (intervals.empty()) return std::nullopt;
+  std::nth_element(intervals.begin(), intervals.begin() + intervals.size() / 2, intervals.end());
+  const double median_s = NsToSeconds(intervals[intervals.size() / 2]);
+  if (median_s <= options.own_vio_max_frame_interval_s) return std::nullopt;
+  std::ostringstream reason;
+  reason << std::fixed << std::setprecision(2) << "the images are " << median_s
+         << " s apart (median), too far for viosfm's own VIO to track corners from one to the "
+            "next (own_vio_max_frame_interval_s "
+         << options.own_vio_max_frame_interval_s
+         << "): the images make the model and the IMU gives it its metric scale and gravity";
+  return reason.str();
+}
 
 // viosfm's own VIO on the sequence: every posed frame, a new segment after
 // every stretch without a pose.
@@ -165,6 +191,13 @@ Trajectory LoadVioTrajectory(const Sequence& sequence, const PipelineOptions& op
 VioPoses LoadVioPoses(const Sequence& sequence, const PipelineOptions& options, FrameCache* frames,
                       const VioProgressCallback& on_progress) {
   if (!options.vio_source && options.vio_trajectory.empty()) {
+    if (const std::optional<std::string> reason = WhyNoOwnVio(sequence, options)) {
+      VioPoses poses;
+      poses.absent = true;
+      poses.segment_rule = *reason;
+      VIOSFM_LOG(WARNING) << "run: " << *reason;
+      return poses;
+    }
     return RunOwnVio(sequence, options, frames, on_progress);
   }
   VioPoses poses;
@@ -172,13 +205,25 @@ VioPoses LoadVioPoses(const Sequence& sequence, const PipelineOptions& options, 
     poses.world_from_body = LoadVioTrajectory(sequence, options);
     poses.rolling_shutter_readout_s = options.rolling_shutter_readout_s;
     poses.rolling_shutter_source = "rolling_shutter.readout_s";
-    poses.segments = SegmentsFromTimeGaps(poses.world_from_body, options.vio_max_gap_ns);
+    // One segment: a time gap alone is no re-initialisation. The gaps
+    // longer than vio_max_gap_ns are candidate breaks, which the images
+    // confirm or refute before mapping (sfm/vio_gaps.h).
+    poses.segments.assign(poses.world_from_body.size(), 0);
     poses.segment_rule =
         options.vio_max_gap_ns > 0
-            ? "time gaps longer than " + FormatNsAsSeconds(options.vio_max_gap_ns, 3) + " s"
-            : "none (--vio-max-gap 0)";
+            ? "one segment; its time gaps longer than " +
+                  FormatNsAsSeconds(options.vio_max_gap_ns, 3) + " s judged by the images"
+            : "one segment (--vio-max-gap 0)";
   }
   CompleteVioPoses(&poses);
+  const std::vector<int> gaps = SegmentsFromTimeGaps(poses.world_from_body, options.vio_max_gap_ns);
+  for (size_t k = 0; k < gaps.size(); ++k) poses.odometers[k].gap = gaps[k];
+  if (!gaps.empty() && gaps.back() > 0) {
+    VIOSFM_LOG(INFO) << "run: the VIO trajectory has " << gaps.back() << " time gap(s) longer than "
+                     << FormatNsAsSeconds(options.vio_max_gap_ns, 3)
+                     << " s: each is one segment where the images confirm the VIO's relative pose "
+                        "across it, a break where they contradict it or show nothing";
+  }
   return poses;
 }
 

@@ -28,6 +28,10 @@
 namespace viosfm {
 
 struct VioPoses {
+  // No VIO: the images alone (no IMU, no trajectory file), or the images and
+  // the IMU (frames too far apart for viosfm's own VIO); `segment_rule` says
+  // why. The mapper then starts, carries and joins its models from the images.
+  bool absent = false;
   Trajectory world_from_body;          // time ordered
   std::vector<int> segments;           // per pose
   std::vector<VioOdometer> odometers;  // per pose (ComputeVioOdometers)
@@ -60,7 +64,10 @@ Trajectory ReadVioTrajectoryFile(const std::filesystem::path& path, TrajectoryFo
 Trajectory LoadVioTrajectory(const Sequence& sequence, const PipelineOptions& options);
 
 // The VIO poses as the options say (viosfm's own VIO without a source or
-// file, else LoadVioTrajectory) with their segments and odometers.
+// file, else LoadVioTrajectory) with their segments and odometers. Without a
+// source or file, no VIO runs where the dataset has no IMU, or where its
+// images are further apart (median) than own_vio_max_frame_interval_s: the
+// own VIO tracks corners from frame to frame (VioPoses::absent).
 // viosfm's own VIO reads the images through `frames` (kept there for the
 // features stage) when given, and reports its progress to `on_progress`
 // (vio/odometry.h RunVio) when given.

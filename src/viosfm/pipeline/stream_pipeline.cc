@@ -995,6 +995,11 @@ PipelineSummary RunStreamPipeline(const PipelineOptions& requested) {
     ResolveRateByTexture(*recorded, &frame_cache, &options, &summary);
     if (options.texture_probe.enable) AddSettledRateAndFeatures(options, &fingerprint);
     summary.num_frames_in = recorded->images.size();
+    if (own_vio && !recorded->has_imu()) {
+      throw InputError(options.dataset.string(), 0,
+                       "--stream: the stream runs viosfm's own VIO, which needs an IMU, and the "
+                       "dataset has none; run the images alone without --stream");
+    }
     if (own_vio && FrameSelectionUsesTrajectory(*recorded, options.frame_selection)) {
       throw InputError(options.dataset.string(), 0,
                        "--stream: the frame selection would need the own VIO's trajectory "

@@ -44,6 +44,9 @@ struct ImagePairMatches {
   image_t image_id1 = kInvalidImageId;
   image_t image_id2 = kInvalidImageId;
   FeatureMatches matches;
+  // Accepted by RANSAC alone across a gap in the VIO's poses whose relative
+  // pose step 1 rejected (PairDecision::vio_contradicted).
+  bool vio_contradicted = false;
 };
 
 // COLMAP's pair id: ordered so that image_id1 < image_id2,

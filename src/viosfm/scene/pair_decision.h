@@ -55,18 +55,25 @@ struct PairDecision {
   // Step 1 rejected the pair (the EE test, or the depth check: then
   // vio_depth_rejected too).
   bool vio_rejected = false;
+  // The pair's frames lie on two sides of a gap in the VIO's poses
+  // (VioOdometer::gap), where the VIO may have re-initialised: a pair step 1
+  // rejects is then judged by RANSAC alone and, accepted, is evidence that
+  // the VIO jumped there (vio_contradicted; sfm/vio_gaps.h decides).
+  bool spans_vio_gap = false;
+  bool vio_contradicted = false;
   int num_inliers = 0;    // RANSAC inliers (0 if RANSAC did not run)
   bool accepted = false;  // the pair's geometry is stored
   // The matches were already in the database: the pair was not matched or
   // verified again (accepted and num_inliers come from the stored geometry).
   bool resumed = false;
-  // "accepted", "no_matches", "vio_outlier_ratio", "vio_depth",
-  // "too_few_inliers".
+  // "accepted", "accepted_against_vio" (vio_contradicted), "no_matches",
+  // "vio_outlier_ratio", "vio_depth", "too_few_inliers".
   std::string reason;
 };
 
 // Reasons, as written in PairDecision::reason.
 inline constexpr const char* kPairAccepted = "accepted";
+inline constexpr const char* kPairAcceptedAgainstVio = "accepted_against_vio";
 inline constexpr const char* kPairNoMatches = "no_matches";
 inline constexpr const char* kPairVioOutlierRatio = "vio_outlier_ratio";
 inline constexpr const char* kPairVioDepth = "vio_depth";

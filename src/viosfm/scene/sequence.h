@@ -47,6 +47,12 @@ struct Sequence {
   std::vector<ImuSample> imu;
   // Ordered by strictly increasing timestamp; empty without ground truth.
   std::vector<GroundTruthState> ground_truth;
+  // The images are an unordered photo collection: their stamps only number
+  // them (io/image_folder.h).
+  bool unordered = false;
+  // The camera was guessed from the image size, not calibrated: the bundle
+  // adjustment refines its focal length and distortion.
+  bool camera_guessed = false;
 
   bool has_imu() const { return !imu.empty(); }
   bool has_ground_truth() const { return !ground_truth.empty(); }

@@ -143,6 +143,12 @@ struct VioOdometer {
   int segment = 0;            // index of the segment (see SegmentVioTrajectory)
   double distance_m = 0.0;    // path length from the segment's first pose
   double rotation_rad = 0.0;  // rotation angle travelled from the segment's first pose
+  // The time gaps in the VIO's poses before this one within its segment
+  // (SegmentsFromTimeGaps): a VIO file does not say where it
+  // re-initialised, so a long gap is only a candidate break, which the
+  // images confirm or refute (sfm/vio_gaps.h). Frames with different
+  // counts lie on two sides of a gap.
+  int gap = 0;
 };
 
 // One frame as the model sees it: the VIO's pose of the camera and its
@@ -182,10 +188,12 @@ struct RelativePoseSigmas {
 };
 RelativePoseSigmas LargestSigmas(const Eigen::Matrix<double, 6, 6>& covariance);
 
-// Segment index of every pose of a VIO trajectory (time ordered): a new
-// segment starts after every gap between consecutive stamps larger than
-// max_gap_ns (a VIO that lost track and re-initialised gives no poses for a
-// while and then poses in a new world frame). max_gap_ns <= 0: one segment.
+// The number of gaps between consecutive stamps longer than max_gap_ns
+// before every pose of a VIO trajectory (time ordered): where a VIO may have
+// lost track and re-initialised (it gives no poses for a while and then
+// poses in a new world frame), or only given keyframes; a segment index
+// when every such gap is a break, a VioOdometer::gap when the images judge
+// them. max_gap_ns <= 0: none.
 std::vector<int> SegmentsFromTimeGaps(const Trajectory& trajectory, timestamp_ns_t max_gap_ns);
 
 // The odometer of every pose of `world_from_frame` (time ordered) given its

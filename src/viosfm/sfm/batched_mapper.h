@@ -39,7 +39,13 @@
 #pragma once
 
 #include <functional>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <set>
 #include <string>
+#include <unordered_map>
+#include <unordered_set>
 #include <vector>
 
 #include "viosfm/ba/bundle_adjustment.h"
@@ -50,7 +56,9 @@
 #include "viosfm/sfm/filters.h"
 #include "viosfm/sfm/frame_registration.h"
 #include "viosfm/sfm/gyro_priors.h"
+#include "viosfm/sfm/incremental_mapper.h"
 #include "viosfm/sfm/inertial_terms.h"
+#include "viosfm/sfm/linear_solver_chooser.h"
 #include "viosfm/sfm/mapper_input.h"
 #include "viosfm/sfm/relative_pose_priors.h"
 #include "viosfm/sfm/tracks.h"
@@ -179,6 +187,9 @@ struct BatchedMapperOptions {
   bool vio_drift_states = false;
   // Verified registration of each frame (frame_registration.h).
   FrameRegistrationOptions registration;
+  // The images-only core (incremental_mapper.h): initial pairs, frames
+  // registered from the images, separate models and their merging.
+  IncrementalMapperOptions incremental;
   // Worker threads (BA, triangulation); default 2.
   int num_threads = 2;
   bool show_progress = true;
@@ -217,6 +228,7 @@ struct BatchedMapperOptions {
     VisitOptionGroup({"ba", "", kRunOnly}, self.ba, visit);
     VisitOptionGroup({"filter", "", kRunOnly}, self.filter, visit);
     VisitOptionGroup({"registration", "", kRunOnly}, self.registration, visit);
+    VisitOptionGroup({"incremental", "", kRunOnly}, self.incremental, visit);
     VisitOptionGroup({"gyro", "", kRunOnly}, self.gyro, visit);
     VisitOptionGroup({"inertial", "", kRunOnly}, self.inertial, visit);
     visit({"retriangulate", "re-triangulate tracks without a point after each filtering", kRunOnly},
@@ -268,6 +280,9 @@ struct MapperFrameStatus {
   int num_predicted_inliers = 0;  // of the VIO's prediction
   int num_supporting_observations = 0;
   bool vio_break = false;  // the VIO jumped here (FrameRegistrationOptions::break_sigmas)
+  // The model the frame is registered in: 0 the main one (the result), 1, 2,
+  // ... the separate ones the images could not join to it; -1 none.
+  int model = -1;
   // Why a frame is not posed (empty if it is).
   std::string reason;
 };
@@ -318,6 +333,18 @@ struct BatchedMapperSummary {
   // with the registered frames showed the VIO's pose (a look-alike place's
   // 2D-3D matches, FrameRegistrationOptions): their VIO pose stands.
   int num_vio_jumps_refused = 0;
+  // Models: the main one and the separate ones (registered frames each,
+  // the main one first), and how many models were merged into others.
+  std::vector<int> frames_per_model;
+  int num_models_merged = 0;
+  int num_frames_in_other_models = 0;
+  // No input frame had a VIO pose: the models are the images' alone (their
+  // scale and frame are those of their initial pairs, unless the IMU's
+  // alignment below made them metric and level).
+  bool images_only = false;
+  // The IMU's scale and gravity applied to a model the images alone made,
+  // before its final adjustment; empty without.
+  std::string imu_alignment_message;
   int num_vio_segments = 0;         // VIO segments among the input frames
   int num_vio_segments_joined = 0;  // of those, with a posed frame
   // With the pairs streamed: points joined because later pairs joined
@@ -331,10 +358,148 @@ struct BatchedMapperSummary {
   std::string ToString() const;  // a few lines for the log
 };
 
+// Called after each batch but the last with the model as it stands.
+using MapperBatchCallback =
+    std::function<void(const Reconstruction& model, const MapperBatchStatistics& batch)>;
+
+// The batched mapper as a class with named steps; RunBatchedMapper runs it.
+// It keeps the VIO's side of the mapping (predictions, jumps, priors, the
+// IMU in the global adjustments) and drives the images-only core
+// (incremental_mapper.h) for what the VIO does not place.
+class ImageValidator;
+class VioDriftTerms;
+class BatchedMapper {
+ public:
+  // `input` and `stream` must outlive the mapper (see RunBatchedMapper).
+  BatchedMapper(const BatchedMapperInput& input, const BatchedMapperOptions& options,
+                VerifiedPairStream* stream);
+  ~BatchedMapper();
+  Reconstruction Run(BatchedMapperSummary* summary, const MapperBatchCallback& on_batch,
+                     std::vector<Reconstruction>* other_models);
+
+ private:
+  // Input: frames joining the model, tracks, priors, a streamed batch.
+  void AddNewImages();
+  void BuildTracks(const std::vector<ImagePairMatches>& new_pairs);
+  void BuildPriors();
+  // Takes a streamed batch's frames and pairs; returns whether it is the last.
+  bool TakeStreamedBatch(size_t begin, size_t* end, bool last);
+
+  // Registration by the VIO's prediction, checked against the images.
+  bool SameRun(size_t i, size_t j) const;
+  std::optional<size_t> FindReference(size_t i) const;
+  std::optional<Eigen::Vector3d> VioCamVelocity(size_t i) const;
+  bool BeyondVioDrift(size_t i, size_t reference, const Rigid3d& images_pose,
+                      const Rigid3d& vio_pose, double* position_difference,
+                      double* rotation_difference) const;
+  void RegisterFrame(size_t i, int model, const Rigid3d& cam_from_world, FramePoseSource source);
+  bool TryRegister(size_t i);
+  bool RegisterAgainstPrediction(size_t i, size_t reference, const Rigid3d& predicted,
+                                 const AbsolutePoseResult& result);
+  bool JumpRefuted(size_t i, const Rigid3d& predicted, const AbsolutePoseResult& result,
+                   double position_difference, double rotation_difference);
+  void MoveToStamp(size_t i, const Rigid3d& predicted, FrameCorrespondences* correspondences) const;
+  size_t RetryPending();
+  size_t RecheckVioPlaced();
+  void TriangulateTracksOf(const std::vector<size_t>& frame_indices);
+
+  // Registration from the images alone (the core), and the models.
+  size_t RegisterFromImages(bool may_start_model);
+  bool StartModelFromImages();
+  bool StartModelFromVioSegment();
+  void MergeModels();
+
+  // Adjustment, filtering, re-triangulation.
+  std::vector<RelativePosePrior> ActivePriors(bool with_bridging) const;
+  BundleAdjustmentSummary Adjust(size_t window_begin, bool global);
+  BaLinearSolver ChooseLinearSolver(const std::vector<image_t>& free_images, bool global);
+  void CompensateRollingShutter(bool global);
+  std::unique_ptr<InertialTerms> MakeInertialTerms(const GyroPriors& gyro,
+                                                   const std::vector<GyroFrame>& frames);
+  std::vector<GyroFrame> GyroFramesOfMainModel() const;
+  void AlignMainModelToImu();
+  std::unique_ptr<VioDriftTerms> MakeDriftTerms(bool global,
+                                                std::vector<RelativePosePrior>* priors) const;
+  void AdjustOtherModels(bool global);
+  double FilterAndRetriangulateAll();
+  void FilterAndRetriangulateWindow(size_t window_begin);
+  std::vector<point3D_t> PointsToFilter(size_t window_begin) const;
+
+  // A batch, the final refinements, and every frame's verdict.
+  void MapBatch(size_t b, size_t num_batches, const MapperBatchCallback& on_batch, bool* last);
+  TriangulationStatistics RegisterBatch(size_t begin, size_t end, MapperBatchStatistics* stats);
+  size_t RegisterLateFrames();
+  void RefineFinalModel(bool frames_changed, double final_change, bool global);
+  void JudgeFrames();
+
+  const std::vector<image_t>& MainRegistered() const;
+  bool MainModelHasGauge() const;
+
+  const BatchedMapperInput& input_;
+  const BatchedMapperOptions& options_;
+  const FrameRegistrationOptions& registration_;
+  VerifiedPairStream* stream_ = nullptr;
+  // The frames come from the stream a batch at a time, or are all in the input.
+  bool frames_streamed_ = false;
+  std::unique_ptr<ImageValidator> streamed_validator_;
+  std::vector<MapperImage> streamed_images_;
+  const std::vector<MapperImage>* images_ = nullptr;
+  const std::vector<MapperImage>& images() const { return *images_; }
+  size_t num_images_ = 0;  // the frames known so far
+  BatchedMapperSummary summary_;
+
+  // Pairs and tracks (of every pair, or streamed, of those taken so far).
+  std::vector<ImagePairMatches> streamed_pairs_;
+  const std::vector<ImagePairMatches>* pairs_ = nullptr;
+  std::optional<IncrementalTrackBuilder> track_builder_;
+  IncrementalMapper core_;
+
+  // Per frame: its VIO pose, and whether the VIO jumped just before it.
+  std::vector<std::optional<Rigid3d>> vio_poses_;
+  std::set<int> segments_;
+  std::vector<char> is_break_;
+  // The first frame with a VIO pose: placed where the VIO puts it and held
+  // in every adjustment (the gauge).
+  size_t gauge_index_ = std::numeric_limits<size_t>::max();
+  image_t gauge_image_ = kInvalidImageId;
+  // Frames not registered yet, in time order, and those registered by the
+  // last registration round.
+  std::vector<size_t> pending_;
+  std::vector<size_t> newly_registered_;
+  // The batch each pending frame arrived in.
+  std::vector<size_t> batch_of_frame_;
+  size_t current_batch_ = 0;
+
+  // Relative-pose priors and the pairs of the consecutive ones.
+  RelativePosePriors all_priors_;
+  std::unordered_set<image_pair_t> consecutive_pairs_;
+
+  // Points triangulated or extended since the last filtering.
+  std::vector<point3D_t> changed_since_filter_;
+  bool all_changed_since_filter_ = true;
+
+  // The adjustments' state.
+  BundleAdjustmentOptions ba_options_;
+  LinearSolverChooser solver_chooser_;
+  int num_batch_adjustments_ = 0;
+  std::unordered_map<image_t, std::vector<char>> rolling_shutter_moved_;
+  std::vector<float> rolling_shutter_moves_;
+  // A global adjustment left the IMU's factors out: the later ones take the
+  // gyro's priors at once.
+  bool inertial_declined_ = false;
+  // The inflation of the gyro's priors and of the IMU factors' covariance
+  // the first global adjustment measured; later ones keep at least that.
+  double gyro_sigma_floor_ = 1.0;
+  double inertial_sigma_floor_ = 1.0;
+  // The main model, made by the images alone, was scaled and levelled by
+  // the IMU (AlignMainModelToImu).
+  bool imu_aligned_ = false;
+};
+
 // Throws InputError naming the first problem of `input`: no images, a camera
 // with an invalid or duplicate id or parameters, a duplicate image id or
 // name, an empty name, an unknown camera id, images not in strictly
-// increasing time order, a non-finite VIO pose, no image with a VIO pose, a
+// increasing time order, a non-finite VIO pose, a
 // pair naming an unknown image, or a match indexing a keypoint that does not
 // exist.
 void ValidateBatchedMapperInput(const BatchedMapperInput& input);
@@ -357,12 +522,14 @@ void ValidateBatchedMapperInput(const BatchedMapperInput& input);
 // `on_batch`, if given, is called after each batch but the last (whose
 // adjustment is the final one) with the model as it stands, from the
 // mapper's thread.
-using MapperBatchCallback =
-    std::function<void(const Reconstruction& model, const MapperBatchStatistics& batch)>;
+// The result is the main model (the one holding the VIO's first frame, or
+// the largest); `other_models`, if given, receives the separate models the
+// images could not join to it (each with only its own frames registered).
 Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
                                 const BatchedMapperOptions& options,
                                 BatchedMapperSummary* summary = nullptr,
                                 VerifiedPairStream* stream = nullptr,
-                                const MapperBatchCallback& on_batch = {});
+                                const MapperBatchCallback& on_batch = {},
+                                std::vector<Reconstruction>* other_models = nullptr);
 
 }  // namespace viosfm

@@ -285,7 +285,8 @@ TEST(FrameRegistration, FramesWithoutAVioPoseAreRegisteredFromTheImages) {
 }
 
 // A segment whose frames the images cannot reach (they see other points: no
-// verified pair joins them) stays unposed, with the reason.
+// verified pair joins them) is a separate model where its VIO puts it,
+// reported as such.
 TEST(FrameRegistration, ASegmentTheImagesCannotJoinIsReported) {
   SyntheticSequence sequence = Corridor(40, 25);
   for (size_t i = 30; i < 40; ++i) sequence.input.images[i].vio_odometer.segment = 1;
@@ -295,10 +296,30 @@ TEST(FrameRegistration, ASegmentTheImagesCannotJoinIsReported) {
   }
   sequence.input.verified_pairs = pairs;
   BatchedMapperSummary summary;
-  RunBatchedMapper(sequence.input, Quiet(10), &summary);
-  EXPECT_EQ(summary.num_unposed, 10);
-  EXPECT_EQ(summary.num_vio_segments_joined, 1);
-  EXPECT_NE(summary.frames[35].reason.find("segment 1"), std::string::npos);
+  std::vector<Reconstruction> other_models;
+  const Reconstruction main = RunBatchedMapper(sequence.input, Quiet(10), &summary, nullptr, {},
+                                               &other_models);
+  EXPECT_EQ(summary.num_unposed, 0);
+  EXPECT_EQ(summary.frames_per_model, (std::vector<int>{30, 10}));
+  EXPECT_EQ(summary.num_frames_in_other_models, 10);
+  EXPECT_EQ(summary.num_registered, 30);
+  EXPECT_EQ(summary.frames[35].model, 1);
+  EXPECT_EQ(summary.num_vio_segments_joined, 2);
+  EXPECT_FALSE(main.GetImage(36).registered);
+  ASSERT_EQ(other_models.size(), 1u);
+  EXPECT_EQ(other_models[0].NumRegImages(), 10u);
+  EXPECT_TRUE(other_models[0].GetImage(36).registered);
+  // The separate model where the VIO's segment 1 puts it: each frame within
+  // millimetres of its VIO pose relative to the segment's first.
+  const Rigid3d& first = *sequence.input.images[30].vio_cam_from_world;
+  const Rigid3d first_model = other_models[0].GetImage(31).cam_from_world;
+  for (size_t i = 30; i < 40; ++i) {
+    const Rigid3d vio_relative = *sequence.input.images[i].vio_cam_from_world * first.Inverse();
+    const Rigid3d model_relative =
+        other_models[0].GetImage(static_cast<image_t>(i + 1)).cam_from_world *
+        first_model.Inverse();
+    EXPECT_LT((vio_relative.translation - model_relative.translation).norm(), 0.01) << i;
+  }
 }
 
 // A relative-pose prior whose VIO relative pose is corrupted (0.5 m and 10

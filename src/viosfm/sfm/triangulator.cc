@@ -234,10 +234,11 @@ TriangulationStatistics TriangulateReconstruction(Reconstruction* reconstruction
       const Image& image = reconstruction->GetImage(element.image_id);
       VIOSFM_CHECK_LT(element.point2D_idx, image.points2D.size())
           << "track element of image " << element.image_id << " out of range";
+      if (!is_allowed(element.image_id)) continue;
       const point3D_t point3D_id = image.points2D[element.point2D_idx].point3D_id;
       if (point3D_id != kInvalidPoint3DId) {
         CountId(point3D_id, &point_counts);
-      } else if (is_allowed(element.image_id)) {
+      } else {
         candidates.push_back(element);
       }
     }

@@ -1,6 +1,9 @@
 #include "viosfm/util/hash.h"
 
+#include <xxhash.h>
+
 #include <fstream>
+#include <memory>
 #include <vector>
 
 #include "viosfm/util/errors.h"
@@ -28,24 +31,31 @@ uint64_t Fnv1a64Hash(std::string_view text) {
 }
 
 std::string FileHash::ToString() const {
-  return std::to_string(size) + " bytes, fnv1a64 " + HashToHex(hash);
+  return std::to_string(size) + " bytes, xxh3 " + HashToHex(hash);
+}
+
+uint64_t Xxh3Hash(const void* data, size_t size) {
+  return XXH3_64bits(data, size);
 }
 
 FileHash HashFile(const std::filesystem::path& path) {
   std::ifstream stream(path, std::ios::binary);
   if (!stream) throw InputError(path.string(), 0, "cannot open for reading");
-  Fnv1a64 hash;
+  std::unique_ptr<XXH3_state_t, decltype(&XXH3_freeState)> state(XXH3_createState(),
+                                                                 &XXH3_freeState);
+  VIOSFM_CHECK(state != nullptr && XXH3_64bits_reset(state.get()) == XXH_OK);
   FileHash result;
   std::vector<char> block(1 << 20);
   while (stream) {
     stream.read(block.data(), static_cast<std::streamsize>(block.size()));
     const std::streamsize count = stream.gcount();
     if (count <= 0) break;
-    hash.Update(block.data(), static_cast<size_t>(count));
+    VIOSFM_CHECK(XXH3_64bits_update(state.get(), block.data(), static_cast<size_t>(count)) ==
+                 XXH_OK);
     result.size += static_cast<uintmax_t>(count);
   }
   if (stream.bad()) throw InputError(path.string(), 0, "read failed");
-  result.hash = hash.digest();
+  result.hash = XXH3_64bits_digest(state.get());
   return result;
 }
 

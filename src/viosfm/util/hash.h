@@ -1,13 +1,10 @@
-// A small, dependency-free content hash: 64-bit FNV-1a (Fowler, Noll, Vo).
-//
-// What it is for: telling apart inputs that differ by accident (another
-// dataset, an edited calibration, a trajectory file written again), as the
-// run fingerprint does (pipeline/run_fingerprint.h). It is not
-// cryptographic: inputs made to collide on purpose are not detected. Two
-// different inputs of a run share a hash with probability about 2^-64.
-//
-// Speed: one multiply per byte; a file is read in 1 MiB blocks: 0.7 GB/s
-// from the page cache on the 2-core test machine (500 MB in 0.72 s).
+// Content hashes, for telling apart inputs that differ by accident (another
+// dataset, an edited calibration or image, a trajectory file written again),
+// as the run fingerprint does (pipeline/run_fingerprint.h): 64-bit FNV-1a
+// (Fowler, Noll, Vo) for the short records a program builds (field by
+// field), XXH3 (xxHash) for files. Neither is cryptographic: inputs made to
+// collide on purpose are not detected; two different inputs of a run share
+// a hash with probability about 2^-64.
 #pragma once
 
 #include <cstddef>
@@ -63,11 +60,17 @@ uint64_t Fnv1a64Hash(std::string_view text);
 // 16 lower-case hex digits of `hash`.
 std::string HashToHex(uint64_t hash);
 
-// The size and FNV-1a hash of a file's whole content.
+// XXH3 (64 bits, xxHash: libxxhash) of `size` bytes: a fast,
+// non-cryptographic content hash (about 10 GB/s, so hashing a file costs
+// little more than reading it).
+uint64_t Xxh3Hash(const void* data, size_t size);
+
+// The size and XXH3 hash of a file's whole content (an input of a run, an
+// image), read in 1 MiB blocks.
 struct FileHash {
   uintmax_t size = 0;  // bytes
-  uint64_t hash = Fnv1a64::kOffsetBasis;
-  // "1234 bytes, fnv1a64 0123456789abcdef"
+  uint64_t hash = 0;
+  // "1234 bytes, xxh3 0123456789abcdef"
   std::string ToString() const;
 };
 // Throws InputError naming the file if it cannot be opened or read.

@@ -41,6 +41,18 @@ TEST(Fnv1a64, FieldsKeepTheirBoundaries) {
   EXPECT_NE(zero.digest(), negative_zero.digest());
 }
 
+TEST(HashFile, ImagesOfTheSameSizeWithOtherPixelsDiffer) {
+  const std::filesystem::path dir = testing::MakeScratchFolder("hash_image");
+  std::string pixels(752 * 480, '\x40');
+  testing::WriteTextFile(dir / "a.pgm", "P5 752 480 255\n" + pixels);
+  pixels[752 * 240 + 376] = '\x41';  // one grey level of one pixel
+  testing::WriteTextFile(dir / "b.pgm", "P5 752 480 255\n" + pixels);
+  const FileHash a = HashFile(dir / "a.pgm");
+  const FileHash b = HashFile(dir / "b.pgm");
+  EXPECT_EQ(a.size, b.size);
+  EXPECT_NE(a.hash, b.hash);
+}
+
 TEST(HashFile, SizeAndContentAcrossBlocks) {
   const std::filesystem::path dir = testing::MakeScratchFolder("hash_file");
   // More than one 1 MiB block, so the blocks are chained.
@@ -49,14 +61,16 @@ TEST(HashFile, SizeAndContentAcrossBlocks) {
   testing::WriteTextFile(dir / "big.bin", content);
   const FileHash hash = HashFile(dir / "big.bin");
   EXPECT_EQ(hash.size, content.size());
-  EXPECT_EQ(hash.hash, Fnv1a64Hash(content));
+  // The file read in blocks gives the hash of its content in one piece.
+  EXPECT_EQ(hash.hash, Xxh3Hash(content.data(), content.size()));
   // One byte changed anywhere changes the hash.
   content[content.size() - 1] = 'z';
   testing::WriteTextFile(dir / "big.bin", content);
   EXPECT_NE(HashFile(dir / "big.bin").hash, hash.hash);
 
   testing::WriteTextFile(dir / "empty", "");
-  EXPECT_EQ(HashFile(dir / "empty").ToString(), "0 bytes, fnv1a64 cbf29ce484222325");
+  // XXH3_64bits of no bytes (seed 0), the xxHash specification's value.
+  EXPECT_EQ(HashFile(dir / "empty").ToString(), "0 bytes, xxh3 2d06800538d394c2");
   const InputError error = testing::ExpectInputError([&] { HashFile(dir / "absent"); });
   EXPECT_EQ(error.path(), (dir / "absent").string());
 }

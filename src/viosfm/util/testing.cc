@@ -69,7 +69,11 @@ fs::path CopyFolderLinkingImages(const fs::path& source, const fs::path& target)
     if (entry.is_directory()) {
       fs::create_directories(target / relative);
     } else if (entry.path().extension() == ".png") {
-      fs::create_symlink(fs::absolute(entry.path()), target / relative);
+      // A hard link (a copy across file systems): the dataset readers
+      // refuse symbolic links that leave the dataset's folder.
+      std::error_code error;
+      fs::create_hard_link(entry.path(), target / relative, error);
+      if (error) fs::copy_file(entry.path(), target / relative);
     } else {
       fs::copy_file(entry.path(), target / relative);
     }

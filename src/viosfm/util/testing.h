@@ -19,8 +19,10 @@ std::filesystem::path SourcePath(const std::string& relative);
 // A fresh empty folder under the system temp dir, unique per test, removed at exit.
 std::filesystem::path MakeScratchFolder(const std::string& name);
 // Copies the folder `source` into `target` (created): text files copied,
-// .png images symlinked one by one (so that a test may delete or break any
-// of them without touching the source). Returns `target`.
+// .png images hard-linked one by one (copied across file systems), so that
+// a test may delete or replace any of them without touching the source (a
+// file is replaced by removing it first, never written through). Returns
+// `target`.
 std::filesystem::path CopyFolderLinkingImages(const std::filesystem::path& source,
                                               const std::filesystem::path& target);
 
