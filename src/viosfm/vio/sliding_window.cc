@@ -92,6 +92,12 @@ ImuState StateOf(const ImuStateParameters& parameters, timestamp_ns_t timestamp_
   return parameters.ToState(timestamp_ns);
 }
 
+bool IsFinite(const ImuState& state) {
+  return state.world_from_body.rotation.coeffs().allFinite() &&
+         state.world_from_body.translation.allFinite() && state.velocity_in_world.allFinite() &&
+         state.gyro_bias.allFinite() && state.accel_bias.allFinite();
+}
+
 }  // namespace
 
 SlidingWindowEstimator::SlidingWindowEstimator(const Rigid3d& body_from_cam, const ImuNoise& noise,
@@ -116,6 +122,13 @@ void SlidingWindowEstimator::ClearWindow() {
   prior_.reset();
   has_tracked_ = false;
   imu_only_since_ns_ = -1;
+}
+
+void SlidingWindowEstimator::Clear() {
+  map_points_.clear();
+  relocalization_points_.clear();
+  relocalization_seen_.clear();
+  ClearWindow();
 }
 
 void SlidingWindowEstimator::Reset() {
@@ -813,6 +826,19 @@ WindowFrameEstimate SlidingWindowEstimator::AddFrame(const FrameFeatures& featur
     return estimate;
   }
   const ImuState predicted = frame->preintegration->Predict(previous_state);
+  if (!frame->preintegration->IsUsable() || !IsFinite(predicted)) {
+    // Readings no IMU reports: no factor, no prediction can be made of them.
+    estimate.state = previous_state;
+    estimate.state.timestamp_ns = features.timestamp_ns;
+    estimate.status = VioStatus::kLost;
+    std::ostringstream message;
+    message << "the IMU readings between " << FormatNsAsSeconds(previous.timestamp_ns, 3) << " and "
+            << FormatNsAsSeconds(features.timestamp_ns, 3)
+            << " s give a non-finite or degenerate preintegration (values out of any IMU's range)";
+    estimate.message = message.str();
+    Reset();
+    return estimate;
+  }
   frame->parameters = ImuStateParameters::FromState(predicted);
   for (const FeatureObservation& observation : features.observations) {
     frame->observations[observation.track_id] = observation.normalized;

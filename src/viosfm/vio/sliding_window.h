@@ -214,6 +214,8 @@ class SlidingWindowEstimator {
   // Clears the window; the landmarks of the last frame that tracked are
   // kept for the re-localisation of the next Initialize.
   void Reset();
+  // Clears the window and its map: the next Initialize starts afresh.
+  void Clear();
   // Whether the last restart re-localised against the map kept at the
   // reset (decided relocalization_window_s after the restart; false until then).
   bool relocalized() const { return relocalized_; }

@@ -395,6 +395,84 @@ TEST(SlidingWindowEstimator, VibratingFlightKeepsTracking) {
   EXPECT_LT(accuracy.ate_se3_m, 0.15);
 }
 
+// The IMU silent for longer than VioOptions::max_imu_gap_s is a break: no
+// state is carried across it, the frames after it initialise again (a new
+// segment, its own scale from the images and the IMU after the gap), and
+// each stretch is metric on its own. A gap of 0.3 s is bridged.
+TEST(VisualInertialOdometry, AnImuGapLongerThanTheBridgeBreaksTheVio) {
+  for (const double gap_s : {0.3, 1.5}) {
+    SyntheticRun run = MakeSyntheticRun(14.0, 2.0, 51);
+    const timestamp_ns_t gap_from = run.motion_start_ns + SecondsToNs(4.0);
+    const timestamp_ns_t gap_to = gap_from + SecondsToNs(gap_s);
+    std::vector<ImuSample> imu;
+    for (const ImuSample& sample : run.imu.samples) {
+      if (sample.timestamp_ns <= gap_from || sample.timestamp_ns >= gap_to) imu.push_back(sample);
+    }
+    VioOptions options;
+    options.show_progress = false;
+    VisualInertialOdometry vio(run.rig, imu, run.frames.front().timestamp_ns,
+                               run.frames.back().timestamp_ns, options);
+    int breaks = 0;
+    int posed_before_reinitialisation = 0;  // after the gap's start, before tracking again
+    bool tracking_again = false;
+    std::vector<Eigen::Vector3d> before_estimate, before_truth, after_estimate, after_truth;
+    for (const FrameFeatures& frame : run.frames) {
+      const VioFrameResult result = vio.ProcessFrame(frame);
+      ASSERT_NE(result.status, VioStatus::kLost);
+      breaks += result.after_imu_break ? 1 : 0;
+      const Eigen::Vector3d truth = run.motion.PositionInWorld(frame.timestamp_ns);
+      if (frame.timestamp_ns <= gap_from) {
+        if (result.status == VioStatus::kTracking) {
+          before_estimate.push_back(result.state.world_from_body.translation);
+          before_truth.push_back(truth);
+        }
+        continue;
+      }
+      if (breaks > 0 && !tracking_again) {
+        tracking_again = result.status == VioStatus::kTracking;
+        if (!tracking_again && result.has_pose && result.status != VioStatus::kInitializing) {
+          ++posed_before_reinitialisation;
+        }
+      }
+      if (result.status == VioStatus::kTracking) {
+        after_estimate.push_back(result.state.world_from_body.translation);
+        after_truth.push_back(truth);
+      }
+    }
+    const Accuracy before = Evaluate(before_estimate, before_truth);
+    const Accuracy after = Evaluate(after_estimate, after_truth);
+    std::cout << "IMU gap of " << gap_s << " s: " << breaks << " break(s), "
+              << vio.summary().imu_breaks.size() << " recorded; before it " << before.count
+              << " frames tracking, ATE " << before.ate_se3_m << " m, scale " << before.scale
+              << "; after it " << after.count << " frames tracking, ATE " << after.ate_se3_m
+              << " m (Sim(3) " << after.ate_sim3_m << " m), scale " << after.scale << "\n";
+    if (gap_s < options.max_imu_gap_s) {
+      EXPECT_EQ(breaks, 0);
+      EXPECT_TRUE(vio.summary().imu_breaks.empty());
+      // One trajectory through the bridged gap.
+      std::vector<Eigen::Vector3d> estimate = before_estimate;
+      std::vector<Eigen::Vector3d> truth = before_truth;
+      estimate.insert(estimate.end(), after_estimate.begin(), after_estimate.end());
+      truth.insert(truth.end(), after_truth.begin(), after_truth.end());
+      EXPECT_LT(Evaluate(estimate, truth).ate_se3_m, 0.05);
+      continue;
+    }
+    EXPECT_EQ(breaks, 1);
+    ASSERT_EQ(vio.summary().imu_breaks.size(), 1u);
+    EXPECT_NEAR(vio.summary().imu_breaks[0].gap_s, gap_s, 0.01);
+    // Nothing carried across the gap: no frame after it is posed by the IMU
+    // before the new initialisation.
+    EXPECT_EQ(posed_before_reinitialisation, 0);
+    EXPECT_TRUE(tracking_again);
+    // Each side metric on its own (aligned separately).
+    EXPECT_LT(before.ate_se3_m, 0.05);
+    EXPECT_NEAR(before.scale, 1.0, 0.03);
+    EXPECT_GT(after.count, 100u);
+    EXPECT_LT(after.ate_se3_m, 0.05);
+    EXPECT_NEAR(after.scale, 1.0, 0.03);
+  }
+}
+
 // A visual gap longer than max_imu_only_s: the estimate is declared lost
 // once, the window restarts from the last good state carried by the IMU, and
 // tracking resumes after the gap.
