@@ -19,6 +19,7 @@
 #include "viosfm/pipeline/texture_probe.h"
 #include "viosfm/sfm/batched_mapper.h"
 #include "viosfm/sfm/vio_gaps.h"
+#include "viosfm/vio/odometry.h"
 
 namespace viosfm {
 
@@ -118,6 +119,9 @@ struct PipelineSummary {
   size_t num_frames_unposed = 0;
   int num_vio_segments = 0;  // in the VIO input (after the gaps' decisions)
   std::string vio_segment_rule;
+  // viosfm's own VIO's summary (its frames by status, resets, stretches on
+  // the IMU alone); empty for an external VIO or none.
+  std::optional<VioSummary> own_vio;
   // The gaps of a VIO trajectory file judged by the images (sfm/vio_gaps.h).
   VioGapSummary vio_gaps;
   // A camera guessed from the image size, as the adjustment refined it

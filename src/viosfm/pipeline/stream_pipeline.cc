@@ -1065,6 +1065,7 @@ PipelineSummary RunStreamPipeline(const PipelineOptions& requested) {
   summary.fingerprint = fingerprint.Hash();
   summary.num_vio_segments = vio.num_segments();
   summary.vio_segment_rule = vio.segment_rule;
+  summary.own_vio = vio.own_vio_summary;
   summary.stream = streamed.stream;
   summary.features = streamed.features;
   summary.verification = streamed.verification.summary;
