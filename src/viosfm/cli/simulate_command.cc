@@ -80,7 +80,7 @@ void RegisterSimulate(CLI::App& app) {
   command->add_option("--out", args->out, "Output folder (replaced atomically)")->required();
   command
       ->add_option("--scenario", args->options.scenario,
-                   "Scene and motion preset: room, two_floors, corridor or dark")
+                   "Scene and motion preset: room, two_floors, corridor, dark or mav")
       ->capture_default_str();
   command->add_option("--duration", args->options.duration_s, "Length in seconds")
       ->capture_default_str();

@@ -139,6 +139,7 @@ PipelineSummary RunPipeline(const PipelineOptions& requested) {
   summary.num_vio_segments = vio.num_segments();
   summary.vio_segment_rule = vio.segment_rule;
   summary.own_vio = vio.own_vio;
+  summary.own_vio_summary = vio.own_vio_summary;
 
   const SelectedFrames frames =
       clock.Run([&] { return SelectFramesStage(sequence, vio, options, vio_name, &frame_cache); });

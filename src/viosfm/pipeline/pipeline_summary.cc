@@ -212,6 +212,24 @@ std::string PipelineSummaryToJson(const PipelineSummary& s) {
                    {"pairs_dropped", s.vio_gaps.num_pairs_dropped}}},
                  {"jumps_found", s.mapper.num_vio_breaks},
                  {"jumps_refused", s.mapper.num_vio_jumps_refused}};
+  if (s.own_vio_summary) {
+    // viosfm's own VIO: its frames by status; IMU-only and lost frames are
+    // posed by the IMU alone.
+    const VioSummary& own = *s.own_vio_summary;
+    const auto count = [&](VioStatus status) {
+      return own.status_counts[static_cast<int>(status)];
+    };
+    json["vio"]["own"] = {{"frames", own.num_frames},
+                          {"frames_tracking", count(VioStatus::kTracking)},
+                          {"frames_initializing", count(VioStatus::kInitializing)},
+                          {"frames_imu_only", count(VioStatus::kImuOnly)},
+                          {"frames_lost", count(VioStatus::kLost)},
+                          {"imu_only_stretches", own.num_imu_only_stretches},
+                          {"longest_imu_only_s", own.longest_imu_only_s},
+                          {"resets", own.num_resets},
+                          {"imu_breaks", own.imu_breaks.size()},
+                          {"frames_without_pose", own.num_frames_without_pose}};
+  }
   ordered_json unposed = ordered_json::array();
   for (const MapperFrameStatus& frame : s.mapper.frames) {
     if (!frame.reason.empty()) {

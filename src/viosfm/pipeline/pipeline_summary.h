@@ -20,6 +20,7 @@
 #include "viosfm/pipeline/texture_probe.h"
 #include "viosfm/sfm/batched_mapper.h"
 #include "viosfm/sfm/vio_gaps.h"
+#include "viosfm/vio/odometry.h"
 
 namespace viosfm {
 
@@ -121,6 +122,9 @@ struct PipelineSummary {
   // What viosfm's own VIO decided (time offset, IMU noise, IMU-only stretches).
   OwnVioDecisions own_vio;
   std::string vio_segment_rule;
+  // viosfm's own VIO's summary (its frames by status, resets, stretches on
+  // the IMU alone); empty for an external VIO or none.
+  std::optional<VioSummary> own_vio_summary;
   // The gaps of a VIO trajectory file judged by the images (sfm/vio_gaps.h).
   VioGapSummary vio_gaps;
   // A camera guessed from the image size, as the adjustment refined it

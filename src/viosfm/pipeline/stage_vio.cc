@@ -157,6 +157,7 @@ VioPoses PosesOfOwnVio(const Sequence& sequence, const PipelineOptions& options,
   rig.imu_noise = result.summary.imu_noise.used;
   poses.own_vio_rig = rig;
   poses.own_vio = OwnVioDecisionsOf(result);
+  poses.own_vio_summary = result.summary;
   const OwnVioReadout readout = OwnVioRollingShutter(options, result.summary.time_offset, true);
   poses.rolling_shutter_readout_s = readout.readout_s;
   poses.rolling_shutter_source = readout.source;

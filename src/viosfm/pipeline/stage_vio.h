@@ -51,6 +51,9 @@ struct VioPoses {
   // global shutter.
   double rolling_shutter_readout_s = 0.0;
   std::string rolling_shutter_source;  // for the log: where the readout came from
+  // What viosfm's own VIO said of its run (frame counts by status, resets,
+  // stretches on the IMU alone); empty for an external VIO.
+  std::optional<VioSummary> own_vio_summary;
   int num_segments() const { return segments.empty() ? 0 : segments.back() + 1; }
 };
 

@@ -166,6 +166,7 @@ void TakeStreamOutput(StreamOutput* streamed, PipelineSummary* summary) {
   summary->num_vio_segments = vio.num_segments();
   summary->vio_segment_rule = vio.segment_rule;
   summary->own_vio = vio.own_vio;
+  summary->own_vio_summary = vio.own_vio_summary;
   summary->stream = streamed->stream;
   summary->features = streamed->features;
   summary->verification = streamed->verification.summary;

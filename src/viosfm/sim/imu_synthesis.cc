@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "viosfm/sim/scene_model.h"
 #include "viosfm/util/random.h"
 
 namespace viosfm {
@@ -23,6 +24,58 @@ Eigen::Vector3d NormalVector(Random& random, double stddev) {
 
 }  // namespace
 
+std::string ImuVibrationOptions::Validate() const {
+  if (!(accel_rms_mps2 >= 0.0)) return "accel_rms_mps2 must be >= 0";
+  if (!(broadband_fraction >= 0.0 && broadband_fraction <= 1.0)) {
+    return "broadband_fraction must be in [0, 1]";
+  }
+  if (!(min_frequency_hz > 0.0) || !(max_frequency_hz >= min_frequency_hz)) {
+    return "min_frequency_hz/max_frequency_hz must satisfy 0 < min <= max";
+  }
+  if (num_components < 1) return "num_components must be >= 1";
+  if (!(frequency_wander_hz >= 0.0) || frequency_wander_hz >= min_frequency_hz) {
+    return "frequency_wander_hz must be in [0, min_frequency_hz)";
+  }
+  if (!(wander_period_s > 0.0)) return "wander_period_s must be > 0";
+  if (!(start_s >= 0.0)) return "start_s must be >= 0";
+  return "";
+}
+
+ImuVibration::ImuVibration(const ImuVibrationOptions& options) {
+  if (!(options.accel_rms_mps2 > 0.0)) return;
+  Random random(options.seed);
+  // Equal amplitudes: a sinusoid of amplitude a has RMS a / sqrt(2).
+  const double amplitude =
+      options.accel_rms_mps2 *
+      std::sqrt(2.0 * (1.0 - options.broadband_fraction) / options.num_components);
+  for (int axis = 0; axis < 3; ++axis) {
+    for (int k = 0; k < options.num_components; ++k) {
+      Component component;
+      component.axis = axis;
+      component.amplitude = amplitude;
+      component.frequency_hz = random.Uniform(options.min_frequency_hz, options.max_frequency_hz);
+      component.wander_hz = options.frequency_wander_hz;
+      component.wander_period_s = options.wander_period_s * random.Uniform(0.7, 1.3);
+      component.wander_phase = random.Uniform(0.0, 2.0 * M_PI);
+      component.phase = random.Uniform(0.0, 2.0 * M_PI);
+      components_.push_back(component);
+    }
+  }
+}
+
+Eigen::Vector3d ImuVibration::HarmonicAccelAt(double t) const {
+  Eigen::Vector3d accel = Eigen::Vector3d::Zero();
+  for (const Component& c : components_) {
+    // The phase integrates f(t) = f0 + w sin(2 pi t / T + psi).
+    const double omega = 2.0 * M_PI / c.wander_period_s;
+    const double cycles =
+        c.frequency_hz * t -
+        c.wander_hz / omega * (std::cos(omega * t + c.wander_phase) - std::cos(c.wander_phase));
+    accel[c.axis] += c.amplitude * std::sin(2.0 * M_PI * cycles + c.phase);
+  }
+  return accel;
+}
+
 Eigen::Vector3d SynthesizedImu::GyroBiasAt(timestamp_ns_t t) const {
   return gyro_bias[SampleIndexAt(samples, t)];
 }
@@ -38,6 +91,11 @@ SynthesizedImu SynthesizeImu(const BodyTrajectory& trajectory, timestamp_ns_t fr
   const ImuNoise& noise = options.noise;
   const double period_ns = 1e9 / noise.rate_hz;
   Random random(options.seed);
+  const ImuVibration vibration(options.vibration);
+  // The broadband vibration's own stream: the other readings stay as without it.
+  Random vibration_random(MixSeed(options.vibration.seed, 1));
+  const double broadband_stddev =
+      options.vibration.accel_rms_mps2 * std::sqrt(options.vibration.broadband_fraction);
   SynthesizedImu imu;
   Eigen::Vector3d gyro_bias = options.initial_gyro_bias;
   Eigen::Vector3d accel_bias = options.initial_accel_bias;
@@ -52,6 +110,11 @@ SynthesizedImu SynthesizeImu(const BodyTrajectory& trajectory, timestamp_ns_t fr
     sample.timestamp_ns = t;
     sample.gyro = trajectory.AngularVelocityInBody(t) + gyro_bias;
     sample.accel = trajectory.SpecificForceInBody(t) + accel_bias;
+    if (options.vibration.accel_rms_mps2 > 0.0 &&
+        t - start >= SecondsToNs(options.vibration.start_s)) {
+      sample.accel += vibration.HarmonicAccelAt(NsToSeconds(t - start)) +
+                      NormalVector(vibration_random, broadband_stddev);
+    }
     if (options.add_noise) {
       sample.gyro += NormalVector(random, noise.GyroSampleStddev());
       sample.accel += NormalVector(random, noise.AccelSampleStddev());

@@ -114,6 +114,24 @@ Scenario MakeRoom(const ScenarioOptions& options) {
   return scenario;
 }
 
+// ----------------------------------------------------------------- mav
+
+// The room, flown: a faster, more rotating random walk than a hand's, and
+// the accelerometer vibrating.
+Scenario MakeMav(const ScenarioOptions& options) {
+  Scenario scenario = MakeRoom(options);
+  WalkOptions flight;
+  flight.speed_mps = 0.5;
+  flight.knot_spacing_s = 0.5;
+  flight.turn_stddev_rad = 0.2;
+  flight.height_stddev_m = 0.15;
+  flight.look_around_rad = 0.5;
+  flight.pitch_roll_stddev_rad = 0.12;
+  scenario.walk_style = flight;
+  scenario.vibration.accel_rms_mps2 = 1.2;
+  return scenario;
+}
+
 // ---------------------------------------------------------- two_floors
 //
 // Plan (both floors): room [-4, 4]^2 x [z0, z0 + 3] with a pillar in the
@@ -401,7 +419,7 @@ int Scenario::RegionIndex(const Eigen::Vector3d& point) const {
 }
 
 std::vector<std::string> AvailableScenarios() {
-  return {"room", "two_floors", "corridor", "dark"};
+  return {"room", "two_floors", "corridor", "dark", "mav"};
 }
 
 std::string ScenarioOptions::Validate() const {
@@ -428,6 +446,8 @@ Scenario MakeScenario(const ScenarioOptions& options) {
     scenario = MakeTwoFloors(options);
   } else if (options.name == "corridor") {
     scenario = MakeCorridor(options);
+  } else if (options.name == "mav") {
+    scenario = MakeMav(options);
   } else {
     scenario = MakeDark(options);
   }
@@ -457,7 +477,7 @@ SceneStructure ScenarioStructure(const Scenario& scenario) {
 BodyTrajectory GenerateScenarioMotion(const Scenario& scenario,
                                       const ScenarioMotionOptions& options) {
   if (scenario.route.empty()) {
-    WalkOptions walk = options.walk;
+    WalkOptions walk = scenario.walk_style ? *scenario.walk_style : options.walk;
     walk.duration_s = options.duration_s;
     walk.static_start_s = options.static_start_s;
     walk.box_min = scenario.walk_box_min;

@@ -14,15 +14,23 @@
 //   dark        a 24 m tunnel in low light (dim, noisy, motion-blurred) with a
 //               6 m stretch of almost no texture; the walk goes to the far
 //               end and back.
+//   mav         the room flown by a small drone, as EuRoC's Vicon-room
+//               flights: 0.5 m/s, fast yaw (swings of +-50 degrees about
+//               the heading, up to about 60 deg/s) and pitch (+-9 degrees
+//               a knot of 0.4 s), and propeller vibration in the
+//               accelerometer (1.2 m/s^2 RMS a axis, 60-190 Hz, aliased by
+//               the 200 Hz sampling, as EuRoC's IMU shows in flight).
 #pragma once
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "viosfm/scene/scene_structure.h"
+#include "viosfm/sim/imu_synthesis.h"
 #include "viosfm/sim/renderer.h"
 #include "viosfm/sim/scene_model.h"
 #include "viosfm/sim/trajectory.h"
@@ -51,6 +59,12 @@ struct Scenario {
   Eigen::Vector3d walk_box_min{-3.0, -3.0, 0.8};  // m, random-walk box (room)
   Eigen::Vector3d walk_box_max{3.0, 3.0, 2.0};
   double storey_height_m = 0.0;  // m, vertical offset between floors (two_floors)
+  // Route-less scenarios that do not walk (mav): the random walk's pace and
+  // rotation, replacing the walk options given; unset: those are used.
+  std::optional<WalkOptions> walk_style;
+  // Vibration in the accelerometer's readings (mav); its accel_rms_mps2 0:
+  // none (the simulator sets its seed and start).
+  ImuVibrationOptions vibration;
 
   // Index into `regions` of the region containing `point`; -1 if none.
   int RegionIndex(const Eigen::Vector3d& point) const;

@@ -129,6 +129,11 @@ SimulatedSequence SimulateSequence(const SimulationOptions& options) {
   if (options.white_walls.enabled) {
     PaintWallsWhite(scenario.get(), options.white_walls, MixSeed(options.seed, 0x5768697465ULL));
   }
+  if (imu_options.vibration.accel_rms_mps2 == 0.0 && scenario->vibration.accel_rms_mps2 > 0.0) {
+    imu_options.vibration = scenario->vibration;
+    imu_options.vibration.seed = MixSeed(options.seed, 0x5649425241ULL);
+    imu_options.vibration.start_s = options.static_start_s;  // motors off before take-off
+  }
   out.motion = GenerateScenarioMotion(*scenario, motion);
   out.scenario = scenario;
   const timestamp_ns_t start = out.motion.start_ns();
@@ -329,6 +334,12 @@ void WriteSimulatedSequence(const fs::path& out, const SimulatedSequence& simula
   });
   WriteTumTrajectory(out / "vio_emulated.tum", simulated.vio_body);
   WriteSceneStructure(out / "scene.csv", ScenarioStructure(*simulated.scenario));
+  // The walk and the vibration the scenario used (mav replaces the walk's).
+  const WalkOptions& walk =
+      simulated.scenario->walk_style ? *simulated.scenario->walk_style : options.walk;
+  const double vibration_rms = options.imu.vibration.accel_rms_mps2 > 0.0
+                                   ? options.imu.vibration.accel_rms_mps2
+                                   : simulated.scenario->vibration.accel_rms_mps2;
   WriteFileAtomically(out / "simulation.yaml", [&](std::ostream& stream) {
     stream << std::setprecision(17) << "# viosfm simulate: the options of this sequence\n"
            << "scenario: " << options.scenario << "\n"
@@ -346,13 +357,14 @@ void WriteSimulatedSequence(const fs::path& out, const SimulatedSequence& simula
                                               : simulated.scenario->exposure_time_s)
            << "\n"
            << "walk:\n"
-           << "  speed_mps: " << options.walk.speed_mps << "\n"
-           << "  knot_spacing_s: " << options.walk.knot_spacing_s << "\n"
-           << "  turn_stddev_rad: " << options.walk.turn_stddev_rad << "\n"
-           << "  look_around_rad: " << options.walk.look_around_rad << "\n"
+           << "  speed_mps: " << walk.speed_mps << "\n"
+           << "  knot_spacing_s: " << walk.knot_spacing_s << "\n"
+           << "  turn_stddev_rad: " << walk.turn_stddev_rad << "\n"
+           << "  look_around_rad: " << walk.look_around_rad << "\n"
            << "imu:\n"
-           << "  add_noise: " << (options.imu.add_noise ? "true" : "false") << "\n"
-           << "vio_drift:\n"
+           << "  add_noise: " << (options.imu.add_noise ? "true" : "false") << "\n";
+    if (vibration_rms > 0.0) stream << "  accel_vibration_rms_mps2: " << vibration_rms << "\n";
+    stream << "vio_drift:\n"
            << "  position_walk_m_per_sqrt_m: " << options.vio_drift.position_walk_m_per_sqrt_m
            << "\n"
            << "  yaw_walk_rad_per_sqrt_m: " << options.vio_drift.yaw_walk_rad_per_sqrt_m << "\n"

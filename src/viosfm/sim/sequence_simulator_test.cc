@@ -106,7 +106,7 @@ TEST(SequenceSimulator, IsReproducibleAndRejectsUnknownScenarios) {
     FAIL() << "no error";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find(
-                  "scenario 'moon' is unknown (available: room, two_floors, corridor, dark)"),
+                  "scenario 'moon' is unknown (available: room, two_floors, corridor, dark, mav)"),
               std::string::npos);
   }
 }

@@ -39,6 +39,8 @@ std::string ImuNoiseCheckOptions::Validate() const {
   if (!(min_ratio > 0.0) || !(min_ratio <= 1.0)) return "min_ratio must be in (0, 1]";
   if (!(max_ratio >= 1.0)) return "max_ratio must be >= 1";
   if (!(min_static_s > 0)) return "min_static_s must be > 0";
+  if (!(motion_window_s > 0)) return "motion_window_s must be > 0";
+  if (!(motion_span_s >= motion_window_s)) return "motion_span_s must be >= motion_window_s";
   return "";
 }
 
@@ -93,9 +95,61 @@ std::pair<timestamp_ns_t, std::pair<double, double>> QuietestWindowDensities(
   return quietest;
 }
 
+std::pair<double, double> MeasureHighFrequencyDensities(const std::vector<ImuSample>& imu,
+                                                        timestamp_ns_t start_ns,
+                                                        timestamp_ns_t end_ns, double window_s) {
+  const timestamp_ns_t window_ns = SecondsToNs(window_s);
+  const auto by_time = [](const ImuSample& sample, timestamp_ns_t t) {
+    return sample.timestamp_ns < t;
+  };
+  std::vector<double> gyro_densities;
+  std::vector<double> accel_densities;
+  for (timestamp_ns_t from = start_ns; window_ns > 0 && from + window_ns <= end_ns;
+       from += window_ns) {
+    const auto begin = std::lower_bound(imu.begin(), imu.end(), from, by_time);
+    const auto end = std::lower_bound(begin, imu.end(), from + window_ns, by_time);
+    if (end - begin < 10) continue;
+    // Each reading against the line through its neighbours: for white noise
+    // of standard deviation s per reading, the difference has variance
+    // s^2 (1 + wa^2 + wb^2).
+    Eigen::Vector3d gyro_sum = Eigen::Vector3d::Zero();
+    Eigen::Vector3d accel_sum = Eigen::Vector3d::Zero();
+    double count = 0.0;
+    for (auto it = begin + 1; it + 1 < end; ++it) {
+      const double span = static_cast<double>((it + 1)->timestamp_ns - (it - 1)->timestamp_ns);
+      if (!(span > 0.0)) continue;
+      const double wa = static_cast<double>((it + 1)->timestamp_ns - it->timestamp_ns) / span;
+      const double wb = 1.0 - wa;
+      const double variance_factor = 1.0 + wa * wa + wb * wb;
+      gyro_sum +=
+          (it->gyro - wa * (it - 1)->gyro - wb * (it + 1)->gyro).cwiseAbs2() / variance_factor;
+      accel_sum +=
+          (it->accel - wa * (it - 1)->accel - wb * (it + 1)->accel).cwiseAbs2() / variance_factor;
+      count += 1.0;
+    }
+    const double dt = NsToSeconds((end - 1)->timestamp_ns - begin->timestamp_ns) /
+                      static_cast<double>(end - begin - 1);
+    const double root_dt = std::sqrt(dt);
+    gyro_densities.push_back((gyro_sum / count).cwiseSqrt().mean() * root_dt);
+    accel_densities.push_back((accel_sum / count).cwiseSqrt().mean() * root_dt);
+  }
+  if (gyro_densities.empty()) return {0.0, 0.0};
+  const auto median = [](std::vector<double>* values) {
+    const size_t middle = values->size() / 2;
+    std::nth_element(values->begin(), values->begin() + middle, values->end());
+    double value = (*values)[middle];
+    if (values->size() % 2 == 0) {
+      value = 0.5 * (value + *std::max_element(values->begin(), values->begin() + middle));
+    }
+    return value;
+  };
+  return {median(&gyro_densities), median(&accel_densities)};
+}
+
 ImuNoiseCheck CheckImuNoise(const ImuNoise& given, const std::vector<ImuSample>& imu,
                             const StaticInitResult* static_interval,
-                            const ImuNoiseCheckOptions& options) {
+                            const ImuNoiseCheckOptions& options, timestamp_ns_t motion_start_ns,
+                            timestamp_ns_t motion_end_ns) {
   ImuNoiseCheck check;
   check.given = given;
   check.used = given;
@@ -142,6 +196,30 @@ ImuNoiseCheck CheckImuNoise(const ImuNoise& given, const std::vector<ImuSample>&
             &check.changes);
     }
   }
+  if (options.check_in_motion && !imu.empty()) {
+    // The high-frequency content in motion bounds the densities from below.
+    timestamp_ns_t from = std::max(motion_start_ns, imu.front().timestamp_ns);
+    if (static_interval != nullptr && static_interval->is_static()) {
+      from = std::max(from, static_interval->end_ns);
+    }
+    const timestamp_ns_t to = std::min(
+        {from + SecondsToNs(options.motion_span_s), motion_end_ns, imu.back().timestamp_ns});
+    const auto [gyro, accel] =
+        MeasureHighFrequencyDensities(imu, from, to, options.motion_window_s);
+    check.motion_gyro_density = gyro;
+    check.motion_accel_density = accel;
+    if (gyro > 0.0 && accel > 0.0) {
+      const std::string why = "below " + Number(options.min_ratio) +
+                              " times the high-frequency content measured in motion over " +
+                              Number(NsToSeconds(to - from)) + " s (vibration)";
+      Bound("gyroscope_noise_density", why, options.min_ratio * gyro,
+            std::max(used.gyro_noise_density, options.min_ratio * gyro), &used.gyro_noise_density,
+            &check.changes);
+      Bound("accelerometer_noise_density", why, options.min_ratio * accel,
+            std::max(used.accel_noise_density, options.min_ratio * accel),
+            &used.accel_noise_density, &check.changes);
+    }
+  }
   if (options.scale_random_walks) {
     // A calibration's figures for one sensor come from one source (an Allan
     // variance, a data sheet, a factor applied to both): a white-noise
@@ -173,6 +251,10 @@ ImuNoiseCheck CheckImuNoise(const ImuNoise& given, const std::vector<ImuSample>&
             << Number(NsToSeconds(static_interval->end_ns - static_interval->start_ns))
             << " s: gyro " << Number(check.measured_gyro_density) << " rad/s/sqrt(Hz), accel "
             << Number(check.measured_accel_density) << " m/s^2/sqrt(Hz); ";
+  }
+  if (check.motion_gyro_density > 0.0) {
+    message << "in motion: gyro " << Number(check.motion_gyro_density) << ", accel "
+            << Number(check.motion_accel_density) << "; ";
   }
   if (check.changes.empty()) {
     message << "the calibration's figures are used";

@@ -205,6 +205,17 @@ Matrix15d ImuPreintegration::FullCovariance() const {
   return covariance;
 }
 
+bool ImuPreintegration::IsUsable() const {
+  if (!deltas_.delta_R.coeffs().allFinite() || !deltas_.delta_v.allFinite() ||
+      !deltas_.delta_p.allFinite() || !covariance_.allFinite() || !dR_dbg_.allFinite() ||
+      !dv_dbg_.allFinite() || !dv_dba_.allFinite() || !dp_dbg_.allFinite() ||
+      !dp_dba_.allFinite() || !std::isfinite(delta_t_s_)) {
+    return false;
+  }
+  const Eigen::LLT<Matrix15d> llt(FullCovariance());
+  return llt.info() == Eigen::Success && llt.matrixL().toDenseMatrix().allFinite();
+}
+
 Matrix15d ImuPreintegration::SqrtInformation() const {
   const Matrix15d covariance = FullCovariance();
   const Eigen::LLT<Matrix15d> llt(covariance);

@@ -145,7 +145,13 @@ class ImuPreintegration {
   Matrix15d FullCovariance() const;
   // Square-root information: the lower-triangular L^-1 with L L^T =
   // FullCovariance() (Cholesky), so that |L^-1 r|^2 = r^T covariance^-1 r.
+  // Requires IsUsable().
   Matrix15d SqrtInformation() const;
+  // Whether the deltas, their bias Jacobians and the covariance are finite
+  // and the covariance positive definite: false when readings far outside
+  // what an IMU reports (or non-finite ones) were integrated, which no
+  // factor or prediction may use.
+  bool IsUsable() const;
 
   // Jacobians of the deltas w.r.t. the biases at the linearisation point.
   const Eigen::Matrix3d& dR_dbg() const { return dR_dbg_; }

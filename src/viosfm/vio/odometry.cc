@@ -80,6 +80,9 @@ std::string VioOptions::Validate() const {
                                             : "restart_sigmas must all be > 0";
     }
   }
+  if (!(max_imu_gap_s >= NsToSeconds(kMaxImuStepNs))) {
+    return "max_imu_gap_s must be at least the bridged step of the preintegration";
+  }
   if (max_frames < 0) return "max_frames must be >= 0";
   return "";
 }
@@ -154,7 +157,7 @@ VisualInertialOdometry::VisualInertialOdometry(const SensorRig& rig,
   // static interval, which may lie before the first image.
   summary_.imu_noise = CheckImuNoise(
       rig_.imu_noise, imu_, summary_.static_init.is_static() ? &summary_.static_init : nullptr,
-      options_.imu_noise);
+      options_.imu_noise, rig_.CamToImuTime(first_frame_ns), rig_.CamToImuTime(last_frame_ns));
   rig_.imu_noise = summary_.imu_noise.used;
   if (summary_.imu_noise.changes.empty()) {
     VIOSFM_LOG(INFO) << "vio: " << summary_.imu_noise.message;
@@ -184,10 +187,77 @@ VisualInertialOdometry::VisualInertialOdometry(const SensorRig& rig,
   }
 }
 
+timestamp_ns_t VisualInertialOdometry::LongestImuIntervalNs(timestamp_ns_t from_ns,
+                                                            timestamp_ns_t to_ns) const {
+  if (imu_.size() < 2 || to_ns <= from_ns) return 0;
+  auto first = std::upper_bound(
+      imu_.begin(), imu_.end(), from_ns,
+      [](timestamp_ns_t t, const ImuSample& sample) { return t < sample.timestamp_ns; });
+  if (first != imu_.begin()) --first;
+  auto last = std::lower_bound(
+      imu_.begin(), imu_.end(), to_ns,
+      [](const ImuSample& sample, timestamp_ns_t t) { return sample.timestamp_ns < t; });
+  if (last == imu_.end()) --last;
+  timestamp_ns_t longest = 0;
+  for (auto it = first; it < last; ++it) {
+    longest = std::max(longest, (it + 1)->timestamp_ns - it->timestamp_ns);
+  }
+  return longest;
+}
+
+bool VisualInertialOdometry::BreakAtImuGap(const FrameFeatures& frame, timestamp_ns_t camera_ns) {
+  std::optional<timestamp_ns_t> from_ns = last_frame_imu_ns_;
+  if (have_good_state_) {
+    from_ns =
+        from_ns ? std::min(*from_ns, last_good_state_.timestamp_ns) : last_good_state_.timestamp_ns;
+  }
+  if (!from_ns || *from_ns >= frame.timestamp_ns) return false;
+  const timestamp_ns_t max_gap_ns = SecondsToNs(options_.max_imu_gap_s);
+  if (LongestImuIntervalNs(*from_ns, frame.timestamp_ns) <= max_gap_ns) return false;
+  // The gap's first sample: the start of the first too long interval.
+  auto it = std::upper_bound(
+      imu_.begin(), imu_.end(), *from_ns,
+      [](timestamp_ns_t t, const ImuSample& sample) { return t < sample.timestamp_ns; });
+  if (it != imu_.begin()) --it;
+  while (it + 1 < imu_.end() && (it + 1)->timestamp_ns - it->timestamp_ns <= max_gap_ns) ++it;
+  const timestamp_ns_t gap_start_ns = it->timestamp_ns;
+  const double gap_s =
+      it + 1 < imu_.end() ? NsToSeconds((it + 1)->timestamp_ns - gap_start_ns) : 0.0;
+  // A frame in the gap broke the VIO already: the frames up to its end are
+  // part of the same break.
+  const bool new_gap =
+      summary_.imu_breaks.empty() || summary_.imu_breaks.back().gap_start_ns != gap_start_ns;
+  if (new_gap) {
+    summary_.imu_breaks.push_back({gap_start_ns, gap_s, camera_ns});
+    VIOSFM_LOG(WARNING) << "vio: the IMU has no sample for "
+                        << FormatNsAsSeconds(SecondsToNs(gap_s), 3) << " s after "
+                        << FormatNsAsSeconds(gap_start_ns, 3) << " s (more than max_imu_gap_s "
+                        << options_.max_imu_gap_s
+                        << " s): the VIO breaks there and starts a new segment, "
+                           "initialised again after the gap";
+  }
+  if (moving_start_pending_) {
+    PoseMovingStart(window_->initialized() ? window_->States() : std::vector<ImuState>());
+  }
+  if (undecided_reset_ns_) {
+    // A restart cut off by the gap before its re-localisation was decided.
+    summary_.resets.back().relocalized = false;
+    undecided_reset_ns_.reset();
+  }
+  window_->Clear();
+  have_good_state_ = false;
+  static_start_ = false;
+  init_keyframes_.clear();
+  moving_start_frames_.clear();
+  relocalization_pending_ = false;
+  return new_gap;
+}
+
 ImuState VisualInertialOdometry::Propagate(const ImuState& state, timestamp_ns_t to_ns) const {
   if (to_ns <= state.timestamp_ns) return state;
   ImuPreintegration preintegration(state.gyro_bias, state.accel_bias, rig_.imu_noise);
-  if (!preintegration.IntegrateRange(imu_, state.timestamp_ns, to_ns)) {
+  if (!preintegration.IntegrateRange(imu_, state.timestamp_ns, to_ns) ||
+      !preintegration.IsUsable()) {
     ImuState held = state;
     held.timestamp_ns = to_ns;
     return held;
@@ -208,7 +278,10 @@ ImuState VisualInertialOdometry::PropagateBack(const ImuState& state, timestamp_
   ImuPreintegration preintegration(state.gyro_bias, state.accel_bias, rig_.imu_noise);
   ImuState earlier = state;
   earlier.timestamp_ns = to_ns;
-  if (!preintegration.IntegrateRange(imu_, to_ns, state.timestamp_ns)) return earlier;
+  if (!preintegration.IntegrateRange(imu_, to_ns, state.timestamp_ns) ||
+      !preintegration.IsUsable()) {
+    return earlier;
+  }
   // Predict's equations (imu_preintegration.h) solved for the earlier state:
   // R_j = R_i dR, v_j = v_i + g dt + R_i dv, p_j = p_i + v_i dt + g dt^2 / 2 + R_i dp.
   const double dt = NsToSeconds(state.timestamp_ns - to_ns);
@@ -385,6 +458,22 @@ bool VisualInertialOdometry::TryVisualInertialInitialization(const FrameFeatures
   const ViInitResult init = InitializeVisualInertial(init_keyframes_, imu_, rig_.body_from_cam,
                                                      rig_.imu_noise, options_.vi_init);
   if (!init.success || init.states.empty()) return false;
+  // Readings out of any IMU's range can leave the alignment non-finite.
+  const auto finite = [](const ImuState& state) {
+    return state.world_from_body.rotation.coeffs().allFinite() &&
+           state.world_from_body.translation.allFinite() && state.velocity_in_world.allFinite() &&
+           state.gyro_bias.allFinite() && state.accel_bias.allFinite();
+  };
+  if (!std::all_of(init.states.begin(), init.states.end(), finite) ||
+      !std::all_of(init.points_in_world.begin(), init.points_in_world.end(),
+                   [](const auto& point) { return point.second.allFinite(); })) {
+    VIOSFM_LOG(WARNING) << "vio: the visual-inertial initialisation at "
+                        << FormatNsAsSeconds(frame.timestamp_ns - rig_.cam_time_offset_ns, 3)
+                        << " s gave non-finite states (IMU readings out of any IMU's range?): "
+                           "not used";
+    init_keyframes_.clear();
+    return false;
+  }
   VIOSFM_LOG(INFO) << "vio: visual-inertial initialisation at "
                    << FormatNsAsSeconds(frame.timestamp_ns - rig_.cam_time_offset_ns, 3)
                    << " s: " << init.message;
@@ -429,6 +518,8 @@ VioFrameResult VisualInertialOdometry::ProcessFrame(const FrameFeatures& feature
   result.num_features = static_cast<int>(features.observations.size());
   FrameFeatures frame = features;
   frame.timestamp_ns = rig_.CamToImuTime(features.timestamp_ns);
+  result.after_imu_break = BreakAtImuGap(frame, features.timestamp_ns);
+  last_frame_imu_ns_ = frame.timestamp_ns;
 
   if (window_->initialized()) {
     const WindowFrameEstimate estimate = window_->AddFrame(frame, imu_);
@@ -632,6 +723,7 @@ struct VioRunner::State {
         if (!resets[next_reset].relocalized) ++segment;
         ++next_reset;
       }
+      if (frame.after_imu_break) ++segment;
       frame.segment = segment;
     }
   }
@@ -840,25 +932,28 @@ VioResult VioRunner::Finish(const std::filesystem::path& root) {
   VioResult& result = s.result;
   const std::vector<ImuSample>& imu = s.imu;
   const size_t num_frames = std::min(s.images.size(), s.num_frames_limit);
-  // Samples the IMU dropped: said once, bridged in the preintegration.
+  // Samples the IMU dropped: said once; bridged in the preintegration up
+  // to max_imu_gap_s, breaks beyond (said as they were met).
   size_t num_imu_gaps = 0;
+  size_t num_bridged = 0;
   timestamp_ns_t longest_gap_ns = 0;
-  timestamp_ns_t longest_gap_at_ns = 0;
+  timestamp_ns_t longest_bridged_ns = 0;
+  const timestamp_ns_t max_gap_ns = SecondsToNs(s.options.max_imu_gap_s);
   for (size_t i = 1; i < imu.size(); ++i) {
     const timestamp_ns_t gap_ns = imu[i].timestamp_ns - imu[i - 1].timestamp_ns;
     if (gap_ns > kMaxImuStepNs) ++num_imu_gaps;
-    if (gap_ns > longest_gap_ns) {
-      longest_gap_ns = gap_ns;
-      longest_gap_at_ns = imu[i - 1].timestamp_ns;
+    if (gap_ns > kMaxImuStepNs && gap_ns <= max_gap_ns) {
+      ++num_bridged;
+      longest_bridged_ns = std::max(longest_bridged_ns, gap_ns);
     }
+    longest_gap_ns = std::max(longest_gap_ns, gap_ns);
   }
-  if (num_imu_gaps > 0) {
-    VIOSFM_LOG(WARNING) << "vio: the IMU stream has " << num_imu_gaps
+  if (num_bridged > 0) {
+    VIOSFM_LOG(WARNING) << "vio: the IMU stream has " << num_bridged
                         << " gap(s) between samples longer than " << NsToSeconds(kMaxImuStepNs)
-                        << " s (the longest " << FormatNsAsSeconds(longest_gap_ns, 3)
-                        << " s, after "
-                        << FormatNsAsSeconds(longest_gap_at_ns - imu.front().timestamp_ns, 2)
-                        << " s of it): bridged by readings interpolated linearly";
+                        << " s and at most max_imu_gap_s " << s.options.max_imu_gap_s
+                        << " s (the longest " << FormatNsAsSeconds(longest_bridged_ns, 3)
+                        << " s): bridged by readings interpolated linearly";
   }
   vio.FinishMovingStart();
   s.PoseMovingStart();
@@ -882,10 +977,46 @@ VioResult VioRunner::Finish(const std::filesystem::path& root) {
   summary.num_frames_without_pose = static_cast<size_t>(
       std::count_if(result.frames.begin(), result.frames.end(),
                     [](const VioFrameResult& frame) { return !frame.has_pose; }));
+  // Stretches on the IMU alone: from a stretch's first frame to the frame
+  // after it (to its last when it runs to the end).
+  for (size_t k = 0; k < result.frames.size();) {
+    if (result.frames[k].status != VioStatus::kImuOnly) {
+      ++k;
+      continue;
+    }
+    size_t end = k;
+    while (end < result.frames.size() && result.frames[end].status == VioStatus::kImuOnly) ++end;
+    ++summary.num_imu_only_stretches;
+    const timestamp_ns_t until_ns =
+        result.frames[std::min(end, result.frames.size() - 1)].timestamp_ns;
+    const double length_s = NsToSeconds(until_ns - result.frames[k].timestamp_ns);
+    if (summary.longest_imu_only_from_ns < 0 || length_s > summary.longest_imu_only_s) {
+      summary.longest_imu_only_s = length_s;
+      summary.longest_imu_only_from_ns = result.frames[k].timestamp_ns;
+    }
+    k = end;
+  }
   summary.cpu_seconds = ProcessCpuSeconds() - s.cpu_start;
   summary.wall_seconds = s.timer.ElapsedSeconds();
 
   const SequenceImage& first_image = s.images.front();
+  const size_t num_imu_only = summary.status_counts[static_cast<int>(VioStatus::kImuOnly)];
+  const size_t num_lost = summary.status_counts[static_cast<int>(VioStatus::kLost)];
+  if (num_imu_only > 0 || num_lost > 0) {
+    VIOSFM_LOG(WARNING)
+        << "vio: " << num_imu_only << " of " << summary.num_frames << " frames (" << std::fixed
+        << std::setprecision(0)
+        << 100.0 * static_cast<double>(num_imu_only) /
+               static_cast<double>(std::max<size_t>(1, summary.num_frames))
+        << " %) ran on the IMU alone, in " << summary.num_imu_only_stretches
+        << " stretch(es), the longest " << std::setprecision(2) << summary.longest_imu_only_s
+        << " s from "
+        << (summary.longest_imu_only_from_ns >= 0
+                ? FormatNsAsSeconds(summary.longest_imu_only_from_ns - first_image.timestamp_ns, 2)
+                : std::string("-"))
+        << " s after the first image; " << num_lost << " frame(s) lost (" << summary.num_resets
+        << " reset(s)): their poses are the IMU's" << std::defaultfloat;
+  }
   const SequenceImage& last_image = s.images[num_frames - 1];
   std::ostringstream message;
   if (summary.static_init.is_static()) {
@@ -913,7 +1044,16 @@ VioResult VioRunner::Finish(const std::filesystem::path& root) {
             << summary.num_moving_start_imu << " by the IMU), " << summary.num_frames_without_pose
             << " without a pose";
   }
+  if (num_imu_only > 0) {
+    message << "; " << num_imu_only << " frames on the IMU alone ("
+            << summary.num_imu_only_stretches << " stretches, the longest " << std::fixed
+            << std::setprecision(2) << summary.longest_imu_only_s << " s)";
+  }
   if (summary.num_resets > 0) message << "; " << summary.num_resets << " resets after failures";
+  if (!summary.imu_breaks.empty()) {
+    message << "; " << summary.imu_breaks.size()
+            << " IMU gap(s) longer than max_imu_gap_s broke the VIO into segments";
+  }
   summary.message = message.str();
   VIOSFM_LOG(INFO) << "vio: " << summary.num_frames << " frames (tracking "
                    << summary.status_counts[1] << ", initializing " << summary.status_counts[0]
@@ -956,8 +1096,16 @@ std::string FormatVioSummary(const VioSummary& summary) {
   out << "num_keyframes: " << summary.num_keyframes << "\n";
   out << "num_frames_beyond_imu: " << summary.num_frames_beyond_imu << "\n";
   out << "imu_gaps: " << summary.num_imu_gaps << "  # intervals between IMU samples longer than "
-      << NsToSeconds(kMaxImuStepNs) << " s, bridged; the longest " << summary.longest_imu_gap_s
-      << " s\n";
+      << NsToSeconds(kMaxImuStepNs) << " s; the longest " << summary.longest_imu_gap_s << " s\n";
+  out << "imu_breaks: " << summary.imu_breaks.size()
+      << "  # gaps longer than max_imu_gap_s: the VIO broke into a new segment\n";
+  for (const VioImuBreak& imu_break : summary.imu_breaks) {
+    out << "imu_break: {gap_start_ns: " << imu_break.gap_start_ns << ", gap_s: " << imu_break.gap_s
+        << ", first_frame_ns: " << imu_break.frame_ns << "}\n";
+  }
+  out << "imu_only_stretches: " << summary.num_imu_only_stretches << "\n";
+  out << "longest_imu_only_s: " << summary.longest_imu_only_s << "  # from camera stamp "
+      << summary.longest_imu_only_from_ns << "\n";
   out << "num_frames_without_pose: " << summary.num_frames_without_pose
       << "  # before a moving start was initialised, not posed then\n";
   out << "moving_start_posed: [" << summary.num_moving_start_keyframes << ", "
@@ -977,6 +1125,10 @@ std::string FormatVioSummary(const VioSummary& summary) {
   }
   out << "time_offset_ns: " << summary.time_offset.offset_ns << "\n";
   out << "time_offset_estimated: " << (summary.time_offset.estimated ? "true" : "false") << "\n";
+  out << "time_offset_sigma_s: " << summary.time_offset.sigma_s
+      << "  # standard error the images and the gyro give (0: not computed)\n";
+  out << "time_offset_determined: " << (summary.time_offset.sigma_bounded ? "true" : "false")
+      << "  # false: undetermined within +-time_offset_sigma_s\n";
   out << "time_offset_message: \"" << summary.time_offset.message << "\"\n";
   out << "rolling_shutter_readout_s: " << summary.time_offset.readout_s
       << "  # 0: a global shutter\n";

@@ -82,6 +82,17 @@ struct VioOptions {
   // then estimated with the time offset (time_offset.estimate_readout), and
   // a global shutter assumed when the images do not show one.
   double rolling_shutter_readout_s = 0.0;
+  // s, the longest interval between IMU samples the preintegration bridges
+  // (with readings interpolated linearly and counted as far noisier than
+  // measured ones, imu_preintegration.h); a longer gap breaks the VIO: the
+  // window and everything it carries are dropped at the first frame after
+  // the gap's start, nothing is propagated across it, and the frames after
+  // it start a new segment from a visual-inertial initialisation of their
+  // own (joined to the first by the images only). Default 0.6: dropouts of
+  // half a second were measured to be bridged without losing track on the
+  // real handheld recording (docs/benchmarks.md); over much longer ones what
+  // the body did is too unknown for the IMU to carry the state across.
+  double max_imu_gap_s = 0.6;
   // Process only the first max_frames images (0: all). Default 0.
   int max_frames = 0;
   // Progress bar over the frames (default true; drawn on a terminal only).
@@ -343,6 +354,17 @@ struct VioOptions {
     visit({"time_offset.min_cost_reduction", "relative cost reduction needed to replace the offset",
            kShapesStoredData},
           self.time_offset.min_cost_reduction);
+    visit({"time_offset.uncertainty_range_s",
+           "s, range around the estimate searched for its standard error", kShapesStoredData},
+          self.time_offset.uncertainty_range_s);
+    visit({"time_offset.max_sigma_s",
+           "s, largest standard error with which the estimate replaces the calibration's",
+           kShapesStoredData},
+          self.time_offset.max_sigma_s);
+    visit({"time_offset.min_significance",
+           "standard errors the estimate must lie from the calibration's to replace it",
+           kShapesStoredData},
+          self.time_offset.min_significance);
     visit({"imu_noise.enabled", "check the IMU noise figures; false uses them as they are",
            kShapesStoredData},
           self.imu_noise.enabled);
@@ -358,6 +380,15 @@ struct VioOptions {
     visit(
         {"imu_noise.min_static_s", "s, shortest static interval to measure on", kShapesStoredData},
         self.imu_noise.min_static_s);
+    visit({"imu_noise.check_in_motion",
+           "raise densities below min_ratio times the high-frequency content in motion",
+           kShapesStoredData},
+          self.imu_noise.check_in_motion);
+    visit({"imu_noise.motion_span_s", "s, motion measured from its start", kShapesStoredData},
+          self.imu_noise.motion_span_s);
+    visit({"imu_noise.motion_window_s", "s, window of the in-motion measurement (median over them)",
+           kShapesStoredData},
+          self.imu_noise.motion_window_s);
     visit({"use_static_init", "try the static start first", kShapesStoredData},
           self.use_static_init);
     VisitSigmas("static_start_sigmas", self.static_start_sigmas, visit);
@@ -375,6 +406,10 @@ struct VioOptions {
            "s, rolling-shutter readout time of the camera (0: not given, estimated)",
            kShapesStoredData},
           self.rolling_shutter_readout_s);
+    visit({"max_imu_gap_s",
+           "s, longest IMU gap bridged; a longer one breaks the VIO into a new segment",
+           kShapesStoredData},
+          self.max_imu_gap_s);
     visit({"max_frames", "process only the first max_frames images (0: all)", kShapesStoredData},
           self.max_frames);
     visit({"show_progress", "progress bar over the frames", kRunOnly}, self.show_progress);
@@ -420,6 +455,16 @@ struct VioFrameResult {
   int segment = 0;
   // Map points of the previous segment seen while re-localising.
   int num_map_points = 0;
+  // The first frame after an IMU gap longer than VioOptions::max_imu_gap_s
+  // (a break: a new segment begins with it).
+  bool after_imu_break = false;
+};
+
+// An IMU gap the VIO did not bridge (VioOptions::max_imu_gap_s).
+struct VioImuBreak {
+  timestamp_ns_t gap_start_ns = 0;  // IMU clock: the last sample before the gap
+  double gap_s = 0.0;
+  timestamp_ns_t frame_ns = 0;  // camera stamp of the first frame after the gap's start
 };
 
 // One failure of the estimate (status kLost) and how the VIO went on.
@@ -443,16 +488,22 @@ struct VioSummary {
   bool visual_initialized = false;
   // Camera stamp of the first kTracking frame (-1: never).
   timestamp_ns_t first_tracking_ns = -1;
-  int num_resets = 0;            // kLost events
-  std::vector<VioReset> resets;  // one per kLost event, in order
-  int num_segments = 0;          // distinct VioFrameResult::segment values
+  int num_resets = 0;                   // kLost events
+  std::vector<VioReset> resets;         // one per kLost event, in order
+  int num_segments = 0;                 // distinct VioFrameResult::segment values
+  std::vector<VioImuBreak> imu_breaks;  // IMU gaps that broke the VIO, in order
+  // Stretches of consecutive kImuOnly frames, the longest (s, its first
+  // frame to the first frame after it) and the camera stamp it starts at.
+  size_t num_imu_only_stretches = 0;
+  double longest_imu_only_s = 0.0;
+  timestamp_ns_t longest_imu_only_from_ns = -1;
   int num_keyframes = 0;
   // Frames at the end that lie after the last IMU sample (on the IMU clock):
   // not processed, no pose, not in VioResult::frames.
   size_t num_frames_beyond_imu = 0;
   // Intervals between IMU samples longer than kMaxImuStepNs (samples the
-  // IMU dropped; bridged by interpolated readings, imu_preintegration.h) and
-  // the longest interval, s.
+  // IMU dropped; bridged by interpolated readings, imu_preintegration.h, up
+  // to VioOptions::max_imu_gap_s, breaks beyond) and the longest interval, s.
   size_t num_imu_gaps = 0;
   double longest_imu_gap_s = 0.0;
   // Frames without a pose: those before a moving start was initialised
@@ -526,6 +577,12 @@ class VisualInertialOdometry {
   // state's IMU propagation, which places the new world in the old one.
   bool TryVisualInertialInitialization(const FrameFeatures& frame, const ImuState* carried);
   ImuState Propagate(const ImuState& state, timestamp_ns_t to_ns) const;
+  // The longest interval between IMU samples that overlaps (from_ns, to_ns)
+  // (IMU clock); 0 without samples around it.
+  timestamp_ns_t LongestImuIntervalNs(timestamp_ns_t from_ns, timestamp_ns_t to_ns) const;
+  // A gap longer than max_imu_gap_s since the last frame: everything the
+  // VIO carries is dropped (BreakAtImuGap), and true is returned.
+  bool BreakAtImuGap(const FrameFeatures& frame, timestamp_ns_t camera_ns);
   // The state at to_ns (before state.timestamp_ns) from which the IMU leads
   // to `state`: the propagation run backwards.
   ImuState PropagateBack(const ImuState& state, timestamp_ns_t to_ns) const;
@@ -565,6 +622,8 @@ class VisualInertialOdometry {
   // The camera stamp of the last reset's lost frame while its
   // re-localisation is not decided.
   std::optional<timestamp_ns_t> undecided_reset_ns_;
+  // IMU stamp of the last frame processed (none before the first).
+  std::optional<timestamp_ns_t> last_frame_imu_ns_;
 };
 
 // cam_now_from_cam_prev: the gyro's rotation between two camera stamps

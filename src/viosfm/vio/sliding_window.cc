@@ -92,6 +92,12 @@ ImuState StateOf(const ImuStateParameters& parameters, timestamp_ns_t timestamp_
   return parameters.ToState(timestamp_ns);
 }
 
+bool IsFinite(const ImuState& state) {
+  return state.world_from_body.rotation.coeffs().allFinite() &&
+         state.world_from_body.translation.allFinite() && state.velocity_in_world.allFinite() &&
+         state.gyro_bias.allFinite() && state.accel_bias.allFinite();
+}
+
 }  // namespace
 
 SlidingWindowEstimator::SlidingWindowEstimator(const Rigid3d& body_from_cam, const ImuNoise& noise,
@@ -116,6 +122,13 @@ void SlidingWindowEstimator::ClearWindow() {
   prior_.reset();
   has_tracked_ = false;
   imu_only_since_ns_ = -1;
+}
+
+void SlidingWindowEstimator::Clear() {
+  map_points_.clear();
+  relocalization_points_.clear();
+  relocalization_seen_.clear();
+  ClearWindow();
 }
 
 void SlidingWindowEstimator::Reset() {
@@ -150,7 +163,6 @@ std::vector<ImuState> SlidingWindowEstimator::States() const {
 void SlidingWindowEstimator::Initialize(const ImuState& state, const InitialStateSigmas& sigmas_in,
                                         const FrameFeatures& features) {
   ClearWindow();
-  rejected_tracks_.clear();
   InitialStateSigmas sigmas = sigmas_in;
   restart_ns_ = state.timestamp_ns;
   relocalization_observations_ = 0;
@@ -349,23 +361,61 @@ void SlidingWindowEstimator::TriangulateLandmarks() {
       frame_indices.push_back(k);
     }
     if (points.size() < 2) continue;
-    const std::optional<Eigen::Vector3d> point = TriangulateDlt(poses, points);
-    if (!point || !point->allFinite()) continue;
-    // The widest ray angle: first against the others.
-    double best_angle = 0.0;
-    for (size_t k = 1; k < frame_indices.size(); ++k) {
-      best_angle = std::max(best_angle, TriangulationAngle(centers[frame_indices.front()],
-                                                           centers[frame_indices[k]], *point));
+    // The observations from `first` on: the point, its widest ray angle
+    // (first against the others), and whether every observation lies in the
+    // depth range and within max_reprojection_error_px of it.
+    struct Triangulated {
+      Eigen::Vector3d point;
+      double angle = 0.0;
+      bool consistent = true;
+    };
+    const auto triangulate = [&](size_t first) -> std::optional<Triangulated> {
+      const std::vector<Matrix3x4d> used_poses(poses.begin() + first, poses.end());
+      const std::vector<Eigen::Vector2d> used_points(points.begin() + first, points.end());
+      const std::optional<Eigen::Vector3d> point = TriangulateDlt(used_poses, used_points);
+      if (!point || !point->allFinite()) return std::nullopt;
+      Triangulated result{*point};
+      for (size_t k = first + 1; k < frame_indices.size(); ++k) {
+        result.angle = std::max(
+            result.angle,
+            TriangulationAngle(centers[frame_indices[first]], centers[frame_indices[k]], *point));
+      }
+      for (size_t k = first; k < poses.size() && result.consistent; ++k) {
+        const Eigen::Vector3d in_cam = poses[k] * point->homogeneous();
+        if (in_cam.z() < options_.min_depth_m || in_cam.z() > options_.max_depth_m) {
+          result.consistent = false;
+        }
+        const double error_px = (in_cam.hnormalized() - points[k]).norm() * focal_length_px_;
+        if (error_px > options_.max_reprojection_error_px) result.consistent = false;
+      }
+      return result;
+    };
+    std::optional<Triangulated> triangulated = triangulate(0);
+    if (!triangulated || triangulated->angle < std::min(min_angle, fallback_angle)) continue;
+    if (!triangulated->consistent) {
+      // Some observation disagrees (the track drifted, or a frame's corners
+      // were off): the track goes on from the longest run of its newest
+      // observations that agree, its older ones dropped, so that a stretch
+      // of bad frames in the window does not hold it back until they leave.
+      size_t first = 1;
+      for (; first + 1 < points.size(); ++first) {
+        triangulated = triangulate(first);
+        if (triangulated && triangulated->consistent) break;
+      }
+      if (first + 1 >= points.size()) continue;
+      for (size_t k = 0; k < first; ++k) {
+        frames_[frame_indices[k]]->observations.erase(track_id);
+        --landmark.num_observations;
+      }
+      landmark.anchor = frames_[frame_indices[first]].get();
+      poses.erase(poses.begin(), poses.begin() + static_cast<std::ptrdiff_t>(first));
+      points.erase(points.begin(), points.begin() + static_cast<std::ptrdiff_t>(first));
+      frame_indices.erase(frame_indices.begin(),
+                          frame_indices.begin() + static_cast<std::ptrdiff_t>(first));
+      if (triangulated->angle < std::min(min_angle, fallback_angle)) continue;
     }
-    if (best_angle < std::min(min_angle, fallback_angle)) continue;
-    bool good = true;
-    for (size_t k = 0; k < poses.size() && good; ++k) {
-      const Eigen::Vector3d in_cam = poses[k] * point->homogeneous();
-      if (in_cam.z() < options_.min_depth_m || in_cam.z() > options_.max_depth_m) good = false;
-      const double error_px = (in_cam.hnormalized() - points[k]).norm() * focal_length_px_;
-      if (error_px > options_.max_reprojection_error_px) good = false;
-    }
-    if (!good) continue;
+    const std::optional<Eigen::Vector3d> point = triangulated->point;
+    const double best_angle = triangulated->angle;
     const Frame& anchor = *frames_[frame_indices.front()];
     VIOSFM_CHECK(&anchor == landmark.anchor);
     const double inverse_depth = InverseDepthOfPoint(
@@ -625,9 +675,13 @@ void SlidingWindowEstimator::RemoveOutliers(const std::vector<Landmark*>& landma
       }
     }
     if (bad) {
-      // Drop the track for good: its observations are probably wrong.
+      // The landmark and the track's observations in the window are
+      // dropped; the track's next observation starts a new landmark. A
+      // track that drifted is rejected again once it has parallax; a good
+      // one rejected under a wrong state (a wrong time offset, a stretch on
+      // the IMU alone) comes back instead of holding one of the tracker's
+      // corners without ever being used.
       const uint64_t track_id = landmark->track_id;
-      rejected_tracks_.insert(track_id);
       for (auto& frame : frames_) frame->observations.erase(track_id);
       landmarks_.erase(track_id);
     }
@@ -772,9 +826,21 @@ WindowFrameEstimate SlidingWindowEstimator::AddFrame(const FrameFeatures& featur
     return estimate;
   }
   const ImuState predicted = frame->preintegration->Predict(previous_state);
+  if (!frame->preintegration->IsUsable() || !IsFinite(predicted)) {
+    // Readings no IMU reports: no factor, no prediction can be made of them.
+    estimate.state = previous_state;
+    estimate.state.timestamp_ns = features.timestamp_ns;
+    estimate.status = VioStatus::kLost;
+    std::ostringstream message;
+    message << "the IMU readings between " << FormatNsAsSeconds(previous.timestamp_ns, 3) << " and "
+            << FormatNsAsSeconds(features.timestamp_ns, 3)
+            << " s give a non-finite or degenerate preintegration (values out of any IMU's range)";
+    estimate.message = message.str();
+    Reset();
+    return estimate;
+  }
   frame->parameters = ImuStateParameters::FromState(predicted);
   for (const FeatureObservation& observation : features.observations) {
-    if (rejected_tracks_.count(observation.track_id) > 0) continue;
     frame->observations[observation.track_id] = observation.normalized;
   }
   frame->is_keyframe = IsKeyframe(*frame, features);

@@ -214,6 +214,8 @@ class SlidingWindowEstimator {
   // Clears the window; the landmarks of the last frame that tracked are
   // kept for the re-localisation of the next Initialize.
   void Reset();
+  // Clears the window and its map: the next Initialize starts afresh.
+  void Clear();
   // Whether the last restart re-localised against the map kept at the
   // reset (decided relocalization_window_s after the restart; false until then).
   bool relocalized() const { return relocalized_; }
@@ -245,6 +247,10 @@ class SlidingWindowEstimator {
   // Returns the marginal covariance of the newest pose (see
   // WindowFrameEstimate) when options_.compute_covariance, else zero.
   Eigen::Matrix<double, 6, 6> Optimize(const std::vector<Landmark*>& landmarks);
+  // Drops the landmarks behind a camera, out of the depth range, or with an
+  // observation farther than max_reprojection_error_px from its projection,
+  // with their observations in the window (their tracks start again as new
+  // landmarks from their next observation).
   void RemoveOutliers(const std::vector<Landmark*>& landmarks);
   void MarginalizeOldest(const std::vector<Landmark*>& landmarks);
   std::string CheckPlausible(const ImuState& predicted) const;
@@ -258,7 +264,6 @@ class SlidingWindowEstimator {
 
   std::deque<std::unique_ptr<Frame>> frames_;
   std::unordered_map<uint64_t, Landmark> landmarks_;
-  std::unordered_set<uint64_t> rejected_tracks_;
   std::shared_ptr<LinearPrior> prior_;
   // World points of the landmarks of the last frame that tracked (by track
   // id), and the map a restarted window re-localises against.

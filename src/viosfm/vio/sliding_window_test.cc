@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <iostream>
 #include <unordered_map>
@@ -10,6 +11,7 @@
 #include "viosfm/geometry/alignment.h"
 #include "viosfm/sensor/camera_models.h"
 #include "viosfm/sim/imu_synthesis.h"
+#include "viosfm/sim/scenarios.h"
 #include "viosfm/sim/sequence_simulator.h"
 #include "viosfm/sim/trajectory.h"
 #include "viosfm/util/random.h"
@@ -29,14 +31,16 @@ struct SyntheticRun {
   timestamp_ns_t motion_start_ns = 0;
 };
 
-SyntheticRun MakeSyntheticRun(double duration_s, double static_start_s, uint64_t seed) {
+// The run of `motion` (its motion starting at motion_start_ns): the IMU
+// with EuRoC noise and the given vibration, and the frames, stamped
+// camera_time_offset_s after the instants they show (an offset the rig
+// does not state).
+SyntheticRun ObserveSyntheticRoom(const BodyTrajectory& motion, timestamp_ns_t motion_start_ns,
+                                  uint64_t seed, const ImuVibrationOptions& vibration = {},
+                                  double camera_time_offset_s = 0.0) {
   SyntheticRun run;
-  WalkOptions walk;
-  walk.duration_s = duration_s;
-  walk.static_start_s = static_start_s;
-  walk.seed = seed;
-  run.motion = GenerateWalk(walk);
-  run.motion_start_ns = walk.start_ns + SecondsToNs(static_start_s);
+  run.motion = motion;
+  run.motion_start_ns = motion_start_ns;
 
   run.rig.camera = SimulationOptions::DefaultCamera();
   run.rig.body_from_cam = SimulationOptions::DefaultBodyFromCam();
@@ -48,6 +52,7 @@ SyntheticRun MakeSyntheticRun(double duration_s, double static_start_s, uint64_t
   imu_options.initial_gyro_bias = Eigen::Vector3d(0.004, -0.003, 0.002);
   imu_options.initial_accel_bias = Eigen::Vector3d(0.05, -0.04, 0.03);
   imu_options.seed = seed + 1;
+  imu_options.vibration = vibration;
   run.imu = SynthesizeImu(run.motion, run.motion.start_ns(), run.motion.end_ns(), imu_options);
 
   Random random(seed + 2);
@@ -74,7 +79,9 @@ SyntheticRun MakeSyntheticRun(double duration_s, double static_start_s, uint64_t
   std::unordered_map<size_t, uint64_t> active;  // landmark -> track id
   uint64_t next_track_id = 1;
   const timestamp_ns_t period = SecondsToNs(1.0 / run.rig.camera_rate_hz);
-  for (timestamp_ns_t t = walk.start_ns + period; t + period < run.motion.end_ns(); t += period) {
+  const timestamp_ns_t camera_time_offset_ns = SecondsToNs(camera_time_offset_s);
+  for (timestamp_ns_t t = run.motion.start_ns() + period; t + period < run.motion.end_ns();
+       t += period) {
     const Rigid3d cam_from_world = (run.motion.WorldFromBody(t) * run.rig.body_from_cam).Inverse();
     std::vector<std::pair<size_t, Eigen::Vector2d>> visible;
     for (size_t k = 0; k < points.size(); ++k) {
@@ -90,7 +97,7 @@ SyntheticRun MakeSyntheticRun(double duration_s, double static_start_s, uint64_t
     }
     std::unordered_map<size_t, uint64_t> next_active;
     FrameFeatures frame;
-    frame.timestamp_ns = t;
+    frame.timestamp_ns = t + camera_time_offset_ns;
     auto add = [&](size_t landmark, const Eigen::Vector2d& normalized, uint64_t track_id) {
       FeatureObservation observation;
       observation.track_id = track_id;
@@ -113,6 +120,17 @@ SyntheticRun MakeSyntheticRun(double duration_s, double static_start_s, uint64_t
     run.frames.push_back(std::move(frame));
   }
   return run;
+}
+
+SyntheticRun MakeSyntheticRun(double duration_s, double static_start_s, uint64_t seed,
+                              double speed_mps = WalkOptions().speed_mps) {
+  WalkOptions walk;
+  walk.speed_mps = speed_mps;
+  walk.duration_s = duration_s;
+  walk.static_start_s = static_start_s;
+  walk.seed = seed;
+  return ObserveSyntheticRoom(GenerateWalk(walk), walk.start_ns + SecondsToNs(static_start_s),
+                              seed);
 }
 
 struct Accuracy {
@@ -281,6 +299,178 @@ TEST(SlidingWindowEstimator, BridgesShortVisualGapWithImu) {
   EXPECT_EQ(gap.size(), 30u);
   EXPECT_LT(worst_gap_error, 0.2);
   EXPECT_LT(accuracy.ate_se3_m, 0.05);
+}
+
+// A second in which every frame's corners are shifted together by a
+// random 8 px (what a state wrong by a time offset under fast rotation does
+// to the reprojections): the window rejects the landmarks it sees then. Once
+// the corners are right again, the same tracks go on (the tracker still
+// follows them) and the window takes them back: tracking within a few
+// frames, not on the IMU alone until the tracks leave the view.
+TEST(SlidingWindowEstimator, TracksRejectedUnderAWrongStateComeBack) {
+  SyntheticRun run = MakeSyntheticRun(9.0, 2.0, 31, /*speed_mps=*/0.3);
+  const timestamp_ns_t bad_start = run.motion_start_ns + SecondsToNs(3.0);
+  const timestamp_ns_t bad_end = bad_start + SecondsToNs(1.0);
+  const double focal = MeanFocalLength(run.rig.camera);
+  Random random(5);
+  for (FrameFeatures& frame : run.frames) {
+    if (frame.timestamp_ns < bad_start || frame.timestamp_ns >= bad_end) continue;
+    const double angle = random.Uniform(0.0, 2.0 * M_PI);
+    const Eigen::Vector2d shift = 8.0 / focal * Eigen::Vector2d(std::cos(angle), std::sin(angle));
+    for (FeatureObservation& observation : frame.observations) observation.normalized += shift;
+  }
+  VioOptions options;
+  options.show_progress = false;
+  VisualInertialOdometry vio(run.rig, run.imu.samples, run.frames.front().timestamp_ns,
+                             run.frames.back().timestamp_ns, options);
+  int after = 0;           // frames after the bad stretch
+  int tracking_after = 0;  // of them, tracking
+  int first_tracking_after = -1;
+  std::vector<Eigen::Vector3d> estimate;
+  std::vector<Eigen::Vector3d> truth;
+  for (const FrameFeatures& frame : run.frames) {
+    const VioFrameResult result = vio.ProcessFrame(frame);
+    ASSERT_NE(result.status, VioStatus::kLost);
+    if (frame.timestamp_ns < bad_end) continue;
+    if (result.status == VioStatus::kTracking) {
+      ++tracking_after;
+      if (first_tracking_after < 0) first_tracking_after = after;
+      estimate.push_back(result.state.world_from_body.translation);
+      truth.push_back(run.motion.PositionInWorld(frame.timestamp_ns));
+    }
+    ++after;
+  }
+  const Accuracy accuracy = Evaluate(estimate, truth);
+  std::cout << "after 1 s of shifted corners: first tracking frame " << first_tracking_after << ", "
+            << tracking_after << " of " << after << " frames tracking, ATE " << accuracy.ate_se3_m
+            << " m\n";
+  ASSERT_GE(first_tracking_after, 0);
+  EXPECT_LE(first_tracking_after, 5);
+  EXPECT_GE(tracking_after, after - 5);
+  EXPECT_LT(accuracy.ate_se3_m, 0.1);
+}
+
+// The simulator's MAV scenario (sim/scenarios.h: the room flown at 0.5 m/s
+// with propeller vibration in the accelerometer, 1.2 m/s^2 RMS a axis, 40
+// times its data sheet's white noise in every reading). With the data
+// sheet's figures and tracks banned once rejected, the VIO put 105 of 224
+// frames on the IMU alone and came out 1.55 m off: the failure of the real
+// EuRoC flight. Every frame after the start tracks now, none is lost.
+TEST(SlidingWindowEstimator, VibratingFlightKeepsTracking) {
+  ScenarioOptions scenario_options;
+  scenario_options.name = "mav";
+  scenario_options.texels_per_metre = 8.0;  // the motion and vibration only
+  const Scenario scenario = MakeScenario(scenario_options);
+  ScenarioMotionOptions motion_options;
+  motion_options.duration_s = 14.0;
+  motion_options.static_start_s = 2.0;
+  motion_options.seed = 3;
+  const BodyTrajectory motion = GenerateScenarioMotion(scenario, motion_options);
+  ImuVibrationOptions vibration = scenario.vibration;
+  vibration.start_s = motion_options.static_start_s;
+  const SyntheticRun run = ObserveSyntheticRoom(
+      motion, motion.start_ns() + SecondsToNs(motion_options.static_start_s), 3, vibration);
+  VioOptions options;
+  options.show_progress = false;
+  VisualInertialOdometry vio(run.rig, run.imu.samples, run.frames.front().timestamp_ns,
+                             run.frames.back().timestamp_ns, options);
+  std::array<int, 4> counts{};
+  bool tracked = false;
+  std::vector<Eigen::Vector3d> estimate;
+  std::vector<Eigen::Vector3d> truth;
+  for (const FrameFeatures& frame : run.frames) {
+    const VioFrameResult result = vio.ProcessFrame(frame);
+    tracked = tracked || result.status == VioStatus::kTracking;
+    if (!tracked) continue;
+    ++counts[static_cast<int>(result.status)];
+    estimate.push_back(result.state.world_from_body.translation);
+    truth.push_back(run.motion.PositionInWorld(frame.timestamp_ns));
+  }
+  const Accuracy accuracy = Evaluate(estimate, truth);
+  std::cout << "mav: tracking " << counts[1] << ", IMU only " << counts[2] << ", lost " << counts[3]
+            << "; ATE " << accuracy.ate_se3_m << " m (Sim(3) " << accuracy.ate_sim3_m
+            << " m, scale " << accuracy.scale << ")\n";
+  EXPECT_EQ(counts[3], 0);
+  EXPECT_LE(counts[2], 3);
+  EXPECT_LT(accuracy.ate_se3_m, 0.15);
+}
+
+// The IMU silent for longer than VioOptions::max_imu_gap_s is a break: no
+// state is carried across it, the frames after it initialise again (a new
+// segment, its own scale from the images and the IMU after the gap), and
+// each stretch is metric on its own. A gap of 0.3 s is bridged.
+TEST(VisualInertialOdometry, AnImuGapLongerThanTheBridgeBreaksTheVio) {
+  for (const double gap_s : {0.3, 1.5}) {
+    SyntheticRun run = MakeSyntheticRun(14.0, 2.0, 51);
+    const timestamp_ns_t gap_from = run.motion_start_ns + SecondsToNs(4.0);
+    const timestamp_ns_t gap_to = gap_from + SecondsToNs(gap_s);
+    std::vector<ImuSample> imu;
+    for (const ImuSample& sample : run.imu.samples) {
+      if (sample.timestamp_ns <= gap_from || sample.timestamp_ns >= gap_to) imu.push_back(sample);
+    }
+    VioOptions options;
+    options.show_progress = false;
+    VisualInertialOdometry vio(run.rig, imu, run.frames.front().timestamp_ns,
+                               run.frames.back().timestamp_ns, options);
+    int breaks = 0;
+    int posed_before_reinitialisation = 0;  // after the gap's start, before tracking again
+    bool tracking_again = false;
+    std::vector<Eigen::Vector3d> before_estimate, before_truth, after_estimate, after_truth;
+    for (const FrameFeatures& frame : run.frames) {
+      const VioFrameResult result = vio.ProcessFrame(frame);
+      ASSERT_NE(result.status, VioStatus::kLost);
+      breaks += result.after_imu_break ? 1 : 0;
+      const Eigen::Vector3d truth = run.motion.PositionInWorld(frame.timestamp_ns);
+      if (frame.timestamp_ns <= gap_from) {
+        if (result.status == VioStatus::kTracking) {
+          before_estimate.push_back(result.state.world_from_body.translation);
+          before_truth.push_back(truth);
+        }
+        continue;
+      }
+      if (breaks > 0 && !tracking_again) {
+        tracking_again = result.status == VioStatus::kTracking;
+        if (!tracking_again && result.has_pose && result.status != VioStatus::kInitializing) {
+          ++posed_before_reinitialisation;
+        }
+      }
+      if (result.status == VioStatus::kTracking) {
+        after_estimate.push_back(result.state.world_from_body.translation);
+        after_truth.push_back(truth);
+      }
+    }
+    const Accuracy before = Evaluate(before_estimate, before_truth);
+    const Accuracy after = Evaluate(after_estimate, after_truth);
+    std::cout << "IMU gap of " << gap_s << " s: " << breaks << " break(s), "
+              << vio.summary().imu_breaks.size() << " recorded; before it " << before.count
+              << " frames tracking, ATE " << before.ate_se3_m << " m, scale " << before.scale
+              << "; after it " << after.count << " frames tracking, ATE " << after.ate_se3_m
+              << " m (Sim(3) " << after.ate_sim3_m << " m), scale " << after.scale << "\n";
+    if (gap_s < options.max_imu_gap_s) {
+      EXPECT_EQ(breaks, 0);
+      EXPECT_TRUE(vio.summary().imu_breaks.empty());
+      // One trajectory through the bridged gap.
+      std::vector<Eigen::Vector3d> estimate = before_estimate;
+      std::vector<Eigen::Vector3d> truth = before_truth;
+      estimate.insert(estimate.end(), after_estimate.begin(), after_estimate.end());
+      truth.insert(truth.end(), after_truth.begin(), after_truth.end());
+      EXPECT_LT(Evaluate(estimate, truth).ate_se3_m, 0.05);
+      continue;
+    }
+    EXPECT_EQ(breaks, 1);
+    ASSERT_EQ(vio.summary().imu_breaks.size(), 1u);
+    EXPECT_NEAR(vio.summary().imu_breaks[0].gap_s, gap_s, 0.01);
+    // Nothing carried across the gap: no frame after it is posed by the IMU
+    // before the new initialisation.
+    EXPECT_EQ(posed_before_reinitialisation, 0);
+    EXPECT_TRUE(tracking_again);
+    // Each side metric on its own (aligned separately).
+    EXPECT_LT(before.ate_se3_m, 0.05);
+    EXPECT_NEAR(before.scale, 1.0, 0.03);
+    EXPECT_GT(after.count, 100u);
+    EXPECT_LT(after.ate_se3_m, 0.05);
+    EXPECT_NEAR(after.scale, 1.0, 0.03);
+  }
 }
 
 // A visual gap longer than max_imu_only_s: the estimate is declared lost

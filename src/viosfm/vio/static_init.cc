@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 #include "viosfm/util/errors.h"
@@ -86,6 +87,17 @@ size_t UpperIndex(const std::vector<ImuSample>& samples, timestamp_ns_t t) {
          samples.begin();
 }
 
+// The longest interval between consecutive samples of samples[begin, end);
+// infinite for fewer than two samples.
+timestamp_ns_t LongestInterval(const std::vector<ImuSample>& samples, size_t begin, size_t end) {
+  if (end < begin + 2) return std::numeric_limits<timestamp_ns_t>::max();
+  timestamp_ns_t longest = 0;
+  for (size_t k = begin + 1; k < end; ++k) {
+    longest = std::max(longest, samples[k].timestamp_ns - samples[k - 1].timestamp_ns);
+  }
+  return longest;
+}
+
 }  // namespace
 
 std::string StaticInitOptions::Validate() const {
@@ -153,6 +165,19 @@ StaticInitResult DetectStaticStart(const std::vector<ImuSample>& samples, timest
     const timestamp_ns_t window_start = std::min(start, t_last - window_ns);
     const size_t begin = LowerIndex(samples, window_start);
     const size_t end = UpperIndex(samples, window_start + window_ns);
+    // An IMU gap longer than the smoothing blocks ends the static start: what
+    // the body did while the IMU was silent is unknown. The samples on
+    // either side of the window count, so that a gap at its edge is seen.
+    if (LongestInterval(samples, begin > 0 ? begin - 1 : 0, std::min(end + 1, samples.size())) >
+        smoothing_ns) {
+      if (start == t_first) {
+        result.status = StaticInitStatus::kNotStatic;
+        result.message = "the IMU has a gap longer than smoothing_s in the first window";
+        return result;
+      }
+      ended_by_motion = true;
+      break;
+    }
     const WindowStats stats = ComputeStats(samples, begin, end, smoothing_ns);
     if (!IsStatic(stats, options)) {
       if (start == t_first) {

@@ -30,6 +30,40 @@ TEST(StaticInit, OptionsValidate) {
   EXPECT_NE(options.Validate().find("max_accel_stddev"), std::string::npos);
 }
 
+// An IMU gap (1.5 s without samples) in a static start ends it before it:
+// nothing is known of the body while the IMU was silent. A gap inside the
+// first window leaves no static start.
+TEST(StaticInit, AnImuGapEndsTheStaticStart) {
+  WalkOptions walk;
+  walk.duration_s = 6.0;
+  walk.static_start_s = 4.0;
+  walk.seed = 21;
+  const BodyTrajectory trajectory = GenerateWalk(walk);
+  const timestamp_ns_t start = trajectory.start_ns();
+  const SynthesizedImu imu =
+      SynthesizeImu(trajectory, start, trajectory.end_ns(), ImuSynthesisOptions());
+  for (const double gap_from_s : {2.0, 0.3}) {
+    std::vector<ImuSample> samples;
+    for (const ImuSample& sample : imu.samples) {
+      const double t_s = NsToSeconds(sample.timestamp_ns - start);
+      if (t_s < gap_from_s || t_s > gap_from_s + 1.5) samples.push_back(sample);
+    }
+    const StaticInitResult result =
+        DetectStaticStart(samples, start, trajectory.end_ns(), StaticInitOptions());
+    std::cout << "IMU gap from " << gap_from_s << " s: " << StaticInitStatusName(result.status)
+              << ", " << result.message << "\n";
+    if (gap_from_s < 1.0) {
+      EXPECT_FALSE(result.is_static());
+      EXPECT_NE(result.message.find("gap"), std::string::npos) << result.message;
+      continue;
+    }
+    ASSERT_TRUE(result.is_static()) << result.message;
+    EXPECT_EQ(result.start_ns, start);
+    EXPECT_LE(NsToSeconds(result.end_ns - start), gap_from_s);
+    EXPECT_GT(NsToSeconds(result.end_ns - start), 0.5);
+  }
+}
+
 TEST(StaticInit, GravityAlignedRotationMapsUpToZ) {
   for (const Eigen::Vector3d& up : {Eigen::Vector3d(0.3, -0.2, 0.9),
                                     Eigen::Vector3d(-0.5, 0.7, -0.2), Eigen::Vector3d(0, 0, 1)}) {

@@ -121,76 +121,80 @@ class GyroOrientation {
   std::vector<Eigen::Vector3d> rates_;  // mean rate over [stamps_[k], stamps_[k + 1]]
 };
 
-// Mean over the pairs of the median epipolar residual (normalised) of the
-// corners under the gyro's rotation between their observation times: the
-// stamps shifted by offset_ns, plus each row's time for a rolling shutter
-// of readout_s (0: a global shutter); pairs without IMU coverage are skipped
-// (nullopt if all are).
-std::optional<double> RotationFlowCost(const std::vector<FramePair>& pairs,
-                                       const GyroOrientation& gyro,
-                                       const Eigen::Quaterniond& body_from_cam,
-                                       timestamp_ns_t offset_ns, double readout_s, int height) {
-  double sum = 0.0;
-  int count = 0;
-  std::vector<double> errors;
-  std::vector<Eigen::Vector3d> rows;
+// The median epipolar residual (normalised) of one pair's corners under the
+// gyro's rotation between their observation times: the stamps shifted by
+// offset_ns, plus each row's time for a rolling shutter of readout_s (0: a
+// global shutter); nullopt without IMU coverage.
+std::optional<double> PairRotationFlowCost(const FramePair& pair, const GyroOrientation& gyro,
+                                           const Eigen::Quaterniond& body_from_cam,
+                                           timestamp_ns_t offset_ns, double readout_s, int height) {
   // cam2_from_cam1 for a rotation body1_from_body2.
   const auto cam2_from_cam1 = [&](const Eigen::Quaterniond& body1_from_body2) {
     return (body_from_cam.conjugate() * body1_from_body2 * body_from_cam)
         .conjugate()
         .toRotationMatrix();
   };
-  for (const FramePair& pair : pairs) {
-    const std::optional<Eigen::Quaterniond> q1 = gyro.At(pair.t1 + offset_ns);
-    const std::optional<Eigen::Quaterniond> q2 = gyro.At(pair.t2 + offset_ns);
-    if (!q1 || !q2) continue;
-    // Epipolar residuals with the rotation fixed: for the unit translation
-    // t, x2^T [t]x R x1 = t . ((R x1) x x2) = t . a. t is the eigenvector of
-    // the smallest eigenvalue of sum a a^T (least squares), refitted on the
-    // better 70 % of the corners; the pair's cost is the median |t . a|.
-    rows.clear();
-    rows.reserve(pair.rays1.size());
-    if (readout_s == 0.0) {
-      const Eigen::Matrix3d rotation = cam2_from_cam1(q1->conjugate() * *q2);
-      for (size_t i = 0; i < pair.rays1.size(); ++i) {
-        rows.push_back((rotation * pair.rays1[i]).cross(pair.points2[i].homogeneous()));
-      }
-    } else {
-      bool covered = true;
-      for (size_t i = 0; i < pair.rays1.size() && covered; ++i) {
-        const std::optional<Eigen::Quaterniond> a = gyro.At(
-            pair.t1 + offset_ns + SecondsToNs(RowTimeOffset(pair.rows1[i], height, readout_s)));
-        const std::optional<Eigen::Quaterniond> b = gyro.At(
-            pair.t2 + offset_ns + SecondsToNs(RowTimeOffset(pair.rows2[i], height, readout_s)));
-        covered = a && b;
-        if (covered) {
-          rows.push_back((cam2_from_cam1(a->conjugate() * *b) * pair.rays1[i])
-                             .cross(pair.points2[i].homogeneous()));
-        }
-      }
-      if (!covered) continue;
+  const std::optional<Eigen::Quaterniond> q1 = gyro.At(pair.t1 + offset_ns);
+  const std::optional<Eigen::Quaterniond> q2 = gyro.At(pair.t2 + offset_ns);
+  if (!q1 || !q2) return std::nullopt;
+  // Epipolar residuals with the rotation fixed: for the unit translation
+  // t, x2^T [t]x R x1 = t . ((R x1) x x2) = t . a. t is the eigenvector of
+  // the smallest eigenvalue of sum a a^T (least squares), refitted on the
+  // better 70 % of the corners; the pair's cost is the median |t . a|.
+  std::vector<Eigen::Vector3d> rows;
+  rows.reserve(pair.rays1.size());
+  if (readout_s == 0.0) {
+    const Eigen::Matrix3d rotation = cam2_from_cam1(q1->conjugate() * *q2);
+    for (size_t i = 0; i < pair.rays1.size(); ++i) {
+      rows.push_back((rotation * pair.rays1[i]).cross(pair.points2[i].homogeneous()));
     }
-    const auto fit = [](const std::vector<Eigen::Vector3d>& a, const std::vector<size_t>& use) {
-      Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
-      for (const size_t i : use) normal += a[i] * a[i].transpose();
-      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(normal);
-      return Eigen::Vector3d(solver.eigenvectors().col(0));
-    };
-    std::vector<size_t> all(rows.size());
-    for (size_t i = 0; i < rows.size(); ++i) all[i] = i;
-    Eigen::Vector3d t = fit(rows, all);
-    errors.clear();
-    for (const Eigen::Vector3d& row : rows) errors.push_back(std::abs(t.dot(row)));
-    std::vector<size_t> order = all;
-    std::sort(order.begin(), order.end(),
-              [&](size_t a, size_t b) { return errors[a] < errors[b]; });
-    order.resize(std::max<size_t>(5, order.size() * 7 / 10));
-    t = fit(rows, order);
-    errors.clear();
-    for (const Eigen::Vector3d& row : rows) errors.push_back(std::abs(t.dot(row)));
-    if (errors.empty()) continue;
-    std::nth_element(errors.begin(), errors.begin() + errors.size() / 2, errors.end());
-    sum += errors[errors.size() / 2];
+  } else {
+    for (size_t i = 0; i < pair.rays1.size(); ++i) {
+      const std::optional<Eigen::Quaterniond> a = gyro.At(
+          pair.t1 + offset_ns + SecondsToNs(RowTimeOffset(pair.rows1[i], height, readout_s)));
+      const std::optional<Eigen::Quaterniond> b = gyro.At(
+          pair.t2 + offset_ns + SecondsToNs(RowTimeOffset(pair.rows2[i], height, readout_s)));
+      if (!a || !b) return std::nullopt;
+      rows.push_back((cam2_from_cam1(a->conjugate() * *b) * pair.rays1[i])
+                         .cross(pair.points2[i].homogeneous()));
+    }
+  }
+  if (rows.empty()) return std::nullopt;
+  const auto fit = [](const std::vector<Eigen::Vector3d>& a, const std::vector<size_t>& use) {
+    Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
+    for (const size_t i : use) normal += a[i] * a[i].transpose();
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(normal);
+    return Eigen::Vector3d(solver.eigenvectors().col(0));
+  };
+  std::vector<size_t> all(rows.size());
+  for (size_t i = 0; i < rows.size(); ++i) all[i] = i;
+  Eigen::Vector3d t = fit(rows, all);
+  std::vector<double> errors;
+  errors.reserve(rows.size());
+  for (const Eigen::Vector3d& row : rows) errors.push_back(std::abs(t.dot(row)));
+  std::vector<size_t> order = all;
+  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return errors[a] < errors[b]; });
+  order.resize(std::max<size_t>(5, order.size() * 7 / 10));
+  t = fit(rows, order);
+  errors.clear();
+  for (const Eigen::Vector3d& row : rows) errors.push_back(std::abs(t.dot(row)));
+  std::nth_element(errors.begin(), errors.begin() + errors.size() / 2, errors.end());
+  return errors[errors.size() / 2];
+}
+
+// Mean over the pairs of PairRotationFlowCost; pairs without IMU coverage
+// are skipped (nullopt if all are).
+std::optional<double> RotationFlowCost(const std::vector<FramePair>& pairs,
+                                       const GyroOrientation& gyro,
+                                       const Eigen::Quaterniond& body_from_cam,
+                                       timestamp_ns_t offset_ns, double readout_s, int height) {
+  double sum = 0.0;
+  int count = 0;
+  for (const FramePair& pair : pairs) {
+    const std::optional<double> cost =
+        PairRotationFlowCost(pair, gyro, body_from_cam, offset_ns, readout_s, height);
+    if (!cost) continue;
+    sum += *cost;
     ++count;
   }
   if (count == 0) return std::nullopt;
@@ -243,6 +247,73 @@ LineMinimum MinimizeOnLine(const Cost& cost, double low, double high, double coa
   return minimum;
 }
 
+// Contiguous blocks of frame pairs the jackknife leaves out in turn.
+constexpr int kJackknifeBlocks = 10;
+
+// The spread of the offset minimising the mean pair cost: a delete-one-block
+// jackknife over the pairs (kJackknifeBlocks contiguous blocks in time; the
+// pairs' errors are correlated over neighbouring frames, not between
+// distant ones), each block's minimum found on a grid of `step_ms` within
+// +-half_range_ms of center_ms (ms from the calibration's offset). Not
+// bounded when some block's minimum lies on the grid's edge: the data then
+// leave the offset undetermined over that range.
+struct OffsetSpread {
+  double sigma_ms = 0.0;
+  bool bounded = false;
+};
+
+OffsetSpread JackknifeOffsetSpread(const std::vector<FramePair>& pairs, const GyroOrientation& gyro,
+                                   const Eigen::Quaterniond& body_from_cam,
+                                   timestamp_ns_t calibration_offset_ns, double center_ms,
+                                   double readout_s, int height, double half_range_ms,
+                                   double step_ms) {
+  OffsetSpread spread;
+  const int half = std::max(2, static_cast<int>(std::floor(half_range_ms / step_ms + 1e-9)));
+  const int num_points = 2 * half + 1;
+  // Each pair's cost at every grid point; pairs not covered at every point are left out.
+  std::vector<std::vector<double>> costs;
+  std::vector<double> row(num_points);
+  for (const FramePair& pair : pairs) {
+    bool covered = true;
+    for (int i = 0; i < num_points && covered; ++i) {
+      const double offset_ms = center_ms + (i - half) * step_ms;
+      const std::optional<double> cost = PairRotationFlowCost(
+          pair, gyro, body_from_cam, calibration_offset_ns + SecondsToNs(offset_ms * 1e-3),
+          readout_s, height);
+      covered = cost.has_value();
+      if (covered) row[i] = *cost;
+    }
+    if (covered) costs.push_back(row);
+  }
+  const int num_blocks = std::min<int>(kJackknifeBlocks, static_cast<int>(costs.size()));
+  if (num_blocks < 2) return spread;
+  std::vector<double> estimates;
+  std::vector<double> curve(num_points);
+  for (int block = 0; block < num_blocks; ++block) {
+    const size_t skip_from = costs.size() * block / num_blocks;
+    const size_t skip_to = costs.size() * (block + 1) / num_blocks;
+    std::fill(curve.begin(), curve.end(), 0.0);
+    for (size_t p = 0; p < costs.size(); ++p) {
+      if (p >= skip_from && p < skip_to) continue;
+      for (int i = 0; i < num_points; ++i) curve[i] += costs[p][i];
+    }
+    const int best = static_cast<int>(std::min_element(curve.begin(), curve.end()) - curve.begin());
+    if (best == 0 || best == num_points - 1) return spread;  // not bounded
+    double x = best;
+    const double denominator = curve[best - 1] - 2.0 * curve[best] + curve[best + 1];
+    if (denominator > 0) x += 0.5 * (curve[best - 1] - curve[best + 1]) / denominator;
+    estimates.push_back(center_ms + (x - half) * step_ms);
+  }
+  double mean = 0.0;
+  for (const double estimate : estimates) mean += estimate;
+  mean /= static_cast<double>(estimates.size());
+  double sum_sq = 0.0;
+  for (const double estimate : estimates) sum_sq += (estimate - mean) * (estimate - mean);
+  spread.sigma_ms = std::sqrt(sum_sq * (num_blocks - 1) / num_blocks);
+  spread.bounded = true;
+  return spread;
+}
+
 }  // namespace
 
 std::string TimeOffsetOptions::Validate() const {
@@ -267,6 +338,11 @@ std::string TimeOffsetOptions::Validate() const {
   if (!(min_cost_reduction >= 0) || !(min_cost_reduction < 1)) {
     return "min_cost_reduction must be in [0, 1)";
   }
+  if (!(uncertainty_range_s >= fine_step_s) || uncertainty_range_s > max_offset_s) {
+    return "uncertainty_range_s must be in [fine_step_s, max_offset_s]";
+  }
+  if (!(max_sigma_s > 0)) return "max_sigma_s must be > 0";
+  if (!(min_significance >= 0)) return "min_significance must be >= 0";
   return "";
 }
 
@@ -387,20 +463,40 @@ TimeOffsetEstimate EstimateTimeOffset(const std::vector<FrameFeatures>& frames,
       readout_s > 0.0 ? cost(calibration_offset_ns, readout_s).value_or(*calibration_cost)
                       : *calibration_cost;
   const double reduction = 1.0 - best_cost / reference_cost;
+  OffsetSpread spread;
+  if (!offset.at_edge) {
+    spread =
+        JackknifeOffsetSpread(pairs, gyro, rotation, calibration_offset_ns, offset.x, readout_s,
+                              image_height, options.uncertainty_range_s * 1e3, fine_ms);
+    estimate.sigma_bounded = spread.bounded;
+    estimate.sigma_s = spread.bounded ? spread.sigma_ms * 1e-3 : options.uncertainty_range_s;
+  }
   message << std::setprecision(1) << "camera-IMU time offset " << NsToSeconds(refined) * 1e3
-          << " ms (calibration " << NsToSeconds(calibration_offset_ns) * 1e3
-          << " ms): median epipolar residual with the gyro's "
+          << " ms";
+  if (spread.bounded) {
+    message << " (standard error " << spread.sigma_ms << " ms)";
+  } else if (!offset.at_edge) {
+    message << " (undetermined within +-" << options.uncertainty_range_s * 1e3 << " ms)";
+  }
+  message << ", calibration " << NsToSeconds(calibration_offset_ns) * 1e3
+          << " ms: median epipolar residual with the gyro's "
           << "rotation " << std::setprecision(2) << best_cost * focal_length_px << " px against "
           << reference_cost * focal_length_px << " px at the calibration's offset, " << pairs.size()
           << " frame pairs, " << std::setprecision(0) << estimate.total_rotation_deg
           << " deg of rotation" << readout_message.str();
+  const double shift_ms = offset.x;  // from the calibration's
   if (offset.at_edge) {
     message << "; not trusted: the minimum is at the edge of the +-" << options.max_offset_s * 1e3
             << " ms search range";
   } else if (reduction < options.min_cost_reduction) {
-    estimate.offset_ns = calibration_offset_ns;
-    estimate.estimated = false;
     message << "; the calibration's offset is as good (kept)";
+  } else if (!spread.bounded || spread.sigma_ms > options.max_sigma_s * 1e3) {
+    message << "; the images and the gyro do not determine it (its standard error exceeds "
+            << std::setprecision(1) << options.max_sigma_s * 1e3
+            << " ms): the calibration's offset is kept";
+  } else if (std::abs(shift_ms) < options.min_significance * spread.sigma_ms) {
+    message << "; within " << std::setprecision(1) << options.min_significance
+            << " standard errors of the calibration's: the calibration's offset is kept";
   } else {
     estimate.estimated = true;
     estimate.offset_ns = refined;
