@@ -1,7 +1,6 @@
 #include "viosfm/pipeline/pipeline.h"
 
 #include <algorithm>
-#include <future>
 #include <iomanip>
 #include <iterator>
 #include <optional>
@@ -25,7 +24,6 @@
 #include "viosfm/pipeline/stage_vio.h"
 #include "viosfm/pipeline/stream_pipeline.h"
 #include "viosfm/pipeline/texture_probe.h"
-#include "viosfm/sfm/verified_pair_stream.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/logging.h"
 #include "viosfm/util/timer.h"
@@ -38,37 +36,42 @@ const std::vector<std::string> kStageNames = {
     "read_dataset", "vio",    "select_frames", "features",   "verification",
     "load_matches", "mapper", "colors",        "evaluation", "write_outputs"};
 
-// The mapper running beside the verification (PipelineOptions::
-// stream_mapper): the stream of verified pairs it reads and its result. If
-// the run stops before the mapper's result is taken (the verification
-// failed), the stream fails, so that the mapper stops too, and the
-// mapper's end is awaited before the stream and its input go.
-struct StreamedMapping {
-  explicit StreamedMapping(const BatchedMapperInput& input)
-      : stream(ImageIds(input), Timestamps(input)) {}
-  StreamedMapping(const StreamedMapping&) = delete;
-  StreamedMapping& operator=(const StreamedMapping&) = delete;
-  ~StreamedMapping() {
-    if (result.valid()) {
-      stream.Fail("the run stopped before the mapping ended");
-      result.wait();
-    }
+// When the frame selection does not need the VIO, the frames the features
+// stage will take are known before it: only those stay decoded. viosfm's
+// own VIO, which decodes every frame on one core, then has their features
+// extracted beside it on another (feature_prefetch.h) when the run has more
+// than one thread, unless the folder holds stored features (a resumed run
+// extracts only what they lack).
+void StartFeaturesBesideTheVio(const Sequence& sequence, const PipelineOptions& options,
+                               const RunFolder& folder, FrameCache* frame_cache,
+                               std::optional<FeaturePrefetch>* prefetch) {
+  if (FrameSelectionUsesTrajectory(sequence, options.frame_selection)) return;
+  const FrameSelection predicted = SelectFrames(sequence, options.frame_selection, nullptr);
+  std::vector<std::filesystem::path> paths;
+  for (const size_t index : predicted.kept) paths.push_back(sequence.images[index].path);
+  frame_cache->RetainOnly(paths);
+  const bool own_vio = !options.vio_source && options.vio_trajectory.empty();
+  if (own_vio && options.num_threads > 1 &&
+      !std::filesystem::exists(folder.path() / "database.db")) {
+    prefetch->emplace(std::move(paths), options.EffectiveSiftOptions(), sequence.rig.camera,
+                      frame_cache, kFeaturePrefetchBytes);
   }
+}
 
-  static std::vector<image_t> ImageIds(const BatchedMapperInput& input) {
-    std::vector<image_t> ids;
-    for (const MapperImage& image : input.images) ids.push_back(image.image_id);
-    return ids;
-  }
-  static std::vector<timestamp_ns_t> Timestamps(const BatchedMapperInput& input) {
-    std::vector<timestamp_ns_t> stamps;
-    for (const MapperImage& image : input.images) stamps.push_back(image.timestamp_ns);
-    return stamps;
-  }
-
-  VerifiedPairStream stream;
-  std::future<Reconstruction> result;
-};
+// The VIO's parts of the summary, and the frames' selection.
+void TakeVioAndFrames(const VioPoses& vio, const SelectedFrames& frames,
+                      PipelineSummary* summary) {
+  summary->num_vio_segments = vio.num_segments();
+  summary->vio_segment_rule = vio.segment_rule;
+  summary->own_vio = vio.own_vio;
+  summary->own_vio_summary = vio.own_vio_summary;
+  summary->frame_selection = frames.selection;
+  summary->num_frames_selected = frames.sequence.images.size();
+  summary->num_frames_without_vio_pose = frames.num_without_vio_pose;
+  summary->rolling_shutter_readout_s =
+      frames.rolling_shutter.active() ? frames.rolling_shutter.readout_s : 0.0;
+  summary->rolling_shutter_source = vio.rolling_shutter_source;
+}
 
 }  // namespace
 
@@ -103,25 +106,8 @@ PipelineSummary RunPipeline(const PipelineOptions& requested) {
   });
   summary.num_frames_in = sequence.images.size();
 
-  // When the frame selection does not need the VIO, the frames the
-  // features stage will take are known now: only those stay decoded.
-  // viosfm's own VIO, which decodes every frame on one core, then has their
-  // features extracted beside it on another (feature_prefetch.h) when the
-  // run has more than one thread, unless the folder holds stored features
-  // (a resumed run extracts only what they lack).
   std::optional<FeaturePrefetch> prefetch;
-  if (!FrameSelectionUsesTrajectory(sequence, options.frame_selection)) {
-    const FrameSelection predicted = SelectFrames(sequence, options.frame_selection, nullptr);
-    std::vector<std::filesystem::path> paths;
-    for (const size_t index : predicted.kept) paths.push_back(sequence.images[index].path);
-    frame_cache.RetainOnly(paths);
-    const bool own_vio = !options.vio_source && options.vio_trajectory.empty();
-    if (own_vio && options.num_threads > 1 &&
-        !std::filesystem::exists(folder.path() / "database.db")) {
-      prefetch.emplace(std::move(paths), options.EffectiveSiftOptions(), sequence.rig.camera,
-                       &frame_cache, kFeaturePrefetchBytes);
-    }
-  }
+  StartFeaturesBesideTheVio(sequence, options, folder, &frame_cache, &prefetch);
 
   const VioPoses vio = clock.Run([&] {
     VioPoses poses = LoadVioPoses(sequence, options, &frame_cache);
@@ -136,19 +122,10 @@ PipelineSummary RunPipeline(const PipelineOptions& requested) {
     return poses;
   });
   summary.fingerprint = fingerprint.Hash();
-  summary.num_vio_segments = vio.num_segments();
-  summary.vio_segment_rule = vio.segment_rule;
-  summary.own_vio = vio.own_vio;
-  summary.own_vio_summary = vio.own_vio_summary;
 
   const SelectedFrames frames =
       clock.Run([&] { return SelectFramesStage(sequence, vio, options, vio_name, &frame_cache); });
-  summary.frame_selection = frames.selection;
-  summary.num_frames_selected = frames.sequence.images.size();
-  summary.num_frames_without_vio_pose = frames.num_without_vio_pose;
-  summary.rolling_shutter_readout_s =
-      frames.rolling_shutter.active() ? frames.rolling_shutter.readout_s : 0.0;
-  summary.rolling_shutter_source = vio.rolling_shutter_source;
+  TakeVioAndFrames(vio, frames, &summary);
 
   FeaturesStageOutput features = clock.Run([&] {
     return ExtractFeaturesStage(frames, options, folder, fingerprint, &frame_cache,
@@ -158,47 +135,19 @@ PipelineSummary RunPipeline(const PipelineOptions& requested) {
   summary.features = features.summary;
   ReturnFreedMemory();
 
-  // With stream_mapper the mapper runs beside the verification on its own
-  // thread, fed the pairs as they are verified; the verification stage's
-  // time then holds the batches mapped beside it, the mapper stage's the
-  // time the mapper takes after the verification has ended.
-  BatchedMapperInput input;
-  std::optional<StreamedMapping> streamed;
-  const VerificationResult verification = clock.Run([&] {
-    if (!options.stream_mapper) return VerifyPairsStage(frames, vio, options, &features.database);
-    input = LoadMapperImages(frames, vio, &features.database);
-    streamed.emplace(input);
-    PipelineOptions mapping_options = options;
-    mapping_options.show_progress = false;  // the verification's progress bar is shown
-    streamed->result = std::async(
-        std::launch::async, [&input, &sequence, &vio, mapping_options, &summary, &streamed] {
-          return MapStage(input, sequence, vio, mapping_options, &summary, &streamed->stream);
-        });
-    VerificationResult result = VerifyPairsStage(
-        frames, vio, options, &features.database,
-        [&](std::vector<ImagePairMatches> accepted, timestamp_ns_t pending_from_ns) {
-          streamed->stream.Add(std::move(accepted), pending_from_ns);
-        });
-    streamed->stream.Close();
-    return result;
-  });
+  const VerificationResult verification =
+      clock.Run([&] { return VerifyPairsStage(frames, vio, options, &features.database); });
   summary.verification = verification.summary;
   ReturnFreedMemory();
 
-  if (!streamed) {
-    input = clock.Run([&] {
-      return LoadMapperInputStage(frames, vio, verification, &features.database,
-                                  &summary.vio_gaps);
-    });
-    if (summary.vio_gaps.num_gaps > 0) summary.num_vio_segments = summary.vio_gaps.num_segments;
-  } else {
-    clock.Run([] {});  // loaded before the verification
-  }
+  const BatchedMapperInput input = clock.Run([&] {
+    return LoadMapperInputStage(frames, vio, verification, &features.database, &summary.vio_gaps);
+  });
+  if (summary.vio_gaps.num_gaps > 0) summary.num_vio_segments = summary.vio_gaps.num_segments;
 
   std::vector<Reconstruction> other_models;
   Reconstruction reconstruction = clock.Run([&] {
-    return streamed ? streamed->result.get()
-                    : MapStage(input, sequence, vio, options, &summary, nullptr, &other_models);
+    return MapStage(input, sequence, vio, options, &summary, nullptr, &other_models);
   });
 
   clock.Run([&] {

@@ -53,11 +53,9 @@ std::string PipelineOptions::Validate() const {
   }
   if (num_threads < 1) return "num_threads must be >= 1";
   if (stream_vocabulary_frames < 1) return "stream_vocabulary_frames must be >= 1";
-  if (stream && stream_mapper) return "stream and stream_mapper: the stream maps beside anyway";
   if ((stream || follow) && verification.pairs.mode == PairMode::kPairList) {
     return "stream: pairs.mode pair_list is not streamed";
   }
-  if (follow && stream_mapper) return "follow and stream_mapper: the stream maps beside anyway";
   if (!(follow_idle_s > 0.0) || !std::isfinite(follow_idle_s)) {
     return "follow_idle_s must be > 0 s";
   }
@@ -120,9 +118,6 @@ VerificationOptions PipelineOptions::EffectiveVerificationOptions() const {
   options.show_progress = show_progress;
   options.max_pose_time_difference_ns = max_vio_time_difference_ns;
   options.vio_uncertainty = vio_uncertainty;
-  // The mapper beside the verification gets its pairs batch by batch: small
-  // batches let it start on the first frames early.
-  if (stream_mapper) options.batch_size = std::min(options.batch_size, kStreamedVerificationBatch);
   return options;
 }
 

@@ -57,11 +57,6 @@ void ParseOptionText(const std::string& text, VioSource* source);
 std::string OptionText(const std::optional<SensorRig>& rig);
 void ParseOptionText(const std::string& text, std::optional<SensorRig>* rig);
 
-// Pairs a verification batch holds at most when the mapper runs beside it
-// (PipelineOptions::stream_mapper): about a third of a 50-frame batch's
-// pairs at N1 10, N2 5.
-inline constexpr int kStreamedVerificationBatch = 200;
-
 struct PipelineOptions {
   // EuRoC dataset (the folder containing mav0/, or mav0 itself) or a folder
   // of images (then image_folder must give the camera). Required.
@@ -145,13 +140,6 @@ struct PipelineOptions {
   VerificationOptions verification;
   // Batched mapper (k = 50, relative-pose priors on).
   BatchedMapperOptions mapper;
-  // The mapper runs beside the verification: each batch is mapped once the
-  // verification has passed its frames, with the pairs verified so far
-  // (sfm/verified_pair_stream.h), instead of after every pair is verified.
-  // The final adjustment has every pair. The verification then hands over
-  // its pairs at least every kStreamedVerificationBatch pairs
-  // (verification.batch_size at most that). Default false.
-  bool stream_mapper = false;
   // The run as one stream (stream_pipeline.h): the VIO, the features, the
   // verification and the mapper overlap, each frame taken on as soon as the
   // VIO has settled its pose, its pairs with the frames before it verified,
@@ -284,8 +272,6 @@ struct PipelineOptions {
     VisitOptionGroup({"sift", "", kShapesStoredData}, self.sift, visit);
     VisitOptionGroup({"verification", "", kShapesStoredData}, self.verification, visit);
     VisitOptionGroup({"mapper", "", kRunOnly}, self.mapper, visit);
-    visit({"stream_mapper", "the mapper runs beside the verification, batch by batch", kRunOnly},
-          self.stream_mapper);
     visit({"stream", "the run as one stream: VIO, features, verification and mapper overlap",
            kRunOnly},
           self.stream);

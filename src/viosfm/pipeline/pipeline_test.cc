@@ -190,32 +190,6 @@ TEST(PipelineTest, RealtimeSettingsRegisterEveryFrameAsAccurately) {
   EXPECT_LT(s.evaluation->ate_rmse_m, 1.25 * f.summary.evaluation->ate_rmse_m);
 }
 
-// The mapper beside the verification (stream_mapper): every frame
-// registered, the final tracks those of every verified pair (the same
-// verification as the fixture's run), and the model as accurate as the
-// fixture's against the simulator's truth.
-TEST(PipelineTest, MapperBesideTheVerificationGivesTheSameModel) {
-  const Fixture& f = SharedFixture();
-  PipelineOptions options = SmallOptions(f, f.folder / "out_streamed");
-  options.stream_mapper = true;
-  const PipelineSummary s = RunPipeline(options);
-  EXPECT_EQ(s.verification.num_accepted, f.summary.verification.num_accepted);
-  EXPECT_EQ(s.mapper.tracks.num_tracks, f.summary.mapper.tracks.num_tracks);
-  EXPECT_EQ(s.mapper.tracks.num_observations, f.summary.mapper.tracks.num_observations);
-  EXPECT_EQ(s.num_frames_registered, f.summary.num_frames_registered);
-  EXPECT_EQ(s.num_frames_registered, s.num_frames_selected);
-  ASSERT_TRUE(s.evaluation.has_value());
-  ASSERT_TRUE(f.summary.evaluation.has_value());
-  EXPECT_LT(s.evaluation->ate_rmse_m, 0.9 * s.evaluation->vio_ate_rmse_m);
-  EXPECT_LT(s.evaluation->ate_rmse_m, 1.25 * f.summary.evaluation->ate_rmse_m);
-  const nlohmann::json json =
-      nlohmann::json::parse(ReadTextFile(f.folder / "out_streamed" / "summary.json"));
-  EXPECT_EQ(json["tracks"]["points_joined"], s.mapper.num_points_merged);
-  EXPECT_EQ(json["tracks"]["observations_split_off"], s.mapper.num_observations_split_off);
-  std::cerr << "streamed: ATE " << s.evaluation->ate_rmse_m << " m, every pair at once "
-            << f.summary.evaluation->ate_rmse_m << " m\n";
-}
-
 // The IMU's factors accepted at their start, but their adjustment putting
 // the model's metric scale further from 1 than max_scale_change allows
 // (here any change at all): the adjustment is undone and done again with

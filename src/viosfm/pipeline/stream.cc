@@ -225,6 +225,46 @@ void Stream::WriteLiveModel(const Reconstruction& model, const MapperBatchStatis
                    << model.NumPoints3D() << " points";
 }
 
+void Stream::SetUpVerification() {
+  setup_ = settled_.WaitForSetup();
+  rolling_shutter_ = setup_.readout_s > 0.0 && options_.compensate_rolling_shutter && !imu_.empty();
+  out_.input.cameras = {camera_};
+  out_.input.rig = setup_.rig;
+  out_.input.rolling_shutter_readout_s = rolling_shutter_ ? setup_.readout_s : 0.0;
+  if (sequence_ != nullptr) out_.input.imu = sequence_->imu;
+  decider_.emplace(verification_options_, setup_.rig.body_from_cam, &*database_);
+  const PairGeneratorOptions& pairs = verification_options_.pairs;
+  if (pairs.mode == PairMode::kTemporalRetrieval && pairs.num_retrieval_neighbors > 0) {
+    RetrievalOptions retrieval = verification_options_.retrieval;
+    // Enough to leave N2 once the temporal neighbours are left out.
+    retrieval.num_neighbors = pairs.num_retrieval_neighbors + pairs.num_temporal_neighbors;
+    retrieval.num_threads = 1;
+    retrieval.vocabulary.num_threads = options_.num_threads;
+    retrieval.vocabulary.seed = verification_options_.seed;
+    retrieval_.emplace(retrieval, options_.stream_vocabulary_frames, /*num_temporal_neighbors=*/0);
+  }
+  pair_generator_.emplace(pairs);
+  pair_generator_->SetRetrievalUsed(retrieval_.has_value());
+}
+
+void Stream::TakeVerification(double verification_seconds) {
+  out_.verification = decider_->TakeResult();
+  VerificationSummary& summary = out_.verification.summary;
+  summary.options = verification_options_.ToKeyValues();
+  summary.database_path = database_->path().string();
+  summary.num_images = frames_.size();
+  for (const Frame& frame : frames_) {
+    if (frame.image.world_from_body) ++summary.num_images_with_prior;
+  }
+  summary.seconds_total = verification_seconds;
+  std::sort(out_.verification.decisions.begin(), out_.verification.decisions.end(),
+            [](const PairDecision& a, const PairDecision& b) {
+              return std::make_pair(a.image_id1, a.image_id2) <
+                     std::make_pair(b.image_id1, b.image_id2);
+            });
+  VIOSFM_LOG(INFO) << "run: verification " << FormatVerificationSummary(summary);
+}
+
 StreamOutput Stream::Run(const Timer& stream_timer) {
   const bool own_vio = !options_.vio_source && options_.vio_trajectory.empty();
   // The database, from here on written by this thread only.
@@ -264,25 +304,7 @@ StreamOutput Stream::Run(const Timer& stream_timer) {
     }
   } stop_on_exit{this, &mapper_worker};
 
-  setup_ = settled_.WaitForSetup();
-  rolling_shutter_ = setup_.readout_s > 0.0 && options_.compensate_rolling_shutter && !imu_.empty();
-  out_.input.cameras = {camera_};
-  out_.input.rig = setup_.rig;
-  out_.input.rolling_shutter_readout_s = rolling_shutter_ ? setup_.readout_s : 0.0;
-  if (sequence_ != nullptr) out_.input.imu = sequence_->imu;
-  decider_.emplace(verification_options_, setup_.rig.body_from_cam, &*database_);
-  const PairGeneratorOptions& pairs = verification_options_.pairs;
-  if (pairs.mode == PairMode::kTemporalRetrieval && pairs.num_retrieval_neighbors > 0) {
-    RetrievalOptions retrieval = verification_options_.retrieval;
-    // Enough to leave N2 once the temporal neighbours are left out.
-    retrieval.num_neighbors = pairs.num_retrieval_neighbors + pairs.num_temporal_neighbors;
-    retrieval.num_threads = 1;
-    retrieval.vocabulary.num_threads = options_.num_threads;
-    retrieval.vocabulary.seed = verification_options_.seed;
-    retrieval_.emplace(retrieval, options_.stream_vocabulary_frames, /*num_temporal_neighbors=*/0);
-  }
-  pair_generator_.emplace(pairs);
-  pair_generator_->SetRetrievalUsed(retrieval_.has_value());
+  SetUpVerification();
 
   double mapper_seconds = 0.0;
   BatchedMapperOptions mapper_options = options_.EffectiveMapperOptions();
@@ -343,21 +365,7 @@ StreamOutput Stream::Run(const Timer& stream_timer) {
   prefetch_->Finish();
   if (follower_ != nullptr) fs::remove_all(folder_.path() / "live");
 
-  out_.verification = decider_->TakeResult();
-  VerificationSummary& summary = out_.verification.summary;
-  summary.options = verification_options_.ToKeyValues();
-  summary.database_path = database_->path().string();
-  summary.num_images = frames_.size();
-  for (const Frame& frame : frames_) {
-    if (frame.image.world_from_body) ++summary.num_images_with_prior;
-  }
-  summary.seconds_total = verification_seconds;
-  std::sort(out_.verification.decisions.begin(), out_.verification.decisions.end(),
-            [](const PairDecision& a, const PairDecision& b) {
-              return std::make_pair(a.image_id1, a.image_id2) <
-                     std::make_pair(b.image_id1, b.image_id2);
-            });
-  VIOSFM_LOG(INFO) << "run: verification " << FormatVerificationSummary(summary);
+  TakeVerification(verification_seconds);
   out_.features.num_images = frames_.size();
   out_.features.num_extracted_before = out_.stream.num_features_beside;
   out_.features.seconds = last_frame_seconds;

@@ -115,6 +115,11 @@ class Stream {
   // no longer in memory), normalised descriptors too when `normalised`.
   const PairImage& WithFeatures(size_t k, bool normalised);
   void ForgetFeaturesBefore(size_t k);
+  // Once the VIO's rig is known: the verification's decider, retrieval and
+  // pair generator.
+  void SetUpVerification();
+  // Every pair decided: the verification's result and summary.
+  void TakeVerification(double verification_seconds);
   // The model so far, in OUT/live/ (the mapper's thread, after each batch).
   void WriteLiveModel(const Reconstruction& model, const MapperBatchStatistics& batch) const;
 

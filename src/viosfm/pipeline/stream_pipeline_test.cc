@@ -231,10 +231,6 @@ TEST(StreamPipelineTest, OptionsThatCannotStreamAreRefused) {
   const Fixture& f = SharedFixture();
   PipelineOptions options = SmallOptions(f, f.folder / "stream_refused");
   options.stream = true;
-  options.stream_mapper = true;
-  EXPECT_THAT([&] { RunPipeline(options); },
-              ::testing::ThrowsMessage<InputError>(HasSubstr("stream_mapper")));
-  options.stream_mapper = false;
   options.stream_vocabulary_frames = 0;
   EXPECT_THAT([&] { RunPipeline(options); },
               ::testing::ThrowsMessage<InputError>(HasSubstr("stream_vocabulary_frames")));
