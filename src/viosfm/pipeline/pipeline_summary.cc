@@ -143,11 +143,11 @@ std::string PipelineSummary::ToString() const {
   return WrapLines(out.str());
 }
 
-std::string PipelineSummaryToJson(const PipelineSummary& s) {
-  ordered_json json;
-  json["viosfm_version"] = ViosfmVersion();
-  json["dataset"] = s.dataset;
-  json["started_utc"] = s.started_utc;
+namespace {
+
+// The frames, the models and every image of the recording.
+void AddFramesJson(const PipelineSummary& s, ordered_json* out) {
+  ordered_json& json = *out;
   json["frames"] = {{"in", s.num_frames_in},
                     {"selected", s.num_frames_selected},
                     {"without_vio_pose", s.num_frames_without_vio_pose},
@@ -172,6 +172,11 @@ std::string PipelineSummaryToJson(const PipelineSummary& s) {
                         {"without_vio_pose", s.all_frames.num_without_vio_pose},
                         {"without_model_frame", s.all_frames.num_without_model_frame},
                         {"file", "trajectory_body_all_frames.tum"}};
+}
+
+// The metric scale, the texture probe and the rolling shutter.
+void AddScaleJson(const PipelineSummary& s, ordered_json* out) {
+  ordered_json& json = *out;
   json["imu_scale"] = {{"estimated", s.metric_scale.estimated},
                        {"usable", s.metric_scale.imu.usable},
                        {"imu_scale", s.metric_scale.imu.scale},
@@ -200,6 +205,12 @@ std::string PipelineSummaryToJson(const PipelineSummary& s) {
   json["rolling_shutter"] = {{"readout_s", s.rolling_shutter_readout_s},
                              {"source", s.rolling_shutter_source},
                              {"motion_message", s.mapper.rolling_shutter_message}};
+}
+
+// The VIO's segments and gaps, its own summary, and the frames without a
+// pose or placed by the VIO alone.
+void AddVioJson(const PipelineSummary& s, ordered_json* out) {
+  ordered_json& json = *out;
   json["vio"] = {{"segments", s.num_vio_segments},
                  {"segments_joined", s.mapper.num_vio_segments_joined},
                  {"segment_rule", s.vio_segment_rule},
@@ -245,6 +256,11 @@ std::string PipelineSummaryToJson(const PipelineSummary& s) {
     }
   }
   json["vio_only_frames"] = vio_only;
+}
+
+// The pairs, the points, the tracks, the priors and the adjustments.
+void AddModelJson(const PipelineSummary& s, ordered_json* out) {
+  ordered_json& json = *out;
   json["pairs"] = {{"candidates", s.verification.num_pairs},
                    {"accepted", s.verification.num_accepted},
                    {"accepted_corrected", s.verification.num_accepted_corrected},
@@ -273,6 +289,11 @@ std::string PipelineSummaryToJson(const PipelineSummary& s) {
                               {"observations", s.mapper.final_ba.num_observations},
                               {"iterations", s.mapper.final_ba.num_iterations},
                               {"seconds", s.mapper.final_ba.time_s}};
+}
+
+// The mapper's batches, the stages' times and a streamed run's threads.
+void AddTimesJson(const PipelineSummary& s, ordered_json* out) {
+  ordered_json& json = *out;
   ordered_json batches = ordered_json::array();
   for (const MapperBatchStatistics& batch : s.mapper.batches) {
     batches.push_back({{"index", batch.batch_index},
@@ -309,6 +330,20 @@ std::string PipelineSummaryToJson(const PipelineSummary& s) {
       json["stream"]["seconds_after_recording_end"] = s.stream.seconds_after_recording_end;
     }
   }
+}
+
+}  // namespace
+
+std::string PipelineSummaryToJson(const PipelineSummary& s) {
+  ordered_json json;
+  json["viosfm_version"] = ViosfmVersion();
+  json["dataset"] = s.dataset;
+  json["started_utc"] = s.started_utc;
+  AddFramesJson(s, &json);
+  AddScaleJson(s, &json);
+  AddVioJson(s, &json);
+  AddModelJson(s, &json);
+  AddTimesJson(s, &json);
   json["images"] = {{"decoded", s.images.decodes},
                     {"reused", s.images.reuses},
                     {"not_kept", s.images.not_kept},
