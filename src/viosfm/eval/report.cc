@@ -5,15 +5,10 @@
 #include <sstream>
 
 #include "viosfm/util/file_util.h"
+#include "viosfm/util/string_util.h"
 
 namespace viosfm {
 namespace {
-
-std::string Format(const char* format, double value) {
-  char buffer[64];
-  std::snprintf(buffer, sizeof(buffer), format, value);
-  return buffer;
-}
 
 void AppendStatisticsRow(std::ostringstream& out, const std::string& name,
                          const ErrorStatistics& stats) {
@@ -65,11 +60,12 @@ std::string FormatEvaluationReport(const EvaluationResult& result, const Evaluat
   out << ", " << result.pairs.size() << " pairs\n";
   const Sim3d& s = result.ref_from_est;
   out << "alignment:   " << AlignmentModeName(result.alignment) << " on "
-      << result.num_alignment_pairs << " pairs, scale " << Format("%.9g", s.scale) << ", t = ["
-      << Format("%.6g", s.translation.x()) << ", " << Format("%.6g", s.translation.y()) << ", "
-      << Format("%.6g", s.translation.z()) << "], q_wxyz = [" << Format("%.6g", s.rotation.w())
-      << ", " << Format("%.6g", s.rotation.x()) << ", " << Format("%.6g", s.rotation.y()) << ", "
-      << Format("%.6g", s.rotation.z()) << "]\n\n";
+      << result.num_alignment_pairs << " pairs, scale " << FormatDouble("%.9g", s.scale)
+      << ", t = [" << FormatDouble("%.6g", s.translation.x()) << ", "
+      << FormatDouble("%.6g", s.translation.y()) << ", " << FormatDouble("%.6g", s.translation.z())
+      << "], q_wxyz = [" << FormatDouble("%.6g", s.rotation.w()) << ", "
+      << FormatDouble("%.6g", s.rotation.x()) << ", " << FormatDouble("%.6g", s.rotation.y())
+      << ", " << FormatDouble("%.6g", s.rotation.z()) << "]\n\n";
   char header[256];
   std::snprintf(header, sizeof(header), "  %-26s %7s %12s %12s %12s %12s %12s %12s\n", "metric",
                 "count", "rmse", "mean", "median", "std", "min", "max");
@@ -78,7 +74,7 @@ std::string FormatEvaluationReport(const EvaluationResult& result, const Evaluat
   AppendStatisticsRow(out, "ATE rotation (deg)", result.ate_rotation_deg);
   for (const auto* rpe : {&result.rpe_frames, &result.rpe_distance}) {
     if (!rpe->has_value()) continue;
-    const std::string delta = Format("%g", (*rpe)->delta) + " " + (*rpe)->unit;
+    const std::string delta = FormatDouble("%g", (*rpe)->delta) + " " + (*rpe)->unit;
     AppendStatisticsRow(out, "RPE " + delta + " trans (m)", (*rpe)->translation_m);
     AppendStatisticsRow(out, "RPE " + delta + " rot (deg)", (*rpe)->rotation_deg);
   }

@@ -59,8 +59,7 @@ void StartFeaturesBesideTheVio(const Sequence& sequence, const PipelineOptions& 
 }
 
 // The VIO's parts of the summary, and the frames' selection.
-void TakeVioAndFrames(const VioPoses& vio, const SelectedFrames& frames,
-                      PipelineSummary* summary) {
+void TakeVioAndFrames(const VioPoses& vio, const SelectedFrames& frames, PipelineSummary* summary) {
   summary->num_vio_segments = vio.num_segments();
   summary->vio_segment_rule = vio.segment_rule;
   summary->own_vio = vio.own_vio;
@@ -146,9 +145,8 @@ PipelineSummary RunPipeline(const PipelineOptions& requested) {
   if (summary.vio_gaps.num_gaps > 0) summary.num_vio_segments = summary.vio_gaps.num_segments;
 
   std::vector<Reconstruction> other_models;
-  Reconstruction reconstruction = clock.Run([&] {
-    return MapStage(input, sequence, vio, options, &summary, nullptr, &other_models);
-  });
+  Reconstruction reconstruction = clock.Run(
+      [&] { return MapStage(input, sequence, vio, options, &summary, nullptr, &other_models); });
 
   clock.Run([&] {
     ColorPointsStage(frames, input, options.show_progress, &keypoint_values, &frame_cache,

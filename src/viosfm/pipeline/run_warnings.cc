@@ -5,15 +5,10 @@
 #include <sstream>
 
 #include "viosfm/pipeline/pipeline_summary.h"
+#include "viosfm/util/string_util.h"
 
 namespace viosfm {
 namespace {
-
-std::string Format(const char* format, double value) {
-  char buffer[64];
-  std::snprintf(buffer, sizeof(buffer), format, value);
-  return buffer;
-}
 
 // The widest line: the console's, less an indent of 4.
 constexpr size_t kMaxLineLength = kMaxConsoleLineLength - 4;
@@ -42,8 +37,8 @@ std::string ImuScaleVerdict(const std::string& message) {
 std::string TimeOffsetLine(const OwnVioDecisions& vio) {
   if (!vio.time_offset_estimated || vio.time_offset_ns == vio.calibration_time_offset_ns) return "";
   return "time offset: camera-IMU " +
-         Format("%.1f", static_cast<double>(vio.calibration_time_offset_ns) * 1e-6) + " -> " +
-         Format("%.1f", static_cast<double>(vio.time_offset_ns) * 1e-6) +
+         FormatDouble("%.1f", static_cast<double>(vio.calibration_time_offset_ns) * 1e-6) + " -> " +
+         FormatDouble("%.1f", static_cast<double>(vio.time_offset_ns) * 1e-6) +
          " ms (the VIO's estimate replaced the calibration's)";
 }
 
@@ -52,12 +47,12 @@ std::string ImuNoiseLine(const OwnVioDecisions& vio) {
   const ImuNoise& used = vio.imu_noise_used;
   std::vector<std::string> parts;
   if (used.accel_noise_density != given.accel_noise_density) {
-    parts.push_back("accel " + Format("%.3g", given.accel_noise_density) + " -> " +
-                    Format("%.3g", used.accel_noise_density));
+    parts.push_back("accel " + FormatDouble("%.3g", given.accel_noise_density) + " -> " +
+                    FormatDouble("%.3g", used.accel_noise_density));
   }
   if (used.gyro_noise_density != given.gyro_noise_density) {
-    parts.push_back("gyro " + Format("%.3g", given.gyro_noise_density) + " -> " +
-                    Format("%.3g", used.gyro_noise_density));
+    parts.push_back("gyro " + FormatDouble("%.3g", given.gyro_noise_density) + " -> " +
+                    FormatDouble("%.3g", used.gyro_noise_density));
   }
   const bool walks = used.accel_random_walk != given.accel_random_walk ||
                      used.gyro_random_walk != given.gyro_random_walk;
@@ -86,7 +81,8 @@ std::string ScaleLine(const PipelineSummary& s) {
   } else {
     source = "the VIO's (IMU fit " + ImuScaleVerdict(m.imu.message) + ")";
   }
-  return "metric scale: " + source + ", +-" + Format("%.2f", 100.0 * m.applied_scale_sigma) + " %";
+  return "metric scale: " + source + ", +-" + FormatDouble("%.2f", 100.0 * m.applied_scale_sigma) +
+         " %";
 }
 
 }  // namespace
@@ -118,7 +114,7 @@ std::vector<std::string> RunWarnings(const PipelineSummary& s) {
   if (s.own_vio.num_imu_only_stretches > 0) {
     add("VIO on the IMU alone: " + std::to_string(s.own_vio.num_imu_only_stretches) +
         " stretch(es), " + std::to_string(s.own_vio.num_imu_only_frames) + " frames, longest " +
-        Format("%.2f", s.own_vio.longest_imu_only_s) + " s");
+        FormatDouble("%.2f", s.own_vio.longest_imu_only_s) + " s");
   }
   if (s.mapper.frames_per_model.size() > 1) {
     add("separate models: " + std::to_string(s.mapper.frames_per_model.size() - 1) +

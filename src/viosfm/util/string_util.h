@@ -16,6 +16,10 @@ bool StartsWith(std::string_view text, std::string_view prefix);
 bool EndsWith(std::string_view text, std::string_view suffix);
 std::string ToLower(std::string_view text);
 
+// `value` printed with a printf format holding one floating-point
+// conversion ("%.2f"), up to 63 characters.
+std::string FormatDouble(const char* format, double value);
+
 // Whole-string numeric parses; nullopt if anything but the number is there.
 std::optional<double> ParseDouble(std::string_view text);
 std::optional<int64_t> ParseInt(std::string_view text);
