@@ -57,8 +57,10 @@ step "$((n + 1))/$steps simulate: 'room', 30 s, images at 10 Hz, IMU at 200 Hz -
 
 step "$((n + 2))/$steps run: own VIO, features, N1=10 temporal + N2=5 retrieval pairs, VIO-aided
    verification, batches of 50 frames, BA with relative-pose constraints -> $out/run"
-rm -rf "$out/run"
-"$viosfm" run "$out/sequence" --out "$out/run" --n1 10 --n2 5 --max-features 1000 --batch-size 50
+# --overwrite: an earlier demo's run is replaced; viosfm removes only the
+# files its manifest says it wrote.
+"$viosfm" run "$out/sequence" --out "$out/run" --overwrite --n1 10 --n2 5 --max-features 1000 \
+  --batch-size 50
 
 step "$((n + 3))/$steps report -> $out/run/report.html"
 "$viosfm" report "$out/run"
