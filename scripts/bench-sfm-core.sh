@@ -31,7 +31,8 @@ scenario=${SCENARIO:-room}
 seed=${SEED:-0}
 mkdir -p "$out"
 out=$(cd "$out" && pwd)
-run_flags=(--n1 10 --n2 5 --max-features 1500 --no-progress --threads 2)
+max_features=1500  # viosfm's and COLMAP's SIFT features per image
+run_flags=(--n1 10 --n2 5 --max-features "$max_features" --no-progress --threads 2)
 
 simulate() {  # NAME FLAGS...: the sequence OUT/seq/NAME, made once
   local name=$1
@@ -88,7 +89,8 @@ with open(sys.argv[2], "w") as f:
 PY
 }
 
-# COLMAP 3.8 on a simulated sequence's images with its calibration:
+# COLMAP 3.8 on a simulated sequence's images with its calibration and as many
+# SIFT features per image as viosfm extracts:
 # OUT/colmap_NAME/trajectory_body.tum.
 colmap_on() {  # NAME SEQ MATCHER
   local dir=$out/colmap_$1 seq=$2 matcher=$3
@@ -114,7 +116,8 @@ PY
     colmap feature_extractor --database_path "$dir/database.db" \
       --image_path "$seq/mav0/cam0/data" --ImageReader.camera_model OPENCV \
       --ImageReader.single_camera 1 --ImageReader.camera_params "$params" \
-      --SiftExtraction.use_gpu 0 --SiftExtraction.num_threads 2 &&
+      --SiftExtraction.use_gpu 0 --SiftExtraction.num_threads 2 \
+      --SiftExtraction.max_num_features "$max_features" &&
       colmap "$matcher" --database_path "$dir/database.db" --SiftMatching.use_gpu 0 \
         --SiftMatching.num_threads 2 &&
       colmap mapper --database_path "$dir/database.db" --image_path "$seq/mav0/cam0/data" \

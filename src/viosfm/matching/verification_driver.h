@@ -99,11 +99,9 @@ struct VerificationOptions {
   // The largest correction taken as the VIO's drift: its Mahalanobis
   // distance under the model's covariance (5 degrees of freedom: the
   // rotation and the translation's direction). Default 20: a VIO may drift
-  // several times what the model's default rates say (4.27 would be the
-  // model's own 99.73 % bound), and on the simulated two floors the
-  // correction that would join the identical floors is 42 sigmas or more
-  // even with ten times the model's drift, while correct pairs ask for at
-  // most 8 at its drift (benchmarks.md, VIO-aided verification).
+  // several times what the model's rates say, and the correction that would
+  // join two identical floors is far beyond it while correct pairs ask for
+  // much less (see docs/benchmarks.md, "VIO-aided verification").
   double max_correction_sigmas = 20.0;
   // The VIO's uncertainty (scene/vio_uncertainty.h; the pipeline sets it
   // from its own option).

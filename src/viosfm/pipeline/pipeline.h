@@ -64,8 +64,8 @@
 // Crash safety: a run killed at any point (SIGKILL included) and run again
 // with the same options ends as an uninterrupted run would, byte for byte
 // with --threads 1 (with more threads, Ceres' parallel sums make the bundle
-// adjustment differ slightly run to run: on `make demo`'s sequence, ATEs of
-// 0.9030 to 0.9042 mm over three runs): the database keeps every committed image's
+// adjustment differ slightly run to run, see docs/design.md, "Repeatability
+// of a run"): the database keeps every committed image's
 // features and every verified pair (SQLite, WAL; one transaction per image
 // and per pair), a pair stored as rejected is decided again from its stored
 // matches, and every other output is recomputed. summary.json is removed

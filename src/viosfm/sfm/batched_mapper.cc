@@ -244,10 +244,10 @@ void ValidateBatchedMapperInput(const BatchedMapperInput& input) {
 
 // A VIO jump is refused where the frame's verified matches with the
 // registered frames fit the VIO's pose more than this many times as often as
-// the PnP pose (FrameRegistrationOptions). Measured on the simulated
-// corridor: the look-alike places refused fit 2.6 to 170 times as many
-// matches at the VIO's pose; a pose further along the baseline fits them
-// about as well (3419 against 3398), which tells nothing.
+// the PnP pose (FrameRegistrationOptions): a look-alike place's matches fit
+// the VIO's pose several times better, a pose along the baseline about as
+// well (see docs/history/benchmarks-2026.md, "A look-alike place is not a
+// VIO jump").
 constexpr double kJumpRefutingMatchRatio = 2.0;
 
 

@@ -1,14 +1,10 @@
 // What the VIO does with the IMU noise figures of a calibration file.
 //
 // The white-noise densities weigh the IMU against the images in every
-// optimisation, and calibration files get them wrong: the RealSense
-// recording in ../shared/data states a gyro density of 3.7e-5 rad/s/sqrt(Hz)
-// (its static start measures 5e-4, 13 times more) and an accelerometer
-// density of 0.18 m/s^2/sqrt(Hz) (30 times what it measures, 10 times a
-// consumer MEMS data sheet). On a simulated room with exactly that error in
-// its sensor.yaml the VIO's ATE grows from 17 to 53 mm, mostly through the
-// accelerometer figure: an IMU trusted too little leaves the scale and the
-// velocity to the images.
+// optimisation, and calibration files get them wrong, by an order of
+// magnitude either way; an IMU trusted too little leaves the scale and the
+// velocity to the images (see docs/history/code-comments-2026.md for the
+// real recording's figures).
 //
 // Policy (CheckImuNoise):
 //  - with a static interval (static_init.h) of at least min_static_s, the
@@ -26,13 +22,9 @@
 //    window whose accelerometer readings spread least about their mean)
 //    bounds each density from above, measured there as at rest: motion
 //    only adds to the spread, so the white noise cannot exceed it, and a
-//    density above it is lowered to it. On stretches of the real
-//    RealSense recording that start in motion, the file's accelerometer
-//    density of 0.18 clamped to 0.05 left the scale to the images, and the
-//    VIO's trajectory came out 1.5 to 5.3 times too small; the quietest
-//    half second of the walk bounds the density at about 0.009, and the
-//    trajectory is then within 10 % of the one that started at rest
-//    (docs/benchmarks.md, "Starting in motion");
+//    density above it is lowered to it: a start in motion with the file's
+//    figure left the scale to the images (see docs/benchmarks.md,
+//    "Starting in motion");
 //  - in motion, what the preintegration must absorb is more than the
 //    sensor's white noise: a flying platform vibrates (propellers, motors)
 //    at frequencies the IMU's sampling aliases, and the readings scatter
@@ -51,11 +43,9 @@
 //    walk is scaled by the factor its white-noise density was changed by
 //    (scale_random_walks): a calibration's two figures of one sensor come
 //    from one source, so one found wrong by a factor makes the same error
-//    likely in the other. On a simulated room whose calibration states the
-//    accelerometer's figures 30 times too large (and blur, white walls, auto
-//    exposure, a rolling shutter and a time offset besides), the
-//    accelerometer bias, left free by the inflated walk, wandered ten times
-//    its true range and the scale came out 13 % long. Then values outside
+//    likely in the other: an inflated random walk leaves the bias free to
+//    wander and the scale with it (see docs/benchmarks.md, "VIO robustness
+//    set"). Then values outside
 //    [1e-7, 1e-2] rad/s^2/sqrt(Hz) (gyro) and [1e-6, 1e-1] m/s^3/sqrt(Hz)
 //    (accelerometer) are clamped.
 // Every change is logged with the file's and the used value.

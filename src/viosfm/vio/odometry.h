@@ -89,9 +89,9 @@ struct VioOptions {
   // the gap's start, nothing is propagated across it, and the frames after
   // it start a new segment from a visual-inertial initialisation of their
   // own (joined to the first by the images only). Default 0.6: dropouts of
-  // half a second were measured to be bridged without losing track on the
-  // real handheld recording (docs/benchmarks.md); over much longer ones what
-  // the body did is too unknown for the IMU to carry the state across.
+  // half a second are bridged without a lost track on the real handheld
+  // recording (see docs/benchmarks.md, "VIO on a real flight"); over longer
+  // ones what the body did is too unknown for the IMU to carry the state.
   double max_imu_gap_s = 0.6;
   // Process only the first max_frames images (0: all). Default 0.
   int max_frames = 0;

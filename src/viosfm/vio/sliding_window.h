@@ -85,11 +85,9 @@ struct SlidingWindowOptions {
   // fallback_target_landmarks triangulated landmarks, its tracks whose rays
   // make at least fallback_triangulation_angle_deg are triangulated too
   // (widest first). Defaults 0.3 deg and 30. In a richly textured scene the
-  // low-parallax landmarks cost accuracy (simulated 60 s room: 17.9 mm ATE
-  // with every landmark above 0.3 deg against 14.9 mm above 1 deg); in a
-  // weakly textured or slowly moving one they are all there is (the real
-  // RealSense bedroom recording: 2 to 10 landmarks above 1 deg in the
-  // newest frame for seconds at a time while the hand barely translates).
+  // low-parallax landmarks cost accuracy; in a weakly textured or slowly
+  // moving one they are all there is (the real handheld recording, while the
+  // hand barely translates).
   double fallback_triangulation_angle_deg = 0.3;
   int fallback_target_landmarks = 30;
   // m, depth range of an accepted landmark (anchor camera). Defaults 0.1, 50.
