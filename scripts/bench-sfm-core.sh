@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The images-only core under the VIO, on simulated sequences with exact
-# ground truth (docs/benchmarks.md "Images alone, cut VIOs, sparse images"):
+# ground truth (docs/benchmarks.md "Without a VIO, or with a sparse one"):
 #
 #   kf_vio      keyframe-like frames (0.05-7 s apart, as EuRoC V1_01's 100
 #               keyframes in 144 s) and a VIO file with poses at the

@@ -160,7 +160,7 @@ TEST(SfmCorePipelineTest, TheImagesAloneMakeTheModel) {
   EXPECT_EQ(summary.num_frames_registered, sequence.num_images);
   ASSERT_EQ(summary.mapper.frames_per_model.size(), 1u);
   // The images alone, 800 keypoints of 376x240 a frame: the shape within
-  // 1 % of the path (docs/benchmarks.md "Images alone" has COLMAP's beside).
+  // 1 % of the path (see docs/benchmarks.md, "Without a VIO, or with a sparse one").
   double scale = 0.0;
   EXPECT_LT(SimilarityAte(out, sequence, &scale), 0.01 * sequence.path_m);
 }

@@ -78,7 +78,7 @@ BatchedMapperInput LoadMapperInputStage(const SelectedFrames& frames, const VioP
 BatchedMapperOptions MapperOptionsOfRun(const Sequence& sequence, const PipelineOptions& options) {
   BatchedMapperOptions mapper = options.EffectiveMapperOptions();
   // A guessed camera's focal length, distortion and principal point are
-  // the adjustment's to find (docs/benchmarks.md "Images alone").
+  // the adjustment's to find (see docs/benchmarks.md, "Without a VIO, or with a sparse one").
   if (sequence.camera_guessed) {
     mapper.ba.refine_intrinsics = true;
     mapper.ba.refine_principal_point = true;
@@ -102,7 +102,8 @@ void FinishMapping(const Sequence& sequence, const VioPoses& vio, const Pipeline
   if (sequence.camera_guessed) {
     const Camera& camera = reconstruction->GetCamera(sequence.rig.camera.camera_id);
     std::ostringstream params;
-    for (size_t k = 0; k < camera.params.size(); ++k) params << (k > 0 ? " " : "") << camera.params[k];
+    for (size_t k = 0; k < camera.params.size(); ++k)
+      params << (k > 0 ? " " : "") << camera.params[k];
     summary->camera_refined = camera.ModelName() + " " + params.str();
     VIOSFM_LOG(INFO) << "run: the guessed camera refined by the adjustment: "
                      << summary->camera_refined;

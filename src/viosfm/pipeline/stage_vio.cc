@@ -250,11 +250,11 @@ VioPoses LoadVioPoses(const Sequence& sequence, const PipelineOptions& options, 
     // longer than vio_max_gap_ns are candidate breaks, which the images
     // confirm or refute before mapping (sfm/vio_gaps.h).
     poses.segments.assign(poses.world_from_body.size(), 0);
-    poses.segment_rule =
-        options.vio_max_gap_ns > 0
-            ? "one segment; its time gaps longer than " +
-                  FormatNsAsSeconds(options.vio_max_gap_ns, 3) + " s judged by the images"
-            : "one segment (--vio-max-gap 0)";
+    poses.segment_rule = options.vio_max_gap_ns > 0
+                             ? "one segment; its time gaps longer than " +
+                                   FormatNsAsSeconds(options.vio_max_gap_ns, 3) +
+                                   " s judged by the images"
+                             : "one segment (--vio-max-gap 0)";
   }
   CompleteVioPoses(&poses);
   const std::vector<int> gaps = SegmentsFromTimeGaps(poses.world_from_body, options.vio_max_gap_ns);

@@ -250,7 +250,6 @@ void ValidateBatchedMapperInput(const BatchedMapperInput& input) {
 // VIO jump").
 constexpr double kJumpRefutingMatchRatio = 2.0;
 
-
 namespace {
 
 BundleAdjustmentOptions WithThreads(BundleAdjustmentOptions options, int num_threads) {
@@ -288,7 +287,8 @@ bool BatchedMapper::MainModelHasGauge() const {
 void BatchedMapper::AddNewImages() {
   for (size_t i = num_images_; i < images().size(); ++i) {
     const MapperImage& input_image = images()[i];
-    if (track_builder_) track_builder_->AddImage(input_image.image_id, input_image.keypoints.size());
+    if (track_builder_)
+      track_builder_->AddImage(input_image.image_id, input_image.keypoints.size());
     vio_poses_.emplace_back();
     if (input_image.vio_cam_from_world) {
       vio_poses_[i] = *input_image.vio_cam_from_world;
@@ -362,8 +362,7 @@ void BatchedMapper::BuildPriors() {
 bool BatchedMapper::TakeStreamedBatch(size_t begin, size_t* end, bool last) {
   // The batch's frames (streamed) and the pairs among them and the frames
   // before them: complete once the verification has passed the batch.
-  VerifiedPairStream::Taken taken =
-      stream_->Take(begin + static_cast<size_t>(options_.batch_size));
+  VerifiedPairStream::Taken taken = stream_->Take(begin + static_cast<size_t>(options_.batch_size));
   if (frames_streamed_) {
     const size_t first_new = streamed_images_.size();
     std::move(taken.frames.begin(), taken.frames.end(), std::back_inserter(streamed_images_));
@@ -502,8 +501,7 @@ TriangulationStatistics BatchedMapper::RegisterBatch(size_t begin, size_t end,
     const TriangulationStatistics statistics = TriangulateReconstruction(
         &core_.reconstruction(), batch_tracks, core_.model(m).registered, options_.triangulation);
     if (m == 0) triangulation = statistics;
-    changed_since_filter_.insert(changed_since_filter_.end(),
-                                 statistics.changed_point_ids.begin(),
+    changed_since_filter_.insert(changed_since_filter_.end(), statistics.changed_point_ids.begin(),
                                  statistics.changed_point_ids.end());
   }
   RetryPending();
@@ -742,7 +740,8 @@ Reconstruction BatchedMapper::Run(BatchedMapperSummary* summary_out,
     if (m != main_model && !core_.model(m).registered.empty()) output_order.push_back(m);
   }
   std::vector<int> output_index(static_cast<size_t>(core_.NumModels()), -1);
-  for (size_t k = 0; k < output_order.size(); ++k) output_index[output_order[k]] = static_cast<int>(k);
+  for (size_t k = 0; k < output_order.size(); ++k)
+    output_index[output_order[k]] = static_cast<int>(k);
   for (size_t i = 0; i < num_images_; ++i) {
     const int m = core_.ModelOf(i);
     summary_.frames[i].model = m >= 0 ? output_index[m] : -1;
@@ -782,9 +781,8 @@ Reconstruction BatchedMapper::Run(BatchedMapperSummary* summary_out,
 }
 
 Reconstruction RunBatchedMapper(const BatchedMapperInput& input,
-                                const BatchedMapperOptions& options,
-                                BatchedMapperSummary* summary, VerifiedPairStream* stream,
-                                const MapperBatchCallback& on_batch,
+                                const BatchedMapperOptions& options, BatchedMapperSummary* summary,
+                                VerifiedPairStream* stream, const MapperBatchCallback& on_batch,
                                 std::vector<Reconstruction>* other_models) {
   BatchedMapper mapper(input, options, stream);
   return mapper.Run(summary, on_batch, other_models);
