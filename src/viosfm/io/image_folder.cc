@@ -7,8 +7,8 @@
 
 #include "viosfm/io/euroc.h"
 #include "viosfm/io/image_io.h"
-#include "viosfm/sensor/camera_models.h"
 #include "viosfm/io/text_lines.h"
+#include "viosfm/sensor/camera_models.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/file_util.h"
 #include "viosfm/util/logging.h"
@@ -68,8 +68,8 @@ std::vector<StampedImage> ImagesFromNames(const fs::path& folder, bool* unordere
   if (*unordered) {
     images.clear();
     for (size_t i = 0; i < paths.size(); ++i) {
-      images.push_back({{static_cast<timestamp_ns_t>(i + 1) * 1'000'000'000, paths[i]},
-                        paths[i].string(), 0});
+      images.push_back(
+          {{static_cast<timestamp_ns_t>(i + 1) * 1'000'000'000, paths[i]}, paths[i].string(), 0});
     }
   }
   return images;
@@ -82,8 +82,9 @@ Camera GuessCamera(const fs::path& first_image) {
   const GreyImage image = ReadGreyImage(first_image);
   const double width = static_cast<double>(image.width);
   const double height = static_cast<double>(image.height);
-  Camera camera = MakeCamera(CameraModelId::kSimpleRadial, image.width, image.height,
-                             {1.2 * std::max(width, height), 0.5 * (width - 1.0), 0.5 * (height - 1.0), 0.0});
+  Camera camera =
+      MakeCamera(CameraModelId::kSimpleRadial, image.width, image.height,
+                 {1.2 * std::max(width, height), 0.5 * (width - 1.0), 0.5 * (height - 1.0), 0.0});
   camera.camera_id = 1;
   return camera;
 }
@@ -188,9 +189,8 @@ Sequence ReadImageFolder(const fs::path& folder, const ImageFolderOptions& optio
   }
 
   std::vector<StampedImage> images =
-      options.timestamps_file.empty()
-          ? ImagesFromNames(folder, &sequence.unordered)
-          : ImagesFromTimestampsFile(folder, options.timestamps_file);
+      options.timestamps_file.empty() ? ImagesFromNames(folder, &sequence.unordered)
+                                      : ImagesFromTimestampsFile(folder, options.timestamps_file);
   if (sequence.unordered) {
     VIOSFM_LOG(WARNING) << "image folder " << folder.string()
                         << ": the image names are not timestamps: taken as an unordered photo "

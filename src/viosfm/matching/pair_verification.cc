@@ -131,8 +131,7 @@ void PairVerifier::Verify(const PairImage& image1, const PairImage& image2, cons
   }
   // Across a gap in the VIO's poses its relative pose may be a
   // re-initialisation's jump: RANSAC alone judges what step 1 rejected.
-  decision.spans_vio_gap =
-      decision.has_vio_prior && image1.odometer.gap != image2.odometer.gap;
+  decision.spans_vio_gap = decision.has_vio_prior && image1.odometer.gap != image2.odometer.gap;
   const bool against_vio = decision.spans_vio_gap && decision.vio_rejected;
   if (against_vio) {
     decision.vio_rejected = false;
@@ -179,7 +178,7 @@ void PairVerifier::Verify(const PairImage& image1, const PairImage& image2, cons
   seconds->ransac += timer.ElapsedSeconds();
   decision.num_inliers = estimate.num_inliers();
   decision.accepted = estimate.accepted();
-  decision.reason = !decision.accepted           ? kPairTooFewInliers
+  decision.reason = !decision.accepted          ? kPairTooFewInliers
                     : decision.vio_contradicted ? kPairAcceptedAgainstVio
                                                 : kPairAccepted;
   if (decision.accepted) pair_work->geometry = estimate.ToTwoViewGeometry();

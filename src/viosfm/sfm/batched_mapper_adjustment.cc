@@ -160,8 +160,8 @@ BaLinearSolver BatchedMapper::ChooseLinearSolver(const std::vector<image_t>& fre
   }
   // The final adjustment: by the work of the reduced camera matrix's
   // factorisation (linear_solver_chooser.h).
-  const BaProblemStructure structure = ComputeBaProblemStructure(
-      core_.reconstruction(), free_images, /*with_factorization=*/true);
+  const BaProblemStructure structure =
+      ComputeBaProblemStructure(core_.reconstruction(), free_images, /*with_factorization=*/true);
   const BaLinearSolver solver = solver_chooser_.Next(structure, /*final=*/true);
   VIOSFM_LOG(INFO) << "final bundle adjustment: " << structure.num_free_images
                    << " images, factorisation work per image " << structure.FactorizationPerImage()
@@ -223,9 +223,8 @@ std::vector<GyroFrame> BatchedMapper::GyroFramesOfMainModel() const {
                                                   registration_.support_max_error_px) >=
                           registration_.min_supporting_observations});
   }
-  std::sort(frames.begin(), frames.end(), [](const GyroFrame& a, const GyroFrame& b) {
-    return a.timestamp_ns < b.timestamp_ns;
-  });
+  std::sort(frames.begin(), frames.end(),
+            [](const GyroFrame& a, const GyroFrame& b) { return a.timestamp_ns < b.timestamp_ns; });
   return frames;
 }
 
@@ -267,10 +266,9 @@ void BatchedMapper::AlignMainModelToImu() {
       body.poses.push_back({input_.rig.CamToImuTime(*image.timestamp_ns),
                             image.cam_from_world.Inverse() * cam_from_body});
     }
-    std::sort(body.poses.begin(), body.poses.end(),
-              [](const StampedPose& a, const StampedPose& b) {
-                return a.timestamp_ns < b.timestamp_ns;
-              });
+    std::sort(body.poses.begin(), body.poses.end(), [](const StampedPose& a, const StampedPose& b) {
+      return a.timestamp_ns < b.timestamp_ns;
+    });
     return body;
   };
   Trajectory body = body_trajectory();
@@ -281,9 +279,8 @@ void BatchedMapper::AlignMainModelToImu() {
   Eigen::Vector3d up = Eigen::Vector3d::Zero();
   size_t k = 0;
   for (const ImuSample& sample : input_.imu) {
-    while (k + 1 < body.size() &&
-           std::abs(body.poses[k + 1].timestamp_ns - sample.timestamp_ns) <=
-               std::abs(body.poses[k].timestamp_ns - sample.timestamp_ns)) {
+    while (k + 1 < body.size() && std::abs(body.poses[k + 1].timestamp_ns - sample.timestamp_ns) <=
+                                      std::abs(body.poses[k].timestamp_ns - sample.timestamp_ns)) {
       ++k;
     }
     if (std::abs(body.poses[k].timestamp_ns - sample.timestamp_ns) > 500'000'000) continue;
@@ -385,8 +382,7 @@ BundleAdjustmentSummary BatchedMapper::Adjust(size_t window_begin, bool global) 
     // The gyro's relative rotations between consecutive registered frames,
     // with the biases the current rotations give (gyro_priors.h).
     const std::vector<GyroFrame> frames = GyroFramesOfMainModel();
-    gyro_priors =
-        MakeGyroPriors(frames, input_.imu, input_.rig, options_.gyro, gyro_sigma_floor_);
+    gyro_priors = MakeGyroPriors(frames, input_.imu, input_.rig, options_.gyro, gyro_sigma_floor_);
     gyro_sigma_floor_ = gyro_priors->sigma_factor;
     if (options_.inertial.enabled && (ba_options_.use_relative_pose_priors || imu_aligned_) &&
         !inertial_declined_) {

@@ -74,17 +74,15 @@ std::optional<Eigen::Vector3d> BatchedMapper::VioCamVelocity(size_t i) const {
 bool BatchedMapper::BeyondVioDrift(size_t i, size_t reference, const Rigid3d& images_pose,
                                    const Rigid3d& vio_pose, double* position_difference,
                                    double* rotation_difference) const {
-  const RelativePoseSigmas sigmas =
-      LargestSigmas(RelativePoseCovariance(options_.vio_uncertainty,
-                                           VioSampleOfImage(images()[reference]),
-                                           VioSampleOfImage(images()[i])));
+  const RelativePoseSigmas sigmas = LargestSigmas(
+      RelativePoseCovariance(options_.vio_uncertainty, VioSampleOfImage(images()[reference]),
+                             VioSampleOfImage(images()[i])));
   *position_difference = (ProjectionCenter(images_pose) - ProjectionCenter(vio_pose)).norm();
   *rotation_difference = images_pose.rotation.angularDistance(vio_pose.rotation);
-  return *position_difference >
-             registration_.break_sigmas * sigmas.translation_m +
-                 registration_.break_min_translation_m ||
-         *rotation_difference >
-             registration_.break_sigmas * sigmas.rotation_rad + registration_.break_min_rotation_rad;
+  return *position_difference > registration_.break_sigmas * sigmas.translation_m +
+                                    registration_.break_min_translation_m ||
+         *rotation_difference > registration_.break_sigmas * sigmas.rotation_rad +
+                                    registration_.break_min_rotation_rad;
 }
 
 void BatchedMapper::RegisterFrame(size_t i, int model, const Rigid3d& cam_from_world,
@@ -157,17 +155,15 @@ bool BatchedMapper::TryRegister(size_t i) {
   return false;
 }
 
-bool BatchedMapper::RegisterAgainstPrediction(size_t i, size_t reference,
-                                              const Rigid3d& predicted,
+bool BatchedMapper::RegisterAgainstPrediction(size_t i, size_t reference, const Rigid3d& predicted,
                                               const AbsolutePoseResult& result) {
   MapperFrameStatus& status = summary_.frames[i];
   const int model = core_.ModelOf(reference);
   const int pnp_inliers = static_cast<int>(result.num_inliers);
   const int predicted_inliers = static_cast<int>(result.num_predicted_inliers);
   const bool prediction_supported = predicted_inliers >= registration_.pnp.min_num_inliers;
-  if (prediction_supported &&
-      static_cast<double>(predicted_inliers) >=
-          registration_.min_predicted_inlier_ratio * pnp_inliers) {
+  if (prediction_supported && static_cast<double>(predicted_inliers) >=
+                                  registration_.min_predicted_inlier_ratio * pnp_inliers) {
     RegisterFrame(i, model, predicted, FramePoseSource::kVioVerified);
     return true;
   }
@@ -220,8 +216,8 @@ bool BatchedMapper::JumpRefuted(size_t i, const Rigid3d& predicted,
                    << position_difference << " m and " << rotation_difference
                    << " rad off the images' (" << result.num_predicted_inliers << " of "
                    << result.num_inliers << " 2D-3D inliers), but its matches with "
-                   << "the registered frames show the VIO's pose (" << by_vio
-                   << " of them against " << by_images << "): not a VIO jump";
+                   << "the registered frames show the VIO's pose (" << by_vio << " of them against "
+                   << by_images << "): not a VIO jump";
   return true;
 }
 

@@ -297,8 +297,8 @@ TEST(FrameRegistration, ASegmentTheImagesCannotJoinIsReported) {
   sequence.input.verified_pairs = pairs;
   BatchedMapperSummary summary;
   std::vector<Reconstruction> other_models;
-  const Reconstruction main = RunBatchedMapper(sequence.input, Quiet(10), &summary, nullptr, {},
-                                               &other_models);
+  const Reconstruction main =
+      RunBatchedMapper(sequence.input, Quiet(10), &summary, nullptr, {}, &other_models);
   EXPECT_EQ(summary.num_unposed, 0);
   EXPECT_EQ(summary.frames_per_model, (std::vector<int>{30, 10}));
   EXPECT_EQ(summary.num_frames_in_other_models, 10);

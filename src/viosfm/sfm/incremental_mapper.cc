@@ -214,10 +214,9 @@ std::optional<InitialPair> IncrementalMapper::FindInitialPair(
   // widest baselines among them too), until init_max_pairs_tried.
   std::vector<std::pair<size_t, size_t>> frames_by_matches;
   for (const auto& [frame, count] : matches_of_frame) frames_by_matches.emplace_back(count, frame);
-  std::sort(frames_by_matches.begin(), frames_by_matches.end(),
-            [](const auto& a, const auto& b) {
-              return a.first != b.first ? a.first > b.first : a.second < b.second;
-            });
+  std::sort(frames_by_matches.begin(), frames_by_matches.end(), [](const auto& a, const auto& b) {
+    return a.first != b.first ? a.first > b.first : a.second < b.second;
+  });
   std::vector<const ImagePairMatches*> ranked;
   std::unordered_set<const ImagePairMatches*> taken;
   for (const auto& [count, frame] : frames_by_matches) {
@@ -254,8 +253,8 @@ std::optional<InitialPair> IncrementalMapper::FindInitialPair(
     std::vector<Eigen::Vector2d> points1, points2;
     FeatureMatches matches;
     for (const FeatureMatch& match : pair->matches) {
-      matches.push_back({static_cast<point2D_t>(points1.size()),
-                         static_cast<point2D_t>(points2.size())});
+      matches.push_back(
+          {static_cast<point2D_t>(points1.size()), static_cast<point2D_t>(points2.size())});
       points1.push_back(ImageToCam(camera1, image1.points2D[match.point2D_idx1].xy));
       points2.push_back(ImageToCam(camera2, image2.points2D[match.point2D_idx2].xy));
     }
@@ -406,8 +405,8 @@ TriangulationStatistics IncrementalMapper::TriangulateFrames(const std::vector<s
     std::vector<Track> subset;
     subset.reserve(track_indices.size());
     for (const size_t t : track_indices) subset.push_back(tracks_[t]);
-    const TriangulationStatistics statistics = TriangulateReconstruction(
-        &reconstruction_, subset, models_[m].registered, triangulation_);
+    const TriangulationStatistics statistics =
+        TriangulateReconstruction(&reconstruction_, subset, models_[m].registered, triangulation_);
     total.num_tracks_tried += statistics.num_tracks_tried;
     total.num_points_added += statistics.num_points_added;
     total.num_new_point_observations += statistics.num_new_point_observations;
@@ -613,7 +612,8 @@ std::optional<Sim3d> IncrementalMapper::EstimateModelSimilarity(
     std::vector<Eigen::Vector3d> sample_src, sample_dst;
     std::unordered_set<size_t> chosen;
     while (chosen.size() < 3) {
-      chosen.insert(static_cast<size_t>(random.UniformInt(0, static_cast<int64_t>(src.size()) - 1)));
+      chosen.insert(
+          static_cast<size_t>(random.UniformInt(0, static_cast<int64_t>(src.size()) - 1)));
     }
     for (const size_t k : chosen) {
       sample_src.push_back(src[k]);
@@ -690,9 +690,8 @@ std::optional<ModelMerge> IncrementalMapper::TryMergeModels() {
   merge.num_inliers = num_inliers;
   if (!into_from_from || num_inliers < options_.merge_min_common_points ||
       num_inliers < options_.merge_min_inlier_ratio * static_cast<double>(common.size())) {
-    VIOSFM_LOG(DEBUG) << "mapper: models " << into << " and " << from << " share "
-                      << common.size() << " points, " << num_inliers
-                      << " of them agree on a similarity: not merged";
+    VIOSFM_LOG(DEBUG) << "mapper: models " << into << " and " << from << " share " << common.size()
+                      << " points, " << num_inliers << " of them agree on a similarity: not merged";
     return std::nullopt;
   }
   merge.into_from_from = *into_from_from;
@@ -749,8 +748,8 @@ void TransformFrames(const Sim3d& b_from_a, const std::vector<image_t>& image_id
     // x_b = s R x_a + t, and the camera's coordinates scaled by s see the
     // same image: cam_from_b = (R_c R^T, s t_c - R_c R^T t).
     const Eigen::Quaterniond cam_rotation = image.cam_from_world.rotation * rotation.conjugate();
-    image.cam_from_world.translation = b_from_a.scale * image.cam_from_world.translation -
-                                       (cam_rotation * b_from_a.translation);
+    image.cam_from_world.translation =
+        b_from_a.scale * image.cam_from_world.translation - (cam_rotation * b_from_a.translation);
     image.cam_from_world.rotation = cam_rotation.normalized();
   }
   for (const point3D_t point3D_id : points) {

@@ -76,8 +76,8 @@ struct IncrementalMapperOptions {
     visit({"init_min_triangulation_angle_deg",
            "deg, median triangulation angle an initial pair needs at first", kRunOnly},
           self.init_min_triangulation_angle_deg);
-    visit({"init_lowest_triangulation_angle_deg",
-           "deg, the smallest that bound is relaxed to", kRunOnly},
+    visit({"init_lowest_triangulation_angle_deg", "deg, the smallest that bound is relaxed to",
+           kRunOnly},
           self.init_lowest_triangulation_angle_deg);
     visit({"init_max_pairs_tried", "candidate initial pairs tried", kRunOnly},
           self.init_max_pairs_tried);

@@ -84,10 +84,9 @@ TEST(IncrementalMapperTest, InitialPairHasTheTrueRelativePose) {
   // The pairs hold frames at most 8 apart: the widest baseline wins once
   // no pair reaches the larger angles.
   EXPECT_GE(pair->median_angle_deg, 2.0);
-  const Rigid3d true_cam2_from_cam1 = sequence.cams_from_world[pair->frame2] *
-                                      sequence.cams_from_world[pair->frame1].Inverse();
-  EXPECT_LT(pair->cam2_from_cam1.rotation.angularDistance(true_cam2_from_cam1.rotation) *
-                kRadToDeg,
+  const Rigid3d true_cam2_from_cam1 =
+      sequence.cams_from_world[pair->frame2] * sequence.cams_from_world[pair->frame1].Inverse();
+  EXPECT_LT(pair->cam2_from_cam1.rotation.angularDistance(true_cam2_from_cam1.rotation) * kRadToDeg,
             0.1);
   const double direction_error_deg =
       std::acos(std::clamp(pair->cam2_from_cam1.translation.normalized().dot(
@@ -146,8 +145,9 @@ TEST(IncrementalMapperTest, MergesTwoModelsByTheirCommonPoints) {
   IncrementalMapper core = MakeCore(sequence);
   // Model 0 at the true poses of frames [0, 36), model 1 at the poses of
   // frames [36, 60) moved by a known similarity; the tracks cross.
-  const Sim3d moved(1.7, Eigen::Quaterniond(Eigen::AngleAxisd(0.6, Eigen::Vector3d(1, 2, 3).normalized())),
-                    Eigen::Vector3d(4.0, -2.0, 1.0));
+  const Sim3d moved(
+      1.7, Eigen::Quaterniond(Eigen::AngleAxisd(0.6, Eigen::Vector3d(1, 2, 3).normalized())),
+      Eigen::Vector3d(4.0, -2.0, 1.0));
   const int first = core.NewModel(false);
   const int second = core.NewModel(false);
   std::vector<size_t> frames0, frames1;
