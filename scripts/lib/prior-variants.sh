@@ -5,9 +5,10 @@
 #
 # Runs `viosfm run DATASET --out RUNS/default RUN FLAGS...` unless
 # RUNS/default/summary.json exists, then maps each variant (no_rpc, paper,
-# no_bridging) from the default run's stored features and matches (its
-# database, options.json and fingerprint.json copied into RUNS/VARIANT),
-# each unless its summary.json exists. Logs in RUNS/<name>.log. Needs
+# no_bridging) from the default run's stored features and matches (the
+# default's run folder copied to RUNS/VARIANT, its manifest with it, so that
+# viosfm takes the copy as its own and re-runs only the mapping), each
+# unless its summary.json exists. Logs in RUNS/<name>.log. Needs
 # VIOSFM (the viosfm binary).
 map_prior_variants() {
   local runs=$1 dataset=$2
@@ -25,9 +26,7 @@ map_prior_variants() {
       no_bridging) flags=(--no-bridging) ;;
     esac
     rm -rf "$runs/$variant"
-    mkdir -p "$runs/$variant"
-    cp "$runs/default/database.db" "$runs/default/options.json" "$runs/default/fingerprint.json" \
-      "$runs/$variant/"
+    cp -a "$runs/default" "$runs/$variant"
     "$VIOSFM" run "$dataset" --out "$runs/$variant" "$@" "${flags[@]}" > "$runs/$variant.log" 2>&1
   done
 }
