@@ -229,9 +229,10 @@ viosfm_run() {
     echo "-- viosfm run -> $dir"
     rm -rf "$dir/run" "$dir/reused.txt"
     if [ -n "${REUSE:-}" ] && [ -f "$REUSE/run/database.db" ]; then
-      mkdir -p "$dir/run"
-      cp "$REUSE/run/database.db" "$REUSE/run/options.json" "$REUSE/run/fingerprint.json" \
-        "$dir/run/"
+      mkdir -p "$dir"
+      # The reused run's folder with its manifest: viosfm takes the copy as
+      # its own (it refuses a folder it did not make) and re-maps it.
+      cp -a "$REUSE/run" "$dir/run"
       echo "features and verified matches of $(basename "$REUSE")" > "$dir/reused.txt"
     fi
     local source=(--vio-trajectory "$vio")
