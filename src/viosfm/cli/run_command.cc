@@ -36,11 +36,21 @@ struct RunArguments {
   PipelineOptions options;
 };
 
+// A rate, a feature count or an image size the user gives is kept: the
+// texture probe and the feature budget would change it.
+void KeepUsersChoice(const std::string& key, PipelineOptions* options) {
+  if (SettledByTextureProbe(key)) options->texture_probe.enable = false;
+  if (SettledByFeatureBudget(key)) options->feature_budget.features_per_second = 0;
+}
+
 // --list-options: every option key with its default, whether it shapes the
 // stored data (a re-run with another value cannot reuse them), the flag
 // that sets it, if any, and its help.
 void ListOptions() {
-  for (const OptionDescription& option : OptionDescriptions<PipelineOptions>()) {
+  PipelineOptions defaults;
+  ApplyPreset(RunPreset::kRealtime, &defaults);
+  std::cout << "# defaults of --preset realtime; --preset paper sets the paper's\n";
+  for (const OptionDescription& option : OptionDescriptions(defaults)) {
     const OptionFlag* flag = FlagOfKey(option.key);
     std::cout << option.key << " = " << option.default_text << "  ["
               << (option.effect == kShapesStoredData ? "stored data" : "run only") << "]  "
@@ -63,7 +73,7 @@ void RunRun(RunArguments args) {
     }
     const std::string key = assignment.substr(0, equals);
     SetOptionFromText(options, key, assignment.substr(equals + 1));
-    if (SettledByTextureProbe(key)) options.texture_probe.enable = false;
+    KeepUsersChoice(key, &options);
   }
   options.num_threads = CapNumThreads(options.num_threads, "--threads");
   if (const std::string error = options.Validate(); !error.empty()) {
@@ -133,21 +143,29 @@ void RegisterRun(CLI::App& app) {
   AddCalibrationOptions(command, &args->options.calibration);
   AddDatasetCheckOptions(command, &args->options.dataset_checks);
   AddBagOptions(command, &args->bag);
-  // Defined before the flags that set one option each: CLI11 runs the
-  // callbacks in the order of definition, so those flags (and --set) override
-  // the settings it applies.
+  // `viosfm run` starts from the real-time preset; --preset is defined
+  // before the flags that set one option each: CLI11 runs the callbacks in
+  // the order of definition, so those flags (and --set) override it.
+  ApplyPreset(RunPreset::kRealtime, &args->options);
+  command
+      ->add_option_function<std::string>(
+          "--preset",
+          [args](const std::string& name) {
+            ApplyPreset(name == "paper" ? RunPreset::kPaper : RunPreset::kRealtime, &args->options);
+          },
+          "realtime (default): a recording reconstructed in about its own duration on 2 cores "
+          "(N1 10, N2 5, 10000 features a second of recording, guided matching, a bundle-"
+          "adjustment window); paper: the paper's settings (N1 40, N2 30, 8192 features a frame), "
+          "slower")
+      ->check(CLI::IsMember({"realtime", "paper"}))
+      ->default_str("realtime");
   command->add_flag_callback(
-      "--realtime", [args] { ApplyRealtimeSettings(&args->options); },
-      "Settings that reconstruct a recording in about its own duration on 2 cores: N1 10, N2 "
-      "5, 1000 features on images of at most 960 pixels, --guided-matching, --ba-window 4 with "
-      "5 held views a point, and a textured recording (every frame rich in keypoints) taken at "
-      "4 Hz with 2500 features a frame (the paper's settings are more accurate and far slower; "
-      "flags given with it override it, --rate and --max-features the texture's choice too)");
+      "--realtime", [args] { ApplyPreset(RunPreset::kRealtime, &args->options); },
+      "The same as --preset realtime");
   // A rate or a feature count given by the user is kept: the texture probe
-  // that --realtime turns on would change it.
-  const OptionTarget target = MakeOptionTarget(&args->options, "", [args](const std::string& key) {
-    if (SettledByTextureProbe(key)) args->options.texture_probe.enable = false;
-  });
+  // and the feature budget would change it.
+  const OptionTarget target = MakeOptionTarget(
+      &args->options, "", [args](const std::string& key) { KeepUsersChoice(key, &args->options); });
   AddOptionFlags(command, target,
                  {"--timestamps",
                   "--no-imu",
@@ -206,8 +224,8 @@ void RegisterRun(CLI::App& app) {
       command,
       {{"Run",
         true,
-        {"--out", "--vio-trajectory", "--no-imu", "--realtime", "--threads", "--overwrite", "--set",
-         "--list-options"}},
+        {"--out", "--vio-trajectory", "--no-imu", "--preset", "--realtime", "--threads",
+         "--overwrite", "--set", "--list-options"}},
        {"Dataset",
         true,
         {"--calibration", "--timestamps", "--image-topic", "--imu-topic", "--camera-yaml",

@@ -81,6 +81,9 @@ std::string PipelineOptions::Validate() const {
   if (const std::string error = texture_probe.Validate(); !error.empty()) {
     return "texture_probe." + error;
   }
+  if (const std::string error = feature_budget.Validate(); !error.empty()) {
+    return "feature_budget." + error;
+  }
   if (const std::string error = EffectiveSiftOptions().Validate(); !error.empty()) {
     return "sift." + error;
   }
@@ -147,19 +150,27 @@ std::vector<std::pair<std::string, std::string>> PipelineOptions::StoredDataKeyV
   return StoredDataOptions(WithEffectiveStageOptions());
 }
 
-void ApplyRealtimeSettings(PipelineOptions* options) {
-  options->verification.pairs.num_temporal_neighbors = 10;
-  options->verification.pairs.num_retrieval_neighbors = 5;
-  options->sift.max_num_features = 1000;
-  options->sift.max_image_size = 960;
-  options->verification.guided_matching = true;
-  options->mapper.ba_window_batches = 4;
-  options->mapper.ba_window_max_held_views = 5;
-  options->texture_probe.enable = true;
-  options->mapper.ba.function_tolerance = 3e-5;
-  options->mapper.ba.max_linear_solver_iterations = 100;
-  options->mapper.final_ba_max_refinements = 1;
-  options->mapper.final_ba_refine_min_change = 0.02;
+void ApplyPreset(RunPreset preset, PipelineOptions* options) {
+  const bool realtime = preset == RunPreset::kRealtime;
+  const PipelineOptions paper;
+  options->verification.pairs.num_temporal_neighbors =
+      realtime ? 10 : paper.verification.pairs.num_temporal_neighbors;
+  options->verification.pairs.num_retrieval_neighbors =
+      realtime ? 5 : paper.verification.pairs.num_retrieval_neighbors;
+  options->feature_budget.features_per_second =
+      realtime ? 10000 : paper.feature_budget.features_per_second;
+  options->sift.max_num_features = paper.sift.max_num_features;
+  options->sift.max_image_size = paper.sift.max_image_size;
+  options->verification.guided_matching = realtime || paper.verification.guided_matching;
+  options->mapper.ba_window_batches = realtime ? 4 : paper.mapper.ba_window_batches;
+  options->mapper.ba_window_max_held_views = realtime ? 5 : paper.mapper.ba_window_max_held_views;
+  options->texture_probe.enable = realtime || paper.texture_probe.enable;
+  options->mapper.ba.function_tolerance = realtime ? 3e-5 : paper.mapper.ba.function_tolerance;
+  options->mapper.ba.max_linear_solver_iterations =
+      realtime ? 100 : paper.mapper.ba.max_linear_solver_iterations;
+  options->mapper.final_ba_max_refinements = realtime ? 1 : paper.mapper.final_ba_max_refinements;
+  options->mapper.final_ba_refine_min_change =
+      realtime ? 0.02 : paper.mapper.final_ba_refine_min_change;
 }
 
 }  // namespace viosfm

@@ -134,6 +134,9 @@ struct PipelineOptions {
   // The frame rate and the feature count decided from the images' texture
   // (texture_probe.h; off by default, on with --realtime).
   TextureProbeOptions texture_probe;
+  // The real-time budget of features a second of recording (texture_probe.h;
+  // off by default, on in `viosfm run`'s real-time preset).
+  FeatureBudgetOptions feature_budget;
   // SIFT (default 8192 features, RootSIFT).
   SiftOptions sift;
   // Pairs (N1 40, N2 30), VIO prior (T_EE 20 px, ratio 0.5), RANSAC.
@@ -252,6 +255,7 @@ struct PipelineOptions {
           self.min_readout_evidence);
     VisitOptionGroup({"frame_selection", "", kShapesStoredData}, self.frame_selection, visit);
     VisitOptionGroup({"texture_probe", "", kShapesStoredData}, self.texture_probe, visit);
+    VisitOptionGroup({"feature_budget", "", kShapesStoredData}, self.feature_budget, visit);
     visit(
         {"rosbag.image_topic", "bag: image topic; empty: found by type", kShapesStoredData, is_bag},
         self.rosbag.image_topic);
@@ -291,28 +295,19 @@ struct PipelineOptions {
   }
 };
 
-// `viosfm run --realtime`: the settings with which a recording is
-// reconstructed in about its own duration on two cores, trading some of the
-// paper's accuracy for it. It sets N1 10 and N2 5 (the paper's 40 and 30),
-// up to 1000 features an image (8192) found on images reduced to 960 pixels
-// at most (sift.max_image_size; a 752x480 EuRoC or simulated frame stays as
-// it is, a 1280x720 one is extracted at 960x540), matching inside the VIO
-// epipolar band as wide as the VIO's drift allows
-// (verification.guided_matching), and per-batch adjustments over the last 4
-// batches whose points keep their 5 latest older views
-// (mapper.ba_window_batches, mapper.ba_window_max_held_views), and the texture
-// probe (texture_probe.h: a recording whose every frame is rich in keypoints
-// is taken at 4 Hz with 2500 features a frame), and bundle adjustments that
-// stop at a relative cost change of 3e-5 (mapper.ba.function_tolerance,
-// 1e-5 otherwise), taking back the time the IMU's factors
-// (sfm/inertial_terms.h) add to the final adjustment, with at most 100
-// conjugate-gradient steps an iteration where ITERATIVE_SCHUR solves
-// (mapper.ba.max_linear_solver_iterations, 500 otherwise), and one refinement
-// of the final adjustment at most (mapper.final_ba_max_refinements, 3
-// otherwise), where its filtering and re-triangulation change 2 % of the
-// observations or more (mapper.final_ba_refine_min_change, 0.5 % otherwise):
-// a change that large is worth a refinement, a small one is not worth its
-// time. See docs/benchmarks.md, section "Real time: where a 100 s recording's time goes".
-void ApplyRealtimeSettings(PipelineOptions* options);
+// `viosfm run`'s presets. The fields' defaults above are the paper's
+// settings (`--preset paper`). The real-time preset (`viosfm run`'s default,
+// `--preset realtime`) reconstructs a recording in about its own duration on
+// two cores: N1 10 and N2 5, a budget of 10000 features a second of
+// recording (1000 a frame at 10 Hz, on images of at most 960 px; sparse
+// frames and photos keep every feature), matching inside the VIO's epipolar
+// band, the texture probe, per-batch adjustments over a window of 4 batches
+// with 5 held views a point, looser bundle-adjustment tolerances and one
+// refinement of the final adjustment at most. See docs/benchmarks.md,
+// section "Real time: where a 100 s recording's time goes".
+enum class RunPreset { kRealtime, kPaper };
+
+// Sets the fields a preset decides; the others are left as they are.
+void ApplyPreset(RunPreset preset, PipelineOptions* options);
 
 }  // namespace viosfm

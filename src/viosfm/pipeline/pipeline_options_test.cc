@@ -120,14 +120,14 @@ TEST(PipelineOptions, DescriptionsCoverEveryKeyWithAHelp) {
   for (const auto& [key, value] : bag.ToKeyValues()) EXPECT_EQ(keys.count(key), 1u) << key;
 }
 
-// The real-time settings change exactly their options, every other one
-// keeps the paper's default, and the result is valid.
-TEST(PipelineOptions, RealtimeSettingsChangeOnlyTheirOptions) {
+// The real-time preset changes exactly its options, every other one keeps
+// the paper's default, the result is valid, and the paper preset undoes it.
+TEST(PipelineOptions, RealtimePresetChangesOnlyItsOptions) {
   PipelineOptions options;
   options.dataset = "d";
   options.output_folder = "o";
   PipelineOptions realtime = options;
-  ApplyRealtimeSettings(&realtime);
+  ApplyPreset(RunPreset::kRealtime, &realtime);
   EXPECT_EQ(realtime.Validate(), "");
   const auto before = options.ToKeyValues();
   const auto after = realtime.ToKeyValues();
@@ -140,8 +140,7 @@ TEST(PipelineOptions, RealtimeSettingsChangeOnlyTheirOptions) {
   const std::map<std::string, std::string> expected = {
       {"verification.pairs.num_temporal_neighbors", "10"},
       {"verification.pairs.num_retrieval_neighbors", "5"},
-      {"sift.max_num_features", "1000"},
-      {"sift.max_image_size", "960"},
+      {"feature_budget.features_per_second", "10000"},
       {"verification.guided_matching", "true"},
       {"mapper.ba_window_batches", "4"},
       {"mapper.ba_window_max_held_views", "5"},
@@ -151,6 +150,8 @@ TEST(PipelineOptions, RealtimeSettingsChangeOnlyTheirOptions) {
       {"mapper.final_ba_max_refinements", "1"},
       {"mapper.final_ba_refine_min_change", "0.02"}};
   EXPECT_EQ(changed, expected);
+  ApplyPreset(RunPreset::kPaper, &realtime);
+  EXPECT_EQ(realtime.ToKeyValues(), before);
 }
 
 }  // namespace

@@ -168,7 +168,7 @@ TEST(PipelineTest, GyroCheckReadsTheModelsRotationErrorOverASecond) {
   EXPECT_EQ(check.time_offset_ns, 0);  // the simulator's calibration, with an external VIO
 }
 
-// `viosfm run --realtime`'s settings together (guided matching, the
+// `viosfm run`'s real-time preset together (guided matching, the
 // bundle-adjustment window with held views; batches of 5 here, so that the
 // window of 4 batches leaves earlier images out) register every selected
 // frame, and as accurately as the small settings' run, against the
@@ -176,7 +176,7 @@ TEST(PipelineTest, GyroCheckReadsTheModelsRotationErrorOverASecond) {
 TEST(PipelineTest, RealtimeSettingsRegisterEveryFrameAsAccurately) {
   const Fixture& f = SharedFixture();
   PipelineOptions options = SmallOptions(f, f.folder / "out_realtime");
-  ApplyRealtimeSettings(&options);
+  ApplyPreset(RunPreset::kRealtime, &options);
   options.mapper.batch_size = 5;
   const PipelineSummary s = RunPipeline(options);
   std::cerr << s.ToString() << "\n";

@@ -26,7 +26,7 @@ TEST(RealRecordingPipelineTest, EveryFramePosedByTheImagesAndTrueToTheGyro) {
   PipelineOptions options;
   options.dataset = root;
   options.calibration.camchain = root / "calibration" / "camchain.yaml";
-  ApplyRealtimeSettings(&options);
+  ApplyPreset(RunPreset::kRealtime, &options);
   options.num_threads = 2;
   options.show_progress = false;
   options.output_folder = folder / "run";

@@ -84,6 +84,11 @@ void StageClock::End(const std::string& name, double seconds, double cpu_seconds
 
 void ResolveRateByTexture(const Sequence& sequence, FrameCache* frame_cache,
                           PipelineOptions* options, PipelineSummary* summary) {
+  // The budget first: the probe extracts on the images the budget reduces.
+  const std::string budget = ApplyFeatureBudget(
+      options->feature_budget,
+      ReconstructionRateHz(sequence, options->frame_selection.target_rate_hz), &options->sift);
+  if (!budget.empty()) VIOSFM_LOG(INFO) << "run: real-time budget: " << budget;
   const TextureProbeOptions& probe = options->texture_probe;
   if (probe.enable) {
     std::vector<size_t> candidates;

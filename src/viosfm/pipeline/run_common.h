@@ -94,9 +94,10 @@ void FinishRunSummary(const FrameCache& frame_cache, const Timer& total_timer,
 // poses, the rotations against the gyro).
 void TakeEvaluation(const TrajectoryEvaluation& evaluation, PipelineSummary* summary);
 
-// Frames or features (texture_probe.h): the frame rate and the feature
-// count of a textured recording, settled before anything is extracted, into
-// `options` and `summary`. The probed frames stay in `frame_cache` for the
+// Frames or features (texture_probe.h): the real-time feature budget at the
+// rate the run reconstructs, then the frame rate and the feature count of a
+// textured recording, settled before anything is extracted, into `options`
+// and `summary`. The probed frames stay in `frame_cache` for the
 // VIO.
 void ResolveRateByTexture(const Sequence& sequence, FrameCache* frame_cache,
                           PipelineOptions* options, PipelineSummary* summary);

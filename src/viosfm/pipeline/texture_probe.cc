@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
 #include <sstream>
 
 #include "viosfm/util/errors.h"
@@ -12,6 +13,42 @@ namespace viosfm {
 
 bool SettledByTextureProbe(const std::string& key) {
   return key == "frame_selection.target_rate_hz" || key == "sift.max_num_features";
+}
+
+bool SettledByFeatureBudget(const std::string& key) {
+  return key == "sift.max_num_features" || key == "sift.max_image_size";
+}
+
+std::string FeatureBudgetOptions::Validate() const {
+  if (features_per_second < 0) return "features_per_second must be >= 0";
+  if (max_image_size < 64) return "max_image_size must be at least 64";
+  return "";
+}
+
+double ReconstructionRateHz(const Sequence& sequence, double target_rate_hz) {
+  const size_t n = sequence.images.size();
+  if (sequence.unordered || n < 2) return 0.0;
+  const double span_s =
+      NsToSeconds(sequence.images.back().timestamp_ns - sequence.images.front().timestamp_ns);
+  if (!(span_s > 0.0)) return 0.0;
+  const double camera_hz = static_cast<double>(n - 1) / span_s;
+  return target_rate_hz > 0.0 ? std::min(target_rate_hz, camera_hz) : camera_hz;
+}
+
+std::string ApplyFeatureBudget(const FeatureBudgetOptions& budget, double rate_hz,
+                               SiftOptions* sift) {
+  if (budget.features_per_second <= 0 || !(rate_hz > 0.0)) return "";
+  const double per_frame = budget.features_per_second / rate_hz;
+  if (per_frame >= sift->max_num_features) return "";
+  sift->max_num_features = std::max(1, static_cast<int>(std::lround(per_frame)));
+  if (sift->max_image_size == 0 || sift->max_image_size > budget.max_image_size) {
+    sift->max_image_size = budget.max_image_size;
+  }
+  std::ostringstream line;
+  line << budget.features_per_second << " features a second at " << std::setprecision(3) << rate_hz
+       << " frames a second: " << sift->max_num_features << " a frame, on images of at most "
+       << sift->max_image_size << " px";
+  return line.str();
 }
 
 std::string TextureProbeOptions::Validate() const {

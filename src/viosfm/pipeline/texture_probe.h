@@ -81,6 +81,46 @@ struct TextureProbeOptions {
   }
 };
 
+// A real-time run's budget of SIFT features a second of recording, spread
+// over the frames it reconstructs: at a rate of r frames a second, each gets
+// min(sift.max_num_features, features_per_second / r) features, found on
+// images reduced to at most max_image_size pixels. A sequence whose frames
+// come slower than features_per_second / sift.max_num_features (sparse
+// keyframes, photos taken one by one) is not limited by it, nor is a photo
+// collection without stamps: they have the time for every feature.
+struct FeatureBudgetOptions {
+  // Features a second of recording (>= 0; default 0: no budget).
+  int features_per_second = 0;
+  // px, the longest image side where the budget limits (>= 64; default 960).
+  int max_image_size = 960;
+
+  std::string Validate() const;  // empty if valid, else names the bad field
+
+  template <class Self, class Visitor>
+  static void VisitFields(Self& self, Visitor&& visit) {
+    visit({"features_per_second", "SIFT features a second of recording; 0: no budget",
+           kShapesStoredData},
+          self.features_per_second);
+    visit(
+        {"max_image_size", "px, the longest image side where the budget limits", kShapesStoredData},
+        self.max_image_size);
+  }
+};
+
+// Whether the option `key` is one a user's choice of takes the budget off:
+// sift.max_num_features and sift.max_image_size.
+bool SettledByFeatureBudget(const std::string& key);
+
+// The frames a second a run reconstructs: the selection's target rate, or
+// the camera's where that is slower or no target is set (0: every frame);
+// 0 for a photo collection without stamps or a single image.
+double ReconstructionRateHz(const Sequence& sequence, double target_rate_hz);
+
+// Applies the budget at `rate_hz` to `sift`; returns a line saying what it
+// did ("" when it does not limit).
+std::string ApplyFeatureBudget(const FeatureBudgetOptions& budget, double rate_hz,
+                               SiftOptions* sift);
+
 // Whether the option `key` (options.json's key) is one the probe settles:
 // frame_selection.target_rate_hz and sift.max_num_features.
 bool SettledByTextureProbe(const std::string& key);

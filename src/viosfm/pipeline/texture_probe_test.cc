@@ -155,5 +155,50 @@ TEST(ProbeTexture, DisabledOrInvalid) {
   EXPECT_THAT(options.Validate(), HasSubstr("target_rate_hz"));
 }
 
+// The budget of features a second: 1000 a frame at 10 Hz on images of at
+// most 960 px, 2500 at 4 Hz; frames slower than budget / cap, photos without
+// stamps and a budget of 0 are not limited; the rate is the target's or the
+// camera's where that is slower.
+TEST(FeatureBudget, SpreadsTheFeaturesOverTheFramesOfASecond) {
+  FeatureBudgetOptions budget;
+  budget.features_per_second = 10000;
+  SiftOptions sift;
+  sift.max_num_features = 8192;
+  sift.max_image_size = 0;
+  SiftOptions at_10_hz = sift;
+  EXPECT_NE(ApplyFeatureBudget(budget, 10.0, &at_10_hz), "");
+  EXPECT_EQ(at_10_hz.max_num_features, 1000);
+  EXPECT_EQ(at_10_hz.max_image_size, 960);
+  SiftOptions at_4_hz = sift;
+  ApplyFeatureBudget(budget, 4.0, &at_4_hz);
+  EXPECT_EQ(at_4_hz.max_num_features, 2500);
+  SiftOptions smaller_images = sift;
+  smaller_images.max_image_size = 640;
+  ApplyFeatureBudget(budget, 10.0, &smaller_images);
+  EXPECT_EQ(smaller_images.max_image_size, 640);
+  for (const double slow_hz : {1.2, 0.5, 0.0}) {
+    SiftOptions slow = sift;
+    EXPECT_EQ(ApplyFeatureBudget(budget, slow_hz, &slow), "") << slow_hz;
+    EXPECT_EQ(slow.max_num_features, 8192);
+    EXPECT_EQ(slow.max_image_size, 0);
+  }
+  FeatureBudgetOptions off;
+  SiftOptions unlimited = sift;
+  EXPECT_EQ(ApplyFeatureBudget(off, 10.0, &unlimited), "");
+  EXPECT_EQ(unlimited.max_num_features, 8192);
+
+  Sequence sequence;
+  for (int k = 0; k <= 40; ++k) {  // 20 Hz over 2 s
+    SequenceImage image;
+    image.timestamp_ns = k * 50'000'000;
+    sequence.images.push_back(image);
+  }
+  EXPECT_DOUBLE_EQ(ReconstructionRateHz(sequence, 10.0), 10.0);
+  EXPECT_DOUBLE_EQ(ReconstructionRateHz(sequence, 0.0), 20.0);
+  EXPECT_DOUBLE_EQ(ReconstructionRateHz(sequence, 50.0), 20.0);
+  sequence.unordered = true;
+  EXPECT_EQ(ReconstructionRateHz(sequence, 10.0), 0.0);
+}
+
 }  // namespace
 }  // namespace viosfm

@@ -28,6 +28,9 @@ std::string FeatureTrackerOptions::Validate() const {
   if (detection_pyramid_level < 0 || detection_pyramid_level > klt_max_level) {
     return "detection_pyramid_level must be in [0, klt_max_level]";
   }
+  if (tracking_pyramid_level < -1 || tracking_pyramid_level > 3) {
+    return "tracking_pyramid_level must be in [-1, 3] (-1: chosen by the focal length)";
+  }
   if (klt_window_size < 3 || klt_window_size % 2 == 0) {
     return "klt_window_size must be odd and >= 3";
   }
@@ -122,6 +125,10 @@ struct FeatureTracker::State {
   int height = 0;
   // The camera's mean focal length over kReferenceFocalLengthPx.
   double pixel_scale = 1.0;
+  // The tracked image is the full image reduced tracking_level times by two:
+  // a full-image pixel p is at p / tracking_scale on it.
+  int tracking_level = 0;
+  float tracking_scale = 1.0f;
   cv::Ptr<cv::CLAHE> clahe;
 
   // The previous image: its pyramid (with derivatives), the raw image (to
@@ -142,7 +149,9 @@ struct FeatureTracker::State {
 
   cv::Size WindowSize() const {
     const int side =
-        2 * static_cast<int>(std::lround(0.5 * (options.klt_window_size * pixel_scale - 1.0))) + 1;
+        2 * static_cast<int>(
+                std::lround(0.5 * (options.klt_window_size * pixel_scale / tracking_scale - 1.0))) +
+        1;
     return {std::max(3, side), std::max(3, side)};
   }
 
@@ -168,13 +177,21 @@ struct FeatureTracker::State {
     return equalizing;
   }
 
+  // The pyramid of the tracked image: `raw` reduced tracking_level times,
+  // equalised if asked, then klt_max_level levels with their derivatives.
   void BuildPyramid(const cv::Mat& raw, bool equalize, std::vector<cv::Mat>* pyramid) {
+    cv::Mat reduced = raw;
+    for (int level = 0; level < tracking_level; ++level) {
+      cv::Mat half;
+      cv::pyrDown(reduced, half);
+      reduced = half;
+    }
     // A fresh output: CLAHE must not write into `raw` (the caller's pixels).
     cv::Mat processed;
     if (equalize) {
-      clahe->apply(raw, processed);
+      clahe->apply(reduced, processed);
     } else {
-      processed = raw;
+      processed = reduced;
     }
     cv::buildOpticalFlowPyramid(processed, *pyramid, WindowSize(), options.klt_max_level,
                                 /*withDerivatives=*/true, cv::BORDER_REFLECT_101,
@@ -190,11 +207,12 @@ struct FeatureTracker::State {
 
   // Step 2: KLT with the forward-backward check; replaces `corners` by the
   // survivors at their new positions.
-  void TrackCorners(const std::vector<cv::Mat>& pyramid,
+  void TrackCorners(const std::vector<cv::Mat>& pyramid, const cv::Mat& raw, bool equalize,
                     const std::optional<Eigen::Quaterniond>& rotation_prior) {
     if (corners.empty()) return;
+    const float to_level = 1.0f / tracking_scale;
     std::vector<cv::Point2f> previous(corners.size());
-    for (size_t i = 0; i < corners.size(); ++i) previous[i] = corners[i].pixel;
+    for (size_t i = 0; i < corners.size(); ++i) previous[i] = corners[i].pixel * to_level;
     std::vector<cv::Point2f> current = previous;
     if (rotation_prior) {
       const Eigen::Matrix3d rotation = rotation_prior->normalized().toRotationMatrix();
@@ -203,7 +221,7 @@ struct FeatureTracker::State {
         if (ray.z() < 1e-3) continue;
         const Eigen::Vector2d predicted = CamToImage(camera, ray.hnormalized());
         const cv::Point2f p(static_cast<float>(predicted.x()), static_cast<float>(predicted.y()));
-        if (predicted.allFinite() && InsideBorder(p)) current[i] = p;
+        if (predicted.allFinite() && InsideBorder(p)) current[i] = p * to_level;
       }
     }
     const cv::TermCriteria criteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS,
@@ -218,22 +236,56 @@ struct FeatureTracker::State {
     cv::calcOpticalFlowPyrLK(pyramid, previous_pyramid, current, back, backward_ok, errors,
                              WindowSize(), options.klt_backward_max_level, criteria,
                              cv::OPTFLOW_USE_INITIAL_FLOW);
+    // The forward-backward check compares the level's own tracks; only then
+    // are the forward ones refined.
+    if (tracking_level > 0 && !equalize) RefineOnFullImage(raw, forward_ok, &current);
     const double max_fb_sq =
         options.max_forward_backward_error_px * options.max_forward_backward_error_px;
     std::vector<uint8_t> keep(corners.size(), 0);
     for (size_t i = 0; i < corners.size(); ++i) {
-      if (!forward_ok[i] || !backward_ok[i] || !InsideBorder(current[i])) continue;
-      const double dx = static_cast<double>(back[i].x) - previous[i].x;
-      const double dy = static_cast<double>(back[i].y) - previous[i].y;
+      if (!forward_ok[i] || !backward_ok[i]) continue;
+      const cv::Point2f pixel = current[i] * tracking_scale;
+      if (!InsideBorder(pixel)) continue;
+      const double dx = (static_cast<double>(back[i].x) - previous[i].x) * tracking_scale;
+      const double dy = (static_cast<double>(back[i].y) - previous[i].y) * tracking_scale;
       if (dx * dx + dy * dy > max_fb_sq) continue;
-      const std::optional<Eigen::Vector2d> normalized = Normalize(current[i]);
+      const std::optional<Eigen::Vector2d> normalized = Normalize(pixel);
       if (!normalized) continue;
-      corners[i].pixel = current[i];
+      corners[i].pixel = pixel;
       corners[i].normalized = *normalized;
       ++corners[i].track_length;
       keep[i] = 1;
     }
     KeepWhere(keep, &corners);
+  }
+
+  // Step 2b, when tracking on a reduced level: the tracked positions refined
+  // on the full images by KLT on that level alone, which gives back the full
+  // image's precision; a refinement that fails or moves a corner by more
+  // than a reduced pixel is not taken.
+  void RefineOnFullImage(const cv::Mat& raw, const std::vector<uint8_t>& tracked,
+                         std::vector<cv::Point2f>* current_at_level) {
+    std::vector<cv::Point2f> previous(corners.size());
+    std::vector<cv::Point2f> refined(corners.size());
+    for (size_t i = 0; i < corners.size(); ++i) {
+      previous[i] = corners[i].pixel;
+      refined[i] = (*current_at_level)[i] * tracking_scale;
+    }
+    const std::vector<cv::Point2f> start = refined;
+    const cv::TermCriteria criteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS,
+                                    options.klt_max_iterations, options.klt_epsilon_px);
+    std::vector<uint8_t> ok;
+    std::vector<float> errors;
+    cv::calcOpticalFlowPyrLK(previous_raw, raw, previous, refined, ok, errors, WindowSize(), 0,
+                             criteria, cv::OPTFLOW_USE_INITIAL_FLOW);
+    const double max_move_sq = static_cast<double>(tracking_scale) * tracking_scale;
+    for (size_t i = 0; i < corners.size(); ++i) {
+      if (!tracked[i] || !ok[i]) continue;
+      const double dx = static_cast<double>(refined[i].x) - start[i].x;
+      const double dy = static_cast<double>(refined[i].y) - start[i].y;
+      if (dx * dx + dy * dy > max_move_sq) continue;
+      (*current_at_level)[i] = refined[i] * (1.0f / tracking_scale);
+    }
   }
 
   // Step 3: essential- or fundamental-matrix RANSAC between the previous and the current
@@ -285,15 +337,15 @@ struct FeatureTracker::State {
   }
 
   // Step 4b: new corners away from the tracked ones, detected on pyramid
-  // level detection_pyramid_level (the pyramid alternates image and
-  // derivative levels).
+  // level detection_pyramid_level of the tracked image (its pyramid
+  // alternates image and derivative levels).
   void DetectNewCorners(const std::vector<cv::Mat>& pyramid, ProximityGrid* grid) {
     const int wanted = options.max_num_features - static_cast<int>(corners.size());
     if (wanted <= 0) return;
     const int level =
         std::min(options.detection_pyramid_level, static_cast<int>(pyramid.size() / 2) - 1);
     const cv::Mat& image = pyramid[2 * level];
-    const float scale = static_cast<float>(1 << level);
+    const float scale = tracking_scale * static_cast<float>(1 << level);
     const int margin = static_cast<int>(std::ceil(options.border_margin_px / scale));
     if (image.cols <= 2 * margin || image.rows <= 2 * margin) return;
     cv::Mat mask(image.rows, image.cols, CV_8UC1, cv::Scalar(0));
@@ -362,6 +414,16 @@ FeatureTracker::FeatureTracker(const Camera& camera, const FeatureTrackerOptions
   state_->width = static_cast<int>(camera.width);
   state_->height = static_cast<int>(camera.height);
   state_->pixel_scale = MeanFocalLength(camera) / kReferenceFocalLengthPx;
+  state_->tracking_level = options.tracking_pyramid_level;
+  if (state_->tracking_level < 0) {
+    // The level nearest the reference focal length, keeping 160 px of width.
+    state_->tracking_level =
+        std::max(0, static_cast<int>(std::lround(std::log2(std::max(1.0, state_->pixel_scale)))));
+    while (state_->tracking_level > 0 && (state_->width >> state_->tracking_level) < 160) {
+      --state_->tracking_level;
+    }
+  }
+  state_->tracking_scale = static_cast<float>(1 << state_->tracking_level);
   state_->clahe = cv::createCLAHE(options.clahe_clip_limit, cv::Size(options.clahe_tile_grid_size,
                                                                      options.clahe_tile_grid_size));
 }
@@ -424,7 +486,7 @@ FrameFeatures FeatureTracker::Track(timestamp_ns_t timestamp_ns, const GreyImage
       previous_normalized_by_id.emplace(corner.track_id, corner.normalized);
     }
     const size_t num_before = s.corners.size();
-    s.TrackCorners(pyramid, rotation_prior);
+    s.TrackCorners(pyramid, raw, equalize, rotation_prior);
     const size_t num_tracked = s.corners.size();
     std::vector<Eigen::Vector2d> previous_normalized(s.corners.size());
     for (size_t i = 0; i < s.corners.size(); ++i) {

@@ -56,19 +56,25 @@ struct FeatureTrackerOptions {
   // Shi-Tomasi quality: corners weaker than this fraction of the image's
   // strongest are not detected (default 0.01).
   double min_corner_quality = 0.01;
-  // Pyramid level on which new corners are detected: 0 full resolution, 1
-  // (default) half resolution, 4x cheaper; their positions are then even
-  // pixels of the full image, which KLT tracks at full resolution.
+  // Pyramid level of the tracked image on which new corners are detected: 0
+  // the tracked image, 1 (default) half its resolution, 4x cheaper; KLT then
+  // refines them on the tracked image.
   int detection_pyramid_level = 1;
   // px, corners closer to the image border are not detected and tracks that
   // come closer are dropped (default 5).
   int border_margin_px = 5;
 
+  // Pyramid level of the image KLT tracks on: 0 the full image, -1 (default)
+  // the level whose focal length is nearest kReferenceFocalLengthPx (a 906 px
+  // camera tracks at half resolution, a 460 px one at full), where the
+  // window and the pyramid span the scene they were chosen for at a quarter
+  // of the pixels. Corner positions are always given in full-image pixels.
+  int tracking_pyramid_level = -1;
   // px at kReferenceFocalLengthPx (frame_features.h), side of the KLT window
-  // (odd, default 21; scaled with the focal length and rounded to odd: 41
-  // px at 906 px, where blur and motion span twice the pixels).
+  // (odd, default 21; scaled with the focal length of the tracked level and
+  // rounded to odd).
   int klt_window_size = 21;
-  // Pyramid levels above the full-resolution image (default 3, as VINS-Mono).
+  // Pyramid levels above the tracked image (default 3, as VINS-Mono).
   int klt_max_level = 3;
   // Pyramid levels of the backward track of the forward-backward check
   // (default 1, as VINS-Mono: it starts where the corner was, so it needs

@@ -217,6 +217,55 @@ TEST(FeatureTracker, TracksAreAccurateAndIdsPersist) {
   }
 }
 
+// A camera of twice the resolution and focal length (1504x960, 916 px)
+// tracks on its half-resolution level, as the reference camera does on its
+// full image: the corners are given in the full image's pixels, over all of
+// it, and agree with the ground-truth motion as closely in angle (errors in
+// its pixels twice the reference bounds), and as the full image tracked.
+TEST(FeatureTracker, ALargeCameraTracksOnItsReducedLevel) {
+  static const RoomSequence* large = [] {
+    auto* r = new RoomSequence;
+    r->options = Room().options;
+    r->options.duration_s = 2.0;
+    r->options.camera.width *= 2;
+    r->options.camera.height *= 2;
+    for (size_t i = 0; i < 4; ++i) r->options.camera.params[i] *= 2.0;
+    r->simulated = SimulateSequence(r->options);
+    const RayTable rays(r->options.camera);
+    for (size_t k = 0; k < r->simulated.sequence.images.size(); ++k) {
+      r->frames.push_back(RenderSimulatedFrame(r->simulated, rays, k, r->options, 2));
+      r->stamps.push_back(r->simulated.sequence.images[k].timestamp_ns);
+    }
+    return r;
+  }();
+  FeatureTrackerOptions full_image;
+  full_image.tracking_pyramid_level = 0;
+  for (const FeatureTrackerOptions& options : {FeatureTrackerOptions{}, full_image}) {
+    SCOPED_TRACE("tracking_pyramid_level " + std::to_string(options.tracking_pyramid_level));
+    const std::vector<FrameFeatures> out = TrackAll(*large, options);
+    std::vector<double> consecutive;
+    double max_x = 0.0;
+    double max_y = 0.0;
+    for (size_t k = 1; k < out.size(); ++k) {
+      for (const FeatureObservation& o : out[k].observations) {
+        max_x = std::max(max_x, o.pixel.x());
+        max_y = std::max(max_y, o.pixel.y());
+      }
+      if (large->IsStatic(k - 1)) continue;
+      const std::vector<double> errors = EpipolarErrors(*large, out, k - 1, k);
+      consecutive.insert(consecutive.end(), errors.begin(), errors.end());
+    }
+    ASSERT_GT(consecutive.size(), 1000u);
+    std::cout << "level " << options.tracking_pyramid_level << ": epipolar error median "
+              << Percentile(consecutive, 0.5) << " p95 " << Percentile(consecutive, 0.95)
+              << " px of the 1504x960 camera\n";
+    EXPECT_LT(Percentile(consecutive, 0.5), 2 * 0.3);
+    EXPECT_LT(Percentile(consecutive, 0.95), 2 * 1.0);
+    EXPECT_GT(max_x, 0.85 * static_cast<double>(large->options.camera.width));
+    EXPECT_GT(max_y, 0.85 * static_cast<double>(large->options.camera.height));
+  }
+}
+
 // (3) A patch of the next frame shifted across the epipolar lines: KLT
 // follows it (so without RANSAC the shifted corners survive) and RANSAC
 // removes them.

@@ -122,11 +122,14 @@ struct VioOptions {
     visit({"tracker.border_margin_px", "px, corners closer to the image border are dropped",
            kShapesStoredData},
           self.tracker.border_margin_px);
+    visit({"tracker.tracking_pyramid_level",
+           "pyramid level KLT tracks on (-1: the one nearest the reference focal length)",
+           kShapesStoredData},
+          self.tracker.tracking_pyramid_level);
     visit({"tracker.klt_window_size", "px, side of the KLT window (at the reference focal length)",
            kShapesStoredData},
           self.tracker.klt_window_size);
-    visit({"tracker.klt_max_level", "pyramid levels above the full-resolution image",
-           kShapesStoredData},
+    visit({"tracker.klt_max_level", "pyramid levels above the tracked image", kShapesStoredData},
           self.tracker.klt_max_level);
     visit({"tracker.klt_backward_max_level",
            "pyramid levels of the backward track of the forward-backward check", kShapesStoredData},
