@@ -78,49 +78,21 @@ void Stream::Ingest(const SequenceImage& image) {
     grey_values = SampleKeypointGreyValues(*pixels, features.keypoints);
   }
   const Timer busy;
-  const std::string name = DatabaseImageName(image);
-  image_t image_id = kInvalidImageId;
-  {
-    ColmapDatabase::Transaction transaction(*database_);
-    image_id = database_->WriteImage(name, camera_.camera_id);
-    database_->WriteFeatures(image_id, features.keypoints, features.descriptors);
-    transaction.Commit();
-  }
+  ArrivingFrame arriving{&image, pose, Eigen::Vector3d::Zero()};
+  if (rolling_shutter_)
+    arriving.cam_angular_rate = imu_.CamAngularRateAt(setup_.rig, image.timestamp_ns);
+  const IngestedFrame stored = ingest_->Store(image, &features);
+  const image_t image_id = stored.image_id;
   keypoint_values_->Set(image_id, std::move(grey_values));
   out_.features.num_features += features.keypoints.size();
   ++out_.features.num_extracted;
 
   Frame frame;
-  PairImage& pair_image = frame.image;
-  pair_image.image_id = image_id;
-  pair_image.name = name;
-  pair_image.camera_id = camera_.camera_id;
-  pair_image.timestamp_ns = image.timestamp_ns;
-  if (pose && verification_options_.use_vio_prior) {
-    pair_image.world_from_body = pose->world_from_body;
-    pair_image.odometer = pose->odometer;
-  }
-  if (rolling_shutter_) {
-    pair_image.cam_angular_rate = imu_.CamAngularRateAt(setup_.rig, image.timestamp_ns);
-  }
-  const double readout_s = rolling_shutter_ ? setup_.readout_s : 0.0;
-  SetPairImageKeypoints(camera_, features.keypoints, readout_s,
-                        verification_options_.guided_matching, &pair_image);
-  pair_image.stored_descriptors = std::make_shared<const FeatureDescriptors>(features.descriptors);
+  frame.image = ingest_->PairImageOf(arriving, stored, features.descriptors,
+                                     verification_options_.use_vio_prior,
+                                     verification_options_.guided_matching);
   frame.in_memory = true;
-
-  MapperImage mapper_image;
-  mapper_image.image_id = image_id;
-  mapper_image.camera_id = camera_.camera_id;
-  mapper_image.name = name;
-  mapper_image.timestamp_ns = image.timestamp_ns;
-  mapper_image.keypoints = features.keypoints;
-  CompensateRollingShutterRotation(camera_, readout_s, pair_image.cam_angular_rate,
-                                   &mapper_image.keypoints);
-  if (pose) {
-    mapper_image.vio_cam_from_world = (pose->world_from_body * setup_.rig.body_from_cam).Inverse();
-    mapper_image.vio_odometer = pose->odometer;
-  }
+  MapperImage mapper_image = ingest_->MapperImageOf(arriving, stored);
   FeatureKeypoints mapper_keypoints = std::move(mapper_image.keypoints);
   out_.images.push_back(mapper_image);
   mapper_image.keypoints = std::move(mapper_keypoints);
@@ -232,6 +204,8 @@ void Stream::SetUpVerification() {
   out_.input.rig = setup_.rig;
   out_.input.rolling_shutter_readout_s = rolling_shutter_ ? setup_.readout_s : 0.0;
   if (sequence_ != nullptr) out_.input.imu = sequence_->imu;
+  ingest_.emplace(&*database_, camera_.camera_id, setup_.rig.body_from_cam,
+                  out_.input.rolling_shutter_readout_s);
   decider_.emplace(verification_options_, setup_.rig.body_from_cam, &*database_);
   const PairGeneratorOptions& pairs = verification_options_.pairs;
   if (pairs.mode == PairMode::kTemporalRetrieval && pairs.num_retrieval_neighbors > 0) {
