@@ -97,6 +97,14 @@ class Stream {
   StreamOutput Run(const Timer& stream_timer);
 
  private:
+  // When the stream's parts ended, in s on the stream's clock.
+  struct StreamTimes {
+    double vio = 0.0;
+    double last_frame = 0.0;
+    double verification = 0.0;
+    double mapper = 0.0;
+  };
+
   // One selected frame as the verification holds it.
   struct Frame {
     PairImage image;  // its VIO pose and, while in memory, its features
@@ -110,6 +118,15 @@ class Stream {
   // The frame's features (taken from beside the VIO, or extracted), then
   // the ingest step (frame_ingest.h), its pairs' generator and retrieval.
   void Ingest(const SequenceImage& image);
+  // The database, its camera written.
+  void OpenDatabase();
+  // Frames' retrieved partners to the pair generator.
+  void TakeRetrieved(std::vector<RetrievedFrame> results);
+  // Every frame in and the pair generator told: the last frames'
+  // retrieval, and the pairs still to decide.
+  void FinishVerification();
+  // The stream's summary figures.
+  void TakeTimes(const StreamTimes& times);
   // Verifies the pairs of frame d with the frames before it.
   void Decide(size_t d, const std::vector<ProposedPair>& partners);
   // Decides every frame whose pairs are fixed.
