@@ -52,81 +52,25 @@ void PairVerifier::Verify(const PairImage& image1, const PairImage& image2, cons
                           const Camera& camera2, PairWork* pair_work,
                           PairStepSeconds* seconds) const {
   PairDecision& decision = pair_work->decision;
+  const PairViews views{image1, image2, camera1, camera2};
   Timer timer;
-  // The VIO's relative pose, and with band_follows_drift its covariance
-  // and the epipolar band its drift allows.
-  Rigid3d cam2_from_cam1;
-  std::optional<Eigen::Matrix<double, 6, 6>> covariance;
-  double drift_band_px = options.prior.max_epipolar_error_px;
+  VioRelativePose vio;
+  vio.drift_band_px = options.prior.max_epipolar_error_px;
   if (decision.has_vio_prior) {
-    cam2_from_cam1 = RelativePoseFromVio(*image1.world_from_body, *image2.world_from_body,
-                                         body_from_cam, body_from_cam);
-    if (options.band_follows_drift) {
-      const VioSample frame1{image1.timestamp_ns, *image1.world_from_body * body_from_cam,
-                             image1.odometer};
-      const VioSample frame2{image2.timestamp_ns, *image2.world_from_body * body_from_cam,
-                             image2.odometer};
-      covariance = RelativePoseCovariance(options.vio_uncertainty, frame1, frame2);
-      drift_band_px =
-          DriftEpipolarBandPx(*covariance, cam2_from_cam1,
-                              0.5 * (MeanFocalLength(camera1) + MeanFocalLength(camera2)), options);
-    }
+    vio = RelativePoseOfVio(views);
     seconds->vio += timer.ElapsedSeconds();
-    timer.Start();
   }
   if (!decision.resumed && !pair_work->reverified) {
-    if (options.guided_matching && decision.has_vio_prior) {
-      const Eigen::Matrix3d fundamental = FundamentalFromRelativePose(
-          cam2_from_cam1, CalibrationMatrix(camera1), CalibrationMatrix(camera2));
-      // The band the VIO's drift allows, so that the two visits of a
-      // loop keep their matches; step 1 then judges them under the fixed
-      // T_EE, and under the corrected pose.
-      GuidedMatchingOptions pair_guided = guided;
-      pair_guided.max_epipolar_distance_px =
-          std::max(options.guided_band_px, options.band_follows_drift ? drift_band_px : 0.0);
-      decision.guided_band_px = pair_guided.max_epipolar_distance_px;
-      pair_work->matches =
-          MatchDescriptorsGuided(*image1.stored_descriptors, *image2.stored_descriptors,
-                                 image1.points_px, image2.points_px, fundamental, pair_guided);
-    } else {
-      pair_work->matches = MatchDescriptors(*image1.descriptors, *image2.descriptors, matching);
-    }
+    timer.Start();
+    pair_work->matches = Match(views, vio, &decision);
     seconds->matching += timer.ElapsedSeconds();
   }
   const FeatureMatches& matches = pair_work->matches;
   decision.num_matches = static_cast<int>(matches.size());
   std::vector<bool> depth_inconsistent;  // per match (with the depth check)
-
-  // Step 1: the VIO prior.
   if (decision.has_vio_prior && !matches.empty()) {
     timer.Start();
-    PriorVerificationOptions prior = options.prior;
-    if (covariance && !options.correct_within_drift) prior.max_epipolar_error_px = drift_band_px;
-    decision.vio_band_px = prior.max_epipolar_error_px;
-    PriorVerificationResult check =
-        VerifyPairWithPrior(camera1, camera2, cam2_from_cam1, image1.points_normalized,
-                            image2.points_normalized, matches, prior);
-    // A pair the VIO's pose does not explain: judged again under the pose
-    // its matches show, if that is within the VIO's drift.
-    if (covariance && options.correct_within_drift && !check.accepted && !check.rotation_only) {
-      const DriftCorrection correction = CorrectRelativePoseWithinDrift(
-          camera1, camera2, cam2_from_cam1, *covariance, image1.points_normalized,
-          image2.points_normalized, matches, drift_band_px, options.max_correction_sigmas, prior);
-      decision.vio_correction_sigmas = correction.mahalanobis;
-      if (correction.corrected) {
-        decision.vio_corrected = true;
-        check =
-            VerifyPairWithPrior(camera1, camera2, correction.cam2_from_cam1,
-                                image1.points_normalized, image2.points_normalized, matches, prior);
-      }
-    }
-    decision.vio_outlier_ratio = check.outlier_ratio;
-    decision.vio_rotation_only = check.rotation_only;
-    decision.vio_depth_applied = check.depth_applied;
-    decision.vio_depth_inconsistent_ratio = check.depth_inconsistent_ratio;
-    decision.vio_depth_rejected = check.depth_rejected;
-    decision.vio_rejected = !check.accepted;
-    depth_inconsistent = check.depth_inconsistent;
+    depth_inconsistent = JudgeUnderVio(views, vio, matches, &decision);
     seconds->vio += timer.ElapsedSeconds();
   }
   // Across a gap in the VIO's poses its relative pose may be a
@@ -158,24 +102,100 @@ void PairVerifier::Verify(const PairImage& image1, const PairImage& image2, cons
 
   // Beyond the paper: the depth-inconsistent matches (impossible under
   // the VIO pose) do not enter RANSAC.
-  const FeatureMatches* ransac_matches = &matches;
   FeatureMatches consistent;
-  if (decision.has_vio_prior && decision.vio_depth_applied && !against_vio) {
+  const bool depth_checked = decision.has_vio_prior && decision.vio_depth_applied && !against_vio;
+  if (depth_checked) {
     for (size_t m = 0; m < matches.size(); ++m) {
       if (!depth_inconsistent[m]) consistent.push_back(matches[m]);
     }
-    ransac_matches = &consistent;
   }
-
-  // Step 2: RANSAC.
   timer.Start();
+  JudgeByRansac(views, depth_checked ? consistent : matches, pair_work);
+  seconds->ransac += timer.ElapsedSeconds();
+}
+
+PairVerifier::VioRelativePose PairVerifier::RelativePoseOfVio(const PairViews& views) const {
+  const PairImage& image1 = views.image1;
+  const PairImage& image2 = views.image2;
+  VioRelativePose vio;
+  vio.drift_band_px = options.prior.max_epipolar_error_px;
+  vio.cam2_from_cam1 = RelativePoseFromVio(*image1.world_from_body, *image2.world_from_body,
+                                           body_from_cam, body_from_cam);
+  if (options.band_follows_drift) {
+    const VioSample frame1{image1.timestamp_ns, *image1.world_from_body * body_from_cam,
+                           image1.odometer};
+    const VioSample frame2{image2.timestamp_ns, *image2.world_from_body * body_from_cam,
+                           image2.odometer};
+    vio.covariance = RelativePoseCovariance(options.vio_uncertainty, frame1, frame2);
+    vio.drift_band_px = DriftEpipolarBandPx(
+        *vio.covariance, vio.cam2_from_cam1,
+        0.5 * (MeanFocalLength(views.camera1) + MeanFocalLength(views.camera2)), options);
+  }
+  return vio;
+}
+
+FeatureMatches PairVerifier::Match(const PairViews& views, const VioRelativePose& vio,
+                                   PairDecision* decision) const {
+  if (!options.guided_matching || !decision->has_vio_prior) {
+    return MatchDescriptors(*views.image1.descriptors, *views.image2.descriptors, matching);
+  }
+  const Eigen::Matrix3d fundamental = FundamentalFromRelativePose(
+      vio.cam2_from_cam1, CalibrationMatrix(views.camera1), CalibrationMatrix(views.camera2));
+  // The band the VIO's drift allows, so that the two visits of a loop keep
+  // their matches; step 1 then judges them under the fixed T_EE, and under
+  // the corrected pose.
+  GuidedMatchingOptions pair_guided = guided;
+  pair_guided.max_epipolar_distance_px =
+      std::max(options.guided_band_px, options.band_follows_drift ? vio.drift_band_px : 0.0);
+  decision->guided_band_px = pair_guided.max_epipolar_distance_px;
+  return MatchDescriptorsGuided(*views.image1.stored_descriptors, *views.image2.stored_descriptors,
+                                views.image1.points_px, views.image2.points_px, fundamental,
+                                pair_guided);
+}
+
+std::vector<bool> PairVerifier::JudgeUnderVio(const PairViews& views, const VioRelativePose& vio,
+                                              const FeatureMatches& matches,
+                                              PairDecision* decision) const {
+  const std::vector<Eigen::Vector2d>& points1 = views.image1.points_normalized;
+  const std::vector<Eigen::Vector2d>& points2 = views.image2.points_normalized;
+  PriorVerificationOptions prior = options.prior;
+  if (vio.covariance && !options.correct_within_drift) {
+    prior.max_epipolar_error_px = vio.drift_band_px;
+  }
+  decision->vio_band_px = prior.max_epipolar_error_px;
+  PriorVerificationResult check = VerifyPairWithPrior(
+      views.camera1, views.camera2, vio.cam2_from_cam1, points1, points2, matches, prior);
+  // A pair the VIO's pose does not explain: judged again under the pose its
+  // matches show, if that is within the VIO's drift.
+  if (vio.covariance && options.correct_within_drift && !check.accepted && !check.rotation_only) {
+    const DriftCorrection correction = CorrectRelativePoseWithinDrift(
+        views.camera1, views.camera2, vio.cam2_from_cam1, *vio.covariance, points1, points2,
+        matches, vio.drift_band_px, options.max_correction_sigmas, prior);
+    decision->vio_correction_sigmas = correction.mahalanobis;
+    if (correction.corrected) {
+      decision->vio_corrected = true;
+      check = VerifyPairWithPrior(views.camera1, views.camera2, correction.cam2_from_cam1, points1,
+                                  points2, matches, prior);
+    }
+  }
+  decision->vio_outlier_ratio = check.outlier_ratio;
+  decision->vio_rotation_only = check.rotation_only;
+  decision->vio_depth_applied = check.depth_applied;
+  decision->vio_depth_inconsistent_ratio = check.depth_inconsistent_ratio;
+  decision->vio_depth_rejected = check.depth_rejected;
+  decision->vio_rejected = !check.accepted;
+  return std::move(check.depth_inconsistent);
+}
+
+void PairVerifier::JudgeByRansac(const PairViews& views, const FeatureMatches& matches,
+                                 PairWork* pair_work) const {
+  PairDecision& decision = pair_work->decision;
   TwoViewGeometryOptions geometry = options.geometry;
   geometry.seed =
       MixSeed64(options.seed, ImagePairToPairId(decision.image_id1, decision.image_id2));
-  const TwoViewGeometryResult estimate =
-      EstimateCalibratedTwoViewGeometry(image1.points_normalized, image2.points_normalized,
-                                        *ransac_matches, camera1, camera2, geometry);
-  seconds->ransac += timer.ElapsedSeconds();
+  const TwoViewGeometryResult estimate = EstimateCalibratedTwoViewGeometry(
+      views.image1.points_normalized, views.image2.points_normalized, matches, views.camera1,
+      views.camera2, geometry);
   decision.num_inliers = estimate.num_inliers();
   decision.accepted = estimate.accepted();
   decision.reason = !decision.accepted          ? kPairTooFewInliers

@@ -87,6 +87,35 @@ struct PairVerifier {
   Rigid3d body_from_cam;
   DescriptorMatchingOptions matching;  // single-threaded: the caller runs pairs in parallel
   GuidedMatchingOptions guided;
+
+ private:
+  // The pair's two images and cameras.
+  struct PairViews {
+    const PairImage& image1;
+    const PairImage& image2;
+    const Camera& camera1;
+    const Camera& camera2;
+  };
+  // The VIO's relative pose and, with band_follows_drift, its covariance
+  // and the epipolar band its drift allows (else T_EE).
+  struct VioRelativePose {
+    Rigid3d cam2_from_cam1;
+    std::optional<Eigen::Matrix<double, 6, 6>> covariance;
+    double drift_band_px = 0.0;
+  };
+  VioRelativePose RelativePoseOfVio(const PairViews& views) const;
+  // The tentative matches: inside the VIO's epipolar band (guided) or by
+  // brute force.
+  FeatureMatches Match(const PairViews& views, const VioRelativePose& vio,
+                       PairDecision* decision) const;
+  // Step 1: the matches under the VIO's pose, and under that pose corrected
+  // within its drift; returns which matches the depth check found
+  // impossible.
+  std::vector<bool> JudgeUnderVio(const PairViews& views, const VioRelativePose& vio,
+                                  const FeatureMatches& matches, PairDecision* decision) const;
+  // Step 2: RANSAC over `matches`, seeded by the pair.
+  void JudgeByRansac(const PairViews& views, const FeatureMatches& matches,
+                     PairWork* pair_work) const;
 };
 
 // Writes the pair's tentative matches (a pair matched now) and its geometry

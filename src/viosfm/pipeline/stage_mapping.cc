@@ -1,8 +1,8 @@
 #include "viosfm/pipeline/stage_mapping.h"
 
-#include <map>
 #include <sstream>
 
+#include "viosfm/pipeline/frame_ingest.h"
 #include "viosfm/pipeline/metric_scale.h"
 #include "viosfm/scene/reprojection.h"
 #include "viosfm/util/logging.h"
@@ -12,39 +12,22 @@ namespace viosfm {
 BatchedMapperInput LoadMapperImages(const SelectedFrames& frames, const VioPoses& vio,
                                     ColmapDatabase* database) {
   BatchedMapperInput input;
-  std::map<camera_t, Camera> cameras;  // each read once, in id order
+  const FrameRollingShutter& rolling_shutter = frames.rolling_shutter;
+  input.rolling_shutter_readout_s = rolling_shutter.active() ? rolling_shutter.readout_s : 0.0;
+  // The features stage stored every frame's features: each is read back.
+  FrameIngest ingest(database, kInvalidCameraId, frames.sequence.rig.body_from_cam,
+                     input.rolling_shutter_readout_s);
   for (size_t i = 0; i < frames.sequence.images.size(); ++i) {
-    const SequenceImage& image = frames.sequence.images[i];
-    const std::string name = DatabaseImageName(image);
-    const std::optional<DatabaseImage> row = database->ReadImageWithName(name);
-    VIOSFM_CHECK(row.has_value()) << "image " << name << " missing after feature extraction";
-    MapperImage mapper_image;
-    mapper_image.image_id = row->image_id;
-    mapper_image.camera_id = row->camera_id;
-    mapper_image.name = name;
-    mapper_image.timestamp_ns = image.timestamp_ns;
-    mapper_image.keypoints = database->ReadKeypoints(row->image_id);
-    auto camera = cameras.find(row->camera_id);
-    if (camera == cameras.end()) {
-      camera = cameras.emplace(row->camera_id, database->ReadCamera(row->camera_id)).first;
-    }
-    if (frames.rolling_shutter.active()) {
-      CompensateRollingShutterRotation(camera->second, frames.rolling_shutter.readout_s,
-                                       frames.rolling_shutter.cam_angular_rate[i],
-                                       &mapper_image.keypoints);
-    }
+    ArrivingFrame frame{&frames.sequence.images[i], std::nullopt, Eigen::Vector3d::Zero()};
     if (const std::optional<size_t> pose_index = frames.vio_index[i]) {
-      mapper_image.vio_cam_from_world = (vio.world_from_body.poses[*pose_index].world_from_frame *
-                                         frames.sequence.rig.body_from_cam)
-                                            .Inverse();
-      mapper_image.vio_odometer = vio.odometers[*pose_index];
+      frame.vio_pose = FrameVioPose{vio.world_from_body.poses[*pose_index].world_from_frame,
+                                    vio.odometers[*pose_index]};
     }
-    input.images.push_back(std::move(mapper_image));
+    if (rolling_shutter.active()) frame.cam_angular_rate = rolling_shutter.cam_angular_rate[i];
+    input.images.push_back(
+        ingest.MapperImageOf(frame, ingest.Store(*frame.image, /*features=*/nullptr)));
   }
-  if (frames.rolling_shutter.active()) {
-    input.rolling_shutter_readout_s = frames.rolling_shutter.readout_s;
-  }
-  for (auto& [camera_id, camera] : cameras) input.cameras.push_back(std::move(camera));
+  input.cameras = ingest.Cameras();
   // For the gyro's priors in the final adjustment: the IMU and the rig the
   // VIO used (its clock offset and noise, when it estimated them).
   input.imu = frames.sequence.imu;

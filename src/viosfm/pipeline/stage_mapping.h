@@ -16,7 +16,8 @@
 
 namespace viosfm {
 
-// The mapper's input without its pairs: the frames' keypoints (compensated
+// The mapper's input without its pairs, each frame through the ingest step
+// (frame_ingest.h) from its stored features: the frames' keypoints (compensated
 // for a rolling shutter's rotation) and VIO camera poses, the cameras, the
 // IMU and the rig; input.images[i] is frames.sequence.images[i].
 BatchedMapperInput LoadMapperImages(const SelectedFrames& frames, const VioPoses& vio,

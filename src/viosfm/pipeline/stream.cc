@@ -78,49 +78,21 @@ void Stream::Ingest(const SequenceImage& image) {
     grey_values = SampleKeypointGreyValues(*pixels, features.keypoints);
   }
   const Timer busy;
-  const std::string name = DatabaseImageName(image);
-  image_t image_id = kInvalidImageId;
-  {
-    ColmapDatabase::Transaction transaction(*database_);
-    image_id = database_->WriteImage(name, camera_.camera_id);
-    database_->WriteFeatures(image_id, features.keypoints, features.descriptors);
-    transaction.Commit();
-  }
+  ArrivingFrame arriving{&image, pose, Eigen::Vector3d::Zero()};
+  if (rolling_shutter_)
+    arriving.cam_angular_rate = imu_.CamAngularRateAt(setup_.rig, image.timestamp_ns);
+  const IngestedFrame stored = ingest_->Store(image, &features);
+  const image_t image_id = stored.image_id;
   keypoint_values_->Set(image_id, std::move(grey_values));
   out_.features.num_features += features.keypoints.size();
   ++out_.features.num_extracted;
 
   Frame frame;
-  PairImage& pair_image = frame.image;
-  pair_image.image_id = image_id;
-  pair_image.name = name;
-  pair_image.camera_id = camera_.camera_id;
-  pair_image.timestamp_ns = image.timestamp_ns;
-  if (pose && verification_options_.use_vio_prior) {
-    pair_image.world_from_body = pose->world_from_body;
-    pair_image.odometer = pose->odometer;
-  }
-  if (rolling_shutter_) {
-    pair_image.cam_angular_rate = imu_.CamAngularRateAt(setup_.rig, image.timestamp_ns);
-  }
-  const double readout_s = rolling_shutter_ ? setup_.readout_s : 0.0;
-  SetPairImageKeypoints(camera_, features.keypoints, readout_s,
-                        verification_options_.guided_matching, &pair_image);
-  pair_image.stored_descriptors = std::make_shared<const FeatureDescriptors>(features.descriptors);
+  frame.image = ingest_->PairImageOf(arriving, stored, features.descriptors,
+                                     verification_options_.use_vio_prior,
+                                     verification_options_.guided_matching);
   frame.in_memory = true;
-
-  MapperImage mapper_image;
-  mapper_image.image_id = image_id;
-  mapper_image.camera_id = camera_.camera_id;
-  mapper_image.name = name;
-  mapper_image.timestamp_ns = image.timestamp_ns;
-  mapper_image.keypoints = features.keypoints;
-  CompensateRollingShutterRotation(camera_, readout_s, pair_image.cam_angular_rate,
-                                   &mapper_image.keypoints);
-  if (pose) {
-    mapper_image.vio_cam_from_world = (pose->world_from_body * setup_.rig.body_from_cam).Inverse();
-    mapper_image.vio_odometer = pose->odometer;
-  }
+  MapperImage mapper_image = ingest_->MapperImageOf(arriving, stored);
   FeatureKeypoints mapper_keypoints = std::move(mapper_image.keypoints);
   out_.images.push_back(mapper_image);
   mapper_image.keypoints = std::move(mapper_keypoints);
@@ -129,14 +101,16 @@ void Stream::Ingest(const SequenceImage& image) {
   frame_of_image_[image_id] = frames_.size();
   frames_.push_back(std::move(frame));
   pair_generator_->AddFrame({image_id, image.timestamp_ns});
-  if (retrieval_) {
-    for (RetrievedFrame& result : retrieval_->Add(image_id, features.descriptors)) {
-      std::vector<image_t> ids;
-      for (const ImageScore& score : result.similar) ids.push_back(score.image_id);
-      pair_generator_->SetRetrieved(frame_of_image_.at(result.image_id), std::move(ids));
-    }
-  }
+  if (retrieval_) TakeRetrieved(retrieval_->Add(image_id, features.descriptors));
   busy_seconds_ += busy.ElapsedSeconds();
+}
+
+void Stream::TakeRetrieved(std::vector<RetrievedFrame> results) {
+  for (RetrievedFrame& result : results) {
+    std::vector<image_t> ids;
+    for (const ImageScore& score : result.similar) ids.push_back(score.image_id);
+    pair_generator_->SetRetrieved(frame_of_image_.at(result.image_id), std::move(ids));
+  }
 }
 
 const PairImage& Stream::WithFeatures(size_t k, bool normalised) {
@@ -232,6 +206,8 @@ void Stream::SetUpVerification() {
   out_.input.rig = setup_.rig;
   out_.input.rolling_shutter_readout_s = rolling_shutter_ ? setup_.readout_s : 0.0;
   if (sequence_ != nullptr) out_.input.imu = sequence_->imu;
+  ingest_.emplace(&*database_, camera_.camera_id, setup_.rig.body_from_cam,
+                  out_.input.rolling_shutter_readout_s);
   decider_.emplace(verification_options_, setup_.rig.body_from_cam, &*database_);
   const PairGeneratorOptions& pairs = verification_options_.pairs;
   if (pairs.mode == PairMode::kTemporalRetrieval && pairs.num_retrieval_neighbors > 0) {
@@ -265,15 +241,39 @@ void Stream::TakeVerification(double verification_seconds) {
   VIOSFM_LOG(INFO) << "run: verification " << FormatVerificationSummary(summary);
 }
 
+void Stream::OpenDatabase() {
+  database_.emplace(ColmapDatabase::Open(folder_.path() / "database.db"));
+  ColmapDatabase::Transaction transaction(*database_);
+  camera_ = database_->ReadCamera(database_->WriteCamera(rig_.camera));
+  transaction.Commit();
+}
+
+void Stream::FinishVerification() {
+  if (retrieval_) TakeRetrieved(retrieval_->Finish());
+  DecideReady();
+}
+
+void Stream::TakeTimes(const StreamTimes& times) {
+  out_.features.num_images = frames_.size();
+  out_.features.num_extracted_before = out_.stream.num_features_beside;
+  out_.features.seconds = times.last_frame;
+  out_.stream.streamed = true;
+  out_.stream.vio_seconds = times.vio;
+  out_.stream.verification_seconds = times.verification;
+  out_.stream.verification_busy_seconds = busy_seconds_;
+  out_.stream.mapper_seconds = times.mapper;
+  out_.stream.seconds_after_last_frame = times.mapper - times.last_frame;
+  if (follower_ != nullptr) {
+    out_.stream.followed = true;
+    out_.stream.recording_end_seconds = recording_end_seconds_;
+    out_.stream.seconds_after_recording_end = times.mapper - recording_end_seconds_;
+  }
+}
+
 StreamOutput Stream::Run(const Timer& stream_timer) {
   const bool own_vio = !options_.vio_source && options_.vio_trajectory.empty();
   // The database, from here on written by this thread only.
-  database_.emplace(ColmapDatabase::Open(folder_.path() / "database.db"));
-  {
-    ColmapDatabase::Transaction transaction(*database_);
-    camera_ = database_->ReadCamera(database_->WriteCamera(rig_.camera));
-    transaction.Commit();
-  }
+  OpenDatabase();
   if (!own_vio) {
     out_.vio = LoadVioPoses(*sequence_, options_);
     settled_.SetAll(out_.vio);
@@ -285,12 +285,12 @@ StreamOutput Stream::Run(const Timer& stream_timer) {
   // The VIO; whatever fails, the other threads stop and are joined before
   // the stream and its inputs go.
   Worker vio_worker;
-  double vio_seconds = 0.0;
+  StreamTimes times;
   vio_worker.Start([&] {
     if (follower_ != nullptr) {
-      FollowRecording(stream_timer, &vio_seconds);
+      FollowRecording(stream_timer, &times.vio);
     } else {
-      RunRecordedVio(stream_timer, &vio_seconds);
+      RunRecordedVio(stream_timer, &times.vio);
     }
   });
   Worker mapper_worker;
@@ -306,7 +306,6 @@ StreamOutput Stream::Run(const Timer& stream_timer) {
 
   SetUpVerification();
 
-  double mapper_seconds = 0.0;
   BatchedMapperOptions mapper_options = options_.EffectiveMapperOptions();
   mapper_options.show_progress = false;
   const MapperBatchCallback live = [this](const Reconstruction& model,
@@ -317,7 +316,7 @@ StreamOutput Stream::Run(const Timer& stream_timer) {
     out_.reconstruction =
         RunBatchedMapper(out_.input, mapper_options, &out_.stream_mapper_summary, &pair_stream_,
                          follower_ != nullptr ? live : MapperBatchCallback());
-    mapper_seconds = stream_timer.ElapsedSeconds();
+    times.mapper = stream_timer.ElapsedSeconds();
   });
 
   ProgressBar progress("stream", static_cast<int64_t>(paths_.size()),
@@ -330,17 +329,10 @@ StreamOutput Stream::Run(const Timer& stream_timer) {
     progress.Update();
   }
   progress.Finish();
-  const double last_frame_seconds = stream_timer.ElapsedSeconds();
+  times.last_frame = stream_timer.ElapsedSeconds();
   pair_generator_->FinishFrames();
-  if (retrieval_ && !mapper_worker.failed()) {
-    for (RetrievedFrame& result : retrieval_->Finish()) {
-      std::vector<image_t> ids;
-      for (const ImageScore& score : result.similar) ids.push_back(score.image_id);
-      pair_generator_->SetRetrieved(frame_of_image_.at(result.image_id), std::move(ids));
-    }
-  }
-  if (!mapper_worker.failed()) DecideReady();
-  const double verification_seconds = stream_timer.ElapsedSeconds();
+  if (!mapper_worker.failed()) FinishVerification();
+  times.verification = stream_timer.ElapsedSeconds();
   // The mapper's final adjustment reads the whole IMU: a followed
   // recording's is complete once the VIO's thread has ended (its last rows
   // came before the frame queue closed).
@@ -365,21 +357,8 @@ StreamOutput Stream::Run(const Timer& stream_timer) {
   prefetch_->Finish();
   if (follower_ != nullptr) fs::remove_all(folder_.path() / "live");
 
-  TakeVerification(verification_seconds);
-  out_.features.num_images = frames_.size();
-  out_.features.num_extracted_before = out_.stream.num_features_beside;
-  out_.features.seconds = last_frame_seconds;
-  out_.stream.streamed = true;
-  out_.stream.vio_seconds = vio_seconds;
-  out_.stream.verification_seconds = verification_seconds;
-  out_.stream.verification_busy_seconds = busy_seconds_;
-  out_.stream.mapper_seconds = mapper_seconds;
-  out_.stream.seconds_after_last_frame = mapper_seconds - last_frame_seconds;
-  if (follower_ != nullptr) {
-    out_.stream.followed = true;
-    out_.stream.recording_end_seconds = recording_end_seconds_;
-    out_.stream.seconds_after_recording_end = mapper_seconds - recording_end_seconds_;
-  }
+  TakeVerification(times.verification);
+  TakeTimes(times);
   database_->SyncToDisk();
   return std::move(out_);
 }

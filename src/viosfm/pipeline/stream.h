@@ -16,6 +16,7 @@
 #include "viosfm/matching/pair_decider.h"
 #include "viosfm/matching/pair_verification.h"
 #include "viosfm/pipeline/feature_prefetch.h"
+#include "viosfm/pipeline/frame_ingest.h"
 #include "viosfm/pipeline/frame_selection.h"
 #include "viosfm/pipeline/pipeline_summary.h"
 #include "viosfm/pipeline/run_folder.h"
@@ -96,6 +97,14 @@ class Stream {
   StreamOutput Run(const Timer& stream_timer);
 
  private:
+  // When the stream's parts ended, in s on the stream's clock.
+  struct StreamTimes {
+    double vio = 0.0;
+    double last_frame = 0.0;
+    double verification = 0.0;
+    double mapper = 0.0;
+  };
+
   // One selected frame as the verification holds it.
   struct Frame {
     PairImage image;  // its VIO pose and, while in memory, its features
@@ -106,7 +115,18 @@ class Stream {
   // its selected frames for an external VIO, or the followed recording.
   void RunRecordedVio(const Timer& stream_timer, double* vio_seconds);
   void FollowRecording(const Timer& stream_timer, double* vio_seconds);
+  // The frame's features (taken from beside the VIO, or extracted), then
+  // the ingest step (frame_ingest.h), its pairs' generator and retrieval.
   void Ingest(const SequenceImage& image);
+  // The database, its camera written.
+  void OpenDatabase();
+  // Frames' retrieved partners to the pair generator.
+  void TakeRetrieved(std::vector<RetrievedFrame> results);
+  // Every frame in and the pair generator told: the last frames'
+  // retrieval, and the pairs still to decide.
+  void FinishVerification();
+  // The stream's summary figures.
+  void TakeTimes(const StreamTimes& times);
   // Verifies the pairs of frame d with the frames before it.
   void Decide(size_t d, const std::vector<ProposedPair>& partners);
   // Decides every frame whose pairs are fixed.
@@ -115,8 +135,8 @@ class Stream {
   // no longer in memory), normalised descriptors too when `normalised`.
   const PairImage& WithFeatures(size_t k, bool normalised);
   void ForgetFeaturesBefore(size_t k);
-  // Once the VIO's rig is known: the verification's decider, retrieval and
-  // pair generator.
+  // Once the VIO's rig is known: the ingest step, the verification's
+  // decider, retrieval and pair generator.
   void SetUpVerification();
   // Every pair decided: the verification's result and summary.
   void TakeVerification(double verification_seconds);
@@ -143,6 +163,7 @@ class Stream {
   Camera camera_;
   VioSetup setup_;
   bool rolling_shutter_ = false;
+  std::optional<FrameIngest> ingest_;  // once the VIO's rig is known
   std::optional<FeaturePrefetch> prefetch_;
   std::optional<PairDecider> decider_;
   std::optional<IncrementalRetrieval> retrieval_;

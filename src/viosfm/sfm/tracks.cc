@@ -166,6 +166,140 @@ void SortTracksAndCount(TrackBuildResult* result) {
   }
 }
 
+// The matches as a graph: the matched keypoints' keys (sorted, unique) and
+// the matches as pairs of indices u < v into them (sorted, unique).
+struct MatchGraph {
+  std::vector<NodeKey> keys;
+  std::vector<std::pair<size_t, size_t>> edges;
+};
+
+// The graph of `pair_matches`, counting the input, self and distinct
+// matches into `stats`.
+MatchGraph CollectMatchGraph(const std::vector<ImagePairMatches>& pair_matches,
+                             TrackStatistics* stats) {
+  // Matches as edges between node keys, smaller key first, sorted, unique.
+  std::vector<std::pair<NodeKey, NodeKey>> key_edges;
+  for (const ImagePairMatches& pair : pair_matches) {
+    stats->num_input_matches += pair.matches.size();
+    if (pair.image_id1 == pair.image_id2) {
+      stats->num_self_matches += pair.matches.size();
+      continue;
+    }
+    for (const FeatureMatch& match : pair.matches) {
+      const NodeKey a = MakeKey(pair.image_id1, match.point2D_idx1);
+      const NodeKey b = MakeKey(pair.image_id2, match.point2D_idx2);
+      key_edges.emplace_back(std::min(a, b), std::max(a, b));
+    }
+  }
+  std::sort(key_edges.begin(), key_edges.end());
+  key_edges.erase(std::unique(key_edges.begin(), key_edges.end()), key_edges.end());
+  stats->num_unique_matches = key_edges.size();
+
+  MatchGraph graph;
+  std::vector<NodeKey>& keys = graph.keys;
+  keys.reserve(2 * key_edges.size());
+  for (const auto& [a, b] : key_edges) {
+    keys.push_back(a);
+    keys.push_back(b);
+  }
+  std::sort(keys.begin(), keys.end());
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  const auto index_of = [&keys](NodeKey key) {
+    return static_cast<size_t>(std::lower_bound(keys.begin(), keys.end(), key) - keys.begin());
+  };
+  graph.edges.reserve(key_edges.size());
+  for (const auto& [a, b] : key_edges) graph.edges.emplace_back(index_of(a), index_of(b));
+  return graph;
+}
+
+// The graph's connected components, in the order of their smallest node,
+// nodes sorted within; each marked inconsistent when it holds two
+// keypoints of one image.
+struct Components {
+  std::vector<size_t> of_node;
+  std::vector<std::vector<size_t>> nodes;
+  std::vector<bool> inconsistent;
+};
+
+Components FindComponents(const MatchGraph& graph) {
+  const size_t num_nodes = graph.keys.size();
+  UnionFind sets(num_nodes);
+  for (const auto& [u, v] : graph.edges) {
+    const size_t root_u = sets.Find(u);
+    const size_t root_v = sets.Find(v);
+    if (root_u == root_v) continue;
+    // The smaller index becomes the root, so roots do not depend on edge order.
+    if (root_u < root_v) {
+      sets.Link(root_v, root_u);
+    } else {
+      sets.Link(root_u, root_v);
+    }
+  }
+  Components components;
+  components.of_node.resize(num_nodes);
+  std::vector<size_t> component_of_root(num_nodes, SIZE_MAX);
+  for (size_t i = 0; i < num_nodes; ++i) {
+    const size_t root = sets.Find(i);
+    if (component_of_root[root] == SIZE_MAX) {
+      component_of_root[root] = components.nodes.size();
+      components.nodes.emplace_back();
+    }
+    components.of_node[i] = component_of_root[root];
+    components.nodes[component_of_root[root]].push_back(i);
+  }
+  components.inconsistent.assign(components.nodes.size(), false);
+  for (size_t c = 0; c < components.nodes.size(); ++c) {
+    const std::vector<size_t>& nodes = components.nodes[c];
+    for (size_t k = 1; k < nodes.size(); ++k) {
+      if (KeyImage(graph.keys[nodes[k]]) == KeyImage(graph.keys[nodes[k - 1]])) {
+        components.inconsistent[c] = true;
+        break;
+      }
+    }
+  }
+  return components;
+}
+
+// The track of `nodes` (sorted indices into keys), or a count of a short one.
+void EmitTrack(const std::vector<NodeKey>& keys, const std::vector<size_t>& nodes,
+               const TrackBuilderOptions& options, TrackBuildResult* result) {
+  if (nodes.size() < static_cast<size_t>(options.min_track_length)) {
+    ++result->statistics.num_dropped_short;
+    return;
+  }
+  Track track;
+  track.elements.reserve(nodes.size());
+  for (size_t node : nodes) track.elements.push_back(KeyElement(keys[node]));
+  result->tracks.push_back(std::move(track));
+}
+
+// Splits the inconsistent component of `nodes` (sorted global indices, so
+// sorted by key too) along its `edges` (global indices) and emits the pieces.
+void SplitAndEmit(const std::vector<NodeKey>& keys, const std::vector<size_t>& nodes,
+                  const std::vector<std::pair<size_t, size_t>>& edges,
+                  const TrackBuilderOptions& options, TrackBuildResult* result) {
+  TrackStatistics& stats = result->statistics;
+  std::vector<NodeKey> component_keys;
+  component_keys.reserve(nodes.size());
+  for (const size_t node : nodes) component_keys.push_back(keys[node]);
+  const auto local = [&nodes](size_t global) {
+    return static_cast<size_t>(std::lower_bound(nodes.begin(), nodes.end(), global) -
+                               nodes.begin());
+  };
+  std::vector<std::pair<size_t, size_t>> local_edges;
+  local_edges.reserve(edges.size());
+  for (const auto& [u, v] : edges) local_edges.emplace_back(local(u), local(v));
+  const std::vector<std::vector<size_t>> pieces =
+      SplitComponent(component_keys, local_edges, &stats.num_refused_matches);
+  stats.num_split_pieces += pieces.size();
+  for (const std::vector<size_t>& piece : pieces) {
+    std::vector<size_t> global;
+    global.reserve(piece.size());
+    for (const size_t i : piece) global.push_back(nodes[i]);
+    EmitTrack(keys, global, options, result);
+  }
+}
+
 }  // namespace
 
 std::string TrackBuilderOptions::Validate() const {
@@ -196,133 +330,29 @@ TrackBuildResult BuildTracks(const std::vector<ImagePairMatches>& pair_matches,
   TrackBuildResult result;
   TrackStatistics& stats = result.statistics;
   stats.num_pairs = pair_matches.size();
-
-  // Matches as edges between node keys, smaller key first, sorted, unique.
-  std::vector<std::pair<NodeKey, NodeKey>> key_edges;
-  for (const ImagePairMatches& pair : pair_matches) {
-    stats.num_input_matches += pair.matches.size();
-    if (pair.image_id1 == pair.image_id2) {
-      stats.num_self_matches += pair.matches.size();
-      continue;
-    }
-    for (const FeatureMatch& match : pair.matches) {
-      const NodeKey a = MakeKey(pair.image_id1, match.point2D_idx1);
-      const NodeKey b = MakeKey(pair.image_id2, match.point2D_idx2);
-      key_edges.emplace_back(std::min(a, b), std::max(a, b));
-    }
-  }
-  std::sort(key_edges.begin(), key_edges.end());
-  key_edges.erase(std::unique(key_edges.begin(), key_edges.end()), key_edges.end());
-  stats.num_unique_matches = key_edges.size();
-
-  std::vector<NodeKey> keys;
-  keys.reserve(2 * key_edges.size());
-  for (const auto& [a, b] : key_edges) {
-    keys.push_back(a);
-    keys.push_back(b);
-  }
-  std::sort(keys.begin(), keys.end());
-  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
-  const auto index_of = [&keys](NodeKey key) {
-    return static_cast<size_t>(std::lower_bound(keys.begin(), keys.end(), key) - keys.begin());
-  };
-  std::vector<std::pair<size_t, size_t>> edges;
-  edges.reserve(key_edges.size());
-  for (const auto& [a, b] : key_edges) edges.emplace_back(index_of(a), index_of(b));
-  key_edges.clear();
-  key_edges.shrink_to_fit();
-
-  // Plain connected components.
-  UnionFind components(keys.size());
-  for (const auto& [u, v] : edges) {
-    const size_t root_u = components.Find(u);
-    const size_t root_v = components.Find(v);
-    if (root_u == root_v) continue;
-    // The smaller index becomes the root, so roots do not depend on edge order.
-    if (root_u < root_v) {
-      components.Link(root_v, root_u);
-    } else {
-      components.Link(root_u, root_v);
-    }
-  }
-  // Components in the order of their smallest node; nodes sorted within.
-  std::vector<size_t> component_of_node(keys.size());
-  std::vector<size_t> component_of_root(keys.size(), SIZE_MAX);
-  std::vector<std::vector<size_t>> component_nodes;
-  for (size_t i = 0; i < keys.size(); ++i) {
-    const size_t root = components.Find(i);
-    if (component_of_root[root] == SIZE_MAX) {
-      component_of_root[root] = component_nodes.size();
-      component_nodes.emplace_back();
-    }
-    component_of_node[i] = component_of_root[root];
-    component_nodes[component_of_root[root]].push_back(i);
-  }
-  stats.num_components = component_nodes.size();
-
-  std::vector<bool> inconsistent(component_nodes.size(), false);
-  for (size_t c = 0; c < component_nodes.size(); ++c) {
-    const std::vector<size_t>& nodes = component_nodes[c];
-    for (size_t k = 1; k < nodes.size(); ++k) {
-      if (KeyImage(keys[nodes[k]]) == KeyImage(keys[nodes[k - 1]])) {
-        inconsistent[c] = true;
-        break;
-      }
-    }
-    if (inconsistent[c]) ++stats.num_inconsistent_components;
+  const MatchGraph graph = CollectMatchGraph(pair_matches, &stats);
+  const Components components = FindComponents(graph);
+  stats.num_components = components.nodes.size();
+  for (const bool inconsistent : components.inconsistent) {
+    if (inconsistent) ++stats.num_inconsistent_components;
   }
   // Edges of the inconsistent components (only needed for kSplit).
-  std::vector<std::vector<std::pair<size_t, size_t>>> component_edges(component_nodes.size());
+  std::vector<std::vector<std::pair<size_t, size_t>>> component_edges(components.nodes.size());
   if (options.conflict_policy == TrackConflictPolicy::kSplit) {
-    for (const auto& edge : edges) {
-      const size_t c = component_of_node[edge.first];
-      if (inconsistent[c]) component_edges[c].push_back(edge);
+    for (const auto& edge : graph.edges) {
+      const size_t c = components.of_node[edge.first];
+      if (components.inconsistent[c]) component_edges[c].push_back(edge);
     }
   }
-
-  const auto emit = [&](const std::vector<size_t>& nodes) {
-    if (nodes.size() < static_cast<size_t>(options.min_track_length)) {
-      ++stats.num_dropped_short;
-      return;
-    }
-    Track track;
-    track.elements.reserve(nodes.size());
-    for (size_t node : nodes) track.elements.push_back(KeyElement(keys[node]));
-    result.tracks.push_back(std::move(track));
-  };
-
-  for (size_t c = 0; c < component_nodes.size(); ++c) {
-    if (!inconsistent[c]) {
-      emit(component_nodes[c]);
-      continue;
-    }
-    if (options.conflict_policy == TrackConflictPolicy::kDrop) {
+  for (size_t c = 0; c < components.nodes.size(); ++c) {
+    if (!components.inconsistent[c]) {
+      EmitTrack(graph.keys, components.nodes[c], options, &result);
+    } else if (options.conflict_policy == TrackConflictPolicy::kDrop) {
       ++stats.num_dropped_inconsistent;
-      continue;
-    }
-    // The component's nodes are sorted global indices, so sorted by key too.
-    const std::vector<size_t>& nodes = component_nodes[c];
-    std::vector<NodeKey> component_keys;
-    component_keys.reserve(nodes.size());
-    for (const size_t node : nodes) component_keys.push_back(keys[node]);
-    const auto local = [&nodes](size_t global) {
-      return static_cast<size_t>(std::lower_bound(nodes.begin(), nodes.end(), global) -
-                                 nodes.begin());
-    };
-    std::vector<std::pair<size_t, size_t>> local_edges;
-    local_edges.reserve(component_edges[c].size());
-    for (const auto& [u, v] : component_edges[c]) local_edges.emplace_back(local(u), local(v));
-    const std::vector<std::vector<size_t>> pieces =
-        SplitComponent(component_keys, local_edges, &stats.num_refused_matches);
-    stats.num_split_pieces += pieces.size();
-    for (const std::vector<size_t>& piece : pieces) {
-      std::vector<size_t> global;
-      global.reserve(piece.size());
-      for (const size_t i : piece) global.push_back(nodes[i]);
-      emit(global);
+    } else {
+      SplitAndEmit(graph.keys, components.nodes[c], component_edges[c], options, &result);
     }
   }
-
   SortTracksAndCount(&result);
   return result;
 }

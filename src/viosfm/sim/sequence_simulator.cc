@@ -299,21 +299,11 @@ void RenderSimulatedImages(const fs::path& folder, const SimulatedSequence& simu
   progress.Finish();
 }
 
-void WriteSimulatedSequence(const fs::path& out, const SimulatedSequence& simulated,
-                            const SimulationOptions& options) {
-  const fs::path cam0 = out / "mav0" / "cam0";
-  if (options.render_images) {
-    RenderSimulatedImages(cam0 / "data", simulated, options);
-    WriteEurocDataset(out, simulated.sequence);  // lists the images in cam0/data.csv
-  } else {
-    Sequence without_images = simulated.sequence;
-    without_images.images.clear();
-    WriteEurocDataset(out, without_images);
-  }
-  fs::create_directories(cam0);
-  WriteEurocCameraYaml(cam0 / "sensor.yaml", simulated.sequence.rig.camera,
-                       simulated.sequence.rig.body_from_cam, simulated.sequence.rig.camera_rate_hz);
-  WriteFileAtomically(out / "frames.csv", [&](std::ostream& stream) {
+namespace {
+
+// frames.csv: each frame's region, floor and camera centre.
+void WriteFrameRegions(const fs::path& path, const SimulatedSequence& simulated) {
+  WriteFileAtomically(path, [&](std::ostream& stream) {
     stream << "#timestamp [ns],region,floor,p_cam_x [m],p_cam_y [m],p_cam_z [m]\n"
            << std::setprecision(17);
     const auto& regions = simulated.scenario->regions;
@@ -327,20 +317,46 @@ void WriteSimulatedSequence(const fs::path& out, const SimulatedSequence& simula
              << ',' << center.z() << '\n';
     }
   });
-  WriteFileAtomically(out / "camera_stamps.txt", [&](std::ostream& stream) {
-    stream << "# camera timestamps [ns], one per line\n";
-    for (const SequenceImage& image : simulated.sequence.images)
-      stream << image.timestamp_ns << '\n';
-  });
-  WriteTumTrajectory(out / "vio_emulated.tum", simulated.vio_body);
-  WriteSceneStructure(out / "scene.csv", ScenarioStructure(*simulated.scenario));
+}
+
+// simulation.yaml's robustness section: the imperfections the sequence
+// was made with.
+void WriteRobustnessYaml(std::ostream& stream, const SimulatedSequence& simulated,
+                         const SimulationOptions& options) {
+  const AutoExposureOptions& ae = options.auto_exposure;
+  const ImuNoise& truth = simulated.true_imu_noise;
+  stream << "robustness:\n"
+         << "  auto_exposure:\n"
+         << "    strength_stops: " << ae.strength_stops << "\n"
+         << "    drift_stddev: " << ae.drift_stddev << "\n"
+         << "    drift_time_constant_s: " << ae.drift_time_constant_s << "\n"
+         << "    step_rate_hz: " << ae.step_rate_hz << "\n"
+         << "    step_size: " << ae.step_size << "\n"
+         << "    recovery_time_constant_s: " << ae.recovery_time_constant_s << "\n"
+         << "  rolling_shutter_readout_s: " << options.rolling_shutter_readout_s << "\n"
+         << "  camera_time_offset_s: " << options.camera_time_offset_s << "\n"
+         << "  imu_noise_file_scale_gyro: " << options.imu_noise_file_scale_gyro << "\n"
+         << "  imu_noise_file_scale_accel: " << options.imu_noise_file_scale_accel << "\n"
+         << "  true_imu_noise: [" << truth.gyro_noise_density << ", " << truth.gyro_random_walk
+         << ", " << truth.accel_noise_density << ", " << truth.accel_random_walk
+         << "]  # gyro density, gyro walk, accel density, accel walk\n"
+         << "  white_walls:\n"
+         << "    enabled: " << (options.white_walls.enabled ? "true" : "false") << "\n"
+         << "    mean: " << options.white_walls.mean << "\n"
+         << "    contrast: " << options.white_walls.contrast << "\n"
+         << "    texels_per_metre: " << options.white_walls.texels_per_metre << "\n";
+}
+
+// simulation.yaml: the options of the sequence.
+void WriteSimulationYaml(const fs::path& path, const SimulatedSequence& simulated,
+                         const SimulationOptions& options) {
   // The walk and the vibration the scenario used (mav replaces the walk's).
   const WalkOptions& walk =
       simulated.scenario->walk_style ? *simulated.scenario->walk_style : options.walk;
   const double vibration_rms = options.imu.vibration.accel_rms_mps2 > 0.0
                                    ? options.imu.vibration.accel_rms_mps2
                                    : simulated.scenario->vibration.accel_rms_mps2;
-  WriteFileAtomically(out / "simulation.yaml", [&](std::ostream& stream) {
+  WriteFileAtomically(path, [&](std::ostream& stream) {
     stream << std::setprecision(17) << "# viosfm simulate: the options of this sequence\n"
            << "scenario: " << options.scenario << "\n"
            << "duration_s: " << options.duration_s << "\n"
@@ -387,39 +403,47 @@ void WriteSimulatedSequence(const fs::path& out, const SimulatedSequence& simula
            << "  enabled: " << (options.keyframes.enabled ? "true" : "false") << "\n"
            << "  min_gap_s: " << options.keyframes.min_gap_s << "\n"
            << "  max_gap_s: " << options.keyframes.max_gap_s << "\n";
-    if (!options.HasImperfections()) return;
-    const AutoExposureOptions& ae = options.auto_exposure;
-    const ImuNoise& truth = simulated.true_imu_noise;
-    stream << "robustness:\n"
-           << "  auto_exposure:\n"
-           << "    strength_stops: " << ae.strength_stops << "\n"
-           << "    drift_stddev: " << ae.drift_stddev << "\n"
-           << "    drift_time_constant_s: " << ae.drift_time_constant_s << "\n"
-           << "    step_rate_hz: " << ae.step_rate_hz << "\n"
-           << "    step_size: " << ae.step_size << "\n"
-           << "    recovery_time_constant_s: " << ae.recovery_time_constant_s << "\n"
-           << "  rolling_shutter_readout_s: " << options.rolling_shutter_readout_s << "\n"
-           << "  camera_time_offset_s: " << options.camera_time_offset_s << "\n"
-           << "  imu_noise_file_scale_gyro: " << options.imu_noise_file_scale_gyro << "\n"
-           << "  imu_noise_file_scale_accel: " << options.imu_noise_file_scale_accel << "\n"
-           << "  true_imu_noise: [" << truth.gyro_noise_density << ", " << truth.gyro_random_walk
-           << ", " << truth.accel_noise_density << ", " << truth.accel_random_walk
-           << "]  # gyro density, gyro walk, accel density, accel walk\n"
-           << "  white_walls:\n"
-           << "    enabled: " << (options.white_walls.enabled ? "true" : "false") << "\n"
-           << "    mean: " << options.white_walls.mean << "\n"
-           << "    contrast: " << options.white_walls.contrast << "\n"
-           << "    texels_per_metre: " << options.white_walls.texels_per_metre << "\n";
+    if (options.HasImperfections()) WriteRobustnessYaml(stream, simulated, options);
   });
-  if (options.auto_exposure.enabled()) {
-    WriteFileAtomically(out / "exposure.csv", [&](std::ostream& stream) {
-      stream << "#timestamp [ns],gain\n" << std::setprecision(17);
-      for (size_t k = 0; k < simulated.sequence.images.size(); ++k) {
-        stream << simulated.sequence.images[k].timestamp_ns << ',' << simulated.exposure_gains[k]
-               << '\n';
-      }
-    });
+}
+
+// exposure.csv: each frame's auto-exposure gain.
+void WriteExposureGains(const fs::path& path, const SimulatedSequence& simulated) {
+  WriteFileAtomically(path, [&](std::ostream& stream) {
+    stream << "#timestamp [ns],gain\n" << std::setprecision(17);
+    for (size_t k = 0; k < simulated.sequence.images.size(); ++k) {
+      stream << simulated.sequence.images[k].timestamp_ns << ',' << simulated.exposure_gains[k]
+             << '\n';
+    }
+  });
+}
+
+}  // namespace
+
+void WriteSimulatedSequence(const fs::path& out, const SimulatedSequence& simulated,
+                            const SimulationOptions& options) {
+  const fs::path cam0 = out / "mav0" / "cam0";
+  if (options.render_images) {
+    RenderSimulatedImages(cam0 / "data", simulated, options);
+    WriteEurocDataset(out, simulated.sequence);  // lists the images in cam0/data.csv
+  } else {
+    Sequence without_images = simulated.sequence;
+    without_images.images.clear();
+    WriteEurocDataset(out, without_images);
   }
+  fs::create_directories(cam0);
+  WriteEurocCameraYaml(cam0 / "sensor.yaml", simulated.sequence.rig.camera,
+                       simulated.sequence.rig.body_from_cam, simulated.sequence.rig.camera_rate_hz);
+  WriteFrameRegions(out / "frames.csv", simulated);
+  WriteFileAtomically(out / "camera_stamps.txt", [&](std::ostream& stream) {
+    stream << "# camera timestamps [ns], one per line\n";
+    for (const SequenceImage& image : simulated.sequence.images)
+      stream << image.timestamp_ns << '\n';
+  });
+  WriteTumTrajectory(out / "vio_emulated.tum", simulated.vio_body);
+  WriteSceneStructure(out / "scene.csv", ScenarioStructure(*simulated.scenario));
+  WriteSimulationYaml(out / "simulation.yaml", simulated, options);
+  if (options.auto_exposure.enabled()) WriteExposureGains(out / "exposure.csv", simulated);
 }
 
 }  // namespace viosfm
