@@ -68,6 +68,8 @@
 # into the same folder; --force reruns everything.
 # Needs: viosfm built (make build), colmap, /usr/bin/time, sqlite3
 # (VIOSFM_WITH_COLMAP=1 scripts/install-deps.sh installs them).
+# PRESET (environment): viosfm run's --preset, default paper (the settings of the
+# documented figures); PRESET=realtime runs viosfm's default.
 set -euo pipefail
 
 here=$(cd "$(dirname "$0")/.." && pwd)
@@ -239,7 +241,7 @@ viosfm_run() {
     [ "$vio" = own ] && source=()
     mkdir -p "$dir"
     echo "$version" > "$dir/version.txt"
-    timed "$dir" "$VIOSFM" run "$seq" --out "$dir/run" "${source[@]}" --rate "$rate" \
+    timed "$dir" "$VIOSFM" run "$seq" --out "$dir/run" --preset "${PRESET:-paper}" "${source[@]}" --rate "$rate" \
       --n1 "$n1" --n2 "$n2" --max-features "$max_features" --threads "$threads" "$@"
   fi
   [ -f "$dir/run/trajectory_body.tum" ] && evaluate "$dir" "$dir/run/trajectory_body.tum" tum "$seq"

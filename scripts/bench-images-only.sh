@@ -19,6 +19,8 @@
 #
 # VIOSFM_DATA_DIR (default ../shared/data beside the project) holds
 # strecha_fountain_p11; NO_COLMAP=1 skips COLMAP. Needs jq, python3-numpy.
+# PRESET (environment): viosfm run's --preset, default paper (the settings of the
+# documented figures); PRESET=realtime runs viosfm's default.
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 VIOSFM=${VIOSFM:-$here/build/src/viosfm/cli/viosfm}
@@ -51,7 +53,7 @@ timed() {  # SECONDS_FILE COMMAND...
 
 for variant in viosfm viosfm_k; do
   [ -f "$out/$variant/summary.json" ] && continue
-  flags=(--no-progress --threads "$threads")
+  flags=(--no-progress --threads "$threads" --preset "${PRESET:-paper}")
   [ "$variant" = viosfm_k ] && flags+=(--camera-yaml "$out/camera.yaml")
   timed "$out/$variant.seconds" "$VIOSFM" run "$data/images" --out "$out/$variant" "${flags[@]}" \
     > "$out/$variant.log" 2>&1 || true

@@ -20,6 +20,8 @@
 # Usage: scripts/bench-sfm-core.sh OUT [CASE...]   (default: every case)
 # SCENARIO (default room), SEED (default 0). Needs jq and python3-numpy.
 # Writes OUT/table.md.
+# PRESET (environment): viosfm run's --preset, default paper (the settings of the
+# documented figures); PRESET=realtime runs viosfm's default.
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 VIOSFM=${VIOSFM:-$here/build/src/viosfm/cli/viosfm}
@@ -49,7 +51,7 @@ run() {  # NAME DATASET FLAGS...: OUT/runs/NAME, run once
   shift 2
   mkdir -p "$out/runs"
   if [ ! -f "$out/runs/$name/summary.json" ]; then
-    "$VIOSFM" run "$dataset" --out "$out/runs/$name" "${run_flags[@]}" "$@" \
+    "$VIOSFM" run "$dataset" --out "$out/runs/$name" --preset "${PRESET:-paper}" "${run_flags[@]}" "$@" \
       > "$out/runs/$name.log" 2>&1 || echo "run $name failed: $out/runs/$name.log" >&2
   fi
 }

@@ -10,12 +10,14 @@
 # viosfm takes the copy as its own and re-runs only the mapping), each
 # unless its summary.json exists. Logs in RUNS/<name>.log. Needs
 # VIOSFM (the viosfm binary).
+# PRESET (environment): viosfm run's --preset, default paper (the settings of the
+# documented figures); PRESET=realtime runs viosfm's default.
 map_prior_variants() {
   local runs=$1 dataset=$2
   shift 2
   mkdir -p "$runs"
   if [ ! -f "$runs/default/summary.json" ]; then
-    "$VIOSFM" run "$dataset" --out "$runs/default" "$@" > "$runs/default.log" 2>&1
+    "$VIOSFM" run "$dataset" --out "$runs/default" --preset "${PRESET:-paper}" "$@" > "$runs/default.log" 2>&1
   fi
   local variant flags
   for variant in no_rpc paper no_bridging; do
@@ -27,6 +29,6 @@ map_prior_variants() {
     esac
     rm -rf "$runs/$variant"
     cp -a "$runs/default" "$runs/$variant"
-    "$VIOSFM" run "$dataset" --out "$runs/$variant" "$@" "${flags[@]}" > "$runs/$variant.log" 2>&1
+    "$VIOSFM" run "$dataset" --out "$runs/$variant" --preset "${PRESET:-paper}" "$@" "${flags[@]}" > "$runs/$variant.log" 2>&1
   done
 }

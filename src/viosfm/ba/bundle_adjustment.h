@@ -127,8 +127,8 @@ struct BundleAdjustmentOptions {
   // ITERATIVE_SCHUR: the conjugate gradients' steps per iteration at most.
   // Default 500 (Ceres'). With the IMU's factors (sfm/inertial_terms.h) the
   // reduced system holds a stiff frame-to-frame chain that the Schur-Jacobi
-  // preconditioner does not see, so the steps run to the cap; `--realtime`
-  // takes 100, most of the factors' gain for a third of their time.
+  // preconditioner does not see, so the steps run to the cap; the real-time
+  // preset takes 100, most of the factors' gain for a third of their time.
   // See docs/benchmarks.md, section "Scaling: 300 to 2400 frames".
   int max_linear_solver_iterations = 500;
   double gradient_tolerance = 1e-10;  // (default 1e-10)

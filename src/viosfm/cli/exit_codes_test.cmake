@@ -142,21 +142,32 @@ set(pattern "N1 10, N2 5, [0-9.]+ Hz, batch size 50, BA window 3, max 2000 featu
 if(NOT "${stderr}${stdout}" MATCHES "${pattern}")
   message(FATAL_ERROR "run --realtime: the log '${stderr}${stdout}' does not match '${pattern}'")
 endif()
-# --realtime alone lets the texture decide the rate and the feature count;
-# --rate (as --max-features above) or --set keeps the user's.
-foreach(extra "" "--rate;5" "--set;frame_selection.target_rate_hz=5")
+# The default (--preset realtime; --realtime the same) lets the feature
+# budget and the texture decide the feature count and the rate: 1000
+# features a frame at 10 Hz, 2000 at 5 Hz; --rate (as --max-features above)
+# or --set keeps the user's rate.
+foreach(extra "" "--realtime;--rate;5" "--set;frame_selection.target_rate_hz=5")
   file(REMOVE_RECURSE "${WORK}/out_probe")
-  execute_process(COMMAND "${VIOSFM}" --log-level info run "${WORK}/dataset" --realtime ${extra}
+  execute_process(COMMAND "${VIOSFM}" --log-level info run "${WORK}/dataset" ${extra}
                           --out "${WORK}/out_probe"
                   RESULT_VARIABLE result ERROR_VARIABLE stderr OUTPUT_VARIABLE stdout)
   string(REGEX MATCH "max [0-9]+ features, [^,]*," decision "${stderr}${stdout}")
+  string(REGEX MATCH "real-time budget: [^\n]*: [0-9]+ a frame" budget "${stderr}${stdout}")
   if(extra STREQUAL "")
-    set(expected "max 1000 features, rate and features by texture,")
+    set(expected "max 8192 features, rate and features by texture,")
+    set(expected_budget "at 10 frames a second: 1000 a frame")
   else()
-    set(expected "max 1000 features, guided matching,")
+    set(expected "max 8192 features, guided matching,")
+    set(expected_budget "at 5 frames a second: 2000 a frame")
   endif()
   if(NOT decision STREQUAL expected)
-    message(FATAL_ERROR "run --realtime ${extra}: '${decision}', expected '${expected}'")
+    message(FATAL_ERROR "run ${extra}: '${decision}', expected '${expected}'")
+  endif()
+  if(NOT budget MATCHES "${expected_budget}$")
+    message(FATAL_ERROR "run ${extra}: '${budget}', expected '... ${expected_budget}'")
   endif()
 endforeach()
+# --preset takes realtime or paper.
+expect_exit(2 "--preset: fast not in {realtime,paper}"
+            run "${WORK}/dataset" --out "${WORK}/out_preset" --preset fast)
 file(REMOVE_RECURSE "${WORK}")

@@ -132,7 +132,7 @@ struct PipelineOptions {
   // Static trimming and downsampling (default: trimmed, 10 Hz, the paper).
   FrameSelectionOptions frame_selection;
   // The frame rate and the feature count decided from the images' texture
-  // (texture_probe.h; off by default, on with --realtime).
+  // (texture_probe.h; off by default, on in the real-time preset).
   TextureProbeOptions texture_probe;
   // The real-time budget of features a second of recording (texture_probe.h;
   // off by default, on in `viosfm run`'s real-time preset).

@@ -39,9 +39,9 @@
 namespace viosfm {
 
 struct TextureProbeOptions {
-  // Decide the rate and the feature count from the texture (`viosfm run
-  // --realtime` turns it on; --rate or --max-features given with it turn it
-  // off). Default false: the rate and the feature count as set.
+  // Decide the rate and the feature count from the texture (`viosfm run`'s
+  // real-time preset turns it on; --rate or --max-features given with it turn
+  // it off). Default false: the rate and the feature count as set.
   bool enable = false;
   // Frames probed, evenly spread over the frames to select (>= 1). Default 24.
   int num_frames = 24;
