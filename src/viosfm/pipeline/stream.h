@@ -51,6 +51,7 @@ struct StreamOutput {
   PipelineSummary probe;
   double frame_rate_hz = 0.0;
   int max_num_features = 0;
+  int max_image_size = 0;
 };
 
 // s of a followed recording's first images its texture probe looks at (the

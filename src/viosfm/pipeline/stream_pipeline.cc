@@ -153,6 +153,7 @@ void TakeFollowedRecording(StreamOutput* streamed, StreamSource* source, Pipelin
   summary->texture_probe_message = streamed->probe.texture_probe_message;
   options->frame_selection.target_rate_hz = streamed->frame_rate_hz;
   options->sift.max_num_features = streamed->max_num_features;
+  options->sift.max_image_size = streamed->max_image_size;
   summary->frame_rate_hz = streamed->frame_rate_hz;
   summary->max_num_features = streamed->max_num_features;
   *fingerprint = FingerprintOfInputs(*options);

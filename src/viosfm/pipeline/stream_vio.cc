@@ -113,11 +113,13 @@ void Stream::FollowRecording(const Timer& stream_timer, double* vio_seconds) {
         }
         VIOSFM_LOG(INFO) << "run: --follow: the texture probe takes the recording's first "
                          << kFollowProbeWindowS << " s for the whole";
-        ResolveRateByTexture(so_far, frame_cache_, &options_, &out_.probe);
-        prefetch_->SetSiftOptions(options_.EffectiveSiftOptions());
       }
+      // Without the probe the feature budget is settled at once, at the target rate.
+      ResolveRateByTexture(so_far, frame_cache_, &options_, &out_.probe);
+      prefetch_->SetSiftOptions(options_.EffectiveSiftOptions());
       out_.frame_rate_hz = options_.frame_selection.target_rate_hz;
       out_.max_num_features = options_.sift.max_num_features;
+      out_.max_image_size = options_.sift.max_image_size;
       selection.emplace(options_.frame_selection);
     };
     size_t released = 0;  // frames whose selection is decided

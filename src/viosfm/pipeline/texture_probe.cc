@@ -27,7 +27,9 @@ std::string FeatureBudgetOptions::Validate() const {
 
 double ReconstructionRateHz(const Sequence& sequence, double target_rate_hz) {
   const size_t n = sequence.images.size();
-  if (sequence.unordered || n < 2) return 0.0;
+  if (sequence.unordered) return 0.0;
+  // A recording not yet long enough to time is taken at its target rate.
+  if (n < 2) return std::max(0.0, target_rate_hz);
   const double span_s =
       NsToSeconds(sequence.images.back().timestamp_ns - sequence.images.front().timestamp_ns);
   if (!(span_s > 0.0)) return 0.0;

@@ -113,7 +113,8 @@ bool SettledByFeatureBudget(const std::string& key);
 
 // The frames a second a run reconstructs: the selection's target rate, or
 // the camera's where that is slower or no target is set (0: every frame);
-// 0 for a photo collection without stamps or a single image.
+// the target rate for fewer than two images (a recording just begun); 0
+// for a photo collection without stamps.
 double ReconstructionRateHz(const Sequence& sequence, double target_rate_hz);
 
 // Applies the budget at `rate_hz` to `sift`; returns a line saying what it

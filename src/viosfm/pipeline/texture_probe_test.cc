@@ -198,6 +198,9 @@ TEST(FeatureBudget, SpreadsTheFeaturesOverTheFramesOfASecond) {
   EXPECT_DOUBLE_EQ(ReconstructionRateHz(sequence, 50.0), 20.0);
   sequence.unordered = true;
   EXPECT_EQ(ReconstructionRateHz(sequence, 10.0), 0.0);
+  Sequence just_begun;
+  just_begun.images.resize(1);
+  EXPECT_DOUBLE_EQ(ReconstructionRateHz(just_begun, 10.0), 10.0);
 }
 
 }  // namespace
