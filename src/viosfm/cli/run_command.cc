@@ -120,29 +120,8 @@ constexpr const char* kRunExamples =
     "`viosfm run --help-all` lists every flag; `viosfm run --list-options` every option key "
     "for --set.";
 
-}  // namespace
-
-void RegisterRun(CLI::App& app) {
-  auto args = std::make_shared<RunArguments>();
-  CLI::App* command = app.add_subcommand(
-      "run",
-      "Reconstruct a dataset (EuRoC folder, bag or images) into a model. "
-      "The steps: VIO poses, features, VIO-aided verification, batched mapping with "
-      "relative-pose constraints and bundle adjustment, evaluation against ground truth. Writes "
-      "the COLMAP model (model/, model_txt/), points.ply, trajectories, eval.json "
-      "and, last, summary.json to --out; a re-run into the same folder reuses the stored "
-      "features and matches when fingerprint.json says they were made from the same inputs and "
-      "options.");
-  command->footer(kRunExamples);
-  command
-      ->add_option("dataset", args->dataset,
-                   "A EuRoC folder (containing mav0/), a folder of images, or a bag (ROS 1 .bag; "
-                   "ROS 2 .db3, .mcap or bag folder)")
-      ->required();
-  command->add_option("--out", args->out, "Output folder (created if missing)")->required();
-  AddCalibrationOptions(command, &args->options.calibration);
-  AddDatasetCheckOptions(command, &args->options.dataset_checks);
-  AddBagOptions(command, &args->bag);
+// The preset options, defined before the flags that set one option each.
+void AddPresetOptions(CLI::App* command, const std::shared_ptr<RunArguments>& args) {
   // `viosfm run` starts from the real-time preset; --preset is defined
   // before the flags that set one option each: CLI11 runs the callbacks in
   // the order of definition, so those flags (and --set) override it.
@@ -162,6 +141,10 @@ void RegisterRun(CLI::App& app) {
   command->add_flag_callback(
       "--realtime", [args] { ApplyPreset(RunPreset::kRealtime, &args->options); },
       "The same as --preset realtime");
+}
+
+// The flags bound to one option each (cli/option_flags.h).
+void AddRunOptionFlags(CLI::App* command, const std::shared_ptr<RunArguments>& args) {
   // A rate or a feature count given by the user is kept: the texture probe
   // and the feature budget would change it.
   const OptionTarget target = MakeOptionTarget(
@@ -202,8 +185,10 @@ void RegisterRun(CLI::App& app) {
                   "--threads",
                   "--seed",
                   "--no-progress"});
-  AddVerificationBandOptions(command, &args->band);
-  AddVioUncertaintyOptions(command, &args->vio_uncertainty);
+}
+
+// The flags of the run as a whole: --overwrite, --set, --list-options.
+void AddRunControlOptions(CLI::App* command, const std::shared_ptr<RunArguments>& args) {
   command->add_flag("--overwrite", args->options.overwrite,
                     "Remove the stored database and outputs of an earlier run in --out and start "
                     "afresh (without it a re-run reuses them, and refuses a folder whose "
@@ -220,6 +205,10 @@ void RegisterRun(CLI::App& app) {
       },
       "List every option key (for --set) with its default, whether it shapes the stored "
       "features and matches, the flag that sets it, and its help; then exit");
+}
+
+// The help's sections: the shown ones first, the others under --help-all.
+void SetRunSections(CLI::App* command) {
   SetOptionSections(
       command,
       {{"Run",
@@ -251,6 +240,37 @@ void RegisterRun(CLI::App& app) {
        {kVioUncertaintyGroup, false, VioUncertaintyFlagNames()},
        {"A stream, a recording followed", false, {"--stream", "--follow", "--follow-idle"}},
        {"Run: more", false, {"--seed", "--no-progress"}}});
+}
+
+}  // namespace
+
+void RegisterRun(CLI::App& app) {
+  auto args = std::make_shared<RunArguments>();
+  CLI::App* command = app.add_subcommand(
+      "run",
+      "Reconstruct a dataset (EuRoC folder, bag or images) into a model. "
+      "The steps: VIO poses, features, VIO-aided verification, batched mapping with "
+      "relative-pose constraints and bundle adjustment, evaluation against ground truth. Writes "
+      "the COLMAP model (model/, model_txt/), points.ply, trajectories, eval.json "
+      "and, last, summary.json to --out; a re-run into the same folder reuses the stored "
+      "features and matches when fingerprint.json says they were made from the same inputs and "
+      "options.");
+  command->footer(kRunExamples);
+  command
+      ->add_option("dataset", args->dataset,
+                   "A EuRoC folder (containing mav0/), a folder of images, or a bag (ROS 1 .bag; "
+                   "ROS 2 .db3, .mcap or bag folder)")
+      ->required();
+  command->add_option("--out", args->out, "Output folder (created if missing)")->required();
+  AddCalibrationOptions(command, &args->options.calibration);
+  AddDatasetCheckOptions(command, &args->options.dataset_checks);
+  AddBagOptions(command, &args->bag);
+  AddPresetOptions(command, args);
+  AddRunOptionFlags(command, args);
+  AddVerificationBandOptions(command, &args->band);
+  AddVioUncertaintyOptions(command, &args->vio_uncertainty);
+  AddRunControlOptions(command, args);
+  SetRunSections(command);
   command->callback([args] { RunRun(*args); });
 }
 
