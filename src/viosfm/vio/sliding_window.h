@@ -226,6 +226,7 @@ class SlidingWindowEstimator {
  private:
   struct Frame;
   struct Landmark;
+  struct WindowProblem;
 
   bool IsKeyframe(const Frame& frame, const FrameFeatures& features) const;
   void ClearWindow();
@@ -245,6 +246,18 @@ class SlidingWindowEstimator {
   // Returns the marginal covariance of the newest pose (see
   // WindowFrameEstimate) when options_.compute_covariance, else zero.
   Eigen::Matrix<double, 6, 6> Optimize(const std::vector<Landmark*>& landmarks);
+  // Optimize's steps: the window's states and the landmarks' inverse depths
+  // copied into one problem, its factors, the solve, the copy back, and the
+  // newest pose's covariance.
+  void AddStateBlocks(WindowProblem& window) const;
+  void AddPriorFactor(WindowProblem& window) const;
+  void AddImuFactors(WindowProblem& window);
+  void AddLandmarkFactors(WindowProblem& window, const std::vector<Landmark*>& landmarks) const;
+  void AddRelocalizationFactors(WindowProblem& window) const;
+  // Returns whether the solution is usable.
+  bool SolveWindow(WindowProblem& window, bool no_landmarks) const;
+  void CopySolutionBack(const WindowProblem& window, const std::vector<Landmark*>& landmarks);
+  Eigen::Matrix<double, 6, 6> NewestPoseCovariance(WindowProblem& window, int num_depths) const;
   // Drops the landmarks behind a camera, out of the depth range, or with an
   // observation farther than max_reprojection_error_px from its projection,
   // with their observations in the window (their tracks start again as new
