@@ -111,6 +111,31 @@ struct SlidingWindowEstimator::WindowProblem {
   double* inverse_depths = nullptr;  // after the states in values
 };
 
+// A track's observations in the window: the cameras' projection matrices,
+// the normalised points and the frames' indices, oldest first.
+struct SlidingWindowEstimator::TrackRays {
+  std::vector<Matrix3x4d> poses;
+  std::vector<Eigen::Vector2d> points;
+  std::vector<size_t> frame_indices;
+};
+
+// A track's point from its observations from some index on, its widest ray
+// angle (that first observation against the others), and whether every
+// observation lies in the depth range and within max_reprojection_error_px.
+struct SlidingWindowEstimator::TrackTriangulation {
+  Eigen::Vector3d point;
+  double angle = 0.0;
+  bool consistent = true;
+};
+
+// A landmark with less parallax than min_triangulation_angle_deg, with its
+// angle and inverse depth.
+struct SlidingWindowEstimator::WeakLandmark {
+  Landmark* landmark;
+  double angle;
+  double inverse_depth;
+};
+
 namespace {
 
 ImuState StateOf(const ImuStateParameters& parameters, timestamp_ns_t timestamp_ns) {
@@ -424,86 +449,22 @@ void SlidingWindowEstimator::TriangulateLandmarks() {
   for (const auto& [track_id, landmark] : landmarks_) {
     if (landmark.triangulated && newest->observations.count(track_id) > 0) ++newest_seen;
   }
-  // Landmarks with less parallax than min_angle but at least fallback_angle,
-  // with their angle, inverse depth, and whether the newest frame sees them.
-  struct Candidate {
-    Landmark* landmark;
-    double angle;
-    double inverse_depth;
-  };
-  std::vector<Candidate> weak;
-  std::vector<Matrix3x4d> poses;
-  std::vector<Eigen::Vector2d> points;
-  std::vector<size_t> frame_indices;
+  // Landmarks with less parallax than min_angle but at least fallback_angle.
+  std::vector<WeakLandmark> weak;
+  TrackRays rays;
   for (auto& [track_id, landmark] : landmarks_) {
     if (landmark.triangulated || landmark.num_observations < 2) continue;
-    poses.clear();
-    points.clear();
-    frame_indices.clear();
-    for (size_t k = 0; k < frames_.size(); ++k) {
-      const auto it = frames_[k]->observations.find(track_id);
-      if (it == frames_[k]->observations.end()) continue;
-      poses.push_back(cams_from_world[k]);
-      points.push_back(it->second);
-      frame_indices.push_back(k);
-    }
-    if (points.size() < 2) continue;
-    // The observations from `first` on: the point, its widest ray angle
-    // (first against the others), and whether every observation lies in the
-    // depth range and within max_reprojection_error_px of it.
-    struct Triangulated {
-      Eigen::Vector3d point;
-      double angle = 0.0;
-      bool consistent = true;
-    };
-    const auto triangulate = [&](size_t first) -> std::optional<Triangulated> {
-      const std::vector<Matrix3x4d> used_poses(poses.begin() + first, poses.end());
-      const std::vector<Eigen::Vector2d> used_points(points.begin() + first, points.end());
-      const std::optional<Eigen::Vector3d> point = TriangulateDlt(used_poses, used_points);
-      if (!point || !point->allFinite()) return std::nullopt;
-      Triangulated result{*point};
-      for (size_t k = first + 1; k < frame_indices.size(); ++k) {
-        result.angle = std::max(
-            result.angle,
-            TriangulationAngle(centers[frame_indices[first]], centers[frame_indices[k]], *point));
-      }
-      for (size_t k = first; k < poses.size() && result.consistent; ++k) {
-        const Eigen::Vector3d in_cam = poses[k] * point->homogeneous();
-        if (in_cam.z() < options_.min_depth_m || in_cam.z() > options_.max_depth_m) {
-          result.consistent = false;
-        }
-        const double error_px = (in_cam.hnormalized() - points[k]).norm() * focal_length_px_;
-        if (error_px > options_.max_reprojection_error_px) result.consistent = false;
-      }
-      return result;
-    };
-    std::optional<Triangulated> triangulated = triangulate(0);
+    CollectRays(track_id, cams_from_world, &rays);
+    if (rays.points.size() < 2) continue;
+    std::optional<TrackTriangulation> triangulated = TriangulateRays(rays, centers, 0);
     if (!triangulated || triangulated->angle < std::min(min_angle, fallback_angle)) continue;
     if (!triangulated->consistent) {
-      // Some observation disagrees (the track drifted, or a frame's corners
-      // were off): the track goes on from the longest run of its newest
-      // observations that agree, its older ones dropped, so that a stretch
-      // of bad frames in the window does not hold it back until they leave.
-      size_t first = 1;
-      for (; first + 1 < points.size(); ++first) {
-        triangulated = triangulate(first);
-        if (triangulated && triangulated->consistent) break;
-      }
-      if (first + 1 >= points.size()) continue;
-      for (size_t k = 0; k < first; ++k) {
-        frames_[frame_indices[k]]->observations.erase(track_id);
-        --landmark.num_observations;
-      }
-      landmark.anchor = frames_[frame_indices[first]].get();
-      poses.erase(poses.begin(), poses.begin() + static_cast<std::ptrdiff_t>(first));
-      points.erase(points.begin(), points.begin() + static_cast<std::ptrdiff_t>(first));
-      frame_indices.erase(frame_indices.begin(),
-                          frame_indices.begin() + static_cast<std::ptrdiff_t>(first));
-      if (triangulated->angle < std::min(min_angle, fallback_angle)) continue;
+      triangulated = DropDisagreeingObservations(landmark, centers, &rays);
+      if (!triangulated || triangulated->angle < std::min(min_angle, fallback_angle)) continue;
     }
     const std::optional<Eigen::Vector3d> point = triangulated->point;
     const double best_angle = triangulated->angle;
-    const Frame& anchor = *frames_[frame_indices.front()];
+    const Frame& anchor = *frames_[rays.frame_indices.front()];
     VIOSFM_CHECK(&anchor == landmark.anchor);
     const double inverse_depth = InverseDepthOfPoint(
         StateOf(anchor.parameters, anchor.timestamp_ns).world_from_body, body_from_cam_, *point);
@@ -520,16 +481,88 @@ void SlidingWindowEstimator::TriangulateLandmarks() {
   // fallback_target_landmarks triangulated landmarks, its lower-parallax
   // tracks are triangulated too, widest angle first.
   if (!has_tracked_ || newest_seen >= options_.fallback_target_landmarks) return;
-  std::stable_sort(weak.begin(), weak.end(), [&](const Candidate& a, const Candidate& b) {
-    const bool a_newest = newest->observations.count(a.landmark->track_id) > 0;
-    const bool b_newest = newest->observations.count(b.landmark->track_id) > 0;
+  AcceptWeakLandmarks(*newest, newest_seen, &weak);
+}
+
+void SlidingWindowEstimator::CollectRays(uint64_t track_id,
+                                         const std::vector<Matrix3x4d>& cams_from_world,
+                                         TrackRays* rays) const {
+  rays->poses.clear();
+  rays->points.clear();
+  rays->frame_indices.clear();
+  for (size_t k = 0; k < frames_.size(); ++k) {
+    const auto it = frames_[k]->observations.find(track_id);
+    if (it == frames_[k]->observations.end()) continue;
+    rays->poses.push_back(cams_from_world[k]);
+    rays->points.push_back(it->second);
+    rays->frame_indices.push_back(k);
+  }
+}
+
+std::optional<SlidingWindowEstimator::TrackTriangulation> SlidingWindowEstimator::TriangulateRays(
+    const TrackRays& rays, const std::vector<Eigen::Vector3d>& centers, size_t first) const {
+  const std::vector<Matrix3x4d>& poses = rays.poses;
+  const std::vector<Eigen::Vector2d>& points = rays.points;
+  const std::vector<size_t>& frame_indices = rays.frame_indices;
+  const std::vector<Matrix3x4d> used_poses(poses.begin() + first, poses.end());
+  const std::vector<Eigen::Vector2d> used_points(points.begin() + first, points.end());
+  const std::optional<Eigen::Vector3d> point = TriangulateDlt(used_poses, used_points);
+  if (!point || !point->allFinite()) return std::nullopt;
+  TrackTriangulation result{*point};
+  for (size_t k = first + 1; k < frame_indices.size(); ++k) {
+    result.angle = std::max(result.angle, TriangulationAngle(centers[frame_indices[first]],
+                                                             centers[frame_indices[k]], *point));
+  }
+  for (size_t k = first; k < poses.size() && result.consistent; ++k) {
+    const Eigen::Vector3d in_cam = poses[k] * point->homogeneous();
+    if (in_cam.z() < options_.min_depth_m || in_cam.z() > options_.max_depth_m) {
+      result.consistent = false;
+    }
+    const double error_px = (in_cam.hnormalized() - points[k]).norm() * focal_length_px_;
+    if (error_px > options_.max_reprojection_error_px) result.consistent = false;
+  }
+  return result;
+}
+
+std::optional<SlidingWindowEstimator::TrackTriangulation>
+SlidingWindowEstimator::DropDisagreeingObservations(Landmark& landmark,
+                                                    const std::vector<Eigen::Vector3d>& centers,
+                                                    TrackRays* rays) {
+  // Some observation disagrees (the track drifted, or a frame's corners
+  // were off): the track goes on from the longest run of its newest
+  // observations that agree, its older ones dropped, so that a stretch
+  // of bad frames in the window does not hold it back until they leave.
+  std::optional<TrackTriangulation> triangulated;
+  size_t first = 1;
+  for (; first + 1 < rays->points.size(); ++first) {
+    triangulated = TriangulateRays(*rays, centers, first);
+    if (triangulated && triangulated->consistent) break;
+  }
+  if (first + 1 >= rays->points.size()) return std::nullopt;
+  for (size_t k = 0; k < first; ++k) {
+    frames_[rays->frame_indices[k]]->observations.erase(landmark.track_id);
+    --landmark.num_observations;
+  }
+  landmark.anchor = frames_[rays->frame_indices[first]].get();
+  const auto dropped = static_cast<std::ptrdiff_t>(first);
+  rays->poses.erase(rays->poses.begin(), rays->poses.begin() + dropped);
+  rays->points.erase(rays->points.begin(), rays->points.begin() + dropped);
+  rays->frame_indices.erase(rays->frame_indices.begin(), rays->frame_indices.begin() + dropped);
+  return triangulated;
+}
+
+void SlidingWindowEstimator::AcceptWeakLandmarks(const Frame& newest, int newest_seen,
+                                                 std::vector<WeakLandmark>* weak) {
+  std::stable_sort(weak->begin(), weak->end(), [&](const WeakLandmark& a, const WeakLandmark& b) {
+    const bool a_newest = newest.observations.count(a.landmark->track_id) > 0;
+    const bool b_newest = newest.observations.count(b.landmark->track_id) > 0;
     if (a_newest != b_newest) return a_newest;
     if (a.angle != b.angle) return a.angle > b.angle;
     return a.landmark->track_id < b.landmark->track_id;
   });
-  for (const Candidate& candidate : weak) {
+  for (const WeakLandmark& candidate : *weak) {
     if (newest_seen >= options_.fallback_target_landmarks) break;
-    if (newest->observations.count(candidate.landmark->track_id) == 0) break;
+    if (newest.observations.count(candidate.landmark->track_id) == 0) break;
     candidate.landmark->inverse_depth = candidate.inverse_depth;
     candidate.landmark->triangulated = true;
     ++newest_seen;

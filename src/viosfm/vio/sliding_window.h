@@ -41,6 +41,7 @@
 #include <Eigen/Core>
 #include <deque>
 #include <memory>
+#include <optional>
 #include <string>
 #include <unordered_map>
 #include <unordered_set>
@@ -227,6 +228,9 @@ class SlidingWindowEstimator {
   struct Frame;
   struct Landmark;
   struct WindowProblem;
+  struct TrackRays;
+  struct TrackTriangulation;
+  struct WeakLandmark;
 
   bool IsKeyframe(const Frame& frame, const FrameFeatures& features) const;
   void ClearWindow();
@@ -241,6 +245,18 @@ class SlidingWindowEstimator {
   void AppendFrame(std::unique_ptr<Frame> frame);
   void RemoveFrame(size_t index);
   void TriangulateLandmarks();
+  // TriangulateLandmarks' steps: a track's observations, its point from
+  // those from `first` on, the drop of its older observations that disagree
+  // (null when no newer run agrees), and the weak landmarks accepted while
+  // the newest frame sees too few.
+  void CollectRays(uint64_t track_id, const std::vector<Matrix3x4d>& cams_from_world,
+                   TrackRays* rays) const;
+  std::optional<TrackTriangulation> TriangulateRays(const TrackRays& rays,
+                                                    const std::vector<Eigen::Vector3d>& centers,
+                                                    size_t first) const;
+  std::optional<TrackTriangulation> DropDisagreeingObservations(
+      Landmark& landmark, const std::vector<Eigen::Vector3d>& centers, TrackRays* rays);
+  void AcceptWeakLandmarks(const Frame& newest, int newest_seen, std::vector<WeakLandmark>* weak);
   // Landmarks used in the optimisation: triangulated, seen twice or more.
   std::vector<Landmark*> SelectLandmarks();
   // Returns the marginal covariance of the newest pose (see
