@@ -522,48 +522,7 @@ VioFrameResult VisualInertialOdometry::ProcessFrame(const FrameFeatures& feature
   last_frame_imu_ns_ = frame.timestamp_ns;
 
   if (window_->initialized()) {
-    const WindowFrameEstimate estimate = window_->AddFrame(frame, imu_);
-    if (moving_start_pending_) {
-      // Posed once the first of the initialisation's keyframes has left the
-      // window (the others then carry the window's estimates), or now if
-      // the window was lost.
-      const std::vector<ImuState> window_states = window_->States();
-      const bool first_left =
-          window_states.empty() ||
-          std::none_of(window_states.begin(), window_states.end(), [&](const ImuState& state) {
-            return state.timestamp_ns == moving_start_keyframes_.front().timestamp_ns;
-          });
-      if (first_left) PoseMovingStart(window_states);
-    }
-    result.state = estimate.state;
-    result.status = estimate.status;
-    result.is_keyframe = estimate.is_keyframe;
-    result.num_landmarks = estimate.num_landmarks;
-    result.pose_covariance = estimate.pose_covariance;
-    result.num_map_points = estimate.num_map_points;
-    if (estimate.status == VioStatus::kLost) {
-      VIOSFM_LOG(WARNING) << "vio: lost at " << FormatNsAsSeconds(features.timestamp_ns, 3)
-                          << " s: " << estimate.message;
-      VioReset reset;
-      reset.timestamp_ns = features.timestamp_ns;
-      reset.message = estimate.message;
-      summary_.resets.push_back(reset);
-      relocalization_pending_ = false;
-      undecided_reset_ns_ = features.timestamp_ns;
-      init_keyframes_.clear();
-    } else if (relocalization_pending_ && NsToSeconds(frame.timestamp_ns - restart_ns_) >=
-                                              options_.window.relocalization_window_s) {
-      relocalization_pending_ = false;
-      undecided_reset_ns_.reset();
-      VioReset& reset = summary_.resets.back();
-      reset.relocalized = window_->relocalized();
-      reset.num_map_points = window_->num_relocalization_observations();
-      VIOSFM_LOG(INFO) << "vio: the restart after the reset at "
-                       << FormatNsAsSeconds(reset.timestamp_ns, 3) << " s "
-                       << (reset.relocalized ? "re-localised against the previous map"
-                                             : "did not re-localise (joined by the IMU alone)")
-                       << " (" << reset.num_map_points << " map point observations)";
-    }
+    TrackInWindow(frame, features.timestamp_ns, &result);
     Record(result);
     return result;
   }
@@ -574,65 +533,121 @@ VioFrameResult VisualInertialOdometry::ProcessFrame(const FrameFeatures& feature
     result.state = static_state_;
     result.state.timestamp_ns = frame.timestamp_ns;
   } else if (have_good_state_ && static_start_ && summary_.num_resets == 0) {
-    // The static start ended: the window starts from the static state
-    // carried forward by the IMU.
-    ImuState start = Propagate(last_good_state_, frame.timestamp_ns);
-    if (!start.velocity_in_world.allFinite() ||
-        start.velocity_in_world.norm() > options_.window.max_speed_mps) {
-      start = last_good_state_;
-      start.timestamp_ns = frame.timestamp_ns;
-      start.velocity_in_world.setZero();
-    }
-    // Carried by the IMU alone from the end of the static interval: the
-    // velocity is known less well the longer that took.
-    InitialStateSigmas sigmas = options_.static_start_sigmas;
-    const double carried_s = NsToSeconds(frame.timestamp_ns - last_good_state_.timestamp_ns);
-    sigmas.velocity_mps =
-        std::hypot(sigmas.velocity_mps, kCarriedVelocitySigmaPerSecond * carried_s);
-    StartWindow(start, sigmas, frame);
-    result.state = start;
+    StartFromStaticState(frame, &result);
   } else {
-    // A moving start, or a restart after kLost: keyframes are collected until
-    // the visual-inertial initialisation succeeds on them (a restart thus
-    // takes its velocity and gravity from the images and the IMU together,
-    // not from an IMU propagation across the failure, which may be what
-    // failed). Meanwhile a restart's frames are carried by the IMU from the
-    // last good state (status kImuOnly); a moving start's have no pose.
-    result.state.timestamp_ns = frame.timestamp_ns;
-    result.has_pose = false;
-    std::optional<ImuState> carried;
-    if (have_good_state_) {
-      carried = Propagate(last_good_state_, frame.timestamp_ns);
-      if (carried->velocity_in_world.allFinite() &&
-          carried->velocity_in_world.norm() <= options_.window.max_speed_mps) {
-        result.state = *carried;
-        result.status = VioStatus::kImuOnly;
-        result.has_pose = true;
-      } else {
-        carried.reset();
-      }
-    }
-    if (TryVisualInertialInitialization(frame, carried ? &*carried : nullptr)) {
-      result.state = window_->NewestState();
-      result.status = VioStatus::kInitializing;
-      result.has_pose = true;
-      if (!summary_.resets.empty()) {
-        relocalization_pending_ = true;
-        restart_ns_ = frame.timestamp_ns;
-      }
-    } else if (!result.has_pose && summary_.resets.empty() && options_.pose_moving_start) {
-      moving_start_frames_.emplace_back(features.timestamp_ns, frame);
-      // Held for kMovingStartHoldS at most: older frames' corners have left
-      // the view by the time an initialisation succeeds, and a recording
-      // that never initialises must not hold every frame.
-      while (frame.timestamp_ns - moving_start_frames_.front().second.timestamp_ns >
-             SecondsToNs(kMovingStartHoldS)) {
-        moving_start_frames_.pop_front();
-      }
-    }
+    CollectForInitialization(frame, features.timestamp_ns, &result);
   }
   Record(result);
   return result;
+}
+
+void VisualInertialOdometry::TrackInWindow(const FrameFeatures& frame, timestamp_ns_t camera_ns,
+                                           VioFrameResult* result) {
+  const WindowFrameEstimate estimate = window_->AddFrame(frame, imu_);
+  if (moving_start_pending_) {
+    // Posed once the first of the initialisation's keyframes has left the
+    // window (the others then carry the window's estimates), or now if
+    // the window was lost.
+    const std::vector<ImuState> window_states = window_->States();
+    const bool first_left =
+        window_states.empty() ||
+        std::none_of(window_states.begin(), window_states.end(), [&](const ImuState& state) {
+          return state.timestamp_ns == moving_start_keyframes_.front().timestamp_ns;
+        });
+    if (first_left) PoseMovingStart(window_states);
+  }
+  result->state = estimate.state;
+  result->status = estimate.status;
+  result->is_keyframe = estimate.is_keyframe;
+  result->num_landmarks = estimate.num_landmarks;
+  result->pose_covariance = estimate.pose_covariance;
+  result->num_map_points = estimate.num_map_points;
+  if (estimate.status == VioStatus::kLost) {
+    VIOSFM_LOG(WARNING) << "vio: lost at " << FormatNsAsSeconds(camera_ns, 3)
+                        << " s: " << estimate.message;
+    VioReset reset;
+    reset.timestamp_ns = camera_ns;
+    reset.message = estimate.message;
+    summary_.resets.push_back(reset);
+    relocalization_pending_ = false;
+    undecided_reset_ns_ = camera_ns;
+    init_keyframes_.clear();
+  } else if (relocalization_pending_ && NsToSeconds(frame.timestamp_ns - restart_ns_) >=
+                                            options_.window.relocalization_window_s) {
+    relocalization_pending_ = false;
+    undecided_reset_ns_.reset();
+    VioReset& reset = summary_.resets.back();
+    reset.relocalized = window_->relocalized();
+    reset.num_map_points = window_->num_relocalization_observations();
+    VIOSFM_LOG(INFO) << "vio: the restart after the reset at "
+                     << FormatNsAsSeconds(reset.timestamp_ns, 3) << " s "
+                     << (reset.relocalized ? "re-localised against the previous map"
+                                           : "did not re-localise (joined by the IMU alone)")
+                     << " (" << reset.num_map_points << " map point observations)";
+  }
+}
+
+void VisualInertialOdometry::StartFromStaticState(const FrameFeatures& frame,
+                                                  VioFrameResult* result) {
+  // The static start ended: the window starts from the static state
+  // carried forward by the IMU.
+  ImuState start = Propagate(last_good_state_, frame.timestamp_ns);
+  if (!start.velocity_in_world.allFinite() ||
+      start.velocity_in_world.norm() > options_.window.max_speed_mps) {
+    start = last_good_state_;
+    start.timestamp_ns = frame.timestamp_ns;
+    start.velocity_in_world.setZero();
+  }
+  // Carried by the IMU alone from the end of the static interval: the
+  // velocity is known less well the longer that took.
+  InitialStateSigmas sigmas = options_.static_start_sigmas;
+  const double carried_s = NsToSeconds(frame.timestamp_ns - last_good_state_.timestamp_ns);
+  sigmas.velocity_mps = std::hypot(sigmas.velocity_mps, kCarriedVelocitySigmaPerSecond * carried_s);
+  StartWindow(start, sigmas, frame);
+  result->state = start;
+}
+
+void VisualInertialOdometry::CollectForInitialization(const FrameFeatures& frame,
+                                                      timestamp_ns_t camera_ns,
+                                                      VioFrameResult* result) {
+  // A moving start, or a restart after kLost: keyframes are collected until
+  // the visual-inertial initialisation succeeds on them (a restart thus
+  // takes its velocity and gravity from the images and the IMU together,
+  // not from an IMU propagation across the failure, which may be what
+  // failed). Meanwhile a restart's frames are carried by the IMU from the
+  // last good state (status kImuOnly); a moving start's have no pose.
+  result->state.timestamp_ns = frame.timestamp_ns;
+  result->has_pose = false;
+  std::optional<ImuState> carried;
+  if (have_good_state_) {
+    carried = Propagate(last_good_state_, frame.timestamp_ns);
+    if (carried->velocity_in_world.allFinite() &&
+        carried->velocity_in_world.norm() <= options_.window.max_speed_mps) {
+      result->state = *carried;
+      result->status = VioStatus::kImuOnly;
+      result->has_pose = true;
+    } else {
+      carried.reset();
+    }
+  }
+  if (TryVisualInertialInitialization(frame, carried ? &*carried : nullptr)) {
+    result->state = window_->NewestState();
+    result->status = VioStatus::kInitializing;
+    result->has_pose = true;
+    if (!summary_.resets.empty()) {
+      relocalization_pending_ = true;
+      restart_ns_ = frame.timestamp_ns;
+    }
+  } else if (!result->has_pose && summary_.resets.empty() && options_.pose_moving_start) {
+    moving_start_frames_.emplace_back(camera_ns, frame);
+    // Held for kMovingStartHoldS at most: older frames' corners have left
+    // the view by the time an initialisation succeeds, and a recording
+    // that never initialises must not hold every frame.
+    while (frame.timestamp_ns - moving_start_frames_.front().second.timestamp_ns >
+           SecondsToNs(kMovingStartHoldS)) {
+      moving_start_frames_.pop_front();
+    }
+  }
 }
 
 // IMU a frame waits for beyond its stamp (IMU clock) before it is tracked:
