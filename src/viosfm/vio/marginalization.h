@@ -104,6 +104,20 @@ class Marginalizer {
     std::unique_ptr<ceres::LossFunction> loss;
     std::vector<double*> blocks;
   };
+  struct Layout;
+  struct Linearization;
+
+  // Marginalize's steps: the blocks in elimination order, the system H dx = b
+  // of the factors (false when a plus-Jacobian or a factor fails to
+  // evaluate), and the prior from the kept blocks' information H*, b*.
+  Layout OrderBlocks() const;
+  bool ComputePlusJacobians(const Layout& layout, Linearization* linearization) const;
+  bool AddFactor(const Factor& factor, const Layout& layout, Linearization* linearization) const;
+  std::shared_ptr<LinearPrior> PriorFromInformation(const Layout& layout,
+                                                    const Eigen::MatrixXd& H_star,
+                                                    const Eigen::VectorXd& b_star,
+                                                    double eigenvalue_threshold) const;
+
   std::unordered_map<double*, ParameterInfo> parameters_;
   std::vector<double*> parameter_order_;  // declaration order
   std::unordered_set<double*> marginalized_;

@@ -522,48 +522,7 @@ VioFrameResult VisualInertialOdometry::ProcessFrame(const FrameFeatures& feature
   last_frame_imu_ns_ = frame.timestamp_ns;
 
   if (window_->initialized()) {
-    const WindowFrameEstimate estimate = window_->AddFrame(frame, imu_);
-    if (moving_start_pending_) {
-      // Posed once the first of the initialisation's keyframes has left the
-      // window (the others then carry the window's estimates), or now if
-      // the window was lost.
-      const std::vector<ImuState> window_states = window_->States();
-      const bool first_left =
-          window_states.empty() ||
-          std::none_of(window_states.begin(), window_states.end(), [&](const ImuState& state) {
-            return state.timestamp_ns == moving_start_keyframes_.front().timestamp_ns;
-          });
-      if (first_left) PoseMovingStart(window_states);
-    }
-    result.state = estimate.state;
-    result.status = estimate.status;
-    result.is_keyframe = estimate.is_keyframe;
-    result.num_landmarks = estimate.num_landmarks;
-    result.pose_covariance = estimate.pose_covariance;
-    result.num_map_points = estimate.num_map_points;
-    if (estimate.status == VioStatus::kLost) {
-      VIOSFM_LOG(WARNING) << "vio: lost at " << FormatNsAsSeconds(features.timestamp_ns, 3)
-                          << " s: " << estimate.message;
-      VioReset reset;
-      reset.timestamp_ns = features.timestamp_ns;
-      reset.message = estimate.message;
-      summary_.resets.push_back(reset);
-      relocalization_pending_ = false;
-      undecided_reset_ns_ = features.timestamp_ns;
-      init_keyframes_.clear();
-    } else if (relocalization_pending_ && NsToSeconds(frame.timestamp_ns - restart_ns_) >=
-                                              options_.window.relocalization_window_s) {
-      relocalization_pending_ = false;
-      undecided_reset_ns_.reset();
-      VioReset& reset = summary_.resets.back();
-      reset.relocalized = window_->relocalized();
-      reset.num_map_points = window_->num_relocalization_observations();
-      VIOSFM_LOG(INFO) << "vio: the restart after the reset at "
-                       << FormatNsAsSeconds(reset.timestamp_ns, 3) << " s "
-                       << (reset.relocalized ? "re-localised against the previous map"
-                                             : "did not re-localise (joined by the IMU alone)")
-                       << " (" << reset.num_map_points << " map point observations)";
-    }
+    TrackInWindow(frame, features.timestamp_ns, &result);
     Record(result);
     return result;
   }
@@ -574,65 +533,121 @@ VioFrameResult VisualInertialOdometry::ProcessFrame(const FrameFeatures& feature
     result.state = static_state_;
     result.state.timestamp_ns = frame.timestamp_ns;
   } else if (have_good_state_ && static_start_ && summary_.num_resets == 0) {
-    // The static start ended: the window starts from the static state
-    // carried forward by the IMU.
-    ImuState start = Propagate(last_good_state_, frame.timestamp_ns);
-    if (!start.velocity_in_world.allFinite() ||
-        start.velocity_in_world.norm() > options_.window.max_speed_mps) {
-      start = last_good_state_;
-      start.timestamp_ns = frame.timestamp_ns;
-      start.velocity_in_world.setZero();
-    }
-    // Carried by the IMU alone from the end of the static interval: the
-    // velocity is known less well the longer that took.
-    InitialStateSigmas sigmas = options_.static_start_sigmas;
-    const double carried_s = NsToSeconds(frame.timestamp_ns - last_good_state_.timestamp_ns);
-    sigmas.velocity_mps =
-        std::hypot(sigmas.velocity_mps, kCarriedVelocitySigmaPerSecond * carried_s);
-    StartWindow(start, sigmas, frame);
-    result.state = start;
+    StartFromStaticState(frame, &result);
   } else {
-    // A moving start, or a restart after kLost: keyframes are collected until
-    // the visual-inertial initialisation succeeds on them (a restart thus
-    // takes its velocity and gravity from the images and the IMU together,
-    // not from an IMU propagation across the failure, which may be what
-    // failed). Meanwhile a restart's frames are carried by the IMU from the
-    // last good state (status kImuOnly); a moving start's have no pose.
-    result.state.timestamp_ns = frame.timestamp_ns;
-    result.has_pose = false;
-    std::optional<ImuState> carried;
-    if (have_good_state_) {
-      carried = Propagate(last_good_state_, frame.timestamp_ns);
-      if (carried->velocity_in_world.allFinite() &&
-          carried->velocity_in_world.norm() <= options_.window.max_speed_mps) {
-        result.state = *carried;
-        result.status = VioStatus::kImuOnly;
-        result.has_pose = true;
-      } else {
-        carried.reset();
-      }
-    }
-    if (TryVisualInertialInitialization(frame, carried ? &*carried : nullptr)) {
-      result.state = window_->NewestState();
-      result.status = VioStatus::kInitializing;
-      result.has_pose = true;
-      if (!summary_.resets.empty()) {
-        relocalization_pending_ = true;
-        restart_ns_ = frame.timestamp_ns;
-      }
-    } else if (!result.has_pose && summary_.resets.empty() && options_.pose_moving_start) {
-      moving_start_frames_.emplace_back(features.timestamp_ns, frame);
-      // Held for kMovingStartHoldS at most: older frames' corners have left
-      // the view by the time an initialisation succeeds, and a recording
-      // that never initialises must not hold every frame.
-      while (frame.timestamp_ns - moving_start_frames_.front().second.timestamp_ns >
-             SecondsToNs(kMovingStartHoldS)) {
-        moving_start_frames_.pop_front();
-      }
-    }
+    CollectForInitialization(frame, features.timestamp_ns, &result);
   }
   Record(result);
   return result;
+}
+
+void VisualInertialOdometry::TrackInWindow(const FrameFeatures& frame, timestamp_ns_t camera_ns,
+                                           VioFrameResult* result) {
+  const WindowFrameEstimate estimate = window_->AddFrame(frame, imu_);
+  if (moving_start_pending_) {
+    // Posed once the first of the initialisation's keyframes has left the
+    // window (the others then carry the window's estimates), or now if
+    // the window was lost.
+    const std::vector<ImuState> window_states = window_->States();
+    const bool first_left =
+        window_states.empty() ||
+        std::none_of(window_states.begin(), window_states.end(), [&](const ImuState& state) {
+          return state.timestamp_ns == moving_start_keyframes_.front().timestamp_ns;
+        });
+    if (first_left) PoseMovingStart(window_states);
+  }
+  result->state = estimate.state;
+  result->status = estimate.status;
+  result->is_keyframe = estimate.is_keyframe;
+  result->num_landmarks = estimate.num_landmarks;
+  result->pose_covariance = estimate.pose_covariance;
+  result->num_map_points = estimate.num_map_points;
+  if (estimate.status == VioStatus::kLost) {
+    VIOSFM_LOG(WARNING) << "vio: lost at " << FormatNsAsSeconds(camera_ns, 3)
+                        << " s: " << estimate.message;
+    VioReset reset;
+    reset.timestamp_ns = camera_ns;
+    reset.message = estimate.message;
+    summary_.resets.push_back(reset);
+    relocalization_pending_ = false;
+    undecided_reset_ns_ = camera_ns;
+    init_keyframes_.clear();
+  } else if (relocalization_pending_ && NsToSeconds(frame.timestamp_ns - restart_ns_) >=
+                                            options_.window.relocalization_window_s) {
+    relocalization_pending_ = false;
+    undecided_reset_ns_.reset();
+    VioReset& reset = summary_.resets.back();
+    reset.relocalized = window_->relocalized();
+    reset.num_map_points = window_->num_relocalization_observations();
+    VIOSFM_LOG(INFO) << "vio: the restart after the reset at "
+                     << FormatNsAsSeconds(reset.timestamp_ns, 3) << " s "
+                     << (reset.relocalized ? "re-localised against the previous map"
+                                           : "did not re-localise (joined by the IMU alone)")
+                     << " (" << reset.num_map_points << " map point observations)";
+  }
+}
+
+void VisualInertialOdometry::StartFromStaticState(const FrameFeatures& frame,
+                                                  VioFrameResult* result) {
+  // The static start ended: the window starts from the static state
+  // carried forward by the IMU.
+  ImuState start = Propagate(last_good_state_, frame.timestamp_ns);
+  if (!start.velocity_in_world.allFinite() ||
+      start.velocity_in_world.norm() > options_.window.max_speed_mps) {
+    start = last_good_state_;
+    start.timestamp_ns = frame.timestamp_ns;
+    start.velocity_in_world.setZero();
+  }
+  // Carried by the IMU alone from the end of the static interval: the
+  // velocity is known less well the longer that took.
+  InitialStateSigmas sigmas = options_.static_start_sigmas;
+  const double carried_s = NsToSeconds(frame.timestamp_ns - last_good_state_.timestamp_ns);
+  sigmas.velocity_mps = std::hypot(sigmas.velocity_mps, kCarriedVelocitySigmaPerSecond * carried_s);
+  StartWindow(start, sigmas, frame);
+  result->state = start;
+}
+
+void VisualInertialOdometry::CollectForInitialization(const FrameFeatures& frame,
+                                                      timestamp_ns_t camera_ns,
+                                                      VioFrameResult* result) {
+  // A moving start, or a restart after kLost: keyframes are collected until
+  // the visual-inertial initialisation succeeds on them (a restart thus
+  // takes its velocity and gravity from the images and the IMU together,
+  // not from an IMU propagation across the failure, which may be what
+  // failed). Meanwhile a restart's frames are carried by the IMU from the
+  // last good state (status kImuOnly); a moving start's have no pose.
+  result->state.timestamp_ns = frame.timestamp_ns;
+  result->has_pose = false;
+  std::optional<ImuState> carried;
+  if (have_good_state_) {
+    carried = Propagate(last_good_state_, frame.timestamp_ns);
+    if (carried->velocity_in_world.allFinite() &&
+        carried->velocity_in_world.norm() <= options_.window.max_speed_mps) {
+      result->state = *carried;
+      result->status = VioStatus::kImuOnly;
+      result->has_pose = true;
+    } else {
+      carried.reset();
+    }
+  }
+  if (TryVisualInertialInitialization(frame, carried ? &*carried : nullptr)) {
+    result->state = window_->NewestState();
+    result->status = VioStatus::kInitializing;
+    result->has_pose = true;
+    if (!summary_.resets.empty()) {
+      relocalization_pending_ = true;
+      restart_ns_ = frame.timestamp_ns;
+    }
+  } else if (!result->has_pose && summary_.resets.empty() && options_.pose_moving_start) {
+    moving_start_frames_.emplace_back(camera_ns, frame);
+    // Held for kMovingStartHoldS at most: older frames' corners have left
+    // the view by the time an initialisation succeeds, and a recording
+    // that never initialises must not hold every frame.
+    while (frame.timestamp_ns - moving_start_frames_.front().second.timestamp_ns >
+           SecondsToNs(kMovingStartHoldS)) {
+      moving_start_frames_.pop_front();
+    }
+  }
 }
 
 // IMU a frame waits for beyond its stamp (IMU clock) before it is tracked:
@@ -917,107 +932,78 @@ void VioRunner::Step(bool ended) {
   }
 }
 
-VioResult VioRunner::Finish(const std::filesystem::path& root) {
-  State& s = *state_;
-  if (s.imu.empty())
-    throw InputError(root.string(), 0, "VIO needs an IMU stream (mav0/imu0/data.csv)");
-  if (s.images.empty()) throw InputError(root.string(), 0, "no images");
-  Step(/*ended=*/true);
-  if (s.vio == nullptr) {
-    // Every frame in the startup: the offset from what they show.
-    if (!s.time_offset_done) s.EstimateTheTimeOffset();
-    s.StartWindow(/*ended=*/true);
-  }
-  VisualInertialOdometry& vio = *s.vio;
-  VioResult& result = s.result;
-  const std::vector<ImuSample>& imu = s.imu;
-  const size_t num_frames = std::min(s.images.size(), s.num_frames_limit);
-  // Samples the IMU dropped: said once; bridged in the preintegration up
-  // to max_imu_gap_s, breaks beyond (said as they were met).
-  size_t num_imu_gaps = 0;
+namespace {
+
+// Intervals between IMU samples longer than kMaxImuStepNs: all of them, and
+// those the preintegration bridges (at most max_gap_ns).
+struct ImuGaps {
+  size_t num_gaps = 0;
   size_t num_bridged = 0;
-  timestamp_ns_t longest_gap_ns = 0;
+  timestamp_ns_t longest_ns = 0;  // the longest interval between samples, gap or not
   timestamp_ns_t longest_bridged_ns = 0;
-  const timestamp_ns_t max_gap_ns = SecondsToNs(s.options.max_imu_gap_s);
+};
+
+ImuGaps FindImuGaps(const std::vector<ImuSample>& imu, timestamp_ns_t max_gap_ns) {
+  ImuGaps gaps;
   for (size_t i = 1; i < imu.size(); ++i) {
     const timestamp_ns_t gap_ns = imu[i].timestamp_ns - imu[i - 1].timestamp_ns;
-    if (gap_ns > kMaxImuStepNs) ++num_imu_gaps;
+    if (gap_ns > kMaxImuStepNs) ++gaps.num_gaps;
     if (gap_ns > kMaxImuStepNs && gap_ns <= max_gap_ns) {
-      ++num_bridged;
-      longest_bridged_ns = std::max(longest_bridged_ns, gap_ns);
+      ++gaps.num_bridged;
+      gaps.longest_bridged_ns = std::max(gaps.longest_bridged_ns, gap_ns);
     }
-    longest_gap_ns = std::max(longest_gap_ns, gap_ns);
+    gaps.longest_ns = std::max(gaps.longest_ns, gap_ns);
   }
-  if (num_bridged > 0) {
-    VIOSFM_LOG(WARNING) << "vio: the IMU stream has " << num_bridged
-                        << " gap(s) between samples longer than " << NsToSeconds(kMaxImuStepNs)
-                        << " s and at most max_imu_gap_s " << s.options.max_imu_gap_s
-                        << " s (the longest " << FormatNsAsSeconds(longest_bridged_ns, 3)
-                        << " s): bridged by readings interpolated linearly";
-  }
-  vio.FinishMovingStart();
-  s.PoseMovingStart();
-  s.Settle(result.frames.size());
-  s.progress->Finish();
-  result.summary = vio.summary();
-  VioSummary& summary = result.summary;
-  summary.time_offset = s.time_offset;
-  summary.num_frames_beyond_imu = s.num_beyond_imu;
-  const timestamp_ns_t last_imu_ns = imu.back().timestamp_ns;
-  if (s.num_beyond_imu > 0) {
-    VIOSFM_LOG(WARNING) << "vio: the last " << s.num_beyond_imu
-                        << " frame(s) lie after the last IMU sample ("
-                        << FormatNsAsSeconds(last_imu_ns, 3)
-                        << " s on the IMU clock, camera-IMU offset "
-                        << NsToSeconds(s.rig.cam_time_offset_ns) * 1e3 << " ms): no pose for them";
-  }
-  summary.num_segments = s.segment + 1;
-  summary.num_imu_gaps = num_imu_gaps;
-  summary.longest_imu_gap_s = NsToSeconds(longest_gap_ns);
-  summary.num_frames_without_pose = static_cast<size_t>(
-      std::count_if(result.frames.begin(), result.frames.end(),
-                    [](const VioFrameResult& frame) { return !frame.has_pose; }));
-  // Stretches on the IMU alone: from a stretch's first frame to the frame
-  // after it (to its last when it runs to the end).
-  for (size_t k = 0; k < result.frames.size();) {
-    if (result.frames[k].status != VioStatus::kImuOnly) {
+  return gaps;
+}
+
+// Stretches on the IMU alone: from a stretch's first frame to the frame
+// after it (to its last when it runs to the end).
+void CountImuOnlyStretches(const std::vector<VioFrameResult>& frames, VioSummary* summary) {
+  for (size_t k = 0; k < frames.size();) {
+    if (frames[k].status != VioStatus::kImuOnly) {
       ++k;
       continue;
     }
     size_t end = k;
-    while (end < result.frames.size() && result.frames[end].status == VioStatus::kImuOnly) ++end;
-    ++summary.num_imu_only_stretches;
-    const timestamp_ns_t until_ns =
-        result.frames[std::min(end, result.frames.size() - 1)].timestamp_ns;
-    const double length_s = NsToSeconds(until_ns - result.frames[k].timestamp_ns);
-    if (summary.longest_imu_only_from_ns < 0 || length_s > summary.longest_imu_only_s) {
-      summary.longest_imu_only_s = length_s;
-      summary.longest_imu_only_from_ns = result.frames[k].timestamp_ns;
+    while (end < frames.size() && frames[end].status == VioStatus::kImuOnly) ++end;
+    ++summary->num_imu_only_stretches;
+    const timestamp_ns_t until_ns = frames[std::min(end, frames.size() - 1)].timestamp_ns;
+    const double length_s = NsToSeconds(until_ns - frames[k].timestamp_ns);
+    if (summary->longest_imu_only_from_ns < 0 || length_s > summary->longest_imu_only_s) {
+      summary->longest_imu_only_s = length_s;
+      summary->longest_imu_only_from_ns = frames[k].timestamp_ns;
     }
     k = end;
   }
-  summary.cpu_seconds = ProcessCpuSeconds() - s.cpu_start;
-  summary.wall_seconds = s.timer.ElapsedSeconds();
+}
 
-  const SequenceImage& first_image = s.images.front();
+// Says how many frames ran on the IMU alone or were lost, when any did.
+void WarnImuOnlyFrames(const VioSummary& summary, timestamp_ns_t first_image_ns) {
   const size_t num_imu_only = summary.status_counts[static_cast<int>(VioStatus::kImuOnly)];
   const size_t num_lost = summary.status_counts[static_cast<int>(VioStatus::kLost)];
-  if (num_imu_only > 0 || num_lost > 0) {
-    VIOSFM_LOG(WARNING)
-        << "vio: " << num_imu_only << " of " << summary.num_frames << " frames (" << std::fixed
-        << std::setprecision(0)
-        << 100.0 * static_cast<double>(num_imu_only) /
-               static_cast<double>(std::max<size_t>(1, summary.num_frames))
-        << " %) ran on the IMU alone, in " << summary.num_imu_only_stretches
-        << " stretch(es), the longest " << std::setprecision(2) << summary.longest_imu_only_s
-        << " s from "
-        << (summary.longest_imu_only_from_ns >= 0
-                ? FormatNsAsSeconds(summary.longest_imu_only_from_ns - first_image.timestamp_ns, 2)
-                : std::string("-"))
-        << " s after the first image; " << num_lost << " frame(s) lost (" << summary.num_resets
-        << " reset(s)): their poses are the IMU's" << std::defaultfloat;
-  }
-  const SequenceImage& last_image = s.images[num_frames - 1];
+  if (num_imu_only == 0 && num_lost == 0) return;
+  VIOSFM_LOG(WARNING) << "vio: " << num_imu_only << " of " << summary.num_frames << " frames ("
+                      << std::fixed << std::setprecision(0)
+                      << 100.0 * static_cast<double>(num_imu_only) /
+                             static_cast<double>(std::max<size_t>(1, summary.num_frames))
+                      << " %) ran on the IMU alone, in " << summary.num_imu_only_stretches
+                      << " stretch(es), the longest " << std::setprecision(2)
+                      << summary.longest_imu_only_s << " s from "
+                      << (summary.longest_imu_only_from_ns >= 0
+                              ? FormatNsAsSeconds(summary.longest_imu_only_from_ns - first_image_ns,
+                                                  2)
+                              : std::string("-"))
+                      << " s after the first image; " << num_lost << " frame(s) lost ("
+                      << summary.num_resets << " reset(s)): their poses are the IMU's"
+                      << std::defaultfloat;
+}
+
+// The run in a sentence: the start, the initialisation, the moving start's
+// frames, the frames on the IMU alone, resets and IMU breaks.
+std::string SummaryMessage(const VioSummary& summary, const SensorRig& rig,
+                           timestamp_ns_t first_image_ns, timestamp_ns_t last_image_ns) {
+  const size_t num_imu_only = summary.status_counts[static_cast<int>(VioStatus::kImuOnly)];
   std::ostringstream message;
   if (summary.static_init.is_static()) {
     message << "static start detected (" << std::fixed << std::setprecision(2)
@@ -1027,10 +1013,10 @@ VioResult VioRunner::Finish(const std::filesystem::path& root) {
   }
   if (summary.visual_initialized) {
     message << "visual-inertial tracking from "
-            << FormatNsAsSeconds(summary.first_tracking_ns - first_image.timestamp_ns, 2)
+            << FormatNsAsSeconds(summary.first_tracking_ns - first_image_ns, 2)
             << " s after the first image";
   } else if (summary.static_init.is_static() &&
-             s.rig.CamToImuTime(last_image.timestamp_ns) <= summary.static_init.end_ns) {
+             rig.CamToImuTime(last_image_ns) <= summary.static_init.end_ns) {
     message << "not enough motion to initialise the visual part (the platform stays static)";
   } else {
     message << "the visual part was never initialised (not enough motion or landmarks)";
@@ -1054,7 +1040,66 @@ VioResult VioRunner::Finish(const std::filesystem::path& root) {
     message << "; " << summary.imu_breaks.size()
             << " IMU gap(s) longer than max_imu_gap_s broke the VIO into segments";
   }
-  summary.message = message.str();
+  return message.str();
+}
+
+}  // namespace
+
+VioResult VioRunner::Finish(const std::filesystem::path& root) {
+  State& s = *state_;
+  if (s.imu.empty())
+    throw InputError(root.string(), 0, "VIO needs an IMU stream (mav0/imu0/data.csv)");
+  if (s.images.empty()) throw InputError(root.string(), 0, "no images");
+  Step(/*ended=*/true);
+  if (s.vio == nullptr) {
+    // Every frame in the startup: the offset from what they show.
+    if (!s.time_offset_done) s.EstimateTheTimeOffset();
+    s.StartWindow(/*ended=*/true);
+  }
+  VisualInertialOdometry& vio = *s.vio;
+  VioResult& result = s.result;
+  const std::vector<ImuSample>& imu = s.imu;
+  const size_t num_frames = std::min(s.images.size(), s.num_frames_limit);
+  // Samples the IMU dropped: said once; bridged in the preintegration up
+  // to max_imu_gap_s, breaks beyond (said as they were met).
+  const ImuGaps gaps = FindImuGaps(imu, SecondsToNs(s.options.max_imu_gap_s));
+  if (gaps.num_bridged > 0) {
+    VIOSFM_LOG(WARNING) << "vio: the IMU stream has " << gaps.num_bridged
+                        << " gap(s) between samples longer than " << NsToSeconds(kMaxImuStepNs)
+                        << " s and at most max_imu_gap_s " << s.options.max_imu_gap_s
+                        << " s (the longest " << FormatNsAsSeconds(gaps.longest_bridged_ns, 3)
+                        << " s): bridged by readings interpolated linearly";
+  }
+  vio.FinishMovingStart();
+  s.PoseMovingStart();
+  s.Settle(result.frames.size());
+  s.progress->Finish();
+  result.summary = vio.summary();
+  VioSummary& summary = result.summary;
+  summary.time_offset = s.time_offset;
+  summary.num_frames_beyond_imu = s.num_beyond_imu;
+  const timestamp_ns_t last_imu_ns = imu.back().timestamp_ns;
+  if (s.num_beyond_imu > 0) {
+    VIOSFM_LOG(WARNING) << "vio: the last " << s.num_beyond_imu
+                        << " frame(s) lie after the last IMU sample ("
+                        << FormatNsAsSeconds(last_imu_ns, 3)
+                        << " s on the IMU clock, camera-IMU offset "
+                        << NsToSeconds(s.rig.cam_time_offset_ns) * 1e3 << " ms): no pose for them";
+  }
+  summary.num_segments = s.segment + 1;
+  summary.num_imu_gaps = gaps.num_gaps;
+  summary.longest_imu_gap_s = NsToSeconds(gaps.longest_ns);
+  summary.num_frames_without_pose = static_cast<size_t>(
+      std::count_if(result.frames.begin(), result.frames.end(),
+                    [](const VioFrameResult& frame) { return !frame.has_pose; }));
+  CountImuOnlyStretches(result.frames, &summary);
+  summary.cpu_seconds = ProcessCpuSeconds() - s.cpu_start;
+  summary.wall_seconds = s.timer.ElapsedSeconds();
+
+  const SequenceImage& first_image = s.images.front();
+  WarnImuOnlyFrames(summary, first_image.timestamp_ns);
+  summary.message = SummaryMessage(summary, s.rig, first_image.timestamp_ns,
+                                   s.images[num_frames - 1].timestamp_ns);
   VIOSFM_LOG(INFO) << "vio: " << summary.num_frames << " frames (tracking "
                    << summary.status_counts[1] << ", initializing " << summary.status_counts[0]
                    << ", imu_only " << summary.status_counts[2] << ", lost "

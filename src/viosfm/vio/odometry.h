@@ -579,6 +579,15 @@ class VisualInertialOdometry {
   // started from its keyframes. `carried` (after a reset): the last good
   // state's IMU propagation, which places the new world in the old one.
   bool TryVisualInertialInitialization(const FrameFeatures& frame, const ImuState* carried);
+  // ProcessFrame's steps (frame on the IMU clock, camera_ns its camera
+  // stamp): a frame the initialised window estimates, with a loss or the end
+  // of a re-localisation; the window started from the static state carried
+  // forward by the IMU; a frame collected for the visual-inertial
+  // initialisation (moving start or restart).
+  void TrackInWindow(const FrameFeatures& frame, timestamp_ns_t camera_ns, VioFrameResult* result);
+  void StartFromStaticState(const FrameFeatures& frame, VioFrameResult* result);
+  void CollectForInitialization(const FrameFeatures& frame, timestamp_ns_t camera_ns,
+                                VioFrameResult* result);
   ImuState Propagate(const ImuState& state, timestamp_ns_t to_ns) const;
   // The longest interval between IMU samples that overlaps (from_ns, to_ns)
   // (IMU clock); 0 without samples around it.

@@ -86,6 +86,56 @@ struct SlidingWindowEstimator::Landmark {
   int num_observations = 0;    // in the window
 };
 
+// A solve's copies of the window's states and of the landmarks' inverse
+// depths in one array, in window and track order, with the problem over them.
+struct SlidingWindowEstimator::WindowProblem {
+  static constexpr size_t kStateSize = 16;  // pose 7, speed and biases 9
+
+  explicit WindowProblem(size_t num_values) : problem(ProblemOptions()), values(num_values) {}
+
+  static ceres::Problem::Options ProblemOptions() {
+    ceres::Problem::Options options;
+    options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    return options;
+  }
+  double* PoseOf(const Frame& frame) const { return copy_of.at(frame.parameters.pose.data()); }
+  double* SpeedBiasOf(const Frame& frame) const {
+    return copy_of.at(frame.parameters.speed_bias.data());
+  }
+
+  ceres::Problem problem;
+  std::vector<double> values;
+  std::unordered_map<const double*, double*> copy_of;  // a frame's block -> its copy
+  std::unique_ptr<ceres::ParameterBlockOrdering> ordering =
+      std::make_unique<ceres::ParameterBlockOrdering>();
+  double* inverse_depths = nullptr;  // after the states in values
+};
+
+// A track's observations in the window: the cameras' projection matrices,
+// the normalised points and the frames' indices, oldest first.
+struct SlidingWindowEstimator::TrackRays {
+  std::vector<Matrix3x4d> poses;
+  std::vector<Eigen::Vector2d> points;
+  std::vector<size_t> frame_indices;
+};
+
+// A track's point from its observations from some index on, its widest ray
+// angle (that first observation against the others), and whether every
+// observation lies in the depth range and within max_reprojection_error_px.
+struct SlidingWindowEstimator::TrackTriangulation {
+  Eigen::Vector3d point;
+  double angle = 0.0;
+  bool consistent = true;
+};
+
+// A landmark with less parallax than min_triangulation_angle_deg, with its
+// angle and inverse depth.
+struct SlidingWindowEstimator::WeakLandmark {
+  Landmark* landmark;
+  double angle;
+  double inverse_depth;
+};
+
 namespace {
 
 ImuState StateOf(const ImuStateParameters& parameters, timestamp_ns_t timestamp_ns) {
@@ -96,6 +146,68 @@ bool IsFinite(const ImuState& state) {
   return state.world_from_body.rotation.coeffs().allFinite() &&
          state.world_from_body.translation.allFinite() && state.velocity_in_world.allFinite() &&
          state.gyro_bias.allFinite() && state.accel_bias.allFinite();
+}
+
+// J^T J of the window's states with the inverse depths (the last num_depths
+// columns of the Jacobian) eliminated by their Schur complement.
+Eigen::MatrixXd StatesInformation(const ceres::CRSMatrix& jacobian, int num_states,
+                                  int num_depths) {
+  Eigen::MatrixXd states = Eigen::MatrixXd::Zero(num_states, num_states);
+  Eigen::MatrixXd states_depths = Eigen::MatrixXd::Zero(num_states, num_depths);
+  Eigen::VectorXd depths = Eigen::VectorXd::Zero(num_depths);
+  for (int row = 0; row < jacobian.num_rows; ++row) {
+    for (int a = jacobian.rows[row]; a < jacobian.rows[row + 1]; ++a) {
+      const int column_a = jacobian.cols[a];
+      for (int b = jacobian.rows[row]; b < jacobian.rows[row + 1]; ++b) {
+        const int column_b = jacobian.cols[b];
+        const double product = jacobian.values[a] * jacobian.values[b];
+        if (column_a < num_states && column_b < num_states) {
+          states(column_a, column_b) += product;
+        } else if (column_a < num_states) {
+          states_depths(column_a, column_b - num_states) += product;
+        } else if (column_b >= num_states) {
+          VIOSFM_CHECK_EQ(column_a, column_b) << "a residual sees two inverse depths";
+          depths(column_a - num_states) += product;
+        }
+      }
+    }
+  }
+  // The depths' Schur complement, states -= sum over l of s_l s_l^T / d_l,
+  // as one matrix product of the scaled columns (one rank-1 update per
+  // landmark took three quarters of this function's time). A depth no
+  // residual sees (a zero column) constrains nothing.
+  int num_seen = 0;
+  for (int l = 0; l < num_depths; ++l) {
+    if (!(depths(l) > 0.0)) continue;
+    states_depths.col(num_seen++) = states_depths.col(l) / std::sqrt(depths(l));
+  }
+  const auto scaled = states_depths.leftCols(num_seen);
+  states.noalias() -= scaled * scaled.transpose();
+  return states;
+}
+
+// The covariance of the newest pose (the last state, rotation first) from
+// the states' information matrix; zero when it is rank deficient.
+Eigen::Matrix<double, 6, 6> NewestPoseCovarianceOfStates(const Eigen::MatrixXd& states) {
+  Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();
+  const int num_states = static_cast<int>(states.rows());
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(states);
+  const Eigen::VectorXd pivots = ldlt.vectorD().cwiseAbs();
+  // Rank deficient (no covariance), as ceres::Covariance's default
+  // reciprocal condition number 1e-14 judges.
+  if (ldlt.info() != Eigen::Success || !ldlt.isPositive() || num_states == 0 ||
+      !(pivots.minCoeff() > 1e-14 * pivots.maxCoeff())) {
+    return covariance;
+  }
+  Eigen::MatrixXd unit = Eigen::MatrixXd::Zero(num_states, 6);
+  const int newest = num_states - 15;
+  unit.block<6, 6>(newest, 0).setIdentity();
+  const Eigen::Matrix<double, 6, 6> tangent = ldlt.solve(unit).block<6, 6>(newest, 0);
+  // The quaternion part of the tangent is half the rotation vector.
+  Eigen::Matrix<double, 6, 6> scale = Eigen::Matrix<double, 6, 6>::Identity();
+  scale.topLeftCorner<3, 3>() *= 2.0;
+  covariance = scale * (0.5 * (tangent + tangent.transpose())) * scale;
+  return covariance;
 }
 
 }  // namespace
@@ -337,86 +449,22 @@ void SlidingWindowEstimator::TriangulateLandmarks() {
   for (const auto& [track_id, landmark] : landmarks_) {
     if (landmark.triangulated && newest->observations.count(track_id) > 0) ++newest_seen;
   }
-  // Landmarks with less parallax than min_angle but at least fallback_angle,
-  // with their angle, inverse depth, and whether the newest frame sees them.
-  struct Candidate {
-    Landmark* landmark;
-    double angle;
-    double inverse_depth;
-  };
-  std::vector<Candidate> weak;
-  std::vector<Matrix3x4d> poses;
-  std::vector<Eigen::Vector2d> points;
-  std::vector<size_t> frame_indices;
+  // Landmarks with less parallax than min_angle but at least fallback_angle.
+  std::vector<WeakLandmark> weak;
+  TrackRays rays;
   for (auto& [track_id, landmark] : landmarks_) {
     if (landmark.triangulated || landmark.num_observations < 2) continue;
-    poses.clear();
-    points.clear();
-    frame_indices.clear();
-    for (size_t k = 0; k < frames_.size(); ++k) {
-      const auto it = frames_[k]->observations.find(track_id);
-      if (it == frames_[k]->observations.end()) continue;
-      poses.push_back(cams_from_world[k]);
-      points.push_back(it->second);
-      frame_indices.push_back(k);
-    }
-    if (points.size() < 2) continue;
-    // The observations from `first` on: the point, its widest ray angle
-    // (first against the others), and whether every observation lies in the
-    // depth range and within max_reprojection_error_px of it.
-    struct Triangulated {
-      Eigen::Vector3d point;
-      double angle = 0.0;
-      bool consistent = true;
-    };
-    const auto triangulate = [&](size_t first) -> std::optional<Triangulated> {
-      const std::vector<Matrix3x4d> used_poses(poses.begin() + first, poses.end());
-      const std::vector<Eigen::Vector2d> used_points(points.begin() + first, points.end());
-      const std::optional<Eigen::Vector3d> point = TriangulateDlt(used_poses, used_points);
-      if (!point || !point->allFinite()) return std::nullopt;
-      Triangulated result{*point};
-      for (size_t k = first + 1; k < frame_indices.size(); ++k) {
-        result.angle = std::max(
-            result.angle,
-            TriangulationAngle(centers[frame_indices[first]], centers[frame_indices[k]], *point));
-      }
-      for (size_t k = first; k < poses.size() && result.consistent; ++k) {
-        const Eigen::Vector3d in_cam = poses[k] * point->homogeneous();
-        if (in_cam.z() < options_.min_depth_m || in_cam.z() > options_.max_depth_m) {
-          result.consistent = false;
-        }
-        const double error_px = (in_cam.hnormalized() - points[k]).norm() * focal_length_px_;
-        if (error_px > options_.max_reprojection_error_px) result.consistent = false;
-      }
-      return result;
-    };
-    std::optional<Triangulated> triangulated = triangulate(0);
+    CollectRays(track_id, cams_from_world, &rays);
+    if (rays.points.size() < 2) continue;
+    std::optional<TrackTriangulation> triangulated = TriangulateRays(rays, centers, 0);
     if (!triangulated || triangulated->angle < std::min(min_angle, fallback_angle)) continue;
     if (!triangulated->consistent) {
-      // Some observation disagrees (the track drifted, or a frame's corners
-      // were off): the track goes on from the longest run of its newest
-      // observations that agree, its older ones dropped, so that a stretch
-      // of bad frames in the window does not hold it back until they leave.
-      size_t first = 1;
-      for (; first + 1 < points.size(); ++first) {
-        triangulated = triangulate(first);
-        if (triangulated && triangulated->consistent) break;
-      }
-      if (first + 1 >= points.size()) continue;
-      for (size_t k = 0; k < first; ++k) {
-        frames_[frame_indices[k]]->observations.erase(track_id);
-        --landmark.num_observations;
-      }
-      landmark.anchor = frames_[frame_indices[first]].get();
-      poses.erase(poses.begin(), poses.begin() + static_cast<std::ptrdiff_t>(first));
-      points.erase(points.begin(), points.begin() + static_cast<std::ptrdiff_t>(first));
-      frame_indices.erase(frame_indices.begin(),
-                          frame_indices.begin() + static_cast<std::ptrdiff_t>(first));
-      if (triangulated->angle < std::min(min_angle, fallback_angle)) continue;
+      triangulated = DropDisagreeingObservations(landmark, centers, &rays);
+      if (!triangulated || triangulated->angle < std::min(min_angle, fallback_angle)) continue;
     }
     const std::optional<Eigen::Vector3d> point = triangulated->point;
     const double best_angle = triangulated->angle;
-    const Frame& anchor = *frames_[frame_indices.front()];
+    const Frame& anchor = *frames_[rays.frame_indices.front()];
     VIOSFM_CHECK(&anchor == landmark.anchor);
     const double inverse_depth = InverseDepthOfPoint(
         StateOf(anchor.parameters, anchor.timestamp_ns).world_from_body, body_from_cam_, *point);
@@ -433,16 +481,88 @@ void SlidingWindowEstimator::TriangulateLandmarks() {
   // fallback_target_landmarks triangulated landmarks, its lower-parallax
   // tracks are triangulated too, widest angle first.
   if (!has_tracked_ || newest_seen >= options_.fallback_target_landmarks) return;
-  std::stable_sort(weak.begin(), weak.end(), [&](const Candidate& a, const Candidate& b) {
-    const bool a_newest = newest->observations.count(a.landmark->track_id) > 0;
-    const bool b_newest = newest->observations.count(b.landmark->track_id) > 0;
+  AcceptWeakLandmarks(*newest, newest_seen, &weak);
+}
+
+void SlidingWindowEstimator::CollectRays(uint64_t track_id,
+                                         const std::vector<Matrix3x4d>& cams_from_world,
+                                         TrackRays* rays) const {
+  rays->poses.clear();
+  rays->points.clear();
+  rays->frame_indices.clear();
+  for (size_t k = 0; k < frames_.size(); ++k) {
+    const auto it = frames_[k]->observations.find(track_id);
+    if (it == frames_[k]->observations.end()) continue;
+    rays->poses.push_back(cams_from_world[k]);
+    rays->points.push_back(it->second);
+    rays->frame_indices.push_back(k);
+  }
+}
+
+std::optional<SlidingWindowEstimator::TrackTriangulation> SlidingWindowEstimator::TriangulateRays(
+    const TrackRays& rays, const std::vector<Eigen::Vector3d>& centers, size_t first) const {
+  const std::vector<Matrix3x4d>& poses = rays.poses;
+  const std::vector<Eigen::Vector2d>& points = rays.points;
+  const std::vector<size_t>& frame_indices = rays.frame_indices;
+  const std::vector<Matrix3x4d> used_poses(poses.begin() + first, poses.end());
+  const std::vector<Eigen::Vector2d> used_points(points.begin() + first, points.end());
+  const std::optional<Eigen::Vector3d> point = TriangulateDlt(used_poses, used_points);
+  if (!point || !point->allFinite()) return std::nullopt;
+  TrackTriangulation result{*point};
+  for (size_t k = first + 1; k < frame_indices.size(); ++k) {
+    result.angle = std::max(result.angle, TriangulationAngle(centers[frame_indices[first]],
+                                                             centers[frame_indices[k]], *point));
+  }
+  for (size_t k = first; k < poses.size() && result.consistent; ++k) {
+    const Eigen::Vector3d in_cam = poses[k] * point->homogeneous();
+    if (in_cam.z() < options_.min_depth_m || in_cam.z() > options_.max_depth_m) {
+      result.consistent = false;
+    }
+    const double error_px = (in_cam.hnormalized() - points[k]).norm() * focal_length_px_;
+    if (error_px > options_.max_reprojection_error_px) result.consistent = false;
+  }
+  return result;
+}
+
+std::optional<SlidingWindowEstimator::TrackTriangulation>
+SlidingWindowEstimator::DropDisagreeingObservations(Landmark& landmark,
+                                                    const std::vector<Eigen::Vector3d>& centers,
+                                                    TrackRays* rays) {
+  // Some observation disagrees (the track drifted, or a frame's corners
+  // were off): the track goes on from the longest run of its newest
+  // observations that agree, its older ones dropped, so that a stretch
+  // of bad frames in the window does not hold it back until they leave.
+  std::optional<TrackTriangulation> triangulated;
+  size_t first = 1;
+  for (; first + 1 < rays->points.size(); ++first) {
+    triangulated = TriangulateRays(*rays, centers, first);
+    if (triangulated && triangulated->consistent) break;
+  }
+  if (first + 1 >= rays->points.size()) return std::nullopt;
+  for (size_t k = 0; k < first; ++k) {
+    frames_[rays->frame_indices[k]]->observations.erase(landmark.track_id);
+    --landmark.num_observations;
+  }
+  landmark.anchor = frames_[rays->frame_indices[first]].get();
+  const auto dropped = static_cast<std::ptrdiff_t>(first);
+  rays->poses.erase(rays->poses.begin(), rays->poses.begin() + dropped);
+  rays->points.erase(rays->points.begin(), rays->points.begin() + dropped);
+  rays->frame_indices.erase(rays->frame_indices.begin(), rays->frame_indices.begin() + dropped);
+  return triangulated;
+}
+
+void SlidingWindowEstimator::AcceptWeakLandmarks(const Frame& newest, int newest_seen,
+                                                 std::vector<WeakLandmark>* weak) {
+  std::stable_sort(weak->begin(), weak->end(), [&](const WeakLandmark& a, const WeakLandmark& b) {
+    const bool a_newest = newest.observations.count(a.landmark->track_id) > 0;
+    const bool b_newest = newest.observations.count(b.landmark->track_id) > 0;
     if (a_newest != b_newest) return a_newest;
     if (a.angle != b.angle) return a.angle > b.angle;
     return a.landmark->track_id < b.landmark->track_id;
   });
-  for (const Candidate& candidate : weak) {
+  for (const WeakLandmark& candidate : *weak) {
     if (newest_seen >= options_.fallback_target_landmarks) break;
-    if (newest->observations.count(candidate.landmark->track_id) == 0) break;
+    if (newest.observations.count(candidate.landmark->track_id) == 0) break;
     candidate.landmark->inverse_depth = candidate.inverse_depth;
     candidate.landmark->triangulated = true;
     ++newest_seen;
@@ -474,10 +594,6 @@ std::vector<SlidingWindowEstimator::Landmark*> SlidingWindowEstimator::SelectLan
 
 Eigen::Matrix<double, 6, 6> SlidingWindowEstimator::Optimize(
     const std::vector<Landmark*>& landmarks) {
-  ceres::Problem::Options problem_options;
-  problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  ceres::Problem problem(problem_options);
-  ceres::Manifold* pose_manifold = const_cast<ceres::Manifold*>(pose_manifold_.get());
   // Ceres orders the parameter blocks of an ordering group by their
   // addresses, which depend on the allocation history of the whole process:
   // the same window could be solved in another order, and so give other last
@@ -485,105 +601,140 @@ Eigen::Matrix<double, 6, 6> SlidingWindowEstimator::Optimize(
   // landmarks' inverse depths in one array, in window and track order (the
   // order of their addresses), each state block in an ordering group of its
   // own after the eliminated inverse depths; the values are copied back after.
-  constexpr size_t kStateSize = 16;  // pose 7, speed and biases 9
-  std::vector<double> values(frames_.size() * kStateSize + landmarks.size());
-  std::unordered_map<const double*, double*> copy_of;  // a frame's block -> its copy
-  auto* ordering = new ceres::ParameterBlockOrdering;
+  WindowProblem window(frames_.size() * WindowProblem::kStateSize + landmarks.size());
+  AddStateBlocks(window);
+  AddPriorFactor(window);
+  AddImuFactors(window);
+  AddLandmarkFactors(window, landmarks);
+  AddRelocalizationFactors(window);
+  const bool usable = SolveWindow(window, landmarks.empty());
+  CopySolutionBack(window, landmarks);
+  if (!options_.compute_covariance || !usable) return Eigen::Matrix<double, 6, 6>::Zero();
+  return NewestPoseCovariance(window, static_cast<int>(landmarks.size()));
+}
+
+void SlidingWindowEstimator::AddStateBlocks(WindowProblem& window) const {
+  ceres::Manifold* pose_manifold = const_cast<ceres::Manifold*>(pose_manifold_.get());
   int group = 1;
   for (size_t k = 0; k < frames_.size(); ++k) {
     ImuStateParameters& parameters = frames_[k]->parameters;
-    double* pose = values.data() + k * kStateSize;
+    double* pose = window.values.data() + k * WindowProblem::kStateSize;
     double* speed_bias = pose + parameters.pose.size();
     std::copy(parameters.pose.begin(), parameters.pose.end(), pose);
     std::copy(parameters.speed_bias.begin(), parameters.speed_bias.end(), speed_bias);
-    copy_of[parameters.pose.data()] = pose;
-    copy_of[parameters.speed_bias.data()] = speed_bias;
-    problem.AddParameterBlock(pose, 7, pose_manifold);
-    problem.AddParameterBlock(speed_bias, 9);
-    ordering->AddElementToGroup(pose, group++);
-    ordering->AddElementToGroup(speed_bias, group++);
+    window.copy_of[parameters.pose.data()] = pose;
+    window.copy_of[parameters.speed_bias.data()] = speed_bias;
+    window.problem.AddParameterBlock(pose, 7, pose_manifold);
+    window.problem.AddParameterBlock(speed_bias, 9);
+    window.ordering->AddElementToGroup(pose, group++);
+    window.ordering->AddElementToGroup(speed_bias, group++);
   }
-  const auto pose_of = [&copy_of](const Frame& frame) {
-    return copy_of.at(frame.parameters.pose.data());
-  };
-  const auto speed_bias_of = [&copy_of](const Frame& frame) {
-    return copy_of.at(frame.parameters.speed_bias.data());
-  };
-  double* inverse_depths = values.data() + frames_.size() * kStateSize;
-  for (size_t i = 0; i < landmarks.size(); ++i) inverse_depths[i] = landmarks[i]->inverse_depth;
-  if (prior_ != nullptr) {
-    std::vector<double*> blocks = prior_->ParameterBlocks();
-    for (double*& block : blocks) {
-      const auto it = copy_of.find(block);
-      VIOSFM_CHECK(it != copy_of.end())
-          << "the marginalisation prior acts on a block outside the window";
-      block = it->second;
-    }
-    problem.AddResidualBlock(new LinearPriorFactor(prior_), nullptr, blocks);
+  window.inverse_depths = window.values.data() + frames_.size() * WindowProblem::kStateSize;
+}
+
+void SlidingWindowEstimator::AddPriorFactor(WindowProblem& window) const {
+  if (prior_ == nullptr) return;
+  std::vector<double*> blocks = prior_->ParameterBlocks();
+  for (double*& block : blocks) {
+    const auto it = window.copy_of.find(block);
+    VIOSFM_CHECK(it != window.copy_of.end())
+        << "the marginalisation prior acts on a block outside the window";
+    block = it->second;
   }
+  window.problem.AddResidualBlock(new LinearPriorFactor(prior_), nullptr, blocks);
+}
+
+void SlidingWindowEstimator::AddImuFactors(WindowProblem& window) {
   for (size_t k = 1; k < frames_.size(); ++k) {
     Frame& previous = *frames_[k - 1];
     Frame& frame = *frames_[k];
     const ImuState previous_state = StateOf(previous.parameters, previous.timestamp_ns);
     frame.preintegration->RepropagateIfNeeded(previous_state.gyro_bias, previous_state.accel_bias);
-    problem.AddResidualBlock(ImuFactor::Create(*frame.preintegration), ImuLoss(), pose_of(previous),
-                             speed_bias_of(previous), pose_of(frame), speed_bias_of(frame));
+    window.problem.AddResidualBlock(ImuFactor::Create(*frame.preintegration), ImuLoss(),
+                                    window.PoseOf(previous), window.SpeedBiasOf(previous),
+                                    window.PoseOf(frame), window.SpeedBiasOf(frame));
+  }
+}
+
+void SlidingWindowEstimator::AddLandmarkFactors(WindowProblem& window,
+                                                const std::vector<Landmark*>& landmarks) const {
+  for (size_t i = 0; i < landmarks.size(); ++i) {
+    window.inverse_depths[i] = landmarks[i]->inverse_depth;
   }
   const double sqrt_information = focal_length_px_ / options_.pixel_sigma_px;
   for (size_t i = 0; i < landmarks.size(); ++i) {
     Landmark* landmark = landmarks[i];
-    double* inverse_depth = &inverse_depths[i];
+    double* inverse_depth = &window.inverse_depths[i];
     const Eigen::Vector2d& anchor_observation =
         landmark->anchor->observations.at(landmark->track_id);
-    problem.AddParameterBlock(inverse_depth, 1);
-    ordering->AddElementToGroup(inverse_depth, 0);
+    window.problem.AddParameterBlock(inverse_depth, 1);
+    window.ordering->AddElementToGroup(inverse_depth, 0);
     for (auto& frame : frames_) {
       if (frame.get() == landmark->anchor) continue;
       const auto it = frame->observations.find(landmark->track_id);
       if (it == frame->observations.end()) continue;
-      problem.AddResidualBlock(new InverseDepthReprojectionCost(anchor_observation, it->second,
-                                                                body_from_cam_, sqrt_information),
-                               new ceres::CauchyLoss(options_.cauchy_loss_scale),
-                               pose_of(*landmark->anchor), pose_of(*frame), inverse_depth);
+      window.problem.AddResidualBlock(
+          new InverseDepthReprojectionCost(anchor_observation, it->second, body_from_cam_,
+                                           sqrt_information),
+          new ceres::CauchyLoss(options_.cauchy_loss_scale), window.PoseOf(*landmark->anchor),
+          window.PoseOf(*frame), inverse_depth);
     }
   }
+}
+
+void SlidingWindowEstimator::AddRelocalizationFactors(WindowProblem& window) const {
   // Re-localisation: the frames' observations of the map kept at the reset.
+  const double sqrt_information = focal_length_px_ / options_.pixel_sigma_px;
   for (auto& frame : frames_) {
     for (const auto& [track_id, normalized] : frame->observations) {
       const auto it = relocalization_points_.find(track_id);
       if (it == relocalization_points_.end()) continue;
-      problem.AddResidualBlock(MapPointReprojectionFactor::Create(it->second, normalized,
-                                                                  body_from_cam_, sqrt_information),
-                               new ceres::CauchyLoss(options_.cauchy_loss_scale), pose_of(*frame));
+      window.problem.AddResidualBlock(MapPointReprojectionFactor::Create(
+                                          it->second, normalized, body_from_cam_, sqrt_information),
+                                      new ceres::CauchyLoss(options_.cauchy_loss_scale),
+                                      window.PoseOf(*frame));
     }
   }
+}
+
+bool SlidingWindowEstimator::SolveWindow(WindowProblem& window, bool no_landmarks) const {
   ceres::Solver::Options solver_options;
-  if (landmarks.empty()) {
+  if (no_landmarks) {
     // Only states (IMU and prior factors): no landmark block to eliminate.
-    delete ordering;
+    window.ordering.reset();
     solver_options.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
   } else {
     // Inverse depths eliminated first (Schur complement onto the states).
     solver_options.linear_solver_type = ceres::DENSE_SCHUR;
-    solver_options.linear_solver_ordering.reset(ordering);
+    solver_options.linear_solver_ordering = std::move(window.ordering);
   }
   solver_options.trust_region_strategy_type = ceres::DOGLEG;
   solver_options.max_num_iterations = options_.max_num_iterations;
   solver_options.num_threads = options_.num_threads;
   solver_options.logging_type = ceres::SILENT;
   ceres::Solver::Summary summary;
-  ceres::Solve(solver_options, &problem, &summary);
-  for (auto& frame : frames_) {
-    ImuStateParameters& parameters = frame->parameters;
-    std::copy_n(pose_of(*frame), parameters.pose.size(), parameters.pose.begin());
-    std::copy_n(speed_bias_of(*frame), parameters.speed_bias.size(), parameters.speed_bias.begin());
-  }
-  for (size_t i = 0; i < landmarks.size(); ++i) landmarks[i]->inverse_depth = inverse_depths[i];
+  ceres::Solve(solver_options, &window.problem, &summary);
   if (!summary.IsSolutionUsable()) {
     VIOSFM_LOG(DEBUG) << "sliding window: solver failed: " << summary.message;
   }
-  Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();
-  if (!options_.compute_covariance || !summary.IsSolutionUsable()) return covariance;
+  return summary.IsSolutionUsable();
+}
+
+void SlidingWindowEstimator::CopySolutionBack(const WindowProblem& window,
+                                              const std::vector<Landmark*>& landmarks) {
+  for (auto& frame : frames_) {
+    ImuStateParameters& parameters = frame->parameters;
+    std::copy_n(window.PoseOf(*frame), parameters.pose.size(), parameters.pose.begin());
+    std::copy_n(window.SpeedBiasOf(*frame), parameters.speed_bias.size(),
+                parameters.speed_bias.begin());
+  }
+  for (size_t i = 0; i < landmarks.size(); ++i) {
+    landmarks[i]->inverse_depth = window.inverse_depths[i];
+  }
+}
+
+Eigen::Matrix<double, 6, 6> SlidingWindowEstimator::NewestPoseCovariance(WindowProblem& window,
+                                                                         int num_depths) const {
   // The newest pose's marginal covariance: (J^T J)^-1 at the solution, with
   // the loss applied as in the solve, in the tangent spaces. The inverse
   // depths are eliminated in closed form (each residual sees at most one,
@@ -593,66 +744,20 @@ Eigen::Matrix<double, 6, 6> SlidingWindowEstimator::Optimize(
   // from run to run on the same window).
   ceres::Problem::EvaluateOptions evaluate;
   for (auto& frame : frames_) {
-    evaluate.parameter_blocks.push_back(pose_of(*frame));
-    evaluate.parameter_blocks.push_back(speed_bias_of(*frame));
+    evaluate.parameter_blocks.push_back(window.PoseOf(*frame));
+    evaluate.parameter_blocks.push_back(window.SpeedBiasOf(*frame));
   }
-  for (size_t i = 0; i < landmarks.size(); ++i) {
-    evaluate.parameter_blocks.push_back(&inverse_depths[i]);
+  for (int i = 0; i < num_depths; ++i) {
+    evaluate.parameter_blocks.push_back(&window.inverse_depths[i]);
   }
   evaluate.num_threads = 1;
   ceres::CRSMatrix jacobian;
-  if (!problem.Evaluate(evaluate, nullptr, nullptr, nullptr, &jacobian)) return covariance;
+  if (!window.problem.Evaluate(evaluate, nullptr, nullptr, nullptr, &jacobian)) {
+    return Eigen::Matrix<double, 6, 6>::Zero();
+  }
   const int num_states = static_cast<int>(frames_.size()) * 15;  // tangent: pose 6, speed_bias 9
-  const int num_depths = static_cast<int>(landmarks.size());
   VIOSFM_CHECK_EQ(jacobian.num_cols, num_states + num_depths);
-  Eigen::MatrixXd states = Eigen::MatrixXd::Zero(num_states, num_states);
-  Eigen::MatrixXd states_depths = Eigen::MatrixXd::Zero(num_states, num_depths);
-  Eigen::VectorXd depths = Eigen::VectorXd::Zero(num_depths);
-  for (int row = 0; row < jacobian.num_rows; ++row) {
-    for (int a = jacobian.rows[row]; a < jacobian.rows[row + 1]; ++a) {
-      const int column_a = jacobian.cols[a];
-      for (int b = jacobian.rows[row]; b < jacobian.rows[row + 1]; ++b) {
-        const int column_b = jacobian.cols[b];
-        const double product = jacobian.values[a] * jacobian.values[b];
-        if (column_a < num_states && column_b < num_states) {
-          states(column_a, column_b) += product;
-        } else if (column_a < num_states) {
-          states_depths(column_a, column_b - num_states) += product;
-        } else if (column_b >= num_states) {
-          VIOSFM_CHECK_EQ(column_a, column_b) << "a residual sees two inverse depths";
-          depths(column_a - num_states) += product;
-        }
-      }
-    }
-  }
-  // The depths' Schur complement, states -= sum over l of s_l s_l^T / d_l,
-  // as one matrix product of the scaled columns (one rank-1 update per
-  // landmark took three quarters of this function's time). A depth no
-  // residual sees (a zero column) constrains nothing.
-  int num_seen = 0;
-  for (int l = 0; l < num_depths; ++l) {
-    if (!(depths(l) > 0.0)) continue;
-    states_depths.col(num_seen++) = states_depths.col(l) / std::sqrt(depths(l));
-  }
-  const auto scaled = states_depths.leftCols(num_seen);
-  states.noalias() -= scaled * scaled.transpose();
-  const Eigen::LDLT<Eigen::MatrixXd> ldlt(states);
-  const Eigen::VectorXd pivots = ldlt.vectorD().cwiseAbs();
-  // Rank deficient (no covariance), as ceres::Covariance's default
-  // reciprocal condition number 1e-14 judges.
-  if (ldlt.info() != Eigen::Success || !ldlt.isPositive() || num_states == 0 ||
-      !(pivots.minCoeff() > 1e-14 * pivots.maxCoeff())) {
-    return covariance;
-  }
-  Eigen::MatrixXd unit = Eigen::MatrixXd::Zero(num_states, 6);
-  const int newest = num_states - 15;
-  unit.block<6, 6>(newest, 0).setIdentity();
-  const Eigen::Matrix<double, 6, 6> tangent = ldlt.solve(unit).block<6, 6>(newest, 0);
-  // The quaternion part of the tangent is half the rotation vector.
-  Eigen::Matrix<double, 6, 6> scale = Eigen::Matrix<double, 6, 6>::Identity();
-  scale.topLeftCorner<3, 3>() *= 2.0;
-  covariance = scale * (0.5 * (tangent + tangent.transpose())) * scale;
-  return covariance;
+  return NewestPoseCovarianceOfStates(StatesInformation(jacobian, num_states, num_depths));
 }
 
 void SlidingWindowEstimator::RemoveOutliers(const std::vector<Landmark*>& landmarks) {

@@ -41,6 +41,7 @@
 #include <Eigen/Core>
 #include <deque>
 #include <memory>
+#include <optional>
 #include <string>
 #include <unordered_map>
 #include <unordered_set>
@@ -226,6 +227,10 @@ class SlidingWindowEstimator {
  private:
   struct Frame;
   struct Landmark;
+  struct WindowProblem;
+  struct TrackRays;
+  struct TrackTriangulation;
+  struct WeakLandmark;
 
   bool IsKeyframe(const Frame& frame, const FrameFeatures& features) const;
   void ClearWindow();
@@ -240,11 +245,35 @@ class SlidingWindowEstimator {
   void AppendFrame(std::unique_ptr<Frame> frame);
   void RemoveFrame(size_t index);
   void TriangulateLandmarks();
+  // TriangulateLandmarks' steps: a track's observations, its point from
+  // those from `first` on, the drop of its older observations that disagree
+  // (null when no newer run agrees), and the weak landmarks accepted while
+  // the newest frame sees too few.
+  void CollectRays(uint64_t track_id, const std::vector<Matrix3x4d>& cams_from_world,
+                   TrackRays* rays) const;
+  std::optional<TrackTriangulation> TriangulateRays(const TrackRays& rays,
+                                                    const std::vector<Eigen::Vector3d>& centers,
+                                                    size_t first) const;
+  std::optional<TrackTriangulation> DropDisagreeingObservations(
+      Landmark& landmark, const std::vector<Eigen::Vector3d>& centers, TrackRays* rays);
+  void AcceptWeakLandmarks(const Frame& newest, int newest_seen, std::vector<WeakLandmark>* weak);
   // Landmarks used in the optimisation: triangulated, seen twice or more.
   std::vector<Landmark*> SelectLandmarks();
   // Returns the marginal covariance of the newest pose (see
   // WindowFrameEstimate) when options_.compute_covariance, else zero.
   Eigen::Matrix<double, 6, 6> Optimize(const std::vector<Landmark*>& landmarks);
+  // Optimize's steps: the window's states and the landmarks' inverse depths
+  // copied into one problem, its factors, the solve, the copy back, and the
+  // newest pose's covariance.
+  void AddStateBlocks(WindowProblem& window) const;
+  void AddPriorFactor(WindowProblem& window) const;
+  void AddImuFactors(WindowProblem& window);
+  void AddLandmarkFactors(WindowProblem& window, const std::vector<Landmark*>& landmarks) const;
+  void AddRelocalizationFactors(WindowProblem& window) const;
+  // Returns whether the solution is usable.
+  bool SolveWindow(WindowProblem& window, bool no_landmarks) const;
+  void CopySolutionBack(const WindowProblem& window, const std::vector<Landmark*>& landmarks);
+  Eigen::Matrix<double, 6, 6> NewestPoseCovariance(WindowProblem& window, int num_depths) const;
   // Drops the landmarks behind a camera, out of the depth range, or with an
   // observation farther than max_reprojection_error_px from its projection,
   // with their observations in the window (their tracks start again as new

@@ -530,6 +530,204 @@ ViInitResult Fail(ViInitResult result, const std::string& message) {
   return result;
 }
 
+// The initialisation's steps over a window of time-ordered keyframes. A step
+// that can fail on good input returns why (empty: it succeeded).
+class ViInitializer {
+ public:
+  ViInitializer(std::vector<const FrameFeatures*> window, const Rigid3d& body_from_cam,
+                const ViInitOptions& options)
+      : window_(std::move(window)),
+        n_(static_cast<int>(window_.size())),
+        cam_from_body_(body_from_cam.Inverse()),
+        options_(options),
+        sfm_(window_, options) {}
+  ViInitializer(const ViInitializer&) = delete;
+  ViInitializer& operator=(const ViInitializer&) = delete;
+
+  ViInitResult Run(const std::vector<ImuSample>& imu, const ImuNoise& noise) {
+    // IMU between consecutive keyframes (checked first: it is cheap).
+    if (const std::string message = Preintegrate(imu, noise); !message.empty()) {
+      return Fail(result_, message);
+    }
+    // 1. Vision-only SfM up to scale.
+    if (std::string message; !sfm_.Run(&result_, &message)) return Fail(result_, message);
+    SetUpAlignment();
+    EstimateGyroBias();
+    if (const std::string message = CheckExcitation(); !message.empty()) {
+      return Fail(result_, message);
+    }
+    if (const std::string message = AlignLinearly(); !message.empty()) {
+      return Fail(result_, message);
+    }
+    if (const std::string message = RefineGravity(); !message.empty()) {
+      return Fail(result_, message);
+    }
+    SetGravityAlignedStates();
+    Report();
+    return result_;
+  }
+
+ private:
+  std::string Preintegrate(const std::vector<ImuSample>& imu, const ImuNoise& noise) {
+    preintegrations_.reserve(n_ - 1);
+    for (int k = 0; k + 1 < n_; ++k) {
+      preintegrations_.emplace_back(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), noise);
+      if (!preintegrations_.back().IntegrateRange(imu, window_[k]->timestamp_ns,
+                                                  window_[k + 1]->timestamp_ns)) {
+        return "the IMU samples do not cover keyframes " + std::to_string(k) + " to " +
+               std::to_string(k + 1);
+      }
+    }
+    return "";
+  }
+
+  // The reconstruction's camera centres and rotations in its frame V.
+  void SetUpAlignment() {
+    input_.preintegrations = &preintegrations_;
+    input_.cam_from_body_translation = cam_from_body_.translation;
+    for (int k = 0; k < n_; ++k) {
+      const Rigid3d v_from_cam = sfm_.CamFromV(k).Inverse();
+      input_.centers.push_back(v_from_cam.translation);
+      input_.v_from_cam.push_back(v_from_cam.rotation.toRotationMatrix());
+      input_.v_from_body.push_back(
+          (v_from_cam.rotation * cam_from_body_.rotation).toRotationMatrix());
+    }
+  }
+
+  // 2. Gyro bias: Exp(dR_dbg (bg - bg0)) = dR^T * R_bk^T R_bk+1, least squares.
+  void EstimateGyroBias() {
+    Eigen::Vector3d gyro_bias = Eigen::Vector3d::Zero();
+    for (int iteration = 0; iteration < 2; ++iteration) {
+      Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
+      Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+      for (int k = 0; k + 1 < n_; ++k) {
+        const ImuPreintegration& pre = preintegrations_[k];
+        const Eigen::Quaterniond visual(input_.v_from_body[k].transpose() *
+                                        input_.v_from_body[k + 1]);
+        const Eigen::Vector3d residual = So3Log(pre.delta_R().inverse() * visual);
+        normal += pre.dR_dbg().transpose() * pre.dR_dbg();
+        rhs += pre.dR_dbg().transpose() * residual;
+      }
+      gyro_bias += normal.ldlt().solve(rhs);
+      for (ImuPreintegration& pre : preintegrations_) {
+        pre.Repropagate(gyro_bias, Eigen::Vector3d::Zero());
+      }
+    }
+    result_.gyro_bias = gyro_bias;
+  }
+
+  // Excitation: spread of the mean specific force between keyframes, in V.
+  std::string CheckExcitation() {
+    std::vector<Eigen::Vector3d> forces;
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    for (int k = 0; k + 1 < n_; ++k) {
+      forces.push_back(input_.v_from_body[k] * preintegrations_[k].delta_v() /
+                       preintegrations_[k].delta_t_s());
+      mean += forces.back();
+    }
+    mean /= static_cast<double>(forces.size());
+    double sum = 0.0;
+    for (const Eigen::Vector3d& force : forces) sum += (force - mean).squaredNorm();
+    result_.accel_stddev = std::sqrt(sum / static_cast<double>(forces.size()));
+    if (!(result_.accel_stddev < options_.min_accel_stddev)) return "";
+    std::ostringstream stream;
+    stream << "not enough IMU excitation: acceleration stddev " << result_.accel_stddev
+           << " m/s^2 < " << options_.min_accel_stddev << " (scale unobservable)";
+    return stream.str();
+  }
+
+  // 3. Linear alignment.
+  std::string AlignLinearly() {
+    solution_ = SolveAlignment(input_, std::nullopt);
+    result_.gravity_norm_linear = solution_.gravity.norm();
+    std::ostringstream stream;
+    if (!(solution_.scale > 0.0)) {
+      stream << "negative scale from the linear alignment (" << solution_.scale << ")";
+    } else if (std::abs(result_.gravity_norm_linear - options_.gravity_magnitude) >
+               options_.max_gravity_norm_error) {
+      stream << "gravity norm of the linear alignment " << result_.gravity_norm_linear
+             << " m/s^2 is far from " << options_.gravity_magnitude;
+    }
+    return stream.str();
+  }
+
+  // 4. Gravity refinement with |g| fixed.
+  std::string RefineGravity() {
+    Eigen::Vector3d gravity = solution_.gravity.normalized() * options_.gravity_magnitude;
+    for (int iteration = 0; iteration < options_.gravity_refinement_iterations; ++iteration) {
+      solution_ = SolveAlignment(input_, gravity);
+      gravity = solution_.gravity.normalized() * options_.gravity_magnitude;
+    }
+    solution_.gravity = gravity;
+    result_.alignment_rms = solution_.rms;
+    result_.scale = solution_.scale;
+    const double baseline = solution_.scale * input_.centers.back().norm();
+    const bool plausible = solution_.scale > 0.0 && !(baseline < options_.min_baseline_m) &&
+                           !(baseline > options_.max_baseline_m);
+    if (plausible) return "";
+    std::ostringstream stream;
+    stream << "implausible scale " << solution_.scale << " (reference baseline " << baseline
+           << " m, allowed [" << options_.min_baseline_m << ", " << options_.max_baseline_m << "])";
+    return stream.str();
+  }
+
+  // 5. Gravity-aligned world: z up, origin and zero yaw at the first body.
+  void SetGravityAlignedStates() {
+    double roll = 0.0;
+    double pitch = 0.0;
+    const Eigen::Quaterniond tilt = GravityAlignedRotation(-solution_.gravity, &roll, &pitch);
+    const Eigen::Vector3d x_axis = tilt * input_.v_from_body[0].col(0);
+    const double yaw = std::atan2(x_axis.y(), x_axis.x());
+    const Eigen::Quaterniond world_from_v =
+        (Eigen::AngleAxisd(-yaw, Eigen::Vector3d::UnitZ()) * tilt).normalized();
+    std::vector<Eigen::Vector3d> body_positions(n_);
+    for (int k = 0; k < n_; ++k) {
+      body_positions[k] =
+          solution_.scale * input_.centers[k] + input_.v_from_cam[k] * cam_from_body_.translation;
+    }
+    const Eigen::Vector3d origin = body_positions[0];
+    result_.states.resize(n_);
+    for (int k = 0; k < n_; ++k) {
+      ImuState& state = result_.states[k];
+      state.timestamp_ns = window_[k]->timestamp_ns;
+      state.world_from_body =
+          Rigid3d((world_from_v * Eigen::Quaterniond(input_.v_from_body[k])).normalized(),
+                  world_from_v * (body_positions[k] - origin));
+      state.velocity_in_world = world_from_v * solution_.velocities[k];
+      state.gyro_bias = result_.gyro_bias;
+      state.accel_bias.setZero();
+    }
+    for (const auto& [id, point] : sfm_.Points()) {
+      result_.points_in_world[id] = world_from_v * (solution_.scale * point - origin);
+    }
+    result_.gravity_in_world = Eigen::Vector3d(0.0, 0.0, -options_.gravity_magnitude);
+    result_.accel_bias.setZero();
+    result_.success = true;
+  }
+
+  void Report() {
+    std::ostringstream stream;
+    stream << "initialised from " << n_ << " keyframes (reference " << result_.reference_frame
+           << ", parallax " << result_.median_parallax_deg << " deg), "
+           << result_.points_in_world.size() << " landmarks, reprojection RMS "
+           << result_.reprojection_rms_px << " px, scale " << result_.scale << ", |g| linear "
+           << result_.gravity_norm_linear << " m/s^2, accel std " << result_.accel_stddev
+           << " m/s^2, gyro bias " << result_.gyro_bias.transpose() << " rad/s";
+    result_.message = stream.str();
+    VIOSFM_LOG(INFO) << "Visual-inertial initialisation: " << result_.message;
+  }
+
+  const std::vector<const FrameFeatures*> window_;
+  const int n_;
+  const Rigid3d cam_from_body_;
+  const ViInitOptions& options_;
+  WindowSfm sfm_;
+  ViInitResult result_;
+  std::vector<ImuPreintegration> preintegrations_;
+  AlignmentInput input_;
+  AlignmentSolution solution_;
+};
+
 }  // namespace
 
 ViInitResult InitializeVisualInertial(const std::vector<FrameFeatures>& frames,
@@ -537,162 +735,19 @@ ViInitResult InitializeVisualInertial(const std::vector<FrameFeatures>& frames,
                                       const Rigid3d& body_from_cam, const ImuNoise& noise,
                                       const ViInitOptions& options) {
   VIOSFM_CHECK(options.Check()) << options.Validate();
-  ViInitResult result;
   const int first = std::max(0, static_cast<int>(frames.size()) - options.window_size);
   std::vector<const FrameFeatures*> window;
   for (size_t i = first; i < frames.size(); ++i) window.push_back(&frames[i]);
   const int n = static_cast<int>(window.size());
   if (n < options.min_num_frames) {
-    return Fail(result, "too few keyframes (" + std::to_string(n) + ", need " +
-                            std::to_string(options.min_num_frames) + ")");
+    return Fail(ViInitResult(), "too few keyframes (" + std::to_string(n) + ", need " +
+                                    std::to_string(options.min_num_frames) + ")");
   }
   for (int k = 0; k + 1 < n; ++k) {
     VIOSFM_CHECK_LT(window[k]->timestamp_ns, window[k + 1]->timestamp_ns)
         << "keyframes must be time ordered";
   }
-
-  // IMU between consecutive keyframes (checked first: it is cheap).
-  std::vector<ImuPreintegration> preintegrations;
-  preintegrations.reserve(n - 1);
-  for (int k = 0; k + 1 < n; ++k) {
-    preintegrations.emplace_back(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), noise);
-    if (!preintegrations.back().IntegrateRange(imu, window[k]->timestamp_ns,
-                                               window[k + 1]->timestamp_ns)) {
-      return Fail(result, "the IMU samples do not cover keyframes " + std::to_string(k) + " to " +
-                              std::to_string(k + 1));
-    }
-  }
-
-  // 1. Vision-only SfM up to scale.
-  WindowSfm sfm(window, options);
-  std::string message;
-  if (!sfm.Run(&result, &message)) return Fail(result, message);
-
-  const Rigid3d cam_from_body = body_from_cam.Inverse();
-  AlignmentInput input;
-  input.preintegrations = &preintegrations;
-  input.cam_from_body_translation = cam_from_body.translation;
-  for (int k = 0; k < n; ++k) {
-    const Rigid3d v_from_cam = sfm.CamFromV(k).Inverse();
-    input.centers.push_back(v_from_cam.translation);
-    input.v_from_cam.push_back(v_from_cam.rotation.toRotationMatrix());
-    input.v_from_body.push_back((v_from_cam.rotation * cam_from_body.rotation).toRotationMatrix());
-  }
-
-  // 2. Gyro bias: Exp(dR_dbg (bg - bg0)) = dR^T * R_bk^T R_bk+1, least squares.
-  Eigen::Vector3d gyro_bias = Eigen::Vector3d::Zero();
-  for (int iteration = 0; iteration < 2; ++iteration) {
-    Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
-    Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
-    for (int k = 0; k + 1 < n; ++k) {
-      const ImuPreintegration& pre = preintegrations[k];
-      const Eigen::Quaterniond visual(input.v_from_body[k].transpose() * input.v_from_body[k + 1]);
-      const Eigen::Vector3d residual = So3Log(pre.delta_R().inverse() * visual);
-      normal += pre.dR_dbg().transpose() * pre.dR_dbg();
-      rhs += pre.dR_dbg().transpose() * residual;
-    }
-    gyro_bias += normal.ldlt().solve(rhs);
-    for (ImuPreintegration& pre : preintegrations)
-      pre.Repropagate(gyro_bias, Eigen::Vector3d::Zero());
-  }
-  result.gyro_bias = gyro_bias;
-
-  // Excitation: spread of the mean specific force between keyframes, in V.
-  {
-    std::vector<Eigen::Vector3d> forces;
-    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-    for (int k = 0; k + 1 < n; ++k) {
-      forces.push_back(input.v_from_body[k] * preintegrations[k].delta_v() /
-                       preintegrations[k].delta_t_s());
-      mean += forces.back();
-    }
-    mean /= static_cast<double>(forces.size());
-    double sum = 0.0;
-    for (const Eigen::Vector3d& force : forces) sum += (force - mean).squaredNorm();
-    result.accel_stddev = std::sqrt(sum / static_cast<double>(forces.size()));
-    if (result.accel_stddev < options.min_accel_stddev) {
-      std::ostringstream stream;
-      stream << "not enough IMU excitation: acceleration stddev " << result.accel_stddev
-             << " m/s^2 < " << options.min_accel_stddev << " (scale unobservable)";
-      return Fail(result, stream.str());
-    }
-  }
-
-  // 3. Linear alignment.
-  AlignmentSolution solution = SolveAlignment(input, std::nullopt);
-  result.gravity_norm_linear = solution.gravity.norm();
-  if (!(solution.scale > 0.0)) {
-    std::ostringstream stream;
-    stream << "negative scale from the linear alignment (" << solution.scale << ")";
-    return Fail(result, stream.str());
-  }
-  if (std::abs(result.gravity_norm_linear - options.gravity_magnitude) >
-      options.max_gravity_norm_error) {
-    std::ostringstream stream;
-    stream << "gravity norm of the linear alignment " << result.gravity_norm_linear
-           << " m/s^2 is far from " << options.gravity_magnitude;
-    return Fail(result, stream.str());
-  }
-
-  // 4. Gravity refinement with |g| fixed.
-  Eigen::Vector3d gravity = solution.gravity.normalized() * options.gravity_magnitude;
-  for (int iteration = 0; iteration < options.gravity_refinement_iterations; ++iteration) {
-    solution = SolveAlignment(input, gravity);
-    gravity = solution.gravity.normalized() * options.gravity_magnitude;
-  }
-  solution.gravity = gravity;
-  result.alignment_rms = solution.rms;
-  result.scale = solution.scale;
-  const double baseline = solution.scale * input.centers.back().norm();
-  if (!(solution.scale > 0.0) || baseline < options.min_baseline_m ||
-      baseline > options.max_baseline_m) {
-    std::ostringstream stream;
-    stream << "implausible scale " << solution.scale << " (reference baseline " << baseline
-           << " m, allowed [" << options.min_baseline_m << ", " << options.max_baseline_m << "])";
-    return Fail(result, stream.str());
-  }
-
-  // 5. Gravity-aligned world: z up, origin and zero yaw at the first body.
-  double roll = 0.0;
-  double pitch = 0.0;
-  const Eigen::Quaterniond tilt = GravityAlignedRotation(-gravity, &roll, &pitch);
-  const Eigen::Vector3d x_axis = tilt * input.v_from_body[0].col(0);
-  const double yaw = std::atan2(x_axis.y(), x_axis.x());
-  const Eigen::Quaterniond world_from_v =
-      (Eigen::AngleAxisd(-yaw, Eigen::Vector3d::UnitZ()) * tilt).normalized();
-  std::vector<Eigen::Vector3d> body_positions(n);
-  for (int k = 0; k < n; ++k) {
-    body_positions[k] =
-        solution.scale * input.centers[k] + input.v_from_cam[k] * cam_from_body.translation;
-  }
-  const Eigen::Vector3d origin = body_positions[0];
-  result.states.resize(n);
-  for (int k = 0; k < n; ++k) {
-    ImuState& state = result.states[k];
-    state.timestamp_ns = window[k]->timestamp_ns;
-    state.world_from_body =
-        Rigid3d((world_from_v * Eigen::Quaterniond(input.v_from_body[k])).normalized(),
-                world_from_v * (body_positions[k] - origin));
-    state.velocity_in_world = world_from_v * solution.velocities[k];
-    state.gyro_bias = gyro_bias;
-    state.accel_bias.setZero();
-  }
-  for (const auto& [id, point] : sfm.Points()) {
-    result.points_in_world[id] = world_from_v * (solution.scale * point - origin);
-  }
-  result.gravity_in_world = Eigen::Vector3d(0.0, 0.0, -options.gravity_magnitude);
-  result.accel_bias.setZero();
-  result.success = true;
-  std::ostringstream stream;
-  stream << "initialised from " << n << " keyframes (reference " << result.reference_frame
-         << ", parallax " << result.median_parallax_deg << " deg), "
-         << result.points_in_world.size() << " landmarks, reprojection RMS "
-         << result.reprojection_rms_px << " px, scale " << result.scale << ", |g| linear "
-         << result.gravity_norm_linear << " m/s^2, accel std " << result.accel_stddev
-         << " m/s^2, gyro bias " << gyro_bias.transpose() << " rad/s";
-  result.message = stream.str();
-  VIOSFM_LOG(INFO) << "Visual-inertial initialisation: " << result.message;
-  return result;
+  return ViInitializer(std::move(window), body_from_cam, options).Run(imu, noise);
 }
 
 }  // namespace viosfm
