@@ -35,21 +35,28 @@ struct RoomSequence {
   }
 };
 
+// Simulates and renders the sequence `options` describe.
+RoomSequence* RenderRoom(const SimulationOptions& options) {
+  auto* r = new RoomSequence;
+  r->options = options;
+  r->simulated = SimulateSequence(r->options);
+  const RayTable rays(r->options.camera);
+  for (size_t k = 0; k < r->simulated.sequence.images.size(); ++k) {
+    r->frames.push_back(RenderSimulatedFrame(r->simulated, rays, k, r->options, 2));
+    r->stamps.push_back(r->simulated.sequence.images[k].timestamp_ns);
+  }
+  return r;
+}
+
 const RoomSequence& Room() {
   static const RoomSequence* room = [] {
-    auto* r = new RoomSequence;
-    r->options.scenario = "room";
-    r->options.duration_s = 3.0;
-    r->options.static_start_s = kStaticStartS;
-    r->options.camera_rate_hz = 20.0;
-    r->options.seed = 3;
-    r->simulated = SimulateSequence(r->options);
-    const RayTable rays(r->options.camera);
-    for (size_t k = 0; k < r->simulated.sequence.images.size(); ++k) {
-      r->frames.push_back(RenderSimulatedFrame(r->simulated, rays, k, r->options, 2));
-      r->stamps.push_back(r->simulated.sequence.images[k].timestamp_ns);
-    }
-    return r;
+    SimulationOptions options;
+    options.scenario = "room";
+    options.duration_s = 3.0;
+    options.static_start_s = kStaticStartS;
+    options.camera_rate_hz = 20.0;
+    options.seed = 3;
+    return RenderRoom(options);
   }();
   return *room;
 }
@@ -224,19 +231,12 @@ TEST(FeatureTracker, TracksAreAccurateAndIdsPersist) {
 // its pixels twice the reference bounds), and as the full image tracked.
 TEST(FeatureTracker, ALargeCameraTracksOnItsReducedLevel) {
   static const RoomSequence* large = [] {
-    auto* r = new RoomSequence;
-    r->options = Room().options;
-    r->options.duration_s = 2.0;
-    r->options.camera.width *= 2;
-    r->options.camera.height *= 2;
-    for (size_t i = 0; i < 4; ++i) r->options.camera.params[i] *= 2.0;
-    r->simulated = SimulateSequence(r->options);
-    const RayTable rays(r->options.camera);
-    for (size_t k = 0; k < r->simulated.sequence.images.size(); ++k) {
-      r->frames.push_back(RenderSimulatedFrame(r->simulated, rays, k, r->options, 2));
-      r->stamps.push_back(r->simulated.sequence.images[k].timestamp_ns);
-    }
-    return r;
+    SimulationOptions options = Room().options;
+    options.duration_s = 2.0;
+    options.camera.width *= 2;
+    options.camera.height *= 2;
+    for (size_t i = 0; i < 4; ++i) options.camera.params[i] *= 2.0;
+    return RenderRoom(options);
   }();
   FeatureTrackerOptions full_image;
   full_image.tracking_pyramid_level = 0;
