@@ -1,12 +1,17 @@
 #include "viosfm/pipeline/run_folder.h"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <array>
+#include <exception>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
 
 #include "viosfm/io/colmap_database.h"
+#include "viosfm/pipeline/pipeline_summary.h"
+#include "viosfm/pipeline/run_common.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/logging.h"
 #include "viosfm/util/string_util.h"
@@ -37,6 +42,18 @@ bool IsAnyAtomicWriteLeftover(const std::string& name) {
 
 // The run's folders whose every file is the run's (leftovers are looked for inside).
 constexpr std::array<const char*, 3> kOwnedFolders = {"verification", "vio", "bag"};
+
+// The first lines of a run's section of run.log.
+std::string RunLogHeading(const PipelineOptions& options, bool earlier_log) {
+  std::string heading = earlier_log ? "\n" : "";
+  heading += "== viosfm " + ViosfmVersion() + " run, started " + UtcNow() + ", process " +
+             std::to_string(getpid()) + "\n";
+  heading += "== dataset " + options.dataset.string() + ", output " +
+             options.output_folder.string() + "\n";
+  heading += "== the options: options.json; the outcome: summary.json (written last)";
+  if (earlier_log) heading += "\n== an earlier run's log above (it ends where that run stopped)";
+  return heading;
+}
 
 void WriteJsonFile(const fs::path& path, const std::string& text) {
   WriteFileAtomically(path, [&text](std::ostream& stream) { stream << text << "\n"; });
@@ -170,6 +187,7 @@ std::vector<std::string> RunOutputNames(const PipelineOptions& options) {
                                     "fingerprint.json",
                                     "options.json",
                                     "summary.json",
+                                    kRunLogFileName,
                                     "model",
                                     "model_txt",
                                     "models",
@@ -229,7 +247,8 @@ ManagedFolder::Options RunFolderManifestOptions() {
 }
 
 RunFolder::RunFolder(const PipelineOptions& options)
-    : folder_(options.output_folder, RunFolderManifestOptions()) {
+    : folder_(options.output_folder, RunFolderManifestOptions()),
+      exceptions_at_start_(std::uncaught_exceptions()) {
   // A user's file under one of the run's names is refused before anything
   // changes.
   folder_.Claim(RunOutputNames(options));
@@ -240,6 +259,19 @@ RunFolder::RunFolder(const PipelineOptions& options)
       VIOSFM_LOG(INFO) << "run: --overwrite: removed the " << removed << " file(s) viosfm wrote in "
                        << path().string();
     }
+  }
+  // The manifest claims run.log before it exists.
+  folder_.Save();
+  const fs::path log_path = path() / kRunLogFileName;
+  const bool earlier_log = fs::exists(log_path) && fs::file_size(log_path) > 0;
+  log_.emplace(log_path, RunLogHeading(options, earlier_log));
+}
+
+RunFolder::~RunFolder() {
+  if (std::uncaught_exceptions() > exceptions_at_start_) {
+    LogToFileOnly(LogLevel::kERROR,
+                  "run: stopped by an error (the console's last line says which); the folder is "
+                  "incomplete (no summary.json)");
   }
 }
 
@@ -273,6 +305,7 @@ void RunFolder::WriteRecords(
 void RunFolder::WriteSummary(const std::string& json) const {
   WriteJsonFile(path() / "summary.json", json);
   folder_.Finish();
+  LogToFileOnly(LogLevel::kINFO, "run: complete (summary.json written)");
 }
 
 namespace {
