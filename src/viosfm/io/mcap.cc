@@ -8,6 +8,7 @@
 #include <optional>
 #include <system_error>
 
+#include "viosfm/io/bag_bytes.h"
 #include "viosfm/io/compression.h"
 #include "viosfm/util/errors.h"
 
@@ -42,16 +43,6 @@ std::string OpName(uint8_t op) {
       "data end"};
   if (op < kNames.size()) return kNames[op];
   return "op 0x" + std::string(1, "0123456789abcdef"[op >> 4]) + "0123456789abcdef"[op & 15];
-}
-
-std::string ByteOffset(uint64_t offset) {
-  return "byte offset " + std::to_string(offset);
-}
-
-uint64_t LoadU64(const uint8_t* bytes) {
-  uint64_t value = 0;
-  for (int i = 7; i >= 0; --i) value = (value << 8) | bytes[i];
-  return value;
 }
 
 // The fields of one record's content, read in order; every overrun names
@@ -122,12 +113,6 @@ class Fields {
 void AppendU16(std::string& out, uint16_t value) {
   for (int i = 0; i < 2; ++i) out.push_back(static_cast<char>((value >> (8 * i)) & 0xff));
 }
-void AppendU32(std::string& out, uint32_t value) {
-  for (int i = 0; i < 4; ++i) out.push_back(static_cast<char>((value >> (8 * i)) & 0xff));
-}
-void AppendU64(std::string& out, uint64_t value) {
-  for (int i = 0; i < 8; ++i) out.push_back(static_cast<char>((value >> (8 * i)) & 0xff));
-}
 void AppendString(std::string& out, const std::string& text) {
   VIOSFM_CHECK_LE(text.size(), 0xffffffffu) << "MCAP string too long";
   AppendU32(out, static_cast<uint32_t>(text.size()));
@@ -184,25 +169,7 @@ struct McapReader::Scan {
   std::function<void(const McapMessage&)> visit;
 };
 
-namespace {
-
-// Reads exactly `size` bytes at `offset`; InputError when the file ends first.
-void ReadAt(std::ifstream& file, const std::string& path, uint64_t file_size, uint64_t offset,
-            uint8_t* out, uint64_t size, const std::string& what) {
-  if (offset > file_size || size > file_size - offset) {
-    throw InputError(path, 0,
-                     ByteOffset(offset) + ": " + what + ": expected " + std::to_string(size) +
-                         " bytes, the file ends after " +
-                         std::to_string(offset > file_size ? 0 : file_size - offset) +
-                         " (the file is truncated)");
-  }
-  file.clear();
-  file.seekg(static_cast<std::streamoff>(offset));
-  file.read(reinterpret_cast<char*>(out), static_cast<std::streamsize>(size));
-  if (!file) throw InputError(path, 0, ByteOffset(offset) + ": " + what + ": read error");
-}
-
-}  // namespace
+namespace {}  // namespace
 
 McapReader::McapReader(const fs::path& path) : path_(path) {
   const std::string p = path.string();
@@ -214,7 +181,7 @@ McapReader::McapReader(const fs::path& path) : path_(path) {
 
   uint8_t magic[kMagicBytes] = {};
   const uint64_t leading = std::min<uint64_t>(file_size_, kMagicBytes);
-  ReadAt(file_, p, file_size_, 0, magic, leading, "magic");
+  ReadAt(file_, p, file_size_, 0, magic, leading, "magic", "file");
   if (leading < kMagicBytes || std::memcmp(magic, kMcapMagic, 5) != 0) {
     throw InputError(p, 0,
                      "not an MCAP file: expected the magic bytes 89 'MCAP' '0' '\\r' '\\n' at "
@@ -228,7 +195,7 @@ McapReader::McapReader(const fs::path& path) : path_(path) {
 
   // The Header record.
   uint8_t prefix[kRecordPrefixBytes];
-  ReadAt(file_, p, file_size_, kMagicBytes, prefix, kRecordPrefixBytes, "header record");
+  ReadAt(file_, p, file_size_, kMagicBytes, prefix, kRecordPrefixBytes, "header record", "file");
   const uint64_t header_length = LoadU64(prefix + 1);
   if (prefix[0] != kOpHeader) {
     throw InputError(p, 0,
@@ -244,7 +211,7 @@ McapReader::McapReader(const fs::path& path) : path_(path) {
   }
   std::vector<uint8_t> header(header_length);
   ReadAt(file_, p, file_size_, kMagicBytes + kRecordPrefixBytes, header.data(), header_length,
-         "header record");
+         "header record", "file");
   const std::string header_location = ByteOffset(kMagicBytes);
   Fields header_fields(header, p, header_location, kOpHeader);
   profile_ = header_fields.String("profile");
@@ -272,7 +239,8 @@ void McapReader::ReadFooter() {
   uint8_t closing[kMagicBytes] = {};
   const bool has_closing = file_size_ >= kMagicBytes + tail;
   if (has_closing) {
-    ReadAt(file_, p, file_size_, file_size_ - kMagicBytes, closing, kMagicBytes, "closing magic");
+    ReadAt(file_, p, file_size_, file_size_ - kMagicBytes, closing, kMagicBytes, "closing magic",
+           "file");
   }
   if (!has_closing || std::memcmp(closing, kMcapMagic, kMagicBytes) != 0) {
     // Find where the file was cut: a scan of its records throws at the
@@ -288,7 +256,7 @@ void McapReader::ReadFooter() {
   }
   footer_offset_ = file_size_ - tail;
   uint8_t footer[kRecordPrefixBytes + kFooterContentBytes];
-  ReadAt(file_, p, file_size_, footer_offset_, footer, sizeof(footer), "footer record");
+  ReadAt(file_, p, file_size_, footer_offset_, footer, sizeof(footer), "footer record", "file");
   if (footer[0] != kOpFooter || LoadU64(footer + 1) != kFooterContentBytes) {
     throw InputError(p, 0,
                      ByteOffset(footer_offset_) +
@@ -313,7 +281,7 @@ void McapReader::ReadFooter() {
   if (summary_start_ != 0 && summary_crc_ != 0) {
     const uint64_t size = footer_offset_ + kRecordPrefixBytes + 16 - summary_start_;
     std::vector<uint8_t> bytes(size);
-    ReadAt(file_, p, file_size_, summary_start_, bytes.data(), size, "summary section");
+    ReadAt(file_, p, file_size_, summary_start_, bytes.data(), size, "summary section", "file");
     const uint32_t crc = Crc32(bytes);
     if (crc != summary_crc_) {
       throw InputError(p, 0,
@@ -329,7 +297,8 @@ void McapReader::ReadSummary() {
   const std::string p = path_.string();
   const uint64_t end = summary_offset_start_ != 0 ? summary_offset_start_ : footer_offset_;
   std::vector<uint8_t> bytes(end - summary_start_);
-  ReadAt(file_, p, file_size_, summary_start_, bytes.data(), bytes.size(), "summary section");
+  ReadAt(file_, p, file_size_, summary_start_, bytes.data(), bytes.size(), "summary section",
+         "file");
   struct Found {
     uint8_t op;
     std::span<const uint8_t> content;
@@ -570,11 +539,11 @@ void McapReader::ScanData(Scan& scan) {
 
   // The header record was read by the constructor.
   uint8_t prefix[kRecordPrefixBytes];
-  ReadAt(file_, p, file_size_, kMagicBytes, prefix, kRecordPrefixBytes, "header record");
+  ReadAt(file_, p, file_size_, kMagicBytes, prefix, kRecordPrefixBytes, "header record", "file");
   uint64_t offset = kMagicBytes + kRecordPrefixBytes + LoadU64(prefix + 1);
   std::vector<uint8_t> record;
   std::vector<uint8_t> magic_and_header(offset);
-  ReadAt(file_, p, file_size_, 0, magic_and_header.data(), offset, "header record");
+  ReadAt(file_, p, file_size_, 0, magic_and_header.data(), offset, "header record", "file");
   uint32_t crc = Crc32(magic_and_header);
   while (offset < scan.end) {
     const std::string location = ByteOffset(offset);
@@ -584,7 +553,7 @@ void McapReader::ScanData(Scan& scan) {
                            std::to_string(scan.end - offset) +
                            " left before the footer (the file is truncated or corrupt)");
     }
-    ReadAt(file_, p, file_size_, offset, prefix, kRecordPrefixBytes, "record prefix");
+    ReadAt(file_, p, file_size_, offset, prefix, kRecordPrefixBytes, "record prefix", "file");
     const uint8_t op = prefix[0];
     const uint64_t length = LoadU64(prefix + 1);
     if (length > scan.end - offset - kRecordPrefixBytes) {
@@ -599,7 +568,7 @@ void McapReader::ScanData(Scan& scan) {
     if (op == kOpDataEnd) {
       record.resize(length);
       ReadAt(file_, p, file_size_, offset + kRecordPrefixBytes, record.data(), length,
-             "data end record");
+             "data end record", "file");
       Fields data_end(record, p, location, op);
       const uint32_t stated = data_end.U32("data_section_crc");
       if (stated != 0 && stated != crc) {
@@ -612,7 +581,8 @@ void McapReader::ScanData(Scan& scan) {
       throw InputError(p, 0, location + ": footer record inside the file (expected data records)");
     }
     record.resize(kRecordPrefixBytes + length);
-    ReadAt(file_, p, file_size_, offset, record.data(), record.size(), OpName(op) + " record");
+    ReadAt(file_, p, file_size_, offset, record.data(), record.size(), OpName(op) + " record",
+           "file");
     crc = Crc32(record, crc);
     const std::span<const uint8_t> content =
         std::span<const uint8_t>(record).subspan(kRecordPrefixBytes);

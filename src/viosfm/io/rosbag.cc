@@ -10,6 +10,7 @@
 #include <string_view>
 #include <system_error>
 
+#include "viosfm/io/bag_bytes.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/string_util.h"
 
@@ -21,27 +22,13 @@ namespace fs = std::filesystem;
 constexpr uint8_t kOpMessageData = 0x02;
 constexpr uint8_t kOpBagHeader = 0x03;
 constexpr uint8_t kOpIndexData = 0x04;
-constexpr uint8_t kOpChunk = 0x05;
+constexpr uint8_t kOpChunkRecord = 0x05;
 constexpr uint8_t kOpChunkInfo = 0x06;
 constexpr uint8_t kOpConnection = 0x07;
 constexpr size_t kBagHeaderRecordBytes = 4096;
 // Largest uncompressed chunk accepted (rosbag record writes 768 KiB chunks).
-constexpr uint32_t kMaxChunkBytes = uint32_t{1} << 30;
+constexpr uint32_t kMaxUncompressedChunkBytes = uint32_t{1} << 30;
 
-uint32_t LoadU32(const uint8_t* bytes) {
-  return uint32_t{bytes[0]} | (uint32_t{bytes[1]} << 8) | (uint32_t{bytes[2]} << 16) |
-         (uint32_t{bytes[3]} << 24);
-}
-uint64_t LoadU64(const uint8_t* bytes) {
-  return uint64_t{LoadU32(bytes)} | (uint64_t{LoadU32(bytes + 4)} << 32);
-}
-void AppendU32(std::string& out, uint32_t value) {
-  for (int i = 0; i < 4; ++i) out.push_back(static_cast<char>((value >> (8 * i)) & 0xff));
-}
-void AppendU64(std::string& out, uint64_t value) {
-  AppendU32(out, static_cast<uint32_t>(value & 0xffffffffu));
-  AppendU32(out, static_cast<uint32_t>(value >> 32));
-}
 std::string U32Bytes(uint32_t value) {
   std::string out;
   AppendU32(out, value);
@@ -154,10 +141,6 @@ class RecordHeader {
   std::string location_;
 };
 
-std::string ByteOffset(uint64_t offset) {
-  return "byte offset " + std::to_string(offset);
-}
-
 }  // namespace
 
 bool HasRosbagExtension(const fs::path& path) {
@@ -186,25 +169,6 @@ struct RosbagReader::Scan {
 };
 
 namespace {
-
-// Reads exactly `size` bytes at `offset`; InputError naming what was being
-// read when the file ends first.
-void ReadAt(std::ifstream& file, const std::string& path, uint64_t file_size, uint64_t offset,
-            uint8_t* out, uint64_t size, const std::string& what) {
-  if (offset > file_size || size > file_size - offset) {
-    throw InputError(path, 0,
-                     ByteOffset(offset) + ": " + what + ": expected " + std::to_string(size) +
-                         " bytes, the file ends after " +
-                         std::to_string(offset > file_size ? 0 : file_size - offset) +
-                         " (the bag is truncated)");
-  }
-  file.clear();
-  file.seekg(static_cast<std::streamoff>(offset));
-  file.read(reinterpret_cast<char*>(out), static_cast<std::streamsize>(size));
-  if (!file) {
-    throw InputError(path, 0, ByteOffset(offset) + ": " + what + ": read error");
-  }
-}
 
 // The output buffer of a decompression grows with what the data actually
 // gives, up to the size the chunk's header states: a corrupt or hostile header
@@ -329,7 +293,7 @@ RosbagReader::RosbagReader(const fs::path& path) : path_(path) {
                          " bytes, expected the line '#ROSBAG V2.0'");
   }
   ReadAt(file_, p, file_size_, 0, reinterpret_cast<uint8_t*>(version.data()), version_size,
-         "version line");
+         "version line", "bag");
   if (version != kRosbagVersionLine) {
     if (version.starts_with("SQLite format")) {
       throw InputError(p, 0,
@@ -348,7 +312,7 @@ RosbagReader::RosbagReader(const fs::path& path) : path_(path) {
   // The bag header record.
   uint64_t offset = version_size;
   uint8_t length_bytes[4];
-  ReadAt(file_, p, file_size_, offset, length_bytes, 4, "bag header record length");
+  ReadAt(file_, p, file_size_, offset, length_bytes, 4, "bag header record length", "bag");
   const uint32_t header_length = LoadU32(length_bytes);
   if (header_length > file_size_ - offset - 4) {
     throw InputError(p, 0,
@@ -357,7 +321,8 @@ RosbagReader::RosbagReader(const fs::path& path) : path_(path) {
                          std::to_string(file_size_ - offset - 4) + " (the bag is truncated)");
   }
   std::vector<uint8_t> header_bytes(header_length);
-  ReadAt(file_, p, file_size_, offset + 4, header_bytes.data(), header_length, "bag header record");
+  ReadAt(file_, p, file_size_, offset + 4, header_bytes.data(), header_length, "bag header record",
+         "bag");
   HeaderFields fields;
   if (const std::string problem = ParseHeaderFields(header_bytes, &fields); !problem.empty()) {
     throw InputError(p, 0, ByteOffset(offset) + ": bag header record: " + problem);
@@ -369,7 +334,7 @@ RosbagReader::RosbagReader(const fs::path& path) : path_(path) {
   }
   index_pos_ = header.U64("index_pos");
   ReadAt(file_, p, file_size_, offset + 4 + header_length, length_bytes, 4,
-         "bag header record data length");
+         "bag header record data length", "bag");
   const uint32_t padding = LoadU32(length_bytes);
   first_record_offset_ = offset + 8 + uint64_t{header_length} + padding;
   if (first_record_offset_ > file_size_) {
@@ -515,7 +480,7 @@ void RosbagReader::ScanRecords(Scan& scan) {
   while (offset < file_size_) {
     const std::string location = ByteOffset(offset);
     uint8_t length_bytes[4];
-    ReadAt(file_, p, file_size_, offset, length_bytes, 4, "record header length");
+    ReadAt(file_, p, file_size_, offset, length_bytes, 4, "record header length", "bag");
     const uint32_t header_length = LoadU32(length_bytes);
     if (header_length > file_size_ - offset - 4) {
       throw InputError(p, 0,
@@ -525,14 +490,16 @@ void RosbagReader::ScanRecords(Scan& scan) {
                            " (the bag is truncated or corrupt)");
     }
     header_bytes.resize(header_length);
-    ReadAt(file_, p, file_size_, offset + 4, header_bytes.data(), header_length, "record header");
+    ReadAt(file_, p, file_size_, offset + 4, header_bytes.data(), header_length, "record header",
+           "bag");
     HeaderFields fields;
     if (const std::string problem = ParseHeaderFields(header_bytes, &fields); !problem.empty()) {
       throw InputError(p, 0, location + ": record header: " + problem);
     }
     const RecordHeader header(std::move(fields), p, location);
     const uint8_t op = header.Op();
-    ReadAt(file_, p, file_size_, offset + 4 + header_length, length_bytes, 4, "record data length");
+    ReadAt(file_, p, file_size_, offset + 4 + header_length, length_bytes, 4, "record data length",
+           "bag");
     const uint32_t data_length = LoadU32(length_bytes);
     const uint64_t data_offset = offset + 8 + header_length;
     const uint64_t next = data_offset + data_length;
@@ -544,10 +511,11 @@ void RosbagReader::ScanRecords(Scan& scan) {
     }
     const bool read_data = op == kOpConnection || op == kOpChunkInfo ||
                            ((scan.messages || scan.count) && op == kOpMessageData) ||
-                           (op == kOpChunk && (scan.messages || !has_index_));
+                           (op == kOpChunkRecord && (scan.messages || !has_index_));
     if (read_data) {
       data_bytes.resize(data_length);
-      ReadAt(file_, p, file_size_, data_offset, data_bytes.data(), data_length, "record data");
+      ReadAt(file_, p, file_size_, data_offset, data_bytes.data(), data_length, "record data",
+             "bag");
       const std::span<const uint8_t> data(data_bytes);
       if (op == kOpConnection) {
         parse_connection(header, data, location);
@@ -555,13 +523,13 @@ void RosbagReader::ScanRecords(Scan& scan) {
         handle_chunk_info(header, data);
       } else if (op == kOpMessageData) {
         handle_message(header, data, location);
-      } else if (op == kOpChunk) {
+      } else if (op == kOpChunkRecord) {
         const std::string compression = header.Bytes("compression");
         const uint32_t size = header.U32("size");
         std::vector<uint8_t> decompressed;
         std::span<const uint8_t> chunk = data;
         if (compression != "none") {
-          if (size > kMaxChunkBytes) {
+          if (size > kMaxUncompressedChunkBytes) {
             header.Fail("chunk states an uncompressed size of " + std::to_string(size) +
                         " bytes (more than 1 GiB: a corrupt header?)");
           }
@@ -590,7 +558,7 @@ void RosbagReader::ScanRecords(Scan& scan) {
           inner += record.size;
         }
       }
-    } else if (op != kOpChunk && op != kOpIndexData && op != kOpMessageData) {
+    } else if (op != kOpChunkRecord && op != kOpIndexData && op != kOpMessageData) {
       header.Fail("unknown record op " + std::to_string(op) +
                   " (expected 0x02 to 0x07 after the bag header)");
     }
@@ -715,7 +683,7 @@ void RosbagWriter::FlushChunk() {
   }
   const std::string& payload =
       options_.compression == RosbagCompression::kNone ? chunk_data_ : compressed;
-  WriteBytes(EncodeRecord({{"op", std::string(1, static_cast<char>(kOpChunk))},
+  WriteBytes(EncodeRecord({{"op", std::string(1, static_cast<char>(kOpChunkRecord))},
                            {"compression", compression},
                            {"size", U32Bytes(static_cast<uint32_t>(chunk_data_.size()))}},
                           payload));

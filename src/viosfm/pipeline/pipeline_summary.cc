@@ -69,10 +69,9 @@ std::string PipelineSummary::ToString() const {
   }
   if (vio_gaps.num_gaps > 0) out << "VIO gaps: " << vio_gaps.ToString() << "\n";
   out << "VIO: " << num_vio_segments << " segment(s), " << mapper.num_vio_segments_joined
-      << " joined; frames re-posed by the images " << mapper.num_reposed
-      << ", registered without a VIO pose " << mapper.num_registered_without_vio
-      << "; VIO jumps found " << mapper.num_vio_breaks << ", refused "
-      << mapper.num_vio_jumps_refused << "\n";
+      << " joined; re-posed by the images " << mapper.num_reposed
+      << ", registered without a VIO pose " << mapper.num_registered_without_vio << "; jumps found "
+      << mapper.num_vio_breaks << ", refused " << mapper.num_vio_jumps_refused << "\n";
   // The metric scale's line is among the decisions (its details: summary.json, run.log).
   out << "pairs: " << verification.num_pairs << " candidates, " << verification.num_accepted
       << " accepted";
