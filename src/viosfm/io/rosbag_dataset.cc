@@ -744,133 +744,187 @@ Sequence ReadRosbagDataset(const fs::path& bag, const RosbagDatasetOptions& opti
   return RosbagDatasetReader(bag, options).Read();
 }
 
+namespace {
+
+// Writes a Sequence into a bag in named steps: the stamps checked against
+// the bag's time type, the topics added, the calibration embedded, then the
+// images, IMU samples and ground-truth poses merged by stamp.
+class RosbagDatasetWriter {
+ public:
+  RosbagDatasetWriter(const Sequence& sequence, const fs::path& bag,
+                      const RosbagWriteOptions& options)
+      : sequence_(sequence),
+        bag_(bag),
+        options_(options),
+        bag_writer_(CreateBagWriter(bag, options.writer)),
+        writer_(*bag_writer_),
+        ros1_(writer_.format() == BagFormat::kRos1) {}
+
+  void Write() {
+    CheckStamps();
+    AddTopics();
+    if (options_.embed_calibration) EmbedCalibration();
+    WriteMessages();
+    writer_.Close();
+    VIOSFM_LOG(INFO) << "bag " << bag_.string() << ": wrote " << sequence_.images.size()
+                     << " images on " << options_.image_topic << ", " << sequence_.imu.size()
+                     << " IMU samples on " << options_.imu_topic << ", "
+                     << sequence_.ground_truth.size() << " ground-truth poses";
+  }
+
+ private:
+  // ROS time is uint32 seconds, ROS 2's builtin_interfaces/Time int32 seconds.
+  void CheckStamps() const {
+    const timestamp_ns_t max_stamp =
+        (ros1_ ? timestamp_ns_t{0xffffffff} : timestamp_ns_t{0x7fffffff}) * 1'000'000'000 +
+        999'999'999;
+    const auto check_stamp = [&](timestamp_ns_t stamp, const char* what) {
+      if (stamp < 0 || stamp > max_stamp) {
+        throw InputError(bag_.string(), 0,
+                         std::string(what) + " stamp " + std::to_string(stamp) + " ns is outside " +
+                             (ros1_ ? "ROS time (0 to 2^32 s)" : "ROS 2 time (0 to 2^31 s)"));
+      }
+    };
+    for (const SequenceImage& image : sequence_.images) check_stamp(image.timestamp_ns, "image");
+    for (const ImuSample& sample : sequence_.imu) check_stamp(sample.timestamp_ns, "IMU");
+    for (const GroundTruthState& state : sequence_.ground_truth) {
+      check_stamp(state.timestamp_ns, "ground-truth");
+    }
+  }
+
+  void AddTopics() {
+    image_connection_ = writer_.AddTopic(
+        options_.image_topic,
+        options_.compressed_images ? BagMessageKind::kCompressedImage : BagMessageKind::kImage);
+    if (sequence_.has_imu()) {
+      imu_connection_ = writer_.AddTopic(options_.imu_topic, BagMessageKind::kImu);
+    }
+    if (sequence_.has_ground_truth()) {
+      groundtruth_connection_ =
+          writer_.AddTopic(options_.groundtruth_topic, BagMessageKind::kPoseStamped);
+    }
+  }
+
+  // The sensor.yaml texts on their topics, stamped with the first message's stamp.
+  void EmbedCalibration() {
+    const auto serialize_string = ros1_ ? SerializeRosString : SerializeCdrString;
+    timestamp_ns_t first = sequence_.images.front().timestamp_ns;
+    if (sequence_.has_imu()) first = std::min(first, sequence_.imu.front().timestamp_ns);
+    if (sequence_.has_ground_truth()) {
+      first = std::min(first, sequence_.ground_truth.front().timestamp_ns);
+    }
+    const SensorRig& rig = sequence_.rig;
+    const uint32_t camera = writer_.AddTopic(kCameraCalibrationTopic, BagMessageKind::kString);
+    writer_.Write(camera, first,
+                  serialize_string(!options_.camera_yaml_text.empty()
+                                       ? options_.camera_yaml_text
+                                       : EurocCameraYamlText(rig.camera, rig.body_from_cam,
+                                                             rig.camera_rate_hz)));
+    if (sequence_.has_imu()) {
+      const uint32_t imu = writer_.AddTopic(kImuCalibrationTopic, BagMessageKind::kString);
+      writer_.Write(
+          imu, first,
+          serialize_string(!options_.imu_yaml_text.empty() ? options_.imu_yaml_text
+                                                           : EurocImuYamlText(rig.imu_noise)));
+    }
+  }
+
+  // Merges the three streams by stamp (images first on ties, then IMU).
+  void WriteMessages() {
+    size_t i_image = 0, i_imu = 0, i_gt = 0;
+    constexpr timestamp_ns_t kEnd = std::numeric_limits<timestamp_ns_t>::max();
+    const auto& images = sequence_.images;
+    const auto& imu = sequence_.imu;
+    const auto& ground_truth = sequence_.ground_truth;
+    while (i_image < images.size() || i_imu < imu.size() || i_gt < ground_truth.size()) {
+      const timestamp_ns_t t_image = i_image < images.size() ? images[i_image].timestamp_ns : kEnd;
+      const timestamp_ns_t t_imu = i_imu < imu.size() ? imu[i_imu].timestamp_ns : kEnd;
+      const timestamp_ns_t t_gt =
+          i_gt < ground_truth.size() ? ground_truth[i_gt].timestamp_ns : kEnd;
+      if (t_image <= t_imu && t_image <= t_gt) {
+        WriteImage(i_image++);
+      } else if (t_imu <= t_gt) {
+        WriteImu(i_imu++);
+      } else {
+        WriteGroundTruth(i_gt++);
+      }
+    }
+  }
+
+  void WriteImage(size_t index) {
+    const SequenceImage& image = sequence_.images[index];
+    const RosHeader header{static_cast<uint32_t>(index), image.timestamp_ns, "cam0"};
+    std::vector<uint8_t> bytes;
+    if (options_.compressed_images) {
+      RosCompressedImage message;
+      message.header = header;
+      const std::string extension = ToLower(image.path.extension().string());
+      if (extension == ".png") {
+        message.format = "png";
+      } else if (extension == ".jpg" || extension == ".jpeg") {
+        message.format = "jpeg";
+      } else {
+        throw InputError(image.path.string(), 0,
+                         "expected a .png or .jpg image to store as sensor_msgs/CompressedImage");
+      }
+      const std::string file = ReadTextFile(image.path);
+      message.data.assign(file.begin(), file.end());
+      bytes = ros1_ ? SerializeRosCompressedImage(message) : SerializeCdrCompressedImage(message);
+    } else {
+      const GreyImage grey = ReadGreyImage(image.path);
+      RosImage message;
+      message.header = header;
+      message.height = static_cast<uint32_t>(grey.height);
+      message.width = static_cast<uint32_t>(grey.width);
+      message.encoding = "mono8";
+      message.step = static_cast<uint32_t>(grey.width);
+      message.data = grey.pixels;
+      bytes = ros1_ ? SerializeRosImage(message) : SerializeCdrImage(message);
+    }
+    writer_.Write(image_connection_, image.timestamp_ns, bytes);
+  }
+
+  void WriteImu(size_t index) {
+    const ImuSample& sample = sequence_.imu[index];
+    RosImu message;
+    message.header = {static_cast<uint32_t>(index), sample.timestamp_ns, "imu0"};
+    message.angular_velocity = sample.gyro;
+    message.linear_acceleration = sample.accel;
+    // ROS: orientation_covariance[0] = -1 says "no orientation estimate".
+    message.orientation_covariance(0, 0) = -1.0;
+    writer_.Write(imu_connection_, sample.timestamp_ns,
+                  ros1_ ? SerializeRosImu(message) : SerializeCdrImu(message));
+  }
+
+  void WriteGroundTruth(size_t index) {
+    const GroundTruthState& state = sequence_.ground_truth[index];
+    RosPoseStamped message;
+    message.header = {static_cast<uint32_t>(index), state.timestamp_ns, "world"};
+    message.pose = state.world_from_body;
+    writer_.Write(groundtruth_connection_, state.timestamp_ns,
+                  ros1_ ? SerializeRosPoseStamped(message) : SerializeCdrPoseStamped(message));
+  }
+
+  const Sequence& sequence_;
+  const fs::path& bag_;
+  const RosbagWriteOptions& options_;
+  const std::unique_ptr<BagWriter> bag_writer_;
+  BagWriter& writer_;
+  const bool ros1_;
+  uint32_t image_connection_ = 0;
+  uint32_t imu_connection_ = 0;
+  uint32_t groundtruth_connection_ = 0;
+};
+
+}  // namespace
+
 void WriteRosbagDataset(const Sequence& sequence, const fs::path& bag,
                         const RosbagWriteOptions& options) {
   if (const std::string problem = options.Validate(); !problem.empty()) {
     throw InputError("bag write options: " + problem);
   }
   if (sequence.images.empty()) throw InputError(bag.string(), 0, "no images to write");
-  const std::unique_ptr<BagWriter> bag_writer = CreateBagWriter(bag, options.writer);
-  BagWriter& writer = *bag_writer;
-  const bool ros1 = writer.format() == BagFormat::kRos1;
-  const auto serialize_string = ros1 ? SerializeRosString : SerializeCdrString;
-  // ROS time is uint32 seconds, ROS 2's builtin_interfaces/Time int32 seconds.
-  const timestamp_ns_t max_stamp =
-      (ros1 ? timestamp_ns_t{0xffffffff} : timestamp_ns_t{0x7fffffff}) * 1'000'000'000 +
-      999'999'999;
-  const auto check_stamp = [&](timestamp_ns_t stamp, const char* what) {
-    if (stamp < 0 || stamp > max_stamp) {
-      throw InputError(bag.string(), 0,
-                       std::string(what) + " stamp " + std::to_string(stamp) + " ns is outside " +
-                           (ros1 ? "ROS time (0 to 2^32 s)" : "ROS 2 time (0 to 2^31 s)"));
-    }
-  };
-  for (const SequenceImage& image : sequence.images) check_stamp(image.timestamp_ns, "image");
-  for (const ImuSample& sample : sequence.imu) check_stamp(sample.timestamp_ns, "IMU");
-  for (const GroundTruthState& state : sequence.ground_truth) {
-    check_stamp(state.timestamp_ns, "ground-truth");
-  }
-  const uint32_t image_connection = writer.AddTopic(
-      options.image_topic,
-      options.compressed_images ? BagMessageKind::kCompressedImage : BagMessageKind::kImage);
-  const uint32_t imu_connection =
-      sequence.has_imu() ? writer.AddTopic(options.imu_topic, BagMessageKind::kImu) : 0;
-  const uint32_t groundtruth_connection =
-      sequence.has_ground_truth()
-          ? writer.AddTopic(options.groundtruth_topic, BagMessageKind::kPoseStamped)
-          : 0;
-
-  timestamp_ns_t first = sequence.images.front().timestamp_ns;
-  if (sequence.has_imu()) first = std::min(first, sequence.imu.front().timestamp_ns);
-  if (sequence.has_ground_truth()) {
-    first = std::min(first, sequence.ground_truth.front().timestamp_ns);
-  }
-  if (options.embed_calibration) {
-    const uint32_t camera = writer.AddTopic(kCameraCalibrationTopic, BagMessageKind::kString);
-    writer.Write(
-        camera, first,
-        serialize_string(!options.camera_yaml_text.empty()
-                             ? options.camera_yaml_text
-                             : EurocCameraYamlText(sequence.rig.camera, sequence.rig.body_from_cam,
-                                                   sequence.rig.camera_rate_hz)));
-    if (sequence.has_imu()) {
-      const uint32_t imu = writer.AddTopic(kImuCalibrationTopic, BagMessageKind::kString);
-      writer.Write(imu, first,
-                   serialize_string(!options.imu_yaml_text.empty()
-                                        ? options.imu_yaml_text
-                                        : EurocImuYamlText(sequence.rig.imu_noise)));
-    }
-  }
-
-  // Merge the three streams by stamp (images first on ties, then IMU).
-  size_t i_image = 0, i_imu = 0, i_gt = 0;
-  constexpr timestamp_ns_t kEnd = std::numeric_limits<timestamp_ns_t>::max();
-  while (i_image < sequence.images.size() || i_imu < sequence.imu.size() ||
-         i_gt < sequence.ground_truth.size()) {
-    const timestamp_ns_t t_image =
-        i_image < sequence.images.size() ? sequence.images[i_image].timestamp_ns : kEnd;
-    const timestamp_ns_t t_imu =
-        i_imu < sequence.imu.size() ? sequence.imu[i_imu].timestamp_ns : kEnd;
-    const timestamp_ns_t t_gt =
-        i_gt < sequence.ground_truth.size() ? sequence.ground_truth[i_gt].timestamp_ns : kEnd;
-    if (t_image <= t_imu && t_image <= t_gt) {
-      const SequenceImage& image = sequence.images[i_image];
-      RosHeader header{static_cast<uint32_t>(i_image), image.timestamp_ns, "cam0"};
-      std::vector<uint8_t> bytes;
-      if (options.compressed_images) {
-        RosCompressedImage message;
-        message.header = header;
-        const std::string extension = ToLower(image.path.extension().string());
-        if (extension == ".png") {
-          message.format = "png";
-        } else if (extension == ".jpg" || extension == ".jpeg") {
-          message.format = "jpeg";
-        } else {
-          throw InputError(image.path.string(), 0,
-                           "expected a .png or .jpg image to store as sensor_msgs/CompressedImage");
-        }
-        const std::string file = ReadTextFile(image.path);
-        message.data.assign(file.begin(), file.end());
-        bytes = ros1 ? SerializeRosCompressedImage(message) : SerializeCdrCompressedImage(message);
-      } else {
-        const GreyImage grey = ReadGreyImage(image.path);
-        RosImage message;
-        message.header = header;
-        message.height = static_cast<uint32_t>(grey.height);
-        message.width = static_cast<uint32_t>(grey.width);
-        message.encoding = "mono8";
-        message.step = static_cast<uint32_t>(grey.width);
-        message.data = grey.pixels;
-        bytes = ros1 ? SerializeRosImage(message) : SerializeCdrImage(message);
-      }
-      writer.Write(image_connection, image.timestamp_ns, bytes);
-      ++i_image;
-    } else if (t_imu <= t_gt) {
-      const ImuSample& sample = sequence.imu[i_imu];
-      RosImu message;
-      message.header = {static_cast<uint32_t>(i_imu), sample.timestamp_ns, "imu0"};
-      message.angular_velocity = sample.gyro;
-      message.linear_acceleration = sample.accel;
-      // ROS: orientation_covariance[0] = -1 says "no orientation estimate".
-      message.orientation_covariance(0, 0) = -1.0;
-      writer.Write(imu_connection, sample.timestamp_ns,
-                   ros1 ? SerializeRosImu(message) : SerializeCdrImu(message));
-      ++i_imu;
-    } else {
-      const GroundTruthState& state = sequence.ground_truth[i_gt];
-      RosPoseStamped message;
-      message.header = {static_cast<uint32_t>(i_gt), state.timestamp_ns, "world"};
-      message.pose = state.world_from_body;
-      writer.Write(groundtruth_connection, state.timestamp_ns,
-                   ros1 ? SerializeRosPoseStamped(message) : SerializeCdrPoseStamped(message));
-      ++i_gt;
-    }
-  }
-  writer.Close();
-  VIOSFM_LOG(INFO) << "bag " << bag.string() << ": wrote " << sequence.images.size()
-                   << " images on " << options.image_topic << ", " << sequence.imu.size()
-                   << " IMU samples on " << options.imu_topic << ", "
-                   << sequence.ground_truth.size() << " ground-truth poses";
+  RosbagDatasetWriter(sequence, bag, options).Write();
 }
 
 void UseEurocCalibrationTexts(const fs::path& folder, RosbagWriteOptions* options) {
