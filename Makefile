@@ -10,7 +10,7 @@ deps:
 
 configure: deps
 	cmake -S . -B $(BUILD_DIR) -G Ninja $(CMAKE_FLAGS) -DVIOSFM_BUILD_TESTS=ON \
-	  -DVIOSFM_BUILD_BENCHMARKS=ON -DVIOSFM_UNITY_BUILD=OFF
+	  -DVIOSFM_BUILD_BENCHMARKS=ON
 
 build: configure
 	cmake --build $(BUILD_DIR) -j $(JOBS)
@@ -30,7 +30,7 @@ demo:
 package:
 	./scripts/install-deps.sh --demo
 	cmake -S . -B $(BUILD_DIR) -G Ninja $(CMAKE_FLAGS) -DVIOSFM_BUILD_TESTS=OFF \
-	  -DVIOSFM_BUILD_BENCHMARKS=OFF -DVIOSFM_UNITY_BUILD=ON
+	  -DVIOSFM_BUILD_BENCHMARKS=OFF
 	cmake --build $(BUILD_DIR) -j $(JOBS) --target viosfm
 	cd $(BUILD_DIR) && cpack -G DEB
 

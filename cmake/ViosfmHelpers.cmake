@@ -9,34 +9,6 @@ function(viosfm_add_library NAME)
   target_compile_features(${target} PUBLIC cxx_std_20)
   target_compile_options(${target} PRIVATE -Wall -Wextra)
   target_link_libraries(${target} PUBLIC ${ARG_PUBLIC_DEPS} PRIVATE ${ARG_PRIVATE_DEPS})
-  viosfm_set_unity_build(${NAME} ${target})
-endfunction()
-
-# viosfm_set_unity_build(NAME TARGET)
-# With VIOSFM_UNITY_BUILD (a one-off build of the program: `make demo`,
-# `make package`), the layer's sources are compiled VIOSFM_UNITY_BATCH_SIZE
-# at a time in one translation unit each: the headers (Eigen, Ceres, OpenCV)
-# are read and their templates instantiated once a batch instead of once a
-# file. Of two files that define the same internal name (in an anonymous
-# namespace), one is compiled alone (kUnitySkipFiles). Not for development
-# builds: a change to one file recompiles its whole batch, and ccache hits
-# less.
-set(kUnitySkipFiles
-    estimators/essential_matrix.cc eval/gyro_check.cc io/colmap_pose_priors.cc io/euroc.cc
-    io/rosbag2.cc report/html_report.cc sfm/batched_mapper_adjustment.cc
-    sfm/batched_mapper_registration.cc sfm/incremental_mapper.cc sfm/inertial_terms.cc)
-function(viosfm_set_unity_build NAME TARGET)
-  if(NOT VIOSFM_UNITY_BUILD)
-    return()
-  endif()
-  set_target_properties(${TARGET} PROPERTIES UNITY_BUILD ON
-                        UNITY_BUILD_BATCH_SIZE ${VIOSFM_UNITY_BATCH_SIZE})
-  foreach(file ${kUnitySkipFiles})
-    if(file MATCHES "^${NAME}/")
-      set_source_files_properties(${PROJECT_SOURCE_DIR}/src/viosfm/${file}
-                                  TARGET_DIRECTORY ${TARGET} PROPERTIES SKIP_UNITY_BUILD_INCLUSION ON)
-    endif()
-  endforeach()
 endfunction()
 
 # viosfm_add_test(MODULE NAME [DEPS ...])

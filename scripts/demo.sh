@@ -39,10 +39,8 @@ if ((setup)); then
   step "1/$steps packages: the Debian packages viosfm builds and runs with (scripts/install-deps.sh --demo)"
   ./scripts/install-deps.sh --demo
   step "2/$steps configure: $build_dir, the program only (no tests, no benchmarks)"
-  # A one-off build: each layer's files compiled in batches (VIOSFM_UNITY_BUILD).
   cmake -S . -B "$build_dir" -G Ninja ${CMAKE_FLAGS:--DCMAKE_BUILD_TYPE=Release} \
-    -DVIOSFM_BUILD_TESTS=OFF -DVIOSFM_BUILD_BENCHMARKS=OFF -DVIOSFM_UNITY_BUILD=ON \
-    >"$build_dir.configure.log" 2>&1 ||
+    -DVIOSFM_BUILD_TESTS=OFF -DVIOSFM_BUILD_BENCHMARKS=OFF >"$build_dir.configure.log" 2>&1 ||
     { cat "$build_dir.configure.log" >&2; exit 1; }
   rm -f "$build_dir.configure.log"
   step "3/$steps build: the viosfm program, $jobs jobs ([files done/to do, elapsed])"

@@ -376,6 +376,17 @@ void RosbagReader::AddConnection(RosbagConnection connection, const std::string&
   for (size_t i = 0; i < connections_.size(); ++i) connection_index_[connections_[i].id] = i;
 }
 
+namespace {
+
+// One record parsed from a buffer (a chunk's data).
+struct ParsedRecord {
+  RecordHeader header;
+  std::span<const uint8_t> data;
+  size_t size;  // header, data and their lengths
+};
+
+}  // namespace
+
 // The records of the bag file in order, each handed to the step its op
 // names: connections, messages, chunk infos (message counts), and chunks,
 // whose own records are handed on in turn.
@@ -392,13 +403,6 @@ class RosbagReader::RecordScanner {
   }
 
  private:
-  // One record parsed from a buffer (a chunk's data).
-  struct Parsed {
-    RecordHeader header;
-    std::span<const uint8_t> data;
-    size_t size;  // header, data and their lengths
-  };
-
   // Reads the record at `offset` of the file, takes it if the scan wants
   // it; returns the offset of the next one.
   uint64_t ScanRecordAt(uint64_t offset) {
@@ -548,7 +552,7 @@ class RosbagReader::RecordScanner {
           compression == "none" ? ByteOffset(data_offset + inner)
                                 : "chunk at " + location + " (" + compression + "), offset " +
                                       std::to_string(inner) + " of its data";
-      Parsed record = ParseInBuffer(chunk, inner, inner_location);
+      ParsedRecord record = ParseInBuffer(chunk, inner, inner_location);
       const uint8_t inner_op = record.header.Op();
       if (inner_op == kOpConnection) {
         TakeConnection(record.header, record.data, inner_location);
@@ -563,9 +567,9 @@ class RosbagReader::RecordScanner {
   }
 
   // Parses one record (at `location`) from `bytes` starting at `offset`.
-  Parsed ParseInBuffer(std::span<const uint8_t> bytes, size_t offset,
-                       const std::string& location) const {
-    const auto fail = [&](const std::string& what) -> Parsed {
+  ParsedRecord ParseInBuffer(std::span<const uint8_t> bytes, size_t offset,
+                             const std::string& location) const {
+    const auto fail = [&](const std::string& what) -> ParsedRecord {
       throw InputError(p_, 0, location + ": " + what);
     };
     if (bytes.size() - offset < 4) return fail("a record header length needs 4 bytes");
