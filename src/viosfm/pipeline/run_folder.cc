@@ -44,15 +44,11 @@ bool IsAnyAtomicWriteLeftover(const std::string& name) {
 constexpr std::array<const char*, 3> kOwnedFolders = {"verification", "vio", "bag"};
 
 // The first lines of a run's section of run.log.
-std::string RunLogHeading(const PipelineOptions& options, bool earlier_log) {
-  std::string heading = earlier_log ? "\n" : "";
-  heading += "== viosfm " + ViosfmVersion() + " run, started " + UtcNow() + ", process " +
-             std::to_string(getpid()) + "\n";
-  heading += "== dataset " + options.dataset.string() + ", output " +
-             options.output_folder.string() + "\n";
-  heading += "== the options: options.json; the outcome: summary.json (written last)";
-  if (earlier_log) heading += "\n== an earlier run's log above (it ends where that run stopped)";
-  return heading;
+std::string RunLogHeading(const PipelineOptions& options) {
+  return "== viosfm " + ViosfmVersion() + " run, started " + UtcNow() + ", process " +
+         std::to_string(getpid()) + "\n== dataset " + options.dataset.string() + ", output " +
+         options.output_folder.string() +
+         "\n== the options: options.json; the outcome: summary.json (written last)";
 }
 
 void WriteJsonFile(const fs::path& path, const std::string& text) {
@@ -260,15 +256,11 @@ RunFolder::RunFolder(const PipelineOptions& options)
                        << path().string();
     }
   }
-  // The manifest claims run.log before it exists.
-  folder_.Save();
-  const fs::path log_path = path() / kRunLogFileName;
-  const bool earlier_log = fs::exists(log_path) && fs::file_size(log_path) > 0;
-  log_.emplace(log_path, RunLogHeading(options, earlier_log));
+  log_heading_ = RunLogHeading(options);
 }
 
 RunFolder::~RunFolder() {
-  if (std::uncaught_exceptions() > exceptions_at_start_) {
+  if (log_ && std::uncaught_exceptions() > exceptions_at_start_) {
     LogToFileOnly(LogLevel::kERROR,
                   "run: stopped by an error (the console's last line says which); the folder is "
                   "incomplete (no summary.json)");
@@ -280,7 +272,17 @@ void RunFolder::CheckStoredData(const RunFingerprint& current, bool complete) co
 }
 
 void RunFolder::MarkIncomplete() const {
+  // The manifest claims run.log before it exists.
   folder_.Save();
+  if (!log_) {
+    const fs::path log_path = path() / kRunLogFileName;
+    const bool earlier_log = fs::exists(log_path) && fs::file_size(log_path) > 0;
+    log_.emplace(log_path,
+                 (earlier_log ? "\n" : "") + log_heading_ +
+                     (earlier_log ? "\n== an earlier run's log above (it ends where that run "
+                                    "stopped)"
+                                  : ""));
+  }
   fs::remove(path() / "summary.json");
   // The earlier model's report and export describe a model this run
   // replaces (what the user put in export/ stays).

@@ -63,11 +63,7 @@ class RunFolder {
   // viosfm did not make (no manifest) and a user's file under one of the
   // run's names; removes everything viosfm wrote there (the manifest's
   // files, also an earlier report.html and export/) with
-  // options.overwrite, else only the leftovers of interrupted writes. Then
-  // opens run.log (recorded in the manifest first): every log message, the
-  // debug ones too, goes there while the object lives, after a heading that
-  // starts this run's section (an earlier run's log stays above it; with
-  // --overwrite it was removed with the run's other outputs).
+  // options.overwrite, else only the leftovers of interrupted writes.
   explicit RunFolder(const PipelineOptions& options);
   // Closes run.log, with a last line if the run stops on an exception.
   ~RunFolder();
@@ -78,10 +74,14 @@ class RunFolder {
   // CheckStoredRunData on this folder.
   void CheckStoredData(const RunFingerprint& current, bool complete) const;
   // Records the run's names in the manifest (first write into the folder),
-  // removes summary.json, and a report.html and an export/ of the earlier
-  // model (the files viosfm wrote there): from here on the folder is
-  // incomplete until WriteSummary. Called before the first write into the
-  // folder.
+  // opens run.log, removes summary.json, and a report.html and an export/
+  // of the earlier model (the files viosfm wrote there): from here on the
+  // folder is incomplete until WriteSummary. Called before the first write
+  // into the folder: a run refused before it leaves the folder as it was.
+  // From then on every log message, the debug ones too, goes to run.log
+  // while the object lives, after a heading that starts this run's section
+  // and the console's lines printed before it (an earlier run's log stays
+  // above; --overwrite removed it with the run's other outputs).
   void MarkIncomplete() const;
   // fingerprint.json and options.json, atomically, then the database's
   // record (created with the database), before the database's rows change.
@@ -95,7 +95,8 @@ class RunFolder {
   // mutable: the manifest follows what the const stages write.
   mutable ManagedFolder folder_;
   // Declared after folder_: closed before the folder's lock is released.
-  std::optional<LogFile> log_;
+  mutable std::optional<LogFile> log_;
+  std::string log_heading_;
   int exceptions_at_start_ = 0;
 };
 

@@ -118,12 +118,14 @@ TEST(RunFolder, OverwriteRemovesExactlyWhatViosfmWroteWithTheEarlierReportAndExp
     std::map<std::string, std::string> left = Contents(out);
     left.erase(kManifestFileName);
     left.erase(std::string("export/") + kManifestFileName);
-    // This run's log, the earlier one removed with the run's outputs.
-    ASSERT_EQ(left.count("run.log"), 1u);
-    EXPECT_EQ(left["run.log"].find("an earlier run's log"), std::string::npos);
-    EXPECT_EQ(left["run.log"].find("== viosfm "), 0u);
-    EXPECT_NE(left["run.log"].find("--overwrite: removed the"), std::string::npos);
-    left.erase("run.log");
+    // This run's log starts afresh, the earlier one removed with the run's
+    // outputs, when the run starts to write.
+    EXPECT_EQ(left.count("run.log"), 0u);
+    folder.MarkIncomplete();
+    const std::string log = ReadTextFile(out / kRunLogFileName);
+    EXPECT_EQ(log.find("an earlier run's log"), std::string::npos);
+    EXPECT_EQ(log.find("== viosfm "), 0u);
+    EXPECT_NE(log.find("--overwrite: removed the"), std::string::npos);
     EXPECT_EQ(left, (std::map<std::string, std::string>{
                         {"export/colmap_sparse/0/images.bin", "COLMAP's, the user's"},
                         {"notes.txt", "mine"},
@@ -176,15 +178,26 @@ TEST(RunFolder, EveryRunAddsItsSectionToTheLogWrittenAsItGoes) {
   WriteARun(Options(out));
   // A run that stops on an error, and one killed (its log is on disk
   // line by line; nothing closes it).
+  // A run refused before it writes leaves the folder as it was.
+  const auto before = Contents(out);
   EXPECT_THROW(
       {
         const RunFolder folder(Options(out));
+        throw InputError("refused");
+      },
+      InputError);
+  EXPECT_EQ(Contents(out), before);
+  EXPECT_THROW(
+      {
+        const RunFolder folder(Options(out));
+        folder.MarkIncomplete();
         VIOSFM_LOG(DEBUG) << "a debug line of the second run";
         throw InputError("stops");
       },
       InputError);
   {
     const RunFolder folder(Options(out));
+    folder.MarkIncomplete();
     VIOSFM_LOG(INFO) << "the third run's line";
     const std::vector<std::string> sections = LogSections(out);
     ASSERT_EQ(sections.size(), 3u);
