@@ -62,10 +62,11 @@ void RunSimulate(const SimulateArgs& args) {
   const int num_segments = simulated.vio_segments.empty() ? 0 : simulated.vio_segments.back() + 1;
   VIOSFM_LOG(INFO) << "simulated '" << options.scenario << "': " << sequence.images.size()
                    << (options.keyframes.enabled ? " keyframes" : " camera stamps") << ", "
-                   << sequence.imu.size() << " IMU samples, path " << length << " m, "
-                   << options.vio_profile << " emulated VIO (" << simulated.vio_body.size()
-                   << " poses, " << num_segments << " segment(s)), end drift " << vio_end_error
-                   << " m, in " << timer.ElapsedSeconds() << " s -> " << args.out;
+                   << sequence.imu.size() << " IMU samples, path " << length << " m -> " << args.out
+                   << LogDetails() << "; " << options.vio_profile << " emulated VIO ("
+                   << simulated.vio_body.size() << " poses, " << num_segments
+                   << " segment(s)), end drift " << vio_end_error << " m, in "
+                   << timer.ElapsedSeconds() << " s";
 }
 
 }  // namespace

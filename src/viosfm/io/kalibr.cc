@@ -140,9 +140,12 @@ void ApplyCalibration(const KalibrCalibration& calibration, Sequence* sequence) 
                      "the calibration gives an invalid sensor rig: " + problem);
   }
   sequence->rig = rig;
-  VIOSFM_LOG(INFO) << "calibration " << calibration.camchain_path.string() << " replaces the "
-                   << "dataset's " << replaced.str()
-                   << (calibration.camera ? "" : "; the camera intrinsics stay the dataset's");
+  VIOSFM_LOG(INFO) << "calibration " << calibration.camchain_path.filename().string()
+                   << " replaces the dataset's extrinsics, time offset"
+                   << (calibration.camera ? ", camera" : "")
+                   << (calibration.imu_noise ? ", IMU noise" : "") << LogDetails() << " ("
+                   << calibration.camchain_path.string() << ": " << replaced.str()
+                   << (calibration.camera ? ")" : "; the camera intrinsics stay the dataset's)");
 }
 
 void ApplyCalibrationFiles(const CalibrationFiles& files, Sequence* sequence) {

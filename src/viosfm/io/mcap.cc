@@ -8,6 +8,7 @@
 #include <optional>
 #include <system_error>
 
+#include "viosfm/io/bag_bytes.h"
 #include "viosfm/io/compression.h"
 #include "viosfm/util/errors.h"
 
@@ -42,16 +43,6 @@ std::string OpName(uint8_t op) {
       "data end"};
   if (op < kNames.size()) return kNames[op];
   return "op 0x" + std::string(1, "0123456789abcdef"[op >> 4]) + "0123456789abcdef"[op & 15];
-}
-
-std::string ByteOffset(uint64_t offset) {
-  return "byte offset " + std::to_string(offset);
-}
-
-uint64_t LoadU64(const uint8_t* bytes) {
-  uint64_t value = 0;
-  for (int i = 7; i >= 0; --i) value = (value << 8) | bytes[i];
-  return value;
 }
 
 // The fields of one record's content, read in order; every overrun names
@@ -122,12 +113,6 @@ class Fields {
 void AppendU16(std::string& out, uint16_t value) {
   for (int i = 0; i < 2; ++i) out.push_back(static_cast<char>((value >> (8 * i)) & 0xff));
 }
-void AppendU32(std::string& out, uint32_t value) {
-  for (int i = 0; i < 4; ++i) out.push_back(static_cast<char>((value >> (8 * i)) & 0xff));
-}
-void AppendU64(std::string& out, uint64_t value) {
-  for (int i = 0; i < 8; ++i) out.push_back(static_cast<char>((value >> (8 * i)) & 0xff));
-}
 void AppendString(std::string& out, const std::string& text) {
   VIOSFM_CHECK_LE(text.size(), 0xffffffffu) << "MCAP string too long";
   AppendU32(out, static_cast<uint32_t>(text.size()));
@@ -184,25 +169,7 @@ struct McapReader::Scan {
   std::function<void(const McapMessage&)> visit;
 };
 
-namespace {
-
-// Reads exactly `size` bytes at `offset`; InputError when the file ends first.
-void ReadAt(std::ifstream& file, const std::string& path, uint64_t file_size, uint64_t offset,
-            uint8_t* out, uint64_t size, const std::string& what) {
-  if (offset > file_size || size > file_size - offset) {
-    throw InputError(path, 0,
-                     ByteOffset(offset) + ": " + what + ": expected " + std::to_string(size) +
-                         " bytes, the file ends after " +
-                         std::to_string(offset > file_size ? 0 : file_size - offset) +
-                         " (the file is truncated)");
-  }
-  file.clear();
-  file.seekg(static_cast<std::streamoff>(offset));
-  file.read(reinterpret_cast<char*>(out), static_cast<std::streamsize>(size));
-  if (!file) throw InputError(path, 0, ByteOffset(offset) + ": " + what + ": read error");
-}
-
-}  // namespace
+namespace {}  // namespace
 
 McapReader::McapReader(const fs::path& path) : path_(path) {
   const std::string p = path.string();
@@ -214,7 +181,7 @@ McapReader::McapReader(const fs::path& path) : path_(path) {
 
   uint8_t magic[kMagicBytes] = {};
   const uint64_t leading = std::min<uint64_t>(file_size_, kMagicBytes);
-  ReadAt(file_, p, file_size_, 0, magic, leading, "magic");
+  ReadAt(file_, p, file_size_, 0, magic, leading, "magic", "file");
   if (leading < kMagicBytes || std::memcmp(magic, kMcapMagic, 5) != 0) {
     throw InputError(p, 0,
                      "not an MCAP file: expected the magic bytes 89 'MCAP' '0' '\\r' '\\n' at "
@@ -228,7 +195,7 @@ McapReader::McapReader(const fs::path& path) : path_(path) {
 
   // The Header record.
   uint8_t prefix[kRecordPrefixBytes];
-  ReadAt(file_, p, file_size_, kMagicBytes, prefix, kRecordPrefixBytes, "header record");
+  ReadAt(file_, p, file_size_, kMagicBytes, prefix, kRecordPrefixBytes, "header record", "file");
   const uint64_t header_length = LoadU64(prefix + 1);
   if (prefix[0] != kOpHeader) {
     throw InputError(p, 0,
@@ -244,7 +211,7 @@ McapReader::McapReader(const fs::path& path) : path_(path) {
   }
   std::vector<uint8_t> header(header_length);
   ReadAt(file_, p, file_size_, kMagicBytes + kRecordPrefixBytes, header.data(), header_length,
-         "header record");
+         "header record", "file");
   const std::string header_location = ByteOffset(kMagicBytes);
   Fields header_fields(header, p, header_location, kOpHeader);
   profile_ = header_fields.String("profile");
@@ -272,7 +239,8 @@ void McapReader::ReadFooter() {
   uint8_t closing[kMagicBytes] = {};
   const bool has_closing = file_size_ >= kMagicBytes + tail;
   if (has_closing) {
-    ReadAt(file_, p, file_size_, file_size_ - kMagicBytes, closing, kMagicBytes, "closing magic");
+    ReadAt(file_, p, file_size_, file_size_ - kMagicBytes, closing, kMagicBytes, "closing magic",
+           "file");
   }
   if (!has_closing || std::memcmp(closing, kMcapMagic, kMagicBytes) != 0) {
     // Find where the file was cut: a scan of its records throws at the
@@ -288,7 +256,7 @@ void McapReader::ReadFooter() {
   }
   footer_offset_ = file_size_ - tail;
   uint8_t footer[kRecordPrefixBytes + kFooterContentBytes];
-  ReadAt(file_, p, file_size_, footer_offset_, footer, sizeof(footer), "footer record");
+  ReadAt(file_, p, file_size_, footer_offset_, footer, sizeof(footer), "footer record", "file");
   if (footer[0] != kOpFooter || LoadU64(footer + 1) != kFooterContentBytes) {
     throw InputError(p, 0,
                      ByteOffset(footer_offset_) +
@@ -313,7 +281,7 @@ void McapReader::ReadFooter() {
   if (summary_start_ != 0 && summary_crc_ != 0) {
     const uint64_t size = footer_offset_ + kRecordPrefixBytes + 16 - summary_start_;
     std::vector<uint8_t> bytes(size);
-    ReadAt(file_, p, file_size_, summary_start_, bytes.data(), size, "summary section");
+    ReadAt(file_, p, file_size_, summary_start_, bytes.data(), size, "summary section", "file");
     const uint32_t crc = Crc32(bytes);
     if (crc != summary_crc_) {
       throw InputError(p, 0,
@@ -329,7 +297,8 @@ void McapReader::ReadSummary() {
   const std::string p = path_.string();
   const uint64_t end = summary_offset_start_ != 0 ? summary_offset_start_ : footer_offset_;
   std::vector<uint8_t> bytes(end - summary_start_);
-  ReadAt(file_, p, file_size_, summary_start_, bytes.data(), bytes.size(), "summary section");
+  ReadAt(file_, p, file_size_, summary_start_, bytes.data(), bytes.size(), "summary section",
+         "file");
   struct Found {
     uint8_t op;
     std::span<const uint8_t> content;
@@ -458,49 +427,159 @@ void McapReader::AddChannel(McapChannel channel, const std::string& location) {
   for (size_t i = 0; i < channels_.size(); ++i) channel_index_[channels_[i].id] = i;
 }
 
-void McapReader::ScanData(Scan& scan) {
-  const std::string p = path_.string();
-  const auto parse_schema = [&](std::span<const uint8_t> content, const std::string& location) {
-    Fields fields(content, p, location, kOpSchema);
+// The data section's records in order, each handed to the step its op
+// names: schemas, channels, messages, and chunks (decompressed, their CRC
+// checked, their records handed on in turn); the data section's CRC is
+// checked at its end.
+class McapReader::RecordScanner {
+ public:
+  RecordScanner(McapReader& reader, Scan& scan)
+      : reader_(reader), scan_(scan), p_(reader.path_.string()) {}
+
+  void Run() {
+    // The header record was read by the constructor.
+    uint8_t prefix[kRecordPrefixBytes];
+    ReadAt(reader_.file_, p_, reader_.file_size_, kMagicBytes, prefix, kRecordPrefixBytes,
+           "header record", "file");
+    uint64_t offset = kMagicBytes + kRecordPrefixBytes + LoadU64(prefix + 1);
+    std::vector<uint8_t> magic_and_header(offset);
+    ReadAt(reader_.file_, p_, reader_.file_size_, 0, magic_and_header.data(), offset,
+           "header record", "file");
+    crc_ = Crc32(magic_and_header);
+    while (offset < scan_.end) {
+      const std::optional<uint64_t> next = ScanRecordAt(offset);
+      if (!next) return;
+      offset = *next;
+    }
+  }
+
+ private:
+  // Reads the record at `offset` and takes it; returns the next record's
+  // offset, or none after the data end record.
+  std::optional<uint64_t> ScanRecordAt(uint64_t offset) {
+    const std::string location = ByteOffset(offset);
+    const uint64_t end = scan_.end;
+    if (end - offset < kRecordPrefixBytes) {
+      throw InputError(p_, 0,
+                       location + ": a record prefix needs 9 bytes, " +
+                           std::to_string(end - offset) +
+                           " left before the footer (the file is truncated or corrupt)");
+    }
+    uint8_t prefix[kRecordPrefixBytes];
+    ReadAt(reader_.file_, p_, reader_.file_size_, offset, prefix, kRecordPrefixBytes,
+           "record prefix", "file");
+    const uint8_t op = prefix[0];
+    const uint64_t length = LoadU64(prefix + 1);
+    if (length > end - offset - kRecordPrefixBytes) {
+      throw InputError(p_, 0,
+                       location + ": " + OpName(op) + " record of " + std::to_string(length) +
+                           " bytes, the " +
+                           (end == reader_.file_size_ ? std::string("file ends after ")
+                                                      : std::string("footer comes after ")) +
+                           std::to_string(end - offset - kRecordPrefixBytes) +
+                           " (the file is truncated or corrupt)");
+    }
+    if (op == kOpDataEnd) {
+      CheckDataEnd(offset, length, location);
+      return std::nullopt;
+    }
+    if (op == kOpFooter) {
+      throw InputError(p_, 0, location + ": footer record inside the file (expected data records)");
+    }
+    record_.resize(kRecordPrefixBytes + length);
+    ReadAt(reader_.file_, p_, reader_.file_size_, offset, record_.data(), record_.size(),
+           OpName(op) + " record", "file");
+    crc_ = Crc32(record_, crc_);
+    const std::span<const uint8_t> content =
+        std::span<const uint8_t>(record_).subspan(kRecordPrefixBytes);
+    if (op == kOpHeader) {
+      throw InputError(p_, 0, location + ": a second header record");
+    } else if (op == kOpChunk) {
+      TakeChunk(content, location);
+    } else {
+      // Message indexes, attachments, metadata and records of later
+      // versions of the format are not needed.
+      TakeRecord(op, content, location, /*in_chunk=*/false);
+    }
+    return offset + kRecordPrefixBytes + length;
+  }
+
+  // The data end record's CRC of the data section, if it states one.
+  void CheckDataEnd(uint64_t offset, uint64_t length, const std::string& location) {
+    record_.resize(length);
+    ReadAt(reader_.file_, p_, reader_.file_size_, offset + kRecordPrefixBytes, record_.data(),
+           length, "data end record", "file");
+    Fields data_end(record_, p_, location, kOpDataEnd);
+    const uint32_t stated = data_end.U32("data_section_crc");
+    if (stated != 0 && stated != crc_) {
+      data_end.Fail("the data section's CRC is " + std::to_string(crc_) + ", the record states " +
+                    std::to_string(stated) + " (the file is corrupt)");
+    }
+  }
+
+  // A schema, channel or message record; inside a chunk anything else is an
+  // error, outside it is skipped.
+  void TakeRecord(uint8_t op, std::span<const uint8_t> content, const std::string& location,
+                  bool in_chunk) {
+    if (op == kOpSchema) {
+      TakeSchema(content, location);
+    } else if (op == kOpChannel) {
+      TakeChannel(content, location);
+    } else if (op == kOpMessage) {
+      TakeMessage(content, location);
+    } else if (in_chunk) {
+      throw InputError(p_, 0,
+                       location + ": " + OpName(op) +
+                           " record inside a chunk (a chunk holds schema, channel and message "
+                           "records)");
+    }
+  }
+
+  void TakeSchema(std::span<const uint8_t> content, const std::string& location) {
+    Fields fields(content, p_, location, kOpSchema);
     const uint16_t id = fields.U16("id");
     std::string name = fields.String("name");
     std::string encoding = fields.String("encoding");
     const std::span<const uint8_t> data = fields.Bytes32("data");
-    AddSchema(id, std::move(name), std::move(encoding),
-              std::string(reinterpret_cast<const char*>(data.data()), data.size()), location);
-  };
-  const auto parse_channel = [&](std::span<const uint8_t> content, const std::string& location) {
-    Fields fields(content, p, location, kOpChannel);
+    reader_.AddSchema(id, std::move(name), std::move(encoding),
+                      std::string(reinterpret_cast<const char*>(data.data()), data.size()),
+                      location);
+  }
+
+  void TakeChannel(std::span<const uint8_t> content, const std::string& location) {
+    Fields fields(content, p_, location, kOpChannel);
     McapChannel channel;
     channel.id = fields.U16("id");
     channel.schema_id = fields.U16("schema_id");
     channel.topic = fields.String("topic");
     channel.message_encoding = fields.String("message_encoding");
     channel.metadata = fields.StringMap("metadata");
-    AddChannel(std::move(channel), location);
-  };
-  const auto handle_message = [&](std::span<const uint8_t> content, const std::string& location) {
-    Fields fields(content, p, location, kOpMessage);
+    reader_.AddChannel(std::move(channel), location);
+  }
+
+  void TakeMessage(std::span<const uint8_t> content, const std::string& location) {
+    Fields fields(content, p_, location, kOpMessage);
     McapMessage message;
     const uint16_t channel_id = fields.U16("channel_id");
     message.sequence = fields.U32("sequence");
     message.log_time_ns = fields.Time("log_time");
     message.publish_time_ns = fields.Time("publish_time");
     message.data = fields.Rest();
-    const auto it = channel_index_.find(channel_id);
-    if (it == channel_index_.end()) {
+    const auto it = reader_.channel_index_.find(channel_id);
+    if (it == reader_.channel_index_.end()) {
       fields.Fail("message on channel " + std::to_string(channel_id) +
                   ", which no channel record before it defines");
     }
-    McapChannel& channel = channels_[it->second];
-    if (scan.count) ++channel.num_messages;
-    if (!scan.messages || !scan.wanted(channel)) return;
+    McapChannel& channel = reader_.channels_[it->second];
+    if (scan_.count) ++channel.num_messages;
+    if (!scan_.messages || !scan_.wanted(channel)) return;
     message.channel = &channel;
     message.location = location;
-    scan.visit(message);
-  };
-  const auto handle_chunk = [&](std::span<const uint8_t> content, const std::string& location) {
-    Fields fields(content, p, location, kOpChunk);
+    scan_.visit(message);
+  }
+
+  void TakeChunk(std::span<const uint8_t> content, const std::string& location) {
+    Fields fields(content, p_, location, kOpChunk);
     fields.Time("message_start_time");
     fields.Time("message_end_time");
     const uint64_t uncompressed_size = fields.U64("uncompressed_size");
@@ -511,7 +590,7 @@ void McapReader::ScanData(Scan& scan) {
       fields.Fail("states " + std::to_string(uncompressed_size) +
                   " uncompressed bytes (more than 1 GiB: a corrupt record?)");
     }
-    const std::string where = p + ": " + location + " (chunk, " +
+    const std::string where = p_ + ": " + location + " (chunk, " +
                               (compression.empty() ? "uncompressed" : compression) + ")";
     std::vector<uint8_t> decompressed;
     std::span<const uint8_t> records = stored;
@@ -534,103 +613,42 @@ void McapReader::ScanData(Scan& scan) {
                     std::to_string(crc) + " (the chunk is corrupt)");
       }
     }
-    const std::string kind = compression.empty() ? "" : " (" + compression + ")";
+    TakeChunkRecords(records, location + (compression.empty() ? "" : " (" + compression + ")"));
+  }
+
+  // The records of a chunk's (decompressed) records section.
+  void TakeChunkRecords(std::span<const uint8_t> records, const std::string& chunk_location) {
     size_t offset = 0;
     while (offset < records.size()) {
       const std::string inner_location =
-          "chunk at " + location + kind + ", offset " + std::to_string(offset) + " of its records";
+          "chunk at " + chunk_location + ", offset " + std::to_string(offset) + " of its records";
       if (records.size() - offset < kRecordPrefixBytes) {
-        throw InputError(p, 0, inner_location + ": a record prefix needs 9 bytes, the chunk ends");
+        throw InputError(p_, 0, inner_location + ": a record prefix needs 9 bytes, the chunk ends");
       }
       const uint8_t op = records[offset];
       const uint64_t length = LoadU64(records.data() + offset + 1);
       if (length > records.size() - offset - kRecordPrefixBytes) {
-        throw InputError(p, 0,
+        throw InputError(p_, 0,
                          inner_location + ": " + OpName(op) + " record of " +
                              std::to_string(length) + " bytes runs past the chunk's records (" +
                              std::to_string(records.size() - offset - kRecordPrefixBytes) +
                              " left)");
       }
-      const std::span<const uint8_t> inner = records.subspan(offset + kRecordPrefixBytes, length);
-      if (op == kOpSchema) {
-        parse_schema(inner, inner_location);
-      } else if (op == kOpChannel) {
-        parse_channel(inner, inner_location);
-      } else if (op == kOpMessage) {
-        handle_message(inner, inner_location);
-      } else {
-        throw InputError(p, 0,
-                         inner_location + ": " + OpName(op) +
-                             " record inside a chunk (a chunk holds schema, channel and message "
-                             "records)");
-      }
+      TakeRecord(op, records.subspan(offset + kRecordPrefixBytes, length), inner_location,
+                 /*in_chunk=*/true);
       offset += kRecordPrefixBytes + length;
     }
-  };
-
-  // The header record was read by the constructor.
-  uint8_t prefix[kRecordPrefixBytes];
-  ReadAt(file_, p, file_size_, kMagicBytes, prefix, kRecordPrefixBytes, "header record");
-  uint64_t offset = kMagicBytes + kRecordPrefixBytes + LoadU64(prefix + 1);
-  std::vector<uint8_t> record;
-  std::vector<uint8_t> magic_and_header(offset);
-  ReadAt(file_, p, file_size_, 0, magic_and_header.data(), offset, "header record");
-  uint32_t crc = Crc32(magic_and_header);
-  while (offset < scan.end) {
-    const std::string location = ByteOffset(offset);
-    if (scan.end - offset < kRecordPrefixBytes) {
-      throw InputError(p, 0,
-                       location + ": a record prefix needs 9 bytes, " +
-                           std::to_string(scan.end - offset) +
-                           " left before the footer (the file is truncated or corrupt)");
-    }
-    ReadAt(file_, p, file_size_, offset, prefix, kRecordPrefixBytes, "record prefix");
-    const uint8_t op = prefix[0];
-    const uint64_t length = LoadU64(prefix + 1);
-    if (length > scan.end - offset - kRecordPrefixBytes) {
-      throw InputError(p, 0,
-                       location + ": " + OpName(op) + " record of " + std::to_string(length) +
-                           " bytes, the " +
-                           (scan.end == file_size_ ? std::string("file ends after ")
-                                                   : std::string("footer comes after ")) +
-                           std::to_string(scan.end - offset - kRecordPrefixBytes) +
-                           " (the file is truncated or corrupt)");
-    }
-    if (op == kOpDataEnd) {
-      record.resize(length);
-      ReadAt(file_, p, file_size_, offset + kRecordPrefixBytes, record.data(), length,
-             "data end record");
-      Fields data_end(record, p, location, op);
-      const uint32_t stated = data_end.U32("data_section_crc");
-      if (stated != 0 && stated != crc) {
-        data_end.Fail("the data section's CRC is " + std::to_string(crc) + ", the record states " +
-                      std::to_string(stated) + " (the file is corrupt)");
-      }
-      return;
-    }
-    if (op == kOpFooter) {
-      throw InputError(p, 0, location + ": footer record inside the file (expected data records)");
-    }
-    record.resize(kRecordPrefixBytes + length);
-    ReadAt(file_, p, file_size_, offset, record.data(), record.size(), OpName(op) + " record");
-    crc = Crc32(record, crc);
-    const std::span<const uint8_t> content =
-        std::span<const uint8_t>(record).subspan(kRecordPrefixBytes);
-    if (op == kOpHeader) {
-      throw InputError(p, 0, location + ": a second header record");
-    } else if (op == kOpSchema) {
-      parse_schema(content, location);
-    } else if (op == kOpChannel) {
-      parse_channel(content, location);
-    } else if (op == kOpMessage) {
-      handle_message(content, location);
-    } else if (op == kOpChunk) {
-      handle_chunk(content, location);
-    }
-    // Message indexes, attachments, metadata and records of later versions
-    // of the format are not needed.
-    offset += kRecordPrefixBytes + length;
   }
+
+  McapReader& reader_;
+  Scan& scan_;
+  const std::string p_;
+  std::vector<uint8_t> record_;
+  uint32_t crc_ = 0;
+};
+
+void McapReader::ScanData(Scan& scan) {
+  RecordScanner(*this, scan).Run();
 }
 
 void McapReader::ReadMessages(const std::function<bool(const McapChannel&)>& wanted,

@@ -96,6 +96,7 @@ class McapReader {
   class Records;
   void ReadFooter();
   void ReadSummary();
+  class RecordScanner;
   void ScanData(Scan& scan);
   void AddSchema(uint16_t id, std::string name, std::string encoding, std::string data,
                  const std::string& location);

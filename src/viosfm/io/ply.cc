@@ -134,180 +134,232 @@ void WritePly(const fs::path& path, const Reconstruction& reconstruction, bool b
   WritePlyPoints(path, xyz, rgb, binary);
 }
 
-PlyPoints ReadPly(const fs::path& path) {
-  const std::string content = ReadTextFile(path);
-  const std::string file = path.string();
+namespace {
 
-  // ---- Header ----
-  size_t offset = 0;
-  int64_t line_number = 0;
-  auto next_line = [&]() -> std::optional<std::string_view> {
-    if (offset >= content.size()) return std::nullopt;
-    size_t end = content.find('\n', offset);
-    if (end == std::string::npos) end = content.size();
-    std::string_view line(content.data() + offset, end - offset);
-    offset = std::min(end + 1, content.size());
-    ++line_number;
+// Reads a PLY file's vertices in named steps: the header (format, the vertex
+// element's properties), which property feeds which value, then the ASCII
+// or binary body.
+class PlyReader {
+ public:
+  explicit PlyReader(const fs::path& path) : content_(ReadTextFile(path)), file_(path.string()) {}
+
+  PlyPoints Read() {
+    ReadHeader();
+    MapProperties();
+    if (*format_ == PlyFormat::kAscii) {
+      ReadAsciiBody();
+    } else {
+      ReadBinaryBody();
+    }
+    return std::move(points_);
+  }
+
+ private:
+  enum class Section { kNone, kVertex, kOther };
+
+  // The next line without its end of line, or none at the end of the file.
+  std::optional<std::string_view> NextLine() {
+    if (offset_ >= content_.size()) return std::nullopt;
+    size_t end = content_.find('\n', offset_);
+    if (end == std::string::npos) end = content_.size();
+    std::string_view line(content_.data() + offset_, end - offset_);
+    offset_ = std::min(end + 1, content_.size());
+    ++line_number_;
     if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
     return line;
-  };
-
-  std::optional<std::string_view> line = next_line();
-  if (!line || Trim(*line) != "ply") throw InputError(file, 1, "expected 'ply' (not a PLY file)");
-
-  std::optional<PlyFormat> format;
-  std::vector<Property> properties;
-  uint64_t num_vertices = 0;
-  enum class Section { kNone, kVertex, kOther } section = Section::kNone;
-  bool seen_vertex = false;
-  while (true) {
-    line = next_line();
-    if (!line)
-      throw InputError(file, line_number, "expected 'end_header', found the end of the file");
-    const std::vector<std::string_view> tokens = Split(Trim(*line), " \t", true);
-    if (tokens.empty() || tokens[0] == "comment" || tokens[0] == "obj_info") continue;
-    if (tokens[0] == "end_header") break;
-    if (tokens[0] == "format") {
-      if (tokens.size() != 3 || tokens[2] != "1.0") {
-        throw InputError(file, line_number,
-                         "expected 'format <ascii|binary_little_endian|binary_big_endian> 1.0'");
-      }
-      if (tokens[1] == "ascii") {
-        format = PlyFormat::kAscii;
-      } else if (tokens[1] == "binary_little_endian") {
-        format = PlyFormat::kBinaryLittleEndian;
-      } else if (tokens[1] == "binary_big_endian") {
-        format = PlyFormat::kBinaryBigEndian;
-      } else {
-        throw InputError(file, line_number, "unknown PLY format '" + std::string(tokens[1]) + "'");
-      }
-    } else if (tokens[0] == "element") {
-      if (tokens.size() != 3)
-        throw InputError(file, line_number, "expected 'element <name> <count>'");
-      const std::optional<int64_t> count = ParseInt(tokens[2]);
-      if (!count || *count < 0) {
-        throw InputError(file, line_number,
-                         "expected an element count, found '" + std::string(tokens[2]) + "'");
-      }
-      if (tokens[1] == "vertex") {
-        if (section != Section::kNone) {
-          throw InputError(file, line_number, "expected 'element vertex' as the first element");
-        }
-        section = Section::kVertex;
-        seen_vertex = true;
-        num_vertices = static_cast<uint64_t>(*count);
-      } else {
-        section = Section::kOther;
-      }
-    } else if (tokens[0] == "property") {
-      if (section == Section::kOther) continue;  // elements after the vertices are ignored
-      if (section == Section::kNone) {
-        throw InputError(file, line_number, "expected 'element' before 'property'");
-      }
-      if (tokens.size() != 3) {
-        throw InputError(file, line_number,
-                         "expected 'property <scalar type> <name>' (list properties of "
-                         "vertices are not supported)");
-      }
-      const std::optional<ScalarType> type = ParseScalarType(tokens[1]);
-      if (!type) {
-        throw InputError(file, line_number,
-                         "unknown property type '" + std::string(tokens[1]) + "'");
-      }
-      properties.push_back({std::string(tokens[2]), *type});
-    } else {
-      throw InputError(file, line_number, "unexpected header line '" + std::string(*line) + "'");
-    }
   }
-  if (!format) throw InputError(file, line_number, "the header has no 'format' line");
-  if (!seen_vertex) throw InputError(file, line_number, "the header has no 'element vertex'");
 
-  // Which property feeds which output value: 0-2 xyz, 3-5 rgb.
-  const char* kNames[6] = {"x", "y", "z", "red", "green", "blue"};
-  int source[6] = {-1, -1, -1, -1, -1, -1};
-  for (size_t p = 0; p < properties.size(); ++p) {
-    for (int k = 0; k < 6; ++k) {
-      if (properties[p].name == kNames[k]) source[k] = static_cast<int>(p);
-    }
-  }
-  for (int k = 0; k < 3; ++k) {
-    if (source[k] < 0) {
-      throw InputError(file, line_number,
-                       std::string("the vertex element has no property ") + kNames[k]);
-    }
-  }
-  const int num_color = (source[3] >= 0) + (source[4] >= 0) + (source[5] >= 0);
-  if (num_color != 0 && num_color != 3) {
-    throw InputError(file, line_number, "expected all of red, green, blue or none");
-  }
-  const bool has_color = num_color == 3;
-
-  // ---- Body ----
-  PlyPoints points;
-  std::vector<double> values(properties.size());
-  auto store = [&]() {
-    points.xyz.emplace_back(values[source[0]], values[source[1]], values[source[2]]);
-    if (has_color) {
-      Vector3ub color;
-      for (int k = 0; k < 3; ++k) {
-        const double value = values[source[3 + k]];
-        if (!(value >= 0.0 && value <= 255.0)) {
-          throw InputError(file, *format == PlyFormat::kAscii ? line_number : 0,
-                           "vertex " + std::to_string(points.xyz.size() - 1) + ": colour " +
-                               std::to_string(value) + " is not in [0, 255]");
-        }
-        color[k] = static_cast<uint8_t>(value);
-      }
-      points.rgb.push_back(color);
-    }
-  };
-  if (*format == PlyFormat::kAscii) {
-    for (uint64_t i = 0; i < num_vertices; ++i) {
-      line = next_line();
+  void ReadHeader() {
+    std::optional<std::string_view> line = NextLine();
+    if (!line || Trim(*line) != "ply")
+      throw InputError(file_, 1, "expected 'ply' (not a PLY file)");
+    while (true) {
+      line = NextLine();
       if (!line) {
-        throw InputError(
-            file, line_number,
-            "expected " + std::to_string(num_vertices) + " vertices, found " + std::to_string(i));
+        throw InputError(file_, line_number_, "expected 'end_header', found the end of the file");
       }
       const std::vector<std::string_view> tokens = Split(Trim(*line), " \t", true);
-      if (tokens.size() != properties.size()) {
-        throw InputError(file, line_number,
-                         "expected " + std::to_string(properties.size()) + " values for vertex " +
-                             std::to_string(i) + ", found " + std::to_string(tokens.size()));
+      if (tokens.empty() || tokens[0] == "comment" || tokens[0] == "obj_info") continue;
+      if (tokens[0] == "end_header") break;
+      if (tokens[0] == "format") {
+        ReadFormat(tokens);
+      } else if (tokens[0] == "element") {
+        ReadElement(tokens);
+      } else if (tokens[0] == "property") {
+        ReadProperty(tokens);
+      } else {
+        throw InputError(file_, line_number_,
+                         "unexpected header line '" + std::string(*line) + "'");
       }
-      for (size_t p = 0; p < properties.size(); ++p) {
-        const std::optional<double> value = ParseDouble(tokens[p]);
-        if (!value) {
-          throw InputError(file, line_number,
-                           "expected a number for property " + properties[p].name + ", found '" +
-                               std::string(tokens[p]) + "'");
-        }
-        values[p] = *value;
-      }
-      store();
     }
-  } else {
-    size_t vertex_size = 0;
-    for (const Property& property : properties) vertex_size += ScalarSize(property.type);
-    const size_t available = content.size() - offset;
-    if (num_vertices > available / vertex_size) {
-      throw InputError(file, 0,
-                       "truncated: " + std::to_string(num_vertices) + " vertices of " +
-                           std::to_string(vertex_size) + " bytes need " +
-                           std::to_string(num_vertices * vertex_size) +
-                           " bytes after the header, found " + std::to_string(available));
+    if (!format_) throw InputError(file_, line_number_, "the header has no 'format' line");
+    if (!seen_vertex_) throw InputError(file_, line_number_, "the header has no 'element vertex'");
+  }
+
+  void ReadFormat(const std::vector<std::string_view>& tokens) {
+    if (tokens.size() != 3 || tokens[2] != "1.0") {
+      throw InputError(file_, line_number_,
+                       "expected 'format <ascii|binary_little_endian|binary_big_endian> 1.0'");
     }
-    const bool big_endian = *format == PlyFormat::kBinaryBigEndian;
-    points.xyz.reserve(num_vertices);
-    for (uint64_t i = 0; i < num_vertices; ++i) {
-      for (size_t p = 0; p < properties.size(); ++p) {
-        values[p] = DecodeScalar(properties[p].type, content.data() + offset, big_endian);
-        offset += ScalarSize(properties[p].type);
-      }
-      store();
+    if (tokens[1] == "ascii") {
+      format_ = PlyFormat::kAscii;
+    } else if (tokens[1] == "binary_little_endian") {
+      format_ = PlyFormat::kBinaryLittleEndian;
+    } else if (tokens[1] == "binary_big_endian") {
+      format_ = PlyFormat::kBinaryBigEndian;
+    } else {
+      throw InputError(file_, line_number_, "unknown PLY format '" + std::string(tokens[1]) + "'");
     }
   }
-  return points;
+
+  void ReadElement(const std::vector<std::string_view>& tokens) {
+    if (tokens.size() != 3) {
+      throw InputError(file_, line_number_, "expected 'element <name> <count>'");
+    }
+    const std::optional<int64_t> count = ParseInt(tokens[2]);
+    if (!count || *count < 0) {
+      throw InputError(file_, line_number_,
+                       "expected an element count, found '" + std::string(tokens[2]) + "'");
+    }
+    if (tokens[1] != "vertex") {
+      section_ = Section::kOther;
+      return;
+    }
+    if (section_ != Section::kNone) {
+      throw InputError(file_, line_number_, "expected 'element vertex' as the first element");
+    }
+    section_ = Section::kVertex;
+    seen_vertex_ = true;
+    num_vertices_ = static_cast<uint64_t>(*count);
+  }
+
+  void ReadProperty(const std::vector<std::string_view>& tokens) {
+    if (section_ == Section::kOther) return;  // elements after the vertices are ignored
+    if (section_ == Section::kNone) {
+      throw InputError(file_, line_number_, "expected 'element' before 'property'");
+    }
+    if (tokens.size() != 3) {
+      throw InputError(file_, line_number_,
+                       "expected 'property <scalar type> <name>' (list properties of "
+                       "vertices are not supported)");
+    }
+    const std::optional<ScalarType> type = ParseScalarType(tokens[1]);
+    if (!type) {
+      throw InputError(file_, line_number_,
+                       "unknown property type '" + std::string(tokens[1]) + "'");
+    }
+    properties_.push_back({std::string(tokens[2]), *type});
+  }
+
+  // Which property feeds which output value: 0-2 xyz, 3-5 rgb.
+  void MapProperties() {
+    static constexpr const char* kNames[6] = {"x", "y", "z", "red", "green", "blue"};
+    for (size_t p = 0; p < properties_.size(); ++p) {
+      for (int k = 0; k < 6; ++k) {
+        if (properties_[p].name == kNames[k]) source_[k] = static_cast<int>(p);
+      }
+    }
+    for (int k = 0; k < 3; ++k) {
+      if (source_[k] < 0) {
+        throw InputError(file_, line_number_,
+                         std::string("the vertex element has no property ") + kNames[k]);
+      }
+    }
+    const int num_color = (source_[3] >= 0) + (source_[4] >= 0) + (source_[5] >= 0);
+    if (num_color != 0 && num_color != 3) {
+      throw InputError(file_, line_number_, "expected all of red, green, blue or none");
+    }
+    has_color_ = num_color == 3;
+    values_.resize(properties_.size());
+  }
+
+  // The vertex of values_ into the points.
+  void Store() {
+    points_.xyz.emplace_back(values_[source_[0]], values_[source_[1]], values_[source_[2]]);
+    if (!has_color_) return;
+    Vector3ub color;
+    for (int k = 0; k < 3; ++k) {
+      const double value = values_[source_[3 + k]];
+      if (!(value >= 0.0 && value <= 255.0)) {
+        throw InputError(file_, *format_ == PlyFormat::kAscii ? line_number_ : 0,
+                         "vertex " + std::to_string(points_.xyz.size() - 1) + ": colour " +
+                             std::to_string(value) + " is not in [0, 255]");
+      }
+      color[k] = static_cast<uint8_t>(value);
+    }
+    points_.rgb.push_back(color);
+  }
+
+  void ReadAsciiBody() {
+    for (uint64_t i = 0; i < num_vertices_; ++i) {
+      const std::optional<std::string_view> line = NextLine();
+      if (!line) {
+        throw InputError(
+            file_, line_number_,
+            "expected " + std::to_string(num_vertices_) + " vertices, found " + std::to_string(i));
+      }
+      const std::vector<std::string_view> tokens = Split(Trim(*line), " \t", true);
+      if (tokens.size() != properties_.size()) {
+        throw InputError(file_, line_number_,
+                         "expected " + std::to_string(properties_.size()) + " values for vertex " +
+                             std::to_string(i) + ", found " + std::to_string(tokens.size()));
+      }
+      for (size_t p = 0; p < properties_.size(); ++p) {
+        const std::optional<double> value = ParseDouble(tokens[p]);
+        if (!value) {
+          throw InputError(file_, line_number_,
+                           "expected a number for property " + properties_[p].name + ", found '" +
+                               std::string(tokens[p]) + "'");
+        }
+        values_[p] = *value;
+      }
+      Store();
+    }
+  }
+
+  void ReadBinaryBody() {
+    size_t vertex_size = 0;
+    for (const Property& property : properties_) vertex_size += ScalarSize(property.type);
+    const size_t available = content_.size() - offset_;
+    if (num_vertices_ > available / vertex_size) {
+      throw InputError(file_, 0,
+                       "truncated: " + std::to_string(num_vertices_) + " vertices of " +
+                           std::to_string(vertex_size) + " bytes need " +
+                           std::to_string(num_vertices_ * vertex_size) +
+                           " bytes after the header, found " + std::to_string(available));
+    }
+    const bool big_endian = *format_ == PlyFormat::kBinaryBigEndian;
+    points_.xyz.reserve(num_vertices_);
+    for (uint64_t i = 0; i < num_vertices_; ++i) {
+      for (size_t p = 0; p < properties_.size(); ++p) {
+        values_[p] = DecodeScalar(properties_[p].type, content_.data() + offset_, big_endian);
+        offset_ += ScalarSize(properties_[p].type);
+      }
+      Store();
+    }
+  }
+
+  const std::string content_;
+  const std::string file_;
+  size_t offset_ = 0;
+  int64_t line_number_ = 0;
+
+  std::optional<PlyFormat> format_;
+  std::vector<Property> properties_;
+  uint64_t num_vertices_ = 0;
+  Section section_ = Section::kNone;
+  bool seen_vertex_ = false;
+
+  int source_[6] = {-1, -1, -1, -1, -1, -1};
+  bool has_color_ = false;
+  std::vector<double> values_;
+  PlyPoints points_;
+};
+
+}  // namespace
+
+PlyPoints ReadPly(const fs::path& path) {
+  return PlyReader(path).Read();
 }
 
 }  // namespace viosfm

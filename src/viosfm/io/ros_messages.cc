@@ -162,6 +162,7 @@ class Writer {
   void PutString(const std::string& text) {
     PutBytes(reinterpret_cast<const uint8_t*>(text.data()), text.size());
   }
+  void PutByteVector(const std::vector<uint8_t>& data) { PutBytes(data.data(), data.size()); }
   void PutTime(timestamp_ns_t time_ns) {
     VIOSFM_CHECK(time_ns >= 0 && time_ns / 1'000'000'000 <= 0xffffffffLL)
         << "time " << time_ns << " ns is outside ROS time";
@@ -309,6 +310,13 @@ class CdrMessageWriter {
       for (int c = 0; c < 3; ++c) writer.Put<double>(m(r, c));
     }
   }
+  template <typename T>
+  void Put(T value) {
+    writer.Put<T>(value);
+  }
+  void PutString(const std::string& text) { writer.PutString(text); }
+  void PutByteVector(const std::vector<uint8_t>& data) { writer.PutByteSequence(data); }
+  std::vector<uint8_t> Take() { return writer.Take(); }
   CdrWriter writer;
 };
 
@@ -354,8 +362,125 @@ class CdrMessageReader {
     const std::span<const uint8_t> bytes = reader.GetByteSequence(field);
     return std::vector<uint8_t>(bytes.begin(), bytes.end());
   }
+  template <typename T>
+  T Get(const char* field) {
+    return reader.Get<T>(field);
+  }
+  std::string GetString(const char* field) { return reader.GetString(field); }
+  void ExpectEnd() { reader.ExpectEnd(); }
   CdrReader reader;
 };
+
+// The fields of the messages in their order, the same for ROS 1 and ROS 2:
+// `Out` is Writer or CdrMessageWriter, `In` Reader or CdrMessageReader
+// (each encodes the fields its own way).
+template <class Out>
+std::vector<uint8_t> WriteImage(const RosImage& message, Out out) {
+  out.PutHeader(message.header);
+  out.template Put<uint32_t>(message.height);
+  out.template Put<uint32_t>(message.width);
+  out.PutString(message.encoding);
+  out.template Put<uint8_t>(message.is_bigendian);
+  out.template Put<uint32_t>(message.step);
+  out.PutByteVector(message.data);
+  return out.Take();
+}
+
+template <class Out>
+std::vector<uint8_t> WriteCompressedImage(const RosCompressedImage& message, Out out) {
+  out.PutHeader(message.header);
+  out.PutString(message.format);
+  out.PutByteVector(message.data);
+  return out.Take();
+}
+
+template <class Out>
+std::vector<uint8_t> WriteImu(const RosImu& message, Out out) {
+  out.PutHeader(message.header);
+  out.PutQuaternion(message.orientation);
+  out.PutCovariance(message.orientation_covariance);
+  out.PutVector3(message.angular_velocity);
+  out.PutCovariance(message.angular_velocity_covariance);
+  out.PutVector3(message.linear_acceleration);
+  out.PutCovariance(message.linear_acceleration_covariance);
+  return out.Take();
+}
+
+template <class Out>
+std::vector<uint8_t> WritePoseStamped(const RosPoseStamped& message, Out out) {
+  out.PutHeader(message.header);
+  out.PutVector3(message.pose.translation);
+  out.PutQuaternion(message.pose.rotation);
+  return out.Take();
+}
+
+template <class Out>
+std::vector<uint8_t> WriteTransformStamped(const RosTransformStamped& message, Out out) {
+  out.PutHeader(message.header);
+  out.PutString(message.child_frame_id);
+  out.PutVector3(message.transform.translation);
+  out.PutQuaternion(message.transform.rotation);
+  return out.Take();
+}
+
+template <class In>
+RosImage ReadImage(In in) {
+  RosImage message;
+  message.header = in.GetHeader();
+  message.height = in.template Get<uint32_t>("height");
+  message.width = in.template Get<uint32_t>("width");
+  message.encoding = in.GetString("encoding");
+  message.is_bigendian = in.template Get<uint8_t>("is_bigendian");
+  message.step = in.template Get<uint32_t>("step");
+  message.data = in.GetByteVector("data");
+  in.ExpectEnd();
+  return message;
+}
+
+template <class In>
+RosCompressedImage ReadCompressedImage(In in) {
+  RosCompressedImage message;
+  message.header = in.GetHeader();
+  message.format = in.GetString("format");
+  message.data = in.GetByteVector("data");
+  in.ExpectEnd();
+  return message;
+}
+
+template <class In>
+RosImu ReadImu(In in) {
+  RosImu message;
+  message.header = in.GetHeader();
+  message.orientation = in.GetQuaternion("orientation");
+  message.orientation_covariance = in.GetCovariance("orientation_covariance");
+  message.angular_velocity = in.GetVector3("angular_velocity");
+  message.angular_velocity_covariance = in.GetCovariance("angular_velocity_covariance");
+  message.linear_acceleration = in.GetVector3("linear_acceleration");
+  message.linear_acceleration_covariance = in.GetCovariance("linear_acceleration_covariance");
+  in.ExpectEnd();
+  return message;
+}
+
+template <class In>
+RosPoseStamped ReadPoseStamped(In in) {
+  RosPoseStamped message;
+  message.header = in.GetHeader();
+  message.pose.translation = in.GetVector3("pose.position");
+  message.pose.rotation = in.GetQuaternion("pose.orientation");
+  in.ExpectEnd();
+  return message;
+}
+
+template <class In>
+RosTransformStamped ReadTransformStamped(In in) {
+  RosTransformStamped message;
+  message.header = in.GetHeader();
+  message.child_frame_id = in.GetString("child_frame_id");
+  message.transform.translation = in.GetVector3("transform.translation");
+  message.transform.rotation = in.GetQuaternion("transform.rotation");
+  in.ExpectEnd();
+  return message;
+}
 
 }  // namespace
 
@@ -392,52 +517,23 @@ std::string NormalizeRos2TypeName(const std::string& type) {
 }
 
 std::vector<uint8_t> SerializeRosImage(const RosImage& message) {
-  Writer writer;
-  writer.PutHeader(message.header);
-  writer.Put<uint32_t>(message.height);
-  writer.Put<uint32_t>(message.width);
-  writer.PutString(message.encoding);
-  writer.Put<uint8_t>(message.is_bigendian);
-  writer.Put<uint32_t>(message.step);
-  writer.PutBytes(message.data.data(), message.data.size());
-  return writer.Take();
+  return WriteImage(message, Writer());
 }
 
 std::vector<uint8_t> SerializeRosCompressedImage(const RosCompressedImage& message) {
-  Writer writer;
-  writer.PutHeader(message.header);
-  writer.PutString(message.format);
-  writer.PutBytes(message.data.data(), message.data.size());
-  return writer.Take();
+  return WriteCompressedImage(message, Writer());
 }
 
 std::vector<uint8_t> SerializeRosImu(const RosImu& message) {
-  Writer writer;
-  writer.PutHeader(message.header);
-  writer.PutQuaternion(message.orientation);
-  writer.PutCovariance(message.orientation_covariance);
-  writer.PutVector3(message.angular_velocity);
-  writer.PutCovariance(message.angular_velocity_covariance);
-  writer.PutVector3(message.linear_acceleration);
-  writer.PutCovariance(message.linear_acceleration_covariance);
-  return writer.Take();
+  return WriteImu(message, Writer());
 }
 
 std::vector<uint8_t> SerializeRosPoseStamped(const RosPoseStamped& message) {
-  Writer writer;
-  writer.PutHeader(message.header);
-  writer.PutVector3(message.pose.translation);
-  writer.PutQuaternion(message.pose.rotation);
-  return writer.Take();
+  return WritePoseStamped(message, Writer());
 }
 
 std::vector<uint8_t> SerializeRosTransformStamped(const RosTransformStamped& message) {
-  Writer writer;
-  writer.PutHeader(message.header);
-  writer.PutString(message.child_frame_id);
-  writer.PutVector3(message.transform.translation);
-  writer.PutQuaternion(message.transform.rotation);
-  return writer.Take();
+  return WriteTransformStamped(message, Writer());
 }
 
 std::vector<uint8_t> SerializeRosString(const std::string& message) {
@@ -447,64 +543,25 @@ std::vector<uint8_t> SerializeRosString(const std::string& message) {
 }
 
 RosImage DeserializeRosImage(std::span<const uint8_t> bytes, const std::string& where) {
-  Reader reader(bytes, where, kRosImageType.name);
-  RosImage message;
-  message.header = reader.GetHeader();
-  message.height = reader.Get<uint32_t>("height");
-  message.width = reader.Get<uint32_t>("width");
-  message.encoding = reader.GetString("encoding");
-  message.is_bigendian = reader.Get<uint8_t>("is_bigendian");
-  message.step = reader.Get<uint32_t>("step");
-  message.data = reader.GetByteVector("data");
-  reader.ExpectEnd();
-  return message;
+  return ReadImage(Reader(bytes, where, kRosImageType.name));
 }
 
 RosCompressedImage DeserializeRosCompressedImage(std::span<const uint8_t> bytes,
                                                  const std::string& where) {
-  Reader reader(bytes, where, kRosCompressedImageType.name);
-  RosCompressedImage message;
-  message.header = reader.GetHeader();
-  message.format = reader.GetString("format");
-  message.data = reader.GetByteVector("data");
-  reader.ExpectEnd();
-  return message;
+  return ReadCompressedImage(Reader(bytes, where, kRosCompressedImageType.name));
 }
 
 RosImu DeserializeRosImu(std::span<const uint8_t> bytes, const std::string& where) {
-  Reader reader(bytes, where, kRosImuType.name);
-  RosImu message;
-  message.header = reader.GetHeader();
-  message.orientation = reader.GetQuaternion("orientation");
-  message.orientation_covariance = reader.GetCovariance("orientation_covariance");
-  message.angular_velocity = reader.GetVector3("angular_velocity");
-  message.angular_velocity_covariance = reader.GetCovariance("angular_velocity_covariance");
-  message.linear_acceleration = reader.GetVector3("linear_acceleration");
-  message.linear_acceleration_covariance = reader.GetCovariance("linear_acceleration_covariance");
-  reader.ExpectEnd();
-  return message;
+  return ReadImu(Reader(bytes, where, kRosImuType.name));
 }
 
 RosPoseStamped DeserializeRosPoseStamped(std::span<const uint8_t> bytes, const std::string& where) {
-  Reader reader(bytes, where, kRosPoseStampedType.name);
-  RosPoseStamped message;
-  message.header = reader.GetHeader();
-  message.pose.translation = reader.GetVector3("pose.position");
-  message.pose.rotation = reader.GetQuaternion("pose.orientation");
-  reader.ExpectEnd();
-  return message;
+  return ReadPoseStamped(Reader(bytes, where, kRosPoseStampedType.name));
 }
 
 RosTransformStamped DeserializeRosTransformStamped(std::span<const uint8_t> bytes,
                                                    const std::string& where) {
-  Reader reader(bytes, where, kRosTransformStampedType.name);
-  RosTransformStamped message;
-  message.header = reader.GetHeader();
-  message.child_frame_id = reader.GetString("child_frame_id");
-  message.transform.translation = reader.GetVector3("transform.translation");
-  message.transform.rotation = reader.GetQuaternion("transform.rotation");
-  reader.ExpectEnd();
-  return message;
+  return ReadTransformStamped(Reader(bytes, where, kRosTransformStampedType.name));
 }
 
 std::string DeserializeRosString(std::span<const uint8_t> bytes, const std::string& where) {
@@ -518,52 +575,23 @@ std::string DeserializeRosString(std::span<const uint8_t> bytes, const std::stri
 // ROS 2 (CDR)
 
 std::vector<uint8_t> SerializeCdrImage(const RosImage& message) {
-  CdrMessageWriter out;
-  out.PutHeader(message.header);
-  out.writer.Put<uint32_t>(message.height);
-  out.writer.Put<uint32_t>(message.width);
-  out.writer.PutString(message.encoding);
-  out.writer.Put<uint8_t>(message.is_bigendian);
-  out.writer.Put<uint32_t>(message.step);
-  out.writer.PutByteSequence(message.data);
-  return out.writer.Take();
+  return WriteImage(message, CdrMessageWriter());
 }
 
 std::vector<uint8_t> SerializeCdrCompressedImage(const RosCompressedImage& message) {
-  CdrMessageWriter out;
-  out.PutHeader(message.header);
-  out.writer.PutString(message.format);
-  out.writer.PutByteSequence(message.data);
-  return out.writer.Take();
+  return WriteCompressedImage(message, CdrMessageWriter());
 }
 
 std::vector<uint8_t> SerializeCdrImu(const RosImu& message) {
-  CdrMessageWriter out;
-  out.PutHeader(message.header);
-  out.PutQuaternion(message.orientation);
-  out.PutCovariance(message.orientation_covariance);
-  out.PutVector3(message.angular_velocity);
-  out.PutCovariance(message.angular_velocity_covariance);
-  out.PutVector3(message.linear_acceleration);
-  out.PutCovariance(message.linear_acceleration_covariance);
-  return out.writer.Take();
+  return WriteImu(message, CdrMessageWriter());
 }
 
 std::vector<uint8_t> SerializeCdrPoseStamped(const RosPoseStamped& message) {
-  CdrMessageWriter out;
-  out.PutHeader(message.header);
-  out.PutVector3(message.pose.translation);
-  out.PutQuaternion(message.pose.rotation);
-  return out.writer.Take();
+  return WritePoseStamped(message, CdrMessageWriter());
 }
 
 std::vector<uint8_t> SerializeCdrTransformStamped(const RosTransformStamped& message) {
-  CdrMessageWriter out;
-  out.PutHeader(message.header);
-  out.writer.PutString(message.child_frame_id);
-  out.PutVector3(message.transform.translation);
-  out.PutQuaternion(message.transform.rotation);
-  return out.writer.Take();
+  return WriteTransformStamped(message, CdrMessageWriter());
 }
 
 std::vector<uint8_t> SerializeCdrString(const std::string& message) {
@@ -573,64 +601,25 @@ std::vector<uint8_t> SerializeCdrString(const std::string& message) {
 }
 
 RosImage DeserializeCdrImage(std::span<const uint8_t> bytes, const std::string& where) {
-  CdrMessageReader in(bytes, where, kRos2ImageType.name);
-  RosImage message;
-  message.header = in.GetHeader();
-  message.height = in.reader.Get<uint32_t>("height");
-  message.width = in.reader.Get<uint32_t>("width");
-  message.encoding = in.reader.GetString("encoding");
-  message.is_bigendian = in.reader.Get<uint8_t>("is_bigendian");
-  message.step = in.reader.Get<uint32_t>("step");
-  message.data = in.GetByteVector("data");
-  in.reader.ExpectEnd();
-  return message;
+  return ReadImage(CdrMessageReader(bytes, where, kRos2ImageType.name));
 }
 
 RosCompressedImage DeserializeCdrCompressedImage(std::span<const uint8_t> bytes,
                                                  const std::string& where) {
-  CdrMessageReader in(bytes, where, kRos2CompressedImageType.name);
-  RosCompressedImage message;
-  message.header = in.GetHeader();
-  message.format = in.reader.GetString("format");
-  message.data = in.GetByteVector("data");
-  in.reader.ExpectEnd();
-  return message;
+  return ReadCompressedImage(CdrMessageReader(bytes, where, kRos2CompressedImageType.name));
 }
 
 RosImu DeserializeCdrImu(std::span<const uint8_t> bytes, const std::string& where) {
-  CdrMessageReader in(bytes, where, kRos2ImuType.name);
-  RosImu message;
-  message.header = in.GetHeader();
-  message.orientation = in.GetQuaternion("orientation");
-  message.orientation_covariance = in.GetCovariance("orientation_covariance");
-  message.angular_velocity = in.GetVector3("angular_velocity");
-  message.angular_velocity_covariance = in.GetCovariance("angular_velocity_covariance");
-  message.linear_acceleration = in.GetVector3("linear_acceleration");
-  message.linear_acceleration_covariance = in.GetCovariance("linear_acceleration_covariance");
-  in.reader.ExpectEnd();
-  return message;
+  return ReadImu(CdrMessageReader(bytes, where, kRos2ImuType.name));
 }
 
 RosPoseStamped DeserializeCdrPoseStamped(std::span<const uint8_t> bytes, const std::string& where) {
-  CdrMessageReader in(bytes, where, kRos2PoseStampedType.name);
-  RosPoseStamped message;
-  message.header = in.GetHeader();
-  message.pose.translation = in.GetVector3("pose.position");
-  message.pose.rotation = in.GetQuaternion("pose.orientation");
-  in.reader.ExpectEnd();
-  return message;
+  return ReadPoseStamped(CdrMessageReader(bytes, where, kRos2PoseStampedType.name));
 }
 
 RosTransformStamped DeserializeCdrTransformStamped(std::span<const uint8_t> bytes,
                                                    const std::string& where) {
-  CdrMessageReader in(bytes, where, kRos2TransformStampedType.name);
-  RosTransformStamped message;
-  message.header = in.GetHeader();
-  message.child_frame_id = in.reader.GetString("child_frame_id");
-  message.transform.translation = in.GetVector3("transform.translation");
-  message.transform.rotation = in.GetQuaternion("transform.rotation");
-  in.reader.ExpectEnd();
-  return message;
+  return ReadTransformStamped(CdrMessageReader(bytes, where, kRos2TransformStampedType.name));
 }
 
 std::string DeserializeCdrString(std::span<const uint8_t> bytes, const std::string& where) {

@@ -10,6 +10,7 @@
 #include <string_view>
 #include <system_error>
 
+#include "viosfm/io/bag_bytes.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/string_util.h"
 
@@ -21,27 +22,13 @@ namespace fs = std::filesystem;
 constexpr uint8_t kOpMessageData = 0x02;
 constexpr uint8_t kOpBagHeader = 0x03;
 constexpr uint8_t kOpIndexData = 0x04;
-constexpr uint8_t kOpChunk = 0x05;
+constexpr uint8_t kOpChunkRecord = 0x05;
 constexpr uint8_t kOpChunkInfo = 0x06;
 constexpr uint8_t kOpConnection = 0x07;
 constexpr size_t kBagHeaderRecordBytes = 4096;
 // Largest uncompressed chunk accepted (rosbag record writes 768 KiB chunks).
-constexpr uint32_t kMaxChunkBytes = uint32_t{1} << 30;
+constexpr uint32_t kMaxUncompressedChunkBytes = uint32_t{1} << 30;
 
-uint32_t LoadU32(const uint8_t* bytes) {
-  return uint32_t{bytes[0]} | (uint32_t{bytes[1]} << 8) | (uint32_t{bytes[2]} << 16) |
-         (uint32_t{bytes[3]} << 24);
-}
-uint64_t LoadU64(const uint8_t* bytes) {
-  return uint64_t{LoadU32(bytes)} | (uint64_t{LoadU32(bytes + 4)} << 32);
-}
-void AppendU32(std::string& out, uint32_t value) {
-  for (int i = 0; i < 4; ++i) out.push_back(static_cast<char>((value >> (8 * i)) & 0xff));
-}
-void AppendU64(std::string& out, uint64_t value) {
-  AppendU32(out, static_cast<uint32_t>(value & 0xffffffffu));
-  AppendU32(out, static_cast<uint32_t>(value >> 32));
-}
 std::string U32Bytes(uint32_t value) {
   std::string out;
   AppendU32(out, value);
@@ -154,10 +141,6 @@ class RecordHeader {
   std::string location_;
 };
 
-std::string ByteOffset(uint64_t offset) {
-  return "byte offset " + std::to_string(offset);
-}
-
 }  // namespace
 
 bool HasRosbagExtension(const fs::path& path) {
@@ -186,25 +169,6 @@ struct RosbagReader::Scan {
 };
 
 namespace {
-
-// Reads exactly `size` bytes at `offset`; InputError naming what was being
-// read when the file ends first.
-void ReadAt(std::ifstream& file, const std::string& path, uint64_t file_size, uint64_t offset,
-            uint8_t* out, uint64_t size, const std::string& what) {
-  if (offset > file_size || size > file_size - offset) {
-    throw InputError(path, 0,
-                     ByteOffset(offset) + ": " + what + ": expected " + std::to_string(size) +
-                         " bytes, the file ends after " +
-                         std::to_string(offset > file_size ? 0 : file_size - offset) +
-                         " (the bag is truncated)");
-  }
-  file.clear();
-  file.seekg(static_cast<std::streamoff>(offset));
-  file.read(reinterpret_cast<char*>(out), static_cast<std::streamsize>(size));
-  if (!file) {
-    throw InputError(path, 0, ByteOffset(offset) + ": " + what + ": read error");
-  }
-}
 
 // The output buffer of a decompression grows with what the data actually
 // gives, up to the size the chunk's header states: a corrupt or hostile header
@@ -329,7 +293,7 @@ RosbagReader::RosbagReader(const fs::path& path) : path_(path) {
                          " bytes, expected the line '#ROSBAG V2.0'");
   }
   ReadAt(file_, p, file_size_, 0, reinterpret_cast<uint8_t*>(version.data()), version_size,
-         "version line");
+         "version line", "bag");
   if (version != kRosbagVersionLine) {
     if (version.starts_with("SQLite format")) {
       throw InputError(p, 0,
@@ -348,7 +312,7 @@ RosbagReader::RosbagReader(const fs::path& path) : path_(path) {
   // The bag header record.
   uint64_t offset = version_size;
   uint8_t length_bytes[4];
-  ReadAt(file_, p, file_size_, offset, length_bytes, 4, "bag header record length");
+  ReadAt(file_, p, file_size_, offset, length_bytes, 4, "bag header record length", "bag");
   const uint32_t header_length = LoadU32(length_bytes);
   if (header_length > file_size_ - offset - 4) {
     throw InputError(p, 0,
@@ -357,7 +321,8 @@ RosbagReader::RosbagReader(const fs::path& path) : path_(path) {
                          std::to_string(file_size_ - offset - 4) + " (the bag is truncated)");
   }
   std::vector<uint8_t> header_bytes(header_length);
-  ReadAt(file_, p, file_size_, offset + 4, header_bytes.data(), header_length, "bag header record");
+  ReadAt(file_, p, file_size_, offset + 4, header_bytes.data(), header_length, "bag header record",
+         "bag");
   HeaderFields fields;
   if (const std::string problem = ParseHeaderFields(header_bytes, &fields); !problem.empty()) {
     throw InputError(p, 0, ByteOffset(offset) + ": bag header record: " + problem);
@@ -369,7 +334,7 @@ RosbagReader::RosbagReader(const fs::path& path) : path_(path) {
   }
   index_pos_ = header.U64("index_pos");
   ReadAt(file_, p, file_size_, offset + 4 + header_length, length_bytes, 4,
-         "bag header record data length");
+         "bag header record data length", "bag");
   const uint32_t padding = LoadU32(length_bytes);
   first_record_offset_ = offset + 8 + uint64_t{header_length} + padding;
   if (first_record_offset_ > file_size_) {
@@ -411,19 +376,201 @@ void RosbagReader::AddConnection(RosbagConnection connection, const std::string&
   for (size_t i = 0; i < connections_.size(); ++i) connection_index_[connections_[i].id] = i;
 }
 
-void RosbagReader::ScanRecords(Scan& scan) {
-  const std::string p = path_.string();
-  // Parses one record (at `location`) from `bytes` starting at `offset`;
-  // returns its total size.
-  struct Parsed {
-    RecordHeader header;
-    std::span<const uint8_t> data;
-    size_t size;
-  };
-  const auto parse_in_buffer = [&p](std::span<const uint8_t> bytes, size_t offset,
-                                    const std::string& location) -> Parsed {
-    const auto fail = [&](const std::string& what) -> Parsed {
-      throw InputError(p, 0, location + ": " + what);
+namespace {
+
+// One record parsed from a buffer (a chunk's data).
+struct ParsedRecord {
+  RecordHeader header;
+  std::span<const uint8_t> data;
+  size_t size;  // header, data and their lengths
+};
+
+}  // namespace
+
+// The records of the bag file in order, each handed to the step its op
+// names: connections, messages, chunk infos (message counts), and chunks,
+// whose own records are handed on in turn.
+class RosbagReader::RecordScanner {
+ public:
+  RecordScanner(RosbagReader& reader, Scan& scan)
+      : reader_(reader), scan_(scan), p_(reader.path_.string()) {}
+
+  void Run() {
+    // With an index and no messages wanted, read only the index section.
+    uint64_t offset =
+        (reader_.has_index_ && !scan_.messages) ? reader_.index_pos_ : reader_.first_record_offset_;
+    while (offset < reader_.file_size_) offset = ScanRecordAt(offset);
+  }
+
+ private:
+  // Reads the record at `offset` of the file, takes it if the scan wants
+  // it; returns the offset of the next one.
+  uint64_t ScanRecordAt(uint64_t offset) {
+    const std::string location = ByteOffset(offset);
+    const uint64_t file_size = reader_.file_size_;
+    uint8_t length_bytes[4];
+    ReadAt(reader_.file_, p_, file_size, offset, length_bytes, 4, "record header length", "bag");
+    const uint32_t header_length = LoadU32(length_bytes);
+    if (header_length > file_size - offset - 4) {
+      throw InputError(p_, 0,
+                       location + ": record header of " + std::to_string(header_length) +
+                           " bytes, the file ends after " + std::to_string(file_size - offset - 4) +
+                           " (the bag is truncated or corrupt)");
+    }
+    header_bytes_.resize(header_length);
+    ReadAt(reader_.file_, p_, file_size, offset + 4, header_bytes_.data(), header_length,
+           "record header", "bag");
+    HeaderFields fields;
+    if (const std::string problem = ParseHeaderFields(header_bytes_, &fields); !problem.empty()) {
+      throw InputError(p_, 0, location + ": record header: " + problem);
+    }
+    const RecordHeader header(std::move(fields), p_, location);
+    const uint8_t op = header.Op();
+    ReadAt(reader_.file_, p_, file_size, offset + 4 + header_length, length_bytes, 4,
+           "record data length", "bag");
+    const uint32_t data_length = LoadU32(length_bytes);
+    const uint64_t data_offset = offset + 8 + header_length;
+    const uint64_t next = data_offset + data_length;
+    if (next > file_size) {
+      throw InputError(p_, 0,
+                       location + ": record (op " + std::to_string(op) + ") data: expected " +
+                           std::to_string(data_length) + " bytes, the file ends after " +
+                           std::to_string(file_size - data_offset) + " (the bag is truncated)");
+    }
+    if (WantsData(op)) {
+      data_bytes_.resize(data_length);
+      ReadAt(reader_.file_, p_, file_size, data_offset, data_bytes_.data(), data_length,
+             "record data", "bag");
+      TakeRecord(op, header, data_bytes_, data_offset, location);
+    } else if (op != kOpChunkRecord && op != kOpIndexData && op != kOpMessageData) {
+      header.Fail("unknown record op " + std::to_string(op) +
+                  " (expected 0x02 to 0x07 after the bag header)");
+    }
+    return next;
+  }
+
+  // Whether the scan needs the data of a record of `op`.
+  bool WantsData(uint8_t op) const {
+    return op == kOpConnection || op == kOpChunkInfo ||
+           ((scan_.messages || scan_.count) && op == kOpMessageData) ||
+           (op == kOpChunkRecord && (scan_.messages || !reader_.has_index_));
+  }
+
+  void TakeRecord(uint8_t op, const RecordHeader& header, std::span<const uint8_t> data,
+                  uint64_t data_offset, const std::string& location) {
+    if (op == kOpConnection) {
+      TakeConnection(header, data, location);
+    } else if (op == kOpChunkInfo) {
+      TakeChunkInfo(header, data);
+    } else if (op == kOpMessageData) {
+      TakeMessage(header, data, location);
+    } else if (op == kOpChunkRecord) {
+      TakeChunk(header, data, data_offset, location);
+    }
+  }
+
+  void TakeConnection(const RecordHeader& header, std::span<const uint8_t> data,
+                      const std::string& location) {
+    RosbagConnection connection;
+    connection.id = header.U32("conn");
+    connection.topic = header.Bytes("topic");
+    HeaderFields fields;
+    if (const std::string problem = ParseHeaderFields(data, &fields); !problem.empty()) {
+      header.Fail("connection header: " + problem);
+    }
+    const RecordHeader connection_header(std::move(fields), p_, location + " (connection header)");
+    connection.type = connection_header.Bytes("type");
+    connection.md5sum = connection_header.Bytes("md5sum");
+    if (connection_header.Has("message_definition")) {
+      connection.message_definition = connection_header.Bytes("message_definition");
+    }
+    reader_.AddConnection(std::move(connection), location);
+  }
+
+  void TakeMessage(const RecordHeader& header, std::span<const uint8_t> data,
+                   const std::string& location) {
+    const uint32_t id = header.U32("conn");
+    const timestamp_ns_t time_ns = header.Time("time");
+    const auto it = reader_.connection_index_.find(id);
+    if (it == reader_.connection_index_.end()) {
+      header.Fail("message on connection " + std::to_string(id) +
+                  ", which no connection record before it defines");
+    }
+    RosbagConnection& connection = reader_.connections_[it->second];
+    if (scan_.count) ++connection.num_messages;
+    if (!scan_.messages || !scan_.wanted(connection)) return;
+    RosbagMessage message;
+    message.connection = &connection;
+    message.time_ns = time_ns;
+    message.data = data;
+    message.location = location;
+    scan_.visit(message);
+  }
+
+  // Chunk info records of an indexed bag carry the message counts.
+  void TakeChunkInfo(const RecordHeader& header, std::span<const uint8_t> data) {
+    if (scan_.count || !reader_.has_index_ || scan_.messages) return;
+    const uint32_t count = header.U32("count");
+    if (data.size() != uint64_t{count} * 8) {
+      header.Fail("chunk info data has " + std::to_string(data.size()) + " bytes, expected " +
+                  std::to_string(uint64_t{count} * 8) + " for " + std::to_string(count) +
+                  " connections");
+    }
+    for (uint32_t i = 0; i < count; ++i) {
+      const uint32_t id = LoadU32(data.data() + 8 * i);
+      const uint32_t messages = LoadU32(data.data() + 8 * i + 4);
+      const auto it = reader_.connection_index_.find(id);
+      if (it == reader_.connection_index_.end()) {
+        header.Fail("chunk info counts messages of connection " + std::to_string(id) +
+                    ", which no connection record defines");
+      }
+      reader_.connections_[it->second].num_messages += messages;
+    }
+  }
+
+  // A chunk's records (connections and messages), decompressed first.
+  void TakeChunk(const RecordHeader& header, std::span<const uint8_t> data, uint64_t data_offset,
+                 const std::string& location) {
+    const std::string compression = header.Bytes("compression");
+    const uint32_t size = header.U32("size");
+    std::vector<uint8_t> decompressed;
+    std::span<const uint8_t> chunk = data;
+    if (compression != "none") {
+      if (size > kMaxUncompressedChunkBytes) {
+        header.Fail("chunk states an uncompressed size of " + std::to_string(size) +
+                    " bytes (more than 1 GiB: a corrupt header?)");
+      }
+      decompressed = Decompress(header, compression, data, size);
+      chunk = decompressed;
+    } else if (size != data.size()) {
+      header.Fail("uncompressed chunk of " + std::to_string(data.size()) + " bytes states size " +
+                  std::to_string(size));
+    }
+    size_t inner = 0;
+    while (inner < chunk.size()) {
+      const std::string inner_location =
+          compression == "none" ? ByteOffset(data_offset + inner)
+                                : "chunk at " + location + " (" + compression + "), offset " +
+                                      std::to_string(inner) + " of its data";
+      ParsedRecord record = ParseInBuffer(chunk, inner, inner_location);
+      const uint8_t inner_op = record.header.Op();
+      if (inner_op == kOpConnection) {
+        TakeConnection(record.header, record.data, inner_location);
+      } else if (inner_op == kOpMessageData) {
+        TakeMessage(record.header, record.data, inner_location);
+      } else {
+        record.header.Fail("unexpected record (op " + std::to_string(inner_op) +
+                           ") inside a chunk (expected connection or message records)");
+      }
+      inner += record.size;
+    }
+  }
+
+  // Parses one record (at `location`) from `bytes` starting at `offset`.
+  ParsedRecord ParseInBuffer(std::span<const uint8_t> bytes, size_t offset,
+                             const std::string& location) const {
+    const auto fail = [&](const std::string& what) -> ParsedRecord {
+      throw InputError(p_, 0, location + ": " + what);
     };
     if (bytes.size() - offset < 4) return fail("a record header length needs 4 bytes");
     const uint32_t header_length = LoadU32(bytes.data() + offset);
@@ -443,159 +590,20 @@ void RosbagReader::ScanRecords(Scan& scan) {
       return fail("record data of " + std::to_string(data_length) + " bytes overruns the chunk (" +
                   std::to_string(bytes.size() - data_length_at - 4) + " left)");
     }
-    return {RecordHeader(std::move(fields), p, location),
+    return {RecordHeader(std::move(fields), p_, location),
             bytes.subspan(data_length_at + 4, data_length),
             8 + size_t{header_length} + data_length};
-  };
-
-  const auto parse_connection = [&](const RecordHeader& header, std::span<const uint8_t> data,
-                                    const std::string& location) {
-    RosbagConnection connection;
-    connection.id = header.U32("conn");
-    connection.topic = header.Bytes("topic");
-    HeaderFields fields;
-    if (const std::string problem = ParseHeaderFields(data, &fields); !problem.empty()) {
-      header.Fail("connection header: " + problem);
-    }
-    const RecordHeader connection_header(std::move(fields), p, location + " (connection header)");
-    connection.type = connection_header.Bytes("type");
-    connection.md5sum = connection_header.Bytes("md5sum");
-    if (connection_header.Has("message_definition")) {
-      connection.message_definition = connection_header.Bytes("message_definition");
-    }
-    AddConnection(std::move(connection), location);
-  };
-
-  const auto handle_message = [&](const RecordHeader& header, std::span<const uint8_t> data,
-                                  const std::string& location) {
-    const uint32_t id = header.U32("conn");
-    const timestamp_ns_t time_ns = header.Time("time");
-    const auto it = connection_index_.find(id);
-    if (it == connection_index_.end()) {
-      header.Fail("message on connection " + std::to_string(id) +
-                  ", which no connection record before it defines");
-    }
-    RosbagConnection& connection = connections_[it->second];
-    if (scan.count) ++connection.num_messages;
-    if (!scan.messages || !scan.wanted(connection)) return;
-    RosbagMessage message;
-    message.connection = &connection;
-    message.time_ns = time_ns;
-    message.data = data;
-    message.location = location;
-    scan.visit(message);
-  };
-
-  // Chunk info records of an indexed bag carry the message counts.
-  const auto handle_chunk_info = [&](const RecordHeader& header, std::span<const uint8_t> data) {
-    if (!scan.count && has_index_ && !scan.messages) {
-      const uint32_t count = header.U32("count");
-      if (data.size() != uint64_t{count} * 8) {
-        header.Fail("chunk info data has " + std::to_string(data.size()) + " bytes, expected " +
-                    std::to_string(uint64_t{count} * 8) + " for " + std::to_string(count) +
-                    " connections");
-      }
-      for (uint32_t i = 0; i < count; ++i) {
-        const uint32_t id = LoadU32(data.data() + 8 * i);
-        const uint32_t messages = LoadU32(data.data() + 8 * i + 4);
-        const auto it = connection_index_.find(id);
-        if (it == connection_index_.end()) {
-          header.Fail("chunk info counts messages of connection " + std::to_string(id) +
-                      ", which no connection record defines");
-        }
-        connections_[it->second].num_messages += messages;
-      }
-    }
-  };
-
-  // With an index and no messages wanted, read only the index section.
-  uint64_t offset = (has_index_ && !scan.messages) ? index_pos_ : first_record_offset_;
-  std::vector<uint8_t> header_bytes;
-  std::vector<uint8_t> data_bytes;
-  while (offset < file_size_) {
-    const std::string location = ByteOffset(offset);
-    uint8_t length_bytes[4];
-    ReadAt(file_, p, file_size_, offset, length_bytes, 4, "record header length");
-    const uint32_t header_length = LoadU32(length_bytes);
-    if (header_length > file_size_ - offset - 4) {
-      throw InputError(p, 0,
-                       location + ": record header of " + std::to_string(header_length) +
-                           " bytes, the file ends after " +
-                           std::to_string(file_size_ - offset - 4) +
-                           " (the bag is truncated or corrupt)");
-    }
-    header_bytes.resize(header_length);
-    ReadAt(file_, p, file_size_, offset + 4, header_bytes.data(), header_length, "record header");
-    HeaderFields fields;
-    if (const std::string problem = ParseHeaderFields(header_bytes, &fields); !problem.empty()) {
-      throw InputError(p, 0, location + ": record header: " + problem);
-    }
-    const RecordHeader header(std::move(fields), p, location);
-    const uint8_t op = header.Op();
-    ReadAt(file_, p, file_size_, offset + 4 + header_length, length_bytes, 4, "record data length");
-    const uint32_t data_length = LoadU32(length_bytes);
-    const uint64_t data_offset = offset + 8 + header_length;
-    const uint64_t next = data_offset + data_length;
-    if (next > file_size_) {
-      throw InputError(p, 0,
-                       location + ": record (op " + std::to_string(op) + ") data: expected " +
-                           std::to_string(data_length) + " bytes, the file ends after " +
-                           std::to_string(file_size_ - data_offset) + " (the bag is truncated)");
-    }
-    const bool read_data = op == kOpConnection || op == kOpChunkInfo ||
-                           ((scan.messages || scan.count) && op == kOpMessageData) ||
-                           (op == kOpChunk && (scan.messages || !has_index_));
-    if (read_data) {
-      data_bytes.resize(data_length);
-      ReadAt(file_, p, file_size_, data_offset, data_bytes.data(), data_length, "record data");
-      const std::span<const uint8_t> data(data_bytes);
-      if (op == kOpConnection) {
-        parse_connection(header, data, location);
-      } else if (op == kOpChunkInfo) {
-        handle_chunk_info(header, data);
-      } else if (op == kOpMessageData) {
-        handle_message(header, data, location);
-      } else if (op == kOpChunk) {
-        const std::string compression = header.Bytes("compression");
-        const uint32_t size = header.U32("size");
-        std::vector<uint8_t> decompressed;
-        std::span<const uint8_t> chunk = data;
-        if (compression != "none") {
-          if (size > kMaxChunkBytes) {
-            header.Fail("chunk states an uncompressed size of " + std::to_string(size) +
-                        " bytes (more than 1 GiB: a corrupt header?)");
-          }
-          decompressed = Decompress(header, compression, data, size);
-          chunk = decompressed;
-        } else if (size != data.size()) {
-          header.Fail("uncompressed chunk of " + std::to_string(data.size()) +
-                      " bytes states size " + std::to_string(size));
-        }
-        size_t inner = 0;
-        while (inner < chunk.size()) {
-          const std::string inner_location =
-              compression == "none" ? ByteOffset(data_offset + inner)
-                                    : "chunk at " + location + " (" + compression + "), offset " +
-                                          std::to_string(inner) + " of its data";
-          Parsed record = parse_in_buffer(chunk, inner, inner_location);
-          const uint8_t inner_op = record.header.Op();
-          if (inner_op == kOpConnection) {
-            parse_connection(record.header, record.data, inner_location);
-          } else if (inner_op == kOpMessageData) {
-            handle_message(record.header, record.data, inner_location);
-          } else {
-            record.header.Fail("unexpected record (op " + std::to_string(inner_op) +
-                               ") inside a chunk (expected connection or message records)");
-          }
-          inner += record.size;
-        }
-      }
-    } else if (op != kOpChunk && op != kOpIndexData && op != kOpMessageData) {
-      header.Fail("unknown record op " + std::to_string(op) +
-                  " (expected 0x02 to 0x07 after the bag header)");
-    }
-    offset = next;
   }
+
+  RosbagReader& reader_;
+  Scan& scan_;
+  const std::string p_;
+  std::vector<uint8_t> header_bytes_;
+  std::vector<uint8_t> data_bytes_;
+};
+
+void RosbagReader::ScanRecords(Scan& scan) {
+  RecordScanner(*this, scan).Run();
 }
 
 void RosbagReader::ReadMessages(const std::function<bool(const RosbagConnection&)>& wanted,
@@ -715,7 +723,7 @@ void RosbagWriter::FlushChunk() {
   }
   const std::string& payload =
       options_.compression == RosbagCompression::kNone ? chunk_data_ : compressed;
-  WriteBytes(EncodeRecord({{"op", std::string(1, static_cast<char>(kOpChunk))},
+  WriteBytes(EncodeRecord({{"op", std::string(1, static_cast<char>(kOpChunkRecord))},
                            {"compression", compression},
                            {"size", U32Bytes(static_cast<uint32_t>(chunk_data_.size()))}},
                           payload));

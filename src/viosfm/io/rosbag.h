@@ -94,6 +94,7 @@ class RosbagReader {
 
  private:
   struct Scan;
+  class RecordScanner;
   void ScanRecords(Scan& scan);
   void AddConnection(RosbagConnection connection, const std::string& location);
 

@@ -240,136 +240,153 @@ std::set<std::string> ColumnNames(sqlite3* db, const fs::path& path, const std::
 
 Rosbag2SqliteFile::Rosbag2SqliteFile(const fs::path& path)
     : path_(path), database_(std::make_unique<Database>()) {
+  CheckSqliteMagic(path);
+  OpenDatabase();
+  const std::set<std::string> tables = TableNames(database_->db.get(), path);
+  const bool has_qos = CheckLayout(tables);
+  ReadSchemaAndMetadata(tables);
+  ReadTopics(has_qos);
+  CountMessages();
+}
+
+void Rosbag2SqliteFile::CheckSqliteMagic(const fs::path& path) {
   std::error_code error;
   if (!fs::is_regular_file(path, error)) throw InputError(path.string(), 0, "file not found");
-  {
-    std::ifstream file(path, std::ios::binary);
-    char magic[16] = {};
-    file.read(magic, sizeof(magic));
-    if (file.gcount() < 16 || std::memcmp(magic, kSqliteMagic, sizeof(kSqliteMagic)) != 0) {
-      throw InputError(path.string(), 0,
-                       "not an SQLite database (expected 'SQLite format 3' at byte 0): not a "
-                       "rosbag2 .db3 file");
-    }
+  std::ifstream file(path, std::ios::binary);
+  char magic[16] = {};
+  file.read(magic, sizeof(magic));
+  if (file.gcount() < 16 || std::memcmp(magic, kSqliteMagic, sizeof(kSqliteMagic)) != 0) {
+    throw InputError(path.string(), 0,
+                     "not an SQLite database (expected 'SQLite format 3' at byte 0): not a "
+                     "rosbag2 .db3 file");
   }
-  const auto open = [&](const std::string& name, int flags) {
-    sqlite3* db = nullptr;
-    const int status = sqlite3_open_v2(name.c_str(), &db, flags, nullptr);
-    database_->db.reset(db);
-    return status == SQLITE_OK;
-  };
+}
+
+bool Rosbag2SqliteFile::Open(const std::string& name, int flags) {
+  sqlite3* db = nullptr;
+  const int status = sqlite3_open_v2(name.c_str(), &db, flags, nullptr);
+  database_->db.reset(db);
+  return status == SQLITE_OK;
+}
+
+void Rosbag2SqliteFile::OpenDatabase() {
   // Reading the table list is the first access that needs a lock; on
   // read-only media, or a folder where SQLite cannot create its lock files
   // (a WAL bag without its -shm file), immutable mode reads the file as it
   // is. That is safe only when no -wal file holds unmerged pages.
-  std::set<std::string> tables;
-  bool opened = open(path.string(), SQLITE_OPEN_READONLY | SQLITE_OPEN_NOMUTEX);
+  bool opened = Open(path_.string(), SQLITE_OPEN_READONLY | SQLITE_OPEN_NOMUTEX);
   if (opened) {
-    sqlite3_busy_timeout(database_->db.get(), 2000);
-    const Statement probe = [&]() -> Statement {
-      sqlite3_stmt* statement = nullptr;
-      if (sqlite3_prepare_v2(database_->db.get(), "SELECT name FROM sqlite_master", -1, &statement,
-                             nullptr) != SQLITE_OK) {
-        return Statement();
-      }
-      return Statement(statement);
-    }();
+    sqlite3* db = database_->db.get();
+    sqlite3_busy_timeout(db, 2000);
+    sqlite3_stmt* statement = nullptr;
+    const Statement probe = sqlite3_prepare_v2(db, "SELECT name FROM sqlite_master", -1, &statement,
+                                               nullptr) == SQLITE_OK
+                                ? Statement(statement)
+                                : Statement();
     const int status = probe ? sqlite3_step(probe.get()) : SQLITE_ERROR;
     opened = status == SQLITE_ROW || status == SQLITE_DONE;
-    if (!opened && (sqlite3_errcode(database_->db.get()) == SQLITE_NOTADB ||
-                    sqlite3_errcode(database_->db.get()) == SQLITE_CORRUPT)) {
-      FailSqlite(path, database_->db.get(), "cannot read the database");
+    if (!opened &&
+        (sqlite3_errcode(db) == SQLITE_NOTADB || sqlite3_errcode(db) == SQLITE_CORRUPT)) {
+      FailSqlite(path_, db, "cannot read the database");
     }
   }
-  if (!opened) {
-    fs::path wal = path;
-    wal += "-wal";
-    const bool wal_has_pages = fs::exists(wal, error) && fs::file_size(wal, error) > 0;
-    if (wal_has_pages) {
-      FailSqlite(path, database_->db.get(),
-                 "cannot open the database (its write-ahead log " + FileName(wal) +
-                     " holds pages not yet in the file, and the folder is not writable for "
-                     "SQLite to merge them: copy the bag to a writable folder)");
-    }
-    if (!open(FileUri(path) + "?immutable=1",
-              SQLITE_OPEN_READONLY | SQLITE_OPEN_URI | SQLITE_OPEN_NOMUTEX)) {
-      FailSqlite(path, database_->db.get(), "cannot open the database");
-    }
+  if (opened) return;
+  std::error_code error;
+  fs::path wal = path_;
+  wal += "-wal";
+  const bool wal_has_pages = fs::exists(wal, error) && fs::file_size(wal, error) > 0;
+  if (wal_has_pages) {
+    FailSqlite(path_, database_->db.get(),
+               "cannot open the database (its write-ahead log " + FileName(wal) +
+                   " holds pages not yet in the file, and the folder is not writable for "
+                   "SQLite to merge them: copy the bag to a writable folder)");
   }
+  if (!Open(FileUri(path_) + "?immutable=1",
+            SQLITE_OPEN_READONLY | SQLITE_OPEN_URI | SQLITE_OPEN_NOMUTEX)) {
+    FailSqlite(path_, database_->db.get(), "cannot open the database");
+  }
+}
+
+bool Rosbag2SqliteFile::CheckLayout(const std::set<std::string>& tables) const {
   sqlite3* db = database_->db.get();
-  tables = TableNames(db, path);
   if (tables.count("topics") == 0 || tables.count("messages") == 0) {
-    throw InputError(path.string(), 0,
+    throw InputError(path_.string(), 0,
                      "an SQLite database without rosbag2's tables 'topics' and 'messages': not a "
                      "ROS 2 bag");
   }
-  const std::set<std::string> topic_columns = ColumnNames(db, path, "topics");
-  const std::set<std::string> message_columns = ColumnNames(db, path, "messages");
-  for (const char* column : {"id", "name", "type", "serialization_format"}) {
-    if (topic_columns.count(column) == 0) {
-      throw InputError(path.string(), 0,
-                       std::string("table 'topics' has no column '") + column +
-                           "' (not a rosbag2 bag, or a layout viosfm does not know)");
+  const std::set<std::string> topic_columns = ColumnNames(db, path_, "topics");
+  const std::set<std::string> message_columns = ColumnNames(db, path_, "messages");
+  const auto require = [this](const std::set<std::string>& columns, const char* table,
+                              std::initializer_list<const char*> names) {
+    for (const char* column : names) {
+      if (columns.count(column) == 0) {
+        throw InputError(path_.string(), 0,
+                         std::string("table '") + table + "' has no column '" + column +
+                             "' (not a rosbag2 bag, or a layout viosfm does not know)");
+      }
     }
-  }
-  for (const char* column : {"topic_id", "timestamp", "data"}) {
-    if (message_columns.count(column) == 0) {
-      throw InputError(path.string(), 0,
-                       std::string("table 'messages' has no column '") + column +
-                           "' (not a rosbag2 bag, or a layout viosfm does not know)");
-    }
-  }
+  };
+  require(topic_columns, "topics", {"id", "name", "type", "serialization_format"});
+  require(message_columns, "messages", {"topic_id", "timestamp", "data"});
+  return topic_columns.count("offered_qos_profiles") > 0;
+}
+
+void Rosbag2SqliteFile::ReadSchemaAndMetadata(const std::set<std::string>& tables) {
+  sqlite3* db = database_->db.get();
   if (tables.count("schema") > 0) {
-    const Statement statement =
-        Prepare(db, path, "SELECT schema_version FROM schema ORDER BY schema_version DESC LIMIT 1");
+    const Statement statement = Prepare(
+        db, path_, "SELECT schema_version FROM schema ORDER BY schema_version DESC LIMIT 1");
     if (sqlite3_step(statement.get()) == SQLITE_ROW) {
       schema_version_ = sqlite3_column_int(statement.get(), 0);
     }
   }
   if (tables.count("metadata") > 0) {
     const Statement statement =
-        Prepare(db, path, "SELECT metadata FROM metadata ORDER BY id DESC LIMIT 1");
+        Prepare(db, path_, "SELECT metadata FROM metadata ORDER BY id DESC LIMIT 1");
     if (sqlite3_step(statement.get()) == SQLITE_ROW) {
       metadata_ = ParseRosbag2Metadata(ColumnText(statement.get(), 0),
-                                       path.string() + ": table 'metadata'");
+                                       path_.string() + ": table 'metadata'");
     }
   }
-  const bool has_qos = topic_columns.count("offered_qos_profiles") > 0;
-  {
-    const Statement statement =
-        Prepare(db, path,
-                std::string("SELECT id, name, type, serialization_format") +
-                    (has_qos ? ", offered_qos_profiles" : "") + " FROM topics ORDER BY id");
-    int status = SQLITE_ROW;
-    while ((status = sqlite3_step(statement.get())) == SQLITE_ROW) {
-      Topic topic;
-      topic.id = sqlite3_column_int64(statement.get(), 0);
-      topic.name = ColumnText(statement.get(), 1);
-      topic.type = ColumnText(statement.get(), 2);
-      topic.serialization_format = ColumnText(statement.get(), 3);
-      if (has_qos) topic.offered_qos_profiles = ColumnText(statement.get(), 4);
-      topics_.push_back(std::move(topic));
-    }
-    if (status != SQLITE_DONE) FailSqlite(path, db, "reading table 'topics'");
+}
+
+void Rosbag2SqliteFile::ReadTopics(bool has_qos) {
+  sqlite3* db = database_->db.get();
+  const Statement statement =
+      Prepare(db, path_,
+              std::string("SELECT id, name, type, serialization_format") +
+                  (has_qos ? ", offered_qos_profiles" : "") + " FROM topics ORDER BY id");
+  int status = SQLITE_ROW;
+  while ((status = sqlite3_step(statement.get())) == SQLITE_ROW) {
+    Topic topic;
+    topic.id = sqlite3_column_int64(statement.get(), 0);
+    topic.name = ColumnText(statement.get(), 1);
+    topic.type = ColumnText(statement.get(), 2);
+    topic.serialization_format = ColumnText(statement.get(), 3);
+    if (has_qos) topic.offered_qos_profiles = ColumnText(statement.get(), 4);
+    topics_.push_back(std::move(topic));
   }
-  {
-    const Statement statement =
-        Prepare(db, path, "SELECT topic_id, COUNT(*) FROM messages GROUP BY topic_id");
-    int status = SQLITE_ROW;
-    while ((status = sqlite3_step(statement.get())) == SQLITE_ROW) {
-      const int64_t id = sqlite3_column_int64(statement.get(), 0);
-      const auto it = std::find_if(topics_.begin(), topics_.end(),
-                                   [id](const Topic& topic) { return topic.id == id; });
-      const uint64_t count = static_cast<uint64_t>(sqlite3_column_int64(statement.get(), 1));
-      if (it == topics_.end()) {
-        throw InputError(path.string(), 0,
-                         std::to_string(count) + " messages on topic id " + std::to_string(id) +
-                             ", which table 'topics' does not define");
-      }
-      it->num_messages = count;
+  if (status != SQLITE_DONE) FailSqlite(path_, db, "reading table 'topics'");
+}
+
+void Rosbag2SqliteFile::CountMessages() {
+  sqlite3* db = database_->db.get();
+  const Statement statement =
+      Prepare(db, path_, "SELECT topic_id, COUNT(*) FROM messages GROUP BY topic_id");
+  int status = SQLITE_ROW;
+  while ((status = sqlite3_step(statement.get())) == SQLITE_ROW) {
+    const int64_t id = sqlite3_column_int64(statement.get(), 0);
+    const auto it = std::find_if(topics_.begin(), topics_.end(),
+                                 [id](const Topic& topic) { return topic.id == id; });
+    const uint64_t count = static_cast<uint64_t>(sqlite3_column_int64(statement.get(), 1));
+    if (it == topics_.end()) {
+      throw InputError(path_.string(), 0,
+                       std::to_string(count) + " messages on topic id " + std::to_string(id) +
+                           ", which table 'topics' does not define");
     }
-    if (status != SQLITE_DONE) FailSqlite(path, db, "counting the messages");
+    it->num_messages = count;
   }
+  if (status != SQLITE_DONE) FailSqlite(path_, db, "counting the messages");
 }
 
 Rosbag2SqliteFile::~Rosbag2SqliteFile() = default;

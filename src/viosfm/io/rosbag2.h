@@ -33,6 +33,7 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <set>
 #include <span>
 #include <string>
 #include <vector>
@@ -106,6 +107,18 @@ class Rosbag2SqliteFile {
 
  private:
   struct Database;
+  // The constructor's steps: the file's SQLite magic, the database opened
+  // (immutable when SQLite cannot lock it), rosbag2's tables and columns
+  // checked (returns whether topics have QoS profiles), the schema version
+  // and metadata, the topics and their message counts.
+  static void CheckSqliteMagic(const std::filesystem::path& path);
+  bool Open(const std::string& name, int flags);
+  void OpenDatabase();
+  bool CheckLayout(const std::set<std::string>& tables) const;
+  void ReadSchemaAndMetadata(const std::set<std::string>& tables);
+  void ReadTopics(bool has_qos);
+  void CountMessages();
+
   std::filesystem::path path_;
   std::unique_ptr<Database> database_;
   std::vector<Topic> topics_;

@@ -19,12 +19,6 @@ constexpr const char* kColumnNames[kNumColumns] = {
     "id",       "region",   "floor",    "texture_id", "origin_x", "origin_y", "origin_z",
     "axis_u_x", "axis_u_y", "axis_u_z", "axis_v_x",   "axis_v_y", "axis_v_z"};
 
-std::string FormatDouble(double value) {
-  std::array<char, 32> buffer{};
-  std::snprintf(buffer.data(), buffer.size(), "%.17g", value);
-  return buffer.data();
-}
-
 std::string ColumnLabel(size_t column) {
   return "column " + std::to_string(column + 1) + " (" + kColumnNames[column] + ")";
 }
@@ -62,7 +56,7 @@ void WriteSceneStructure(const fs::path& path, const SceneStructure& structure) 
       VIOSFM_CHECK(quad.region.find(',') == std::string::npos) << quad.region;
       stream << quad.id << ',' << quad.region << ',' << quad.floor << ',' << quad.texture_id;
       for (const Eigen::Vector3d* vector : {&quad.origin, &quad.axis_u, &quad.axis_v}) {
-        for (int k = 0; k < 3; ++k) stream << ',' << FormatDouble((*vector)[k]);
+        for (int k = 0; k < 3; ++k) stream << ',' << FormatRoundTrip((*vector)[k]);
       }
       stream << '\n';
     }

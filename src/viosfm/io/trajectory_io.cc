@@ -63,13 +63,6 @@ void AppendPose(const fs::path& path, int64_t line, Trajectory& trajectory, Stam
   trajectory.poses.push_back(std::move(pose));
 }
 
-// "%.17g": the shortest printf form that always reads back to the same double.
-std::string FormatDouble(double value) {
-  std::array<char, 32> buffer{};
-  std::snprintf(buffer.data(), buffer.size(), "%.17g", value);
-  return buffer.data();
-}
-
 void RequireNotEmpty(const fs::path& path, const Trajectory& trajectory) {
   if (trajectory.empty())
     throw InputError(path.string(), 0, "expected at least one pose, found none");
@@ -258,10 +251,10 @@ void WriteTumTrajectory(const fs::path& path, const Trajectory& trajectory) {
     for (const StampedPose& pose : trajectory.poses) {
       const Eigen::Vector3d& t = pose.world_from_frame.translation;
       const Eigen::Quaterniond& q = pose.world_from_frame.rotation;
-      out << FormatNsAsSeconds(pose.timestamp_ns, 9) << ' ' << FormatDouble(t.x()) << ' '
-          << FormatDouble(t.y()) << ' ' << FormatDouble(t.z()) << ' ' << FormatDouble(q.x()) << ' '
-          << FormatDouble(q.y()) << ' ' << FormatDouble(q.z()) << ' ' << FormatDouble(q.w())
-          << '\n';
+      out << FormatNsAsSeconds(pose.timestamp_ns, 9) << ' ' << FormatRoundTrip(t.x()) << ' '
+          << FormatRoundTrip(t.y()) << ' ' << FormatRoundTrip(t.z()) << ' '
+          << FormatRoundTrip(q.x()) << ' ' << FormatRoundTrip(q.y()) << ' '
+          << FormatRoundTrip(q.z()) << ' ' << FormatRoundTrip(q.w()) << '\n';
     }
   });
 }
@@ -273,9 +266,10 @@ void WriteEurocTrajectory(const fs::path& path, const Trajectory& trajectory) {
     for (const StampedPose& pose : trajectory.poses) {
       const Eigen::Vector3d& t = pose.world_from_frame.translation;
       const Eigen::Quaterniond& q = pose.world_from_frame.rotation;
-      out << pose.timestamp_ns << ',' << FormatDouble(t.x()) << ',' << FormatDouble(t.y()) << ','
-          << FormatDouble(t.z()) << ',' << FormatDouble(q.w()) << ',' << FormatDouble(q.x()) << ','
-          << FormatDouble(q.y()) << ',' << FormatDouble(q.z()) << '\n';
+      out << pose.timestamp_ns << ',' << FormatRoundTrip(t.x()) << ',' << FormatRoundTrip(t.y())
+          << ',' << FormatRoundTrip(t.z()) << ',' << FormatRoundTrip(q.w()) << ','
+          << FormatRoundTrip(q.x()) << ',' << FormatRoundTrip(q.y()) << ','
+          << FormatRoundTrip(q.z()) << '\n';
     }
   });
 }
@@ -285,7 +279,7 @@ void WriteKittiTrajectory(const fs::path& path, const Trajectory& trajectory) {
     for (const StampedPose& pose : trajectory.poses) {
       const Matrix3x4d matrix = pose.world_from_frame.ToMatrix();
       for (int i = 0; i < 12; ++i) {
-        out << (i == 0 ? "" : " ") << FormatDouble(matrix(i / 4, i % 4));
+        out << (i == 0 ? "" : " ") << FormatRoundTrip(matrix(i / 4, i % 4));
       }
       out << '\n';
     }

@@ -1,7 +1,11 @@
 #include <gtest/gtest.h>
 
+#include <sstream>
+#include <string>
+
 #include "viosfm/pipeline/pipeline_test_fixture.h"
 #include "viosfm/util/folder_manifest.h"
+#include "viosfm/util/logging.h"
 
 namespace viosfm {
 namespace {
@@ -34,6 +38,34 @@ TEST(PipelineTest, ResumesFromTheStoredFeaturesAndMatches) {
   ASSERT_TRUE(s.evaluation.has_value());
   EXPECT_LT(s.evaluation->ate_rmse_m, 0.005);
   EXPECT_LT(s.mean_reprojection_error_px, 0.4);
+}
+
+// The console's lines of a resumed run, its summary included, are at most
+// 120 characters; run.log holds the first run's section, then this one's
+// with its debug lines and its summary.
+TEST(PipelineTest, AResumedRunAddsItsSectionToTheLogAndKeepsTheConsoleNarrow) {
+  const Fixture& f = SharedFixture();
+  const fs::path out = CopyOfTheRun(f, "resume_log");
+  const std::string first_log = ReadTextFile(out / kRunLogFileName);
+  ::testing::internal::CaptureStderr();
+  const PipelineSummary s = RunPipeline(SmallOptions(f, out));
+  std::string console = ::testing::internal::GetCapturedStderr();
+  console += s.ToString() + "\n";
+  std::istringstream lines(console);
+  size_t num_lines = 0;
+  for (std::string line; std::getline(lines, line); ++num_lines) {
+    EXPECT_LE(line.size(), kMaxConsoleLineLength) << line;
+  }
+  EXPECT_GT(num_lines, 20u);
+
+  const std::string log = ReadTextFile(out / kRunLogFileName);
+  ASSERT_EQ(log.substr(0, first_log.size()), first_log);  // the first run's log stays
+  const std::string second = log.substr(first_log.size());
+  EXPECT_EQ(second.find("\n== viosfm "), 0u) << second.substr(0, 200);
+  EXPECT_NE(second.find("an earlier run's log above"), std::string::npos);
+  EXPECT_NE(second.find("\nD "), std::string::npos);  // debug lines, not on the console
+  EXPECT_NE(second.find("decisions (summary.json: warnings)"), std::string::npos);
+  EXPECT_NE(second.find("run: complete (summary.json written)"), std::string::npos);
 }
 
 TEST(PipelineTest, ResumeWithOtherFeatureOptionsIsAnError) {

@@ -1,5 +1,6 @@
 #include "viosfm/pipeline/pipeline_summary.h"
 
+#include <algorithm>
 #include <iomanip>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -47,34 +48,35 @@ std::string PipelineSummary::ToString() const {
   std::ostringstream out;
   out << std::fixed << std::setprecision(3);
   out << "frames: " << num_frames_in << " in, " << num_frames_selected << " selected ("
-      << num_frames_without_vio_pose << " without a VIO pose), " << num_frames_registered
-      << " registered (pose supported by the images), " << num_frames_vio_only
-      << " placed by the VIO only, " << num_frames_unposed << " without a pose\n";
+      << num_frames_without_vio_pose << " without a VIO pose); " << num_frames_registered
+      << " registered by the images, " << num_frames_vio_only << " placed by the VIO only, "
+      << num_frames_unposed << " unposed\n";
   if (mapper.frames_per_model.size() > 1) {
-    out << "models: " << mapper.frames_per_model.size() << " (the images join "
-        << mapper.num_frames_in_other_models
-        << " frames to none of the main model's: models/1/, ...), " << mapper.num_models_merged
+    out << "models: " << mapper.frames_per_model.size()
+        << " (models/1/, ...: " << mapper.num_frames_in_other_models
+        << " frames the images join to none of model/'s), " << mapper.num_models_merged
         << " merged\n";
   }
   if (mapper.images_only) out << "images only: no VIO pose placed a frame\n";
   if (!camera_refined.empty()) out << "camera (guessed, refined): " << camera_refined << "\n";
   if (!mapper.imu_alignment_message.empty()) out << "IMU: " << mapper.imu_alignment_message << "\n";
-  out << "every image: " << all_frames.ToString() << "\n";
+  out << "every image: " << all_frames.num_images << ": " << all_frames.num_from_model
+      << " from the model, " << all_frames.num_between << " between model frames, "
+      << all_frames.num_beyond << " beyond its VIO segment's model frames, "
+      << all_frames.num_unposed() << " unposed\n";
   if (texture_probe.probed) {
     out << "texture: " << texture_probe_message << "\n";
   }
   if (vio_gaps.num_gaps > 0) out << "VIO gaps: " << vio_gaps.ToString() << "\n";
   out << "VIO: " << num_vio_segments << " segment(s), " << mapper.num_vio_segments_joined
-      << " joined; " << mapper.num_reposed << " frame(s) re-posed from the images, "
-      << mapper.num_registered_without_vio << " registered from the images without a VIO pose, "
-      << mapper.num_vio_breaks << " VIO jump(s) found, " << mapper.num_vio_jumps_refused
-      << " refused by the frame's matches with its neighbours\n";
-  if (!metric_scale.message.empty()) out << "metric scale: " << metric_scale.message << "\n";
+      << " joined; re-posed by the images " << mapper.num_reposed
+      << ", registered without a VIO pose " << mapper.num_registered_without_vio << "; jumps found "
+      << mapper.num_vio_breaks << ", refused " << mapper.num_vio_jumps_refused << "\n";
+  // The metric scale's line is among the decisions (its details: summary.json, run.log).
   out << "pairs: " << verification.num_pairs << " candidates, " << verification.num_accepted
       << " accepted";
   if (verification.num_accepted_corrected > 0) {
-    out << " (" << verification.num_accepted_corrected
-        << " under the VIO's pose corrected within its drift)";
+    out << " (" << verification.num_accepted_corrected << " with the VIO's pose corrected)";
   }
   out << ", " << verification.num_vio_rejected << " rejected by VIO, "
       << verification.num_ransac_rejected << " by RANSAC, " << verification.num_no_matches
@@ -103,40 +105,42 @@ std::string PipelineSummary::ToString() const {
   }
   if (gyro_check) {
     out << std::setprecision(3) << "rotations against the gyro (" << gyro_check->num_intervals
-        << " intervals of 1 s; the model uses the gyro: consistency): RMSE " << gyro_check->rmse_deg
-        << " deg, median " << gyro_check->median_deg << ", max " << gyro_check->max_deg << " ("
-        << std::setprecision(2) << gyro_check->worst_from_s << " to " << gyro_check->worst_to_s
-        << " s)\n";
+        << " x 1 s, a consistency check): RMSE " << gyro_check->rmse_deg << " deg, median "
+        << gyro_check->median_deg << ", max " << gyro_check->max_deg << " (" << std::setprecision(2)
+        << gyro_check->worst_from_s << " to " << gyro_check->worst_to_s << " s)\n";
   } else if (!gyro_check_message.empty()) {
     out << "rotations against the gyro: " << gyro_check_message << "\n";
   }
-  out << "images: " << images.decodes << " decoded, " << images.reuses
-      << " taken from the frame cache instead of decoded again, " << images.not_kept
-      << " not kept for lack of room (cache peak " << std::setprecision(1)
+  out << "images: " << images.decodes << " decoded, " << images.reuses << " from the frame cache, "
+      << images.not_kept << " not kept for lack of room (cache peak " << std::setprecision(1)
       << static_cast<double>(images.peak_bytes) / (1 << 20) << " of "
       << static_cast<double>(frame_cache_max_bytes) / (1 << 20) << " MiB)\n";
-  out << std::setprecision(1) << "time: " << total_seconds << " s (";
-  for (size_t i = 0; i < stages.size(); ++i) {
-    out << (i > 0 ? ", " : "") << stages[i].name << " " << stages[i].seconds;
-  }
   double cpu_seconds = 0.0;
   for (const PipelineStageTime& stage : stages) cpu_seconds += stage.cpu_seconds;
-  out << "), CPU " << cpu_seconds << " s, peak memory " << peak_memory_mb << " MB\n";
+  out << std::setprecision(1) << "time: " << total_seconds << " s, CPU " << cpu_seconds
+      << " s, peak memory " << peak_memory_mb << " MB; the longest stages:";
+  std::vector<PipelineStageTime> longest = stages;
+  std::sort(
+      longest.begin(), longest.end(),
+      [](const PipelineStageTime& a, const PipelineStageTime& b) { return a.seconds > b.seconds; });
+  for (size_t i = 0; i < longest.size() && i < 3; ++i) {
+    out << (i > 0 ? "," : "") << " " << longest[i].name << " " << longest[i].seconds << " s";
+  }
+  out << "\n";
   if (stream.streamed) {
-    out << "stream: the VIO done after " << stream.vio_seconds << " s, the verification after "
+    out << "stream: VIO done after " << stream.vio_seconds << " s, verification after "
         << stream.verification_seconds << " s (" << stream.verification_busy_seconds
-        << " s of it verifying), the mapper after " << stream.mapper_seconds << " s; "
-        << stream.seconds_after_last_frame << " s from the last frame's features to the model";
+        << " s busy), mapper after " << stream.mapper_seconds << " s\n";
+    out << "stream: the model " << stream.seconds_after_last_frame
+        << " s after the last frame's features";
     if (stream.followed) {
-      out << "; the recording ended " << stream.recording_end_seconds
-          << " s after the start, the model was ready " << stream.seconds_after_recording_end
-          << " s after it";
+      out << "; the recording ended after " << stream.recording_end_seconds
+          << " s, the model was ready " << stream.seconds_after_recording_end << " s later";
     }
     out << "\n";
   }
   out << "output: " << output_folder.string()
-      << " (model/, model_txt/, points.ply, trajectory_body.tum, "
-         "trajectory_body_all_frames.tum, summary.json)";
+      << " (model/, points.ply, trajectory_*.tum, summary.json, run.log)";
   const std::vector<std::string> warnings = RunWarnings(*this);
   out << "\ndecisions (summary.json: warnings):" << (warnings.empty() ? " none" : "");
   for (const std::string& line : warnings) out << "\n  " << line;

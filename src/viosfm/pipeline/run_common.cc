@@ -65,6 +65,7 @@ void FinishRunSummary(const FrameCache& frame_cache, const Timer& total_timer,
                    << " taken from the frame cache)";
   summary->total_seconds = total_timer.ElapsedSeconds();
   summary->peak_memory_mb = PeakMemoryMb();
+  WriteToLogFile(summary->ToString());
   folder.WriteSummary(PipelineSummaryToJson(*summary));
 }
 

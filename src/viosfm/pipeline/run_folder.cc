@@ -1,12 +1,17 @@
 #include "viosfm/pipeline/run_folder.h"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <array>
+#include <exception>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
 
 #include "viosfm/io/colmap_database.h"
+#include "viosfm/pipeline/pipeline_summary.h"
+#include "viosfm/pipeline/run_common.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/logging.h"
 #include "viosfm/util/string_util.h"
@@ -37,6 +42,14 @@ bool IsAnyAtomicWriteLeftover(const std::string& name) {
 
 // The run's folders whose every file is the run's (leftovers are looked for inside).
 constexpr std::array<const char*, 3> kOwnedFolders = {"verification", "vio", "bag"};
+
+// The first lines of a run's section of run.log.
+std::string RunLogHeading(const PipelineOptions& options) {
+  return "== viosfm " + ViosfmVersion() + " run, started " + UtcNow() + ", process " +
+         std::to_string(getpid()) + "\n== dataset " + options.dataset.string() + ", output " +
+         options.output_folder.string() +
+         "\n== the options: options.json; the outcome: summary.json (written last)";
+}
 
 void WriteJsonFile(const fs::path& path, const std::string& text) {
   WriteFileAtomically(path, [&text](std::ostream& stream) { stream << text << "\n"; });
@@ -170,6 +183,7 @@ std::vector<std::string> RunOutputNames(const PipelineOptions& options) {
                                     "fingerprint.json",
                                     "options.json",
                                     "summary.json",
+                                    kRunLogFileName,
                                     "model",
                                     "model_txt",
                                     "models",
@@ -229,7 +243,8 @@ ManagedFolder::Options RunFolderManifestOptions() {
 }
 
 RunFolder::RunFolder(const PipelineOptions& options)
-    : folder_(options.output_folder, RunFolderManifestOptions()) {
+    : folder_(options.output_folder, RunFolderManifestOptions()),
+      exceptions_at_start_(std::uncaught_exceptions()) {
   // A user's file under one of the run's names is refused before anything
   // changes.
   folder_.Claim(RunOutputNames(options));
@@ -241,6 +256,15 @@ RunFolder::RunFolder(const PipelineOptions& options)
                        << path().string();
     }
   }
+  log_heading_ = RunLogHeading(options);
+}
+
+RunFolder::~RunFolder() {
+  if (log_ && std::uncaught_exceptions() > exceptions_at_start_) {
+    LogToFileOnly(LogLevel::kERROR,
+                  "run: stopped by an error (the console's last line says which); the folder is "
+                  "incomplete (no summary.json)");
+  }
 }
 
 void RunFolder::CheckStoredData(const RunFingerprint& current, bool complete) const {
@@ -248,7 +272,17 @@ void RunFolder::CheckStoredData(const RunFingerprint& current, bool complete) co
 }
 
 void RunFolder::MarkIncomplete() const {
+  // The manifest claims run.log before it exists.
   folder_.Save();
+  if (!log_) {
+    const fs::path log_path = path() / kRunLogFileName;
+    const bool earlier_log = fs::exists(log_path) && fs::file_size(log_path) > 0;
+    log_.emplace(log_path,
+                 (earlier_log ? "\n" : "") + log_heading_ +
+                     (earlier_log ? "\n== an earlier run's log above (it ends where that run "
+                                    "stopped)"
+                                  : ""));
+  }
   fs::remove(path() / "summary.json");
   // The earlier model's report and export describe a model this run
   // replaces (what the user put in export/ stays).
@@ -273,6 +307,7 @@ void RunFolder::WriteRecords(
 void RunFolder::WriteSummary(const std::string& json) const {
   WriteJsonFile(path() / "summary.json", json);
   folder_.Finish();
+  LogToFileOnly(LogLevel::kINFO, "run: complete (summary.json written)");
 }
 
 namespace {

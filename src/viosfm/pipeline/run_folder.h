@@ -8,10 +8,12 @@
 // and the database's own record of what made its rows), and the order of
 // its records: fingerprint.json, options.json and the database's record
 // before the database changes, summary.json removed when the folder starts
-// to change and written last (a folder without it is incomplete).
+// to change and written last (a folder without it is incomplete), and the
+// run's log (run.log), to which every run into the folder adds its section.
 #pragma once
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -20,8 +22,12 @@
 #include "viosfm/pipeline/run_fingerprint.h"
 #include "viosfm/util/file_util.h"
 #include "viosfm/util/folder_manifest.h"
+#include "viosfm/util/logging.h"
 
 namespace viosfm {
+
+// The run's log in its output folder.
+inline constexpr const char* kRunLogFileName = "run.log";
 
 // Throws InputError if `output_folder` holds stored features and matches
 // (database.db) made from other inputs than `current` says: naming
@@ -35,8 +41,8 @@ void CheckStoredRunData(const std::filesystem::path& output_folder, const RunFin
 
 // The files and folders a run writes into its output folder (top level):
 // database.db with its SQLite -wal, -shm and -journal files, fingerprint.json,
-// options.json, summary.json, model/, model_txt/, models/ (the separate
-// models), verification/, vio/, live/,
+// options.json, summary.json, run.log, model/, model_txt/, models/ (the
+// separate models), verification/, vio/, live/,
 // points.ply, the .tum trajectories, eval.json, eval_vio.json, and bag/ when
 // a bag is extracted to its default place.
 std::vector<std::string> RunOutputNames(const PipelineOptions& options);
@@ -59,15 +65,23 @@ class RunFolder {
   // files, also an earlier report.html and export/) with
   // options.overwrite, else only the leftovers of interrupted writes.
   explicit RunFolder(const PipelineOptions& options);
+  // Closes run.log, with a last line if the run stops on an exception.
+  ~RunFolder();
+  RunFolder(const RunFolder&) = delete;
+  RunFolder& operator=(const RunFolder&) = delete;
 
   const std::filesystem::path& path() const { return folder_.path(); }
   // CheckStoredRunData on this folder.
   void CheckStoredData(const RunFingerprint& current, bool complete) const;
   // Records the run's names in the manifest (first write into the folder),
-  // removes summary.json, and a report.html and an export/ of the earlier
-  // model (the files viosfm wrote there): from here on the folder is
-  // incomplete until WriteSummary. Called before the first write into the
-  // folder.
+  // opens run.log, removes summary.json, and a report.html and an export/
+  // of the earlier model (the files viosfm wrote there): from here on the
+  // folder is incomplete until WriteSummary. Called before the first write
+  // into the folder: a run refused before it leaves the folder as it was.
+  // From then on every log message, the debug ones too, goes to run.log
+  // while the object lives, after a heading that starts this run's section
+  // and the console's lines printed before it (an earlier run's log stays
+  // above; --overwrite removed it with the run's other outputs).
   void MarkIncomplete() const;
   // fingerprint.json and options.json, atomically, then the database's
   // record (created with the database), before the database's rows change.
@@ -80,6 +94,10 @@ class RunFolder {
  private:
   // mutable: the manifest follows what the const stages write.
   mutable ManagedFolder folder_;
+  // Declared after folder_: closed before the folder's lock is released.
+  mutable std::optional<LogFile> log_;
+  std::string log_heading_;
+  int exceptions_at_start_ = 0;
 };
 
 // The folder of the database that `viosfm features` or `viosfm match`

@@ -83,9 +83,10 @@ TEST(RunFolder, TheManifestListsExactlyWhatTheRunWrote) {
   const FolderManifest manifest = *ReadFolderManifest(out);
   EXPECT_TRUE(manifest.complete);
   EXPECT_TRUE(manifest.created_folder);
-  EXPECT_EQ(manifest.files, (std::set<std::string>{
-                                "database.db", "fingerprint.json", "model/cameras.bin",
-                                "options.json", "points.ply", "summary.json", "vio/states.csv"}));
+  EXPECT_EQ(
+      manifest.files,
+      (std::set<std::string>{"database.db", "fingerprint.json", "model/cameras.bin", "options.json",
+                             "points.ply", "run.log", "summary.json", "vio/states.csv"}));
   EXPECT_EQ(manifest.folders, (std::set<std::string>{"model", "vio"}));
 }
 
@@ -117,6 +118,14 @@ TEST(RunFolder, OverwriteRemovesExactlyWhatViosfmWroteWithTheEarlierReportAndExp
     std::map<std::string, std::string> left = Contents(out);
     left.erase(kManifestFileName);
     left.erase(std::string("export/") + kManifestFileName);
+    // This run's log starts afresh, the earlier one removed with the run's
+    // outputs, when the run starts to write.
+    EXPECT_EQ(left.count("run.log"), 0u);
+    folder.MarkIncomplete();
+    const std::string log = ReadTextFile(out / kRunLogFileName);
+    EXPECT_EQ(log.find("an earlier run's log"), std::string::npos);
+    EXPECT_EQ(log.find("== viosfm "), 0u);
+    EXPECT_NE(log.find("--overwrite: removed the"), std::string::npos);
     EXPECT_EQ(left, (std::map<std::string, std::string>{
                         {"export/colmap_sparse/0/images.bin", "COLMAP's, the user's"},
                         {"notes.txt", "mine"},
@@ -150,6 +159,60 @@ TEST(RunFolder, ARunReplacingTheModelRemovesTheEarlierReport) {
   folder.MarkIncomplete();
   EXPECT_FALSE(fs::exists(out / "report.html"));
   EXPECT_FALSE(fs::exists(out / "summary.json"));
+}
+
+// The sections of run.log: the lines starting with "== viosfm ".
+std::vector<std::string> LogSections(const fs::path& out) {
+  std::vector<std::string> sections;
+  const std::string text = ReadTextFile(out / kRunLogFileName);
+  for (size_t at = text.find("== viosfm "); at != std::string::npos;
+       at = text.find("== viosfm ", at + 1)) {
+    const size_t next = text.find("== viosfm ", at + 1);
+    sections.push_back(text.substr(at, next == std::string::npos ? next : next - at));
+  }
+  return sections;
+}
+
+TEST(RunFolder, EveryRunAddsItsSectionToTheLogWrittenAsItGoes) {
+  const fs::path out = testing::MakeScratchFolder("run_folder_log") / "out";
+  WriteARun(Options(out));
+  // A run that stops on an error, and one killed (its log is on disk
+  // line by line; nothing closes it).
+  // A run refused before it writes leaves the folder as it was.
+  const auto before = Contents(out);
+  EXPECT_THROW(
+      {
+        const RunFolder folder(Options(out));
+        throw InputError("refused");
+      },
+      InputError);
+  EXPECT_EQ(Contents(out), before);
+  EXPECT_THROW(
+      {
+        const RunFolder folder(Options(out));
+        folder.MarkIncomplete();
+        VIOSFM_LOG(DEBUG) << "a debug line of the second run";
+        throw InputError("stops");
+      },
+      InputError);
+  {
+    const RunFolder folder(Options(out));
+    folder.MarkIncomplete();
+    VIOSFM_LOG(INFO) << "the third run's line";
+    const std::vector<std::string> sections = LogSections(out);
+    ASSERT_EQ(sections.size(), 3u);
+    EXPECT_NE(sections[2].find("the third run's line"), std::string::npos);
+  }
+  const std::vector<std::string> sections = LogSections(out);
+  ASSERT_EQ(sections.size(), 3u);
+  EXPECT_NE(sections[0].find("run: complete (summary.json written)"), std::string::npos)
+      << sections[0];
+  EXPECT_NE(sections[1].find("D "), std::string::npos);
+  EXPECT_NE(sections[1].find("a debug line of the second run"), std::string::npos);
+  EXPECT_NE(sections[1].find("run: stopped by an error"), std::string::npos);
+  EXPECT_NE(sections[2].find("an earlier run's log above"), std::string::npos);
+  // The manifest claims the log: a run killed before its end leaves it viosfm's.
+  EXPECT_TRUE(ReadFolderManifest(out)->Owns(kRunLogFileName));
 }
 
 TEST(RunFolder, RemoveAtomicWriteLeftovers) {

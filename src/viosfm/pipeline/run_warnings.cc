@@ -124,31 +124,4 @@ std::vector<std::string> RunWarnings(const PipelineSummary& s) {
   return lines;
 }
 
-std::string WrapLines(const std::string& text, size_t width) {
-  std::istringstream in(text);
-  std::string out, line;
-  bool first_line = true;
-  while (std::getline(in, line)) {
-    if (!first_line) out += '\n';
-    first_line = false;
-    std::string current;
-    size_t at = 0;
-    while (at < line.size()) {
-      size_t end = line.find(' ', at);
-      if (end == std::string::npos) end = line.size();
-      const std::string word = line.substr(at, end - at);
-      if (!current.empty() && current.size() + 1 + word.size() > width) {
-        out += current + '\n';
-        current = "  " + word;
-      } else {
-        current += (current.empty() && at == 0 ? "" : " ") + word;
-      }
-      at = end + 1;
-    }
-    out += current;
-  }
-  if (!text.empty() && text.back() == '\n') out += '\n';
-  return out;
-}
-
 }  // namespace viosfm

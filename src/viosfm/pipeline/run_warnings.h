@@ -11,14 +11,12 @@
 #include <vector>
 
 #include "viosfm/sensor/imu.h"
+#include "viosfm/util/logging.h"
 #include "viosfm/util/timestamp.h"
 
 namespace viosfm {
 
 struct PipelineSummary;
-
-// The console's widest line (characters).
-inline constexpr size_t kMaxConsoleLineLength = 120;
 
 // What viosfm's own VIO decided (ran false for an external VIO or none).
 struct OwnVioDecisions {
@@ -44,10 +42,5 @@ struct OwnVioDecisions {
 // printed indented); the metric scale's line always, the others when the
 // run decided so.
 std::vector<std::string> RunWarnings(const PipelineSummary& summary);
-
-// `text` with every line longer than `width` broken at spaces, the
-// continuation lines indented by two spaces (a word longer than the width
-// stays whole).
-std::string WrapLines(const std::string& text, size_t width = kMaxConsoleLineLength);
 
 }  // namespace viosfm

@@ -110,11 +110,5 @@ TEST(RunWarnings, ConsoleSummaryIsNarrowAndEndsWithTheDecisions) {
   EXPECT_EQ(json["warnings"][3], RunWarnings(s)[3]);
 }
 
-TEST(WrapLines, BreaksAtSpacesAndIndents) {
-  EXPECT_EQ(WrapLines("aaa bbb ccc ddd", 7), "aaa bbb\n  ccc\n  ddd");
-  EXPECT_EQ(WrapLines("short\nlines stay\n", 20), "short\nlines stay\n");
-  EXPECT_EQ(WrapLines(std::string(30, 'x') + " y", 10), std::string(30, 'x') + "\n  y");
-}
-
 }  // namespace
 }  // namespace viosfm

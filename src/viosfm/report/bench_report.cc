@@ -390,47 +390,75 @@ BenchResults ReadBenchResults(const fs::path& root) {
   return results;
 }
 
-std::string FormatBenchMarkdown(const BenchResults& results,
-                                const std::string& figures_relative_path) {
-  std::ostringstream md;
-  md << "# Benchmark suite results\n\n"
-     << "Written by `bench/run.sh` and `viosfm bench-report` (docs/benchmarks.md explains the "
-        "methods and how to reproduce them). Every number below was measured on this machine by "
-        "bench/run.sh with these settings (meta.txt of the results folder; date and version "
-        "of the last invocation):\n\n";
-  for (const auto& [key, value] : results.meta) md << "- " << key << ": " << value << "\n";
-  md << "\nATE: Sim(3)-aligned absolute trajectory error of the body trajectory against the "
-        "ground truth, over the frames each method registered; SE(3) ATE: the same aligned "
-        "without scale (shape and metric scale), and scale: the trajectory's scale (1 / the "
-        "Sim(3) alignment's; 1.02: 2 % too long). Time, CPU and memory: wall "
-        "clock, user + system CPU time and peak resident memory of the whole run (COLMAP: "
-        "feature extraction, matching and mapping; viosfm: every stage of `viosfm run`, "
-        "except where a note says the run reused another run's features and matches).\n";
+namespace {
 
-  // Runs made by another viosfm version than meta.txt's get a note.
-  std::string meta_version;
-  for (const auto& [key, value] : results.meta) {
-    if (key == "viosfm") meta_version = value;
-  }
-  std::vector<std::string> sequences;
-  for (const BenchRun& run : results.runs) {
-    if (std::find(sequences.begin(), sequences.end(), run.sequence) == sequences.end()) {
-      sequences.push_back(run.sequence);
+// The results page in named steps: the settings, a section a sequence (its
+// methods' table with notes, the floors, the trajectories' figures), the
+// batch-size and the sequence-length sweeps.
+class BenchMarkdown {
+ public:
+  BenchMarkdown(const BenchResults& results, const std::string& figures_relative_path)
+      : results_(results), figures_(figures_relative_path) {
+    for (const auto& [key, value] : results.meta) {
+      if (key == "viosfm") meta_version_ = value;
     }
   }
-  for (const std::string& sequence : sequences) {
-    md << "\n## " << sequence << "\n\n"
-       << "| method | registered / frames | ATE RMSE (mm) | ATE median (mm) | SE(3) ATE (mm) | "
-          "scale | time (s) | CPU (s) | peak memory (MiB) "
-          "|\n|---|---|---|---|---|---|---|---|---|\n";
+
+  std::string Format() {
+    WriteIntro();
+    for (const std::string& sequence : Sequences()) {
+      WriteMethods(sequence);
+      WriteFloors(sequence);
+      WriteFigures(sequence);
+    }
+    if (!results_.batch_size.empty()) WriteBatchSize();
+    if (!results_.length.empty()) WriteLength();
+    return md_.str();
+  }
+
+ private:
+  void WriteIntro() {
+    md_ << "# Benchmark suite results\n\n"
+        << "Written by `bench/run.sh` and `viosfm bench-report` (docs/benchmarks.md explains the "
+           "methods and how to reproduce them). Every number below was measured on this machine "
+           "by bench/run.sh with these settings (meta.txt of the results folder; date and "
+           "version of the last invocation):\n\n";
+    for (const auto& [key, value] : results_.meta) md_ << "- " << key << ": " << value << "\n";
+    md_ << "\nATE: Sim(3)-aligned absolute trajectory error of the body trajectory against the "
+           "ground truth, over the frames each method registered; SE(3) ATE: the same aligned "
+           "without scale (shape and metric scale), and scale: the trajectory's scale (1 / the "
+           "Sim(3) alignment's; 1.02: 2 % too long). Time, CPU and memory: wall "
+           "clock, user + system CPU time and peak resident memory of the whole run (COLMAP: "
+           "feature extraction, matching and mapping; viosfm: every stage of `viosfm run`, "
+           "except where a note says the run reused another run's features and matches).\n";
+  }
+
+  // The sequences in the order of their first run.
+  std::vector<std::string> Sequences() const {
+    std::vector<std::string> sequences;
+    for (const BenchRun& run : results_.runs) {
+      if (std::find(sequences.begin(), sequences.end(), run.sequence) == sequences.end()) {
+        sequences.push_back(run.sequence);
+      }
+    }
+    return sequences;
+  }
+
+  // The methods' table of `sequence`; runs that reused another run's data
+  // or were made by another viosfm version than meta.txt's get a note.
+  void WriteMethods(const std::string& sequence) {
+    md_ << "\n## " << sequence << "\n\n"
+        << "| method | registered / frames | ATE RMSE (mm) | ATE median (mm) | SE(3) ATE (mm) | "
+           "scale | time (s) | CPU (s) | peak memory (MiB) "
+           "|\n|---|---|---|---|---|---|---|---|---|\n";
     std::vector<std::string> notes;
-    for (const BenchRun& run : results.runs) {
+    for (const BenchRun& run : results_.runs) {
       if (run.sequence != sequence) continue;
       const bool is_vio = run.method == "vio" || run.method == "own_vio";
       std::string name = MethodName(run.method);
       // The emulated VIO is the simulator's; a dataset's is the user's --vio-trajectory.
       if (run.method == "vio" &&
-          !fs::is_regular_file(results.root / sequence / "sequence" / "simulation.yaml")) {
+          !fs::is_regular_file(results_.root / sequence / "sequence" / "simulation.yaml")) {
         name = "input VIO (--vio-trajectory)";
       }
       std::string marks;
@@ -440,84 +468,103 @@ std::string FormatBenchMarkdown(const BenchResults& results,
                         "remaining stages.");
         marks += " [" + std::to_string(notes.size()) + "]";
       }
-      if (!run.version.empty() && run.version != meta_version) {
+      if (!run.version.empty() && run.version != meta_version_) {
         notes.push_back(name + ": run with viosfm " + run.version + ".");
         marks += " [" + std::to_string(notes.size()) + "]";
       }
       name += marks;
-      md << "| " << name << " | " << (is_vio ? "-" : Registered(run)) << " | "
-         << Millimetres(run.ate_rmse_m) << " | " << Millimetres(run.ate_median_m) << " | "
-         << Millimetres(run.ate_se3_rmse_m) << " | " << Fixed(run.scale, 4) << " | "
-         << (is_vio ? "-" : Fixed(run.seconds, 1)) << " | "
-         << (is_vio ? "-" : Fixed(run.cpu_seconds, 1)) << " | "
-         << (is_vio ? "-" : Fixed(run.peak_memory_mb, 0)) << " |\n";
+      md_ << "| " << name << " | " << (is_vio ? "-" : Registered(run)) << " | "
+          << Millimetres(run.ate_rmse_m) << " | " << Millimetres(run.ate_median_m) << " | "
+          << Millimetres(run.ate_se3_rmse_m) << " | " << Fixed(run.scale, 4) << " | "
+          << (is_vio ? "-" : Fixed(run.seconds, 1)) << " | "
+          << (is_vio ? "-" : Fixed(run.cpu_seconds, 1)) << " | "
+          << (is_vio ? "-" : Fixed(run.peak_memory_mb, 0)) << " |\n";
     }
-    if (!notes.empty()) md << "\n";
-    for (size_t i = 0; i < notes.size(); ++i) md << "[" << i + 1 << "] " << notes[i] << "\n";
-    for (const auto& [floor_sequence, placements] : results.floors) {
+    if (!notes.empty()) md_ << "\n";
+    for (size_t i = 0; i < notes.size(); ++i) md_ << "[" << i + 1 << "] " << notes[i] << "\n";
+  }
+
+  void WriteFloors(const std::string& sequence) {
+    for (const auto& [floor_sequence, placements] : results_.floors) {
       if (floor_sequence != sequence) continue;
-      md << "\nFloors: mean height of each floor's registered frames after the Sim(3) "
-            "alignment, against the true height of the same frames (frames.csv), and the ATE of "
-            "each floor's frames aligned on their own.\n\n"
-         << "| method | floor | frames | height (m) | true height (m) | ATE RMSE within the "
-            "floor (mm) |\n|---|---|---|---|---|---|\n";
+      md_ << "\nFloors: mean height of each floor's registered frames after the Sim(3) "
+             "alignment, against the true height of the same frames (frames.csv), and the ATE of "
+             "each floor's frames aligned on their own.\n\n"
+          << "| method | floor | frames | height (m) | true height (m) | ATE RMSE within the "
+             "floor (mm) |\n|---|---|---|---|---|---|\n";
       for (const FloorPlacement& p : placements) {
         for (size_t i = 0; i < p.floors.size(); ++i) {
           const double ate = p.floor_ate_rmse_m[i];
-          md << "| " << MethodName(p.method) << " | " << p.floors[i] << " | " << p.num_frames[i]
-             << " | " << Fixed(p.mean_height_m[i], 2) << " | " << Fixed(p.true_mean_height_m[i], 2)
-             << " | " << (std::isnan(ate) ? std::string("n/a") : Millimetres(ate)) << " |\n";
+          md_ << "| " << MethodName(p.method) << " | " << p.floors[i] << " | " << p.num_frames[i]
+              << " | " << Fixed(p.mean_height_m[i], 2) << " | " << Fixed(p.true_mean_height_m[i], 2)
+              << " | " << (std::isnan(ate) ? std::string("n/a") : Millimetres(ate)) << " |\n";
         }
       }
     }
+  }
+
+  void WriteFigures(const std::string& sequence) {
     for (const char* method : {"viosfm", "colmap_same_pairs", "colmap_sequential"}) {
-      const BenchRun* run = FindRun(results, sequence, method);
-      if (run == nullptr || !DrawsTrajectory(results, *run)) continue;
+      const BenchRun* run = FindRun(results_, sequence, method);
+      if (run == nullptr || !DrawsTrajectory(results_, *run)) continue;
       const std::string stem = "bench_" + sequence + "_" + method;
-      md << "\n"
-         << MethodName(method) << ": ![top](" << figures_relative_path << "/" << stem
-         << "_top.svg) ![side](" << figures_relative_path << "/" << stem << "_side.svg)\n";
+      md_ << "\n"
+          << MethodName(method) << ": ![top](" << figures_ << "/" << stem << "_top.svg) ![side]("
+          << figures_ << "/" << stem << "_side.svg)\n";
     }
   }
-  if (!results.batch_size.empty()) {
-    md << "\n## Batch size (the paper's Fig. 6)\n\n"
-       << "On " << results.batch_size_sequence
-       << "; every batch size started from the features and verified matches of that "
-          "sequence's viosfm run, so the time is that of the VIO read, the mapping and the "
-          "outputs. The figures' reference lines are the methods of the "
-       << results.batch_size_sequence << " table.\n\n"
-       << "| batch size | registered / frames | ATE RMSE (mm) | time (s) | CPU (s) | mapping (s) "
-          "| viosfm |\n"
-       << "|---|---|---|---|---|---|---|\n";
-    for (const BenchRun& run : results.batch_size) {
-      md << "| " << run.method << " | " << Registered(run) << " | " << Millimetres(run.ate_rmse_m)
-         << " | " << Fixed(run.seconds, 1) << " | " << Fixed(run.cpu_seconds, 1) << " | "
-         << Fixed(run.mapping_seconds, 1) << " | "
-         << (run.version.empty() ? meta_version : run.version) << " |\n";
+
+  void WriteBatchSize() {
+    md_ << "\n## Batch size (the paper's Fig. 6)\n\n"
+        << "On " << results_.batch_size_sequence
+        << "; every batch size started from the features and verified matches of that "
+           "sequence's viosfm run, so the time is that of the VIO read, the mapping and the "
+           "outputs. The figures' reference lines are the methods of the "
+        << results_.batch_size_sequence << " table.\n\n"
+        << "| batch size | registered / frames | ATE RMSE (mm) | time (s) | CPU (s) | mapping (s) "
+           "| viosfm |\n"
+        << "|---|---|---|---|---|---|---|\n";
+    for (const BenchRun& run : results_.batch_size) {
+      md_ << "| " << run.method << " | " << Registered(run) << " | " << Millimetres(run.ate_rmse_m)
+          << " | " << Fixed(run.seconds, 1) << " | " << Fixed(run.cpu_seconds, 1) << " | "
+          << Fixed(run.mapping_seconds, 1) << " | "
+          << (run.version.empty() ? meta_version_ : run.version) << " |\n";
     }
-    md << "\n![ATE against batch size](" << figures_relative_path
-       << "/bench_batch_size_ate.svg) ![time against batch size](" << figures_relative_path
-       << "/bench_batch_size_time.svg)\n";
+    md_ << "\n![ATE against batch size](" << figures_
+        << "/bench_batch_size_ate.svg) ![time against batch size](" << figures_
+        << "/bench_batch_size_time.svg)\n";
   }
-  if (!results.length.empty()) {
-    md << "\n## Sequence length\n\n"
-       << "| frames | registered / frames | ATE RMSE (mm) | time (s) | CPU (s) | mapping (s) | "
-          "peak memory (MiB) | viosfm |\n|---|---|---|---|---|---|---|---|\n";
-    for (const BenchRun& run : results.length) {
-      md << "| " << run.method << " | " << Registered(run) << " | " << Millimetres(run.ate_rmse_m)
-         << " | " << Fixed(run.seconds, 1) << " | " << Fixed(run.cpu_seconds, 1) << " | "
-         << Fixed(run.mapping_seconds, 1) << " | " << Fixed(run.peak_memory_mb, 0) << " | "
-         << (run.version.empty() ? meta_version : run.version) << " |\n";
+
+  void WriteLength() {
+    md_ << "\n## Sequence length\n\n"
+        << "| frames | registered / frames | ATE RMSE (mm) | time (s) | CPU (s) | mapping (s) | "
+           "peak memory (MiB) | viosfm |\n|---|---|---|---|---|---|---|---|\n";
+    for (const BenchRun& run : results_.length) {
+      md_ << "| " << run.method << " | " << Registered(run) << " | " << Millimetres(run.ate_rmse_m)
+          << " | " << Fixed(run.seconds, 1) << " | " << Fixed(run.cpu_seconds, 1) << " | "
+          << Fixed(run.mapping_seconds, 1) << " | " << Fixed(run.peak_memory_mb, 0) << " | "
+          << (run.version.empty() ? meta_version_ : run.version) << " |\n";
     }
-    for (const BenchRun& run : results.length) {
+    for (const BenchRun& run : results_.length) {
       if (!run.reused.empty()) {
-        md << "\n"
-           << run.method << " frames: started from the " << run.reused
-           << "; its time is that of the remaining stages.\n";
+        md_ << "\n"
+            << run.method << " frames: started from the " << run.reused
+            << "; its time is that of the remaining stages.\n";
       }
     }
   }
-  return md.str();
+
+  const BenchResults& results_;
+  const std::string figures_;
+  std::string meta_version_;
+  std::ostringstream md_;
+};
+
+}  // namespace
+
+std::string FormatBenchMarkdown(const BenchResults& results,
+                                const std::string& figures_relative_path) {
+  return BenchMarkdown(results, figures_relative_path).Format();
 }
 
 void WriteBenchReport(const BenchResults& results, const fs::path& markdown_path,

@@ -448,159 +448,230 @@ std::vector<uint8_t> MakeThumbnailJpeg(const fs::path& path, int width) {
   return bytes;
 }
 
-std::string RenderViewer3d(const Viewer3dScene& scene, const Viewer3dOptions& options) {
-  if (const std::string error = options.Validate(); !error.empty()) {
-    throw InputError("invalid 3D view options: " + error);
-  }
-  const std::string three = ReadTextFile(options.three_js_dir / kThreeFile);
-  const std::string orbit = ReadTextFile(options.three_js_dir / kOrbitControlsFile);
+namespace {
 
-  // Decimated points and their colours.
-  const std::vector<size_t> kept = DecimationIndices(scene.points.size(), options.max_points);
-  const bool has_colors = !scene.colors.empty() && scene.colors.size() == scene.points.size();
-  std::vector<Eigen::Vector3d> points;
-  std::vector<uint8_t> colors;
-  for (const size_t i : kept) {
-    points.push_back(scene.points[i]);
-    if (has_colors) colors.insert(colors.end(), scene.colors[i].data(), scene.colors[i].data() + 3);
+// The 3D view's HTML in named steps: the points decimated, the path
+// coloured, the heights and the floor grid, the camera frustums with their
+// thumbnails, then the scene's JSON and the page's controls and legends.
+class Viewer3dRenderer {
+ public:
+  Viewer3dRenderer(const Viewer3dScene& scene, const Viewer3dOptions& options)
+      : scene_(scene), options_(options) {}
+
+  std::string Render() {
+    const std::string three = ReadTextFile(options_.three_js_dir / kThreeFile);
+    const std::string orbit = ReadTextFile(options_.three_js_dir / kOrbitControlsFile);
+    DecimatePoints();
+    const Extent extent = SceneExtent(points_, scene_.path);
+    center_ = extent.center;
+    radius_ = extent.radius;
+    ColorPath();
+    PlaceHeightsAndGrid();
+    AddFrustums();
+    std::ostringstream out;
+    WriteControls(out);
+    WriteLegends(out);
+    out << "<pre id=\"viewer3d-selftest\" hidden></pre>\n</div>\n";
+    out << "<script>\n" << ScriptSafe(three) << "\n</script>\n";
+    out << "<script>\n" << ScriptSafe(orbit) << "\n</script>\n";
+    out << "<script>\nvar VIOSFM_SCENE = " << ScriptSafe(SceneJson().dump()) << ";\n"
+        << kViewerScript << "</script>\n";
+    return out.str();
   }
-  const Extent extent = SceneExtent(points, scene.path);
-  const Eigen::Vector3d& center = extent.center;
-  const double radius = extent.radius;
+
+ private:
+  // Decimated points and their colours.
+  void DecimatePoints() {
+    const std::vector<size_t> kept = DecimationIndices(scene_.points.size(), options_.max_points);
+    has_colors_ = !scene_.colors.empty() && scene_.colors.size() == scene_.points.size();
+    for (const size_t i : kept) {
+      points_.push_back(scene_.points[i]);
+      if (has_colors_) {
+        colors_.insert(colors_.end(), scene_.colors[i].data(), scene_.colors[i].data() + 3);
+      }
+    }
+  }
 
   // Path colours: the error on the report's colour map, else one colour.
-  double max_error = 0.0;
-  for (const double e : scene.path_errors_m) max_error = std::max(max_error, e);
-  const bool by_error = scene.path_errors_m.size() == scene.path.size() && !scene.path.empty();
-  std::vector<uint8_t> path_colors;
-  for (size_t i = 0; i < scene.path.size(); ++i) {
-    const Color c = by_error ? ColorMap(max_error > 0 ? scene.path_errors_m[i] / max_error : 0.0)
-                             : Color{255, 255, 255};
-    path_colors.insert(path_colors.end(), {c.r, c.g, c.b});
+  void ColorPath() {
+    for (const double e : scene_.path_errors_m) max_error_ = std::max(max_error_, e);
+    by_error_ = scene_.path_errors_m.size() == scene_.path.size() && !scene_.path.empty();
+    for (size_t i = 0; i < scene_.path.size(); ++i) {
+      const Color c = by_error_
+                          ? ColorMap(max_error_ > 0 ? scene_.path_errors_m[i] / max_error_ : 0.0)
+                          : Color{255, 255, 255};
+      path_colors_.insert(path_colors_.end(), {c.r, c.g, c.b});
+    }
   }
 
   // Heights: the colour bar spans the 2nd to 98th percentile; the floor grid
   // lies at the 2nd (below the cameras when there are no points).
-  std::vector<double> heights;
-  for (const Eigen::Vector3d& p : points) heights.push_back(p.z());
-  if (heights.empty()) {
-    for (const Eigen::Vector3d& p : scene.path) heights.push_back(p.z() - 1.0);
+  void PlaceHeightsAndGrid() {
+    std::vector<double> heights;
+    for (const Eigen::Vector3d& p : points_) heights.push_back(p.z());
+    if (heights.empty()) {
+      for (const Eigen::Vector3d& p : scene_.path) heights.push_back(p.z() - 1.0);
+    }
+    std::sort(heights.begin(), heights.end());
+    height_min_ = heights.empty() ? center_.z() : heights[heights.size() * 2 / 100];
+    height_max_ = heights.empty() ? center_.z() + 1.0 : heights[heights.size() * 98 / 100];
+    if (!(height_max_ > height_min_)) height_max_ = height_min_ + 1.0;
+    spacing_ = GridSpacing(radius_);
+    grid_half_ = std::ceil(1.6 * radius_ / spacing_) * spacing_;
+    // Grid lines on multiples of the spacing in world coordinates.
+    grid_center_ = Eigen::Vector2d(std::round(center_.x() / spacing_) * spacing_,
+                                   std::round(center_.y() / spacing_) * spacing_);
   }
-  std::sort(heights.begin(), heights.end());
-  const double height_min = heights.empty() ? center.z() : heights[heights.size() * 2 / 100];
-  double height_max = heights.empty() ? center.z() + 1.0 : heights[heights.size() * 98 / 100];
-  if (!(height_max > height_min)) height_max = height_min + 1.0;
-  const double spacing = GridSpacing(radius);
-  const double grid_half = std::ceil(1.6 * radius / spacing) * spacing;
-  // Grid lines on multiples of the spacing in world coordinates.
-  const Eigen::Vector2d grid_center(std::round(center.x() / spacing) * spacing,
-                                    std::round(center.y() / spacing) * spacing);
 
   // Frustums in the camera's own shape, a fifth of a grid cell deep, spread
-  // so that they do not overlap.
-  const double depth = 0.2 * spacing;
-  const std::vector<size_t> frame_indices =
-      SpreadFrames(scene.frames, 1.5 * depth, kMinFrustumTurnDeg, options.max_cameras);
-  const Camera& cam = scene.camera;
-  const bool has_intrinsics = cam.width > 0 && cam.height > 0 && cam.HasValidParams();
-  const double w = has_intrinsics ? static_cast<double>(cam.width) : 4.0;
-  const double h = has_intrinsics ? static_cast<double>(cam.height) : 3.0;
-  const auto ray = [&](double u, double v) -> Eigen::Vector3d {
-    if (!has_intrinsics) return Eigen::Vector3d((u - 0.5 * w) / w, (v - 0.5 * h) / w, 1.0);
-    const Eigen::Vector2d xy = ImageToCam(cam, Eigen::Vector2d(u, v));
-    return Eigen::Vector3d(xy.x(), xy.y(), 1.0);
-  };
-  const std::array<Eigen::Vector3d, 6> corners = {
-      Eigen::Vector3d::Zero(), ray(0, 0), ray(w, 0), ray(w, h), ray(0, h), ray(0.5 * w, -0.25 * h)};
-  std::vector<Eigen::Vector3d> frustum_points;
-  nlohmann::json frames = nlohmann::json::array();
-  for (const size_t i : frame_indices) {
-    const Viewer3dFrame& frame = scene.frames[i];
-    const Rigid3d world_from_cam = frame.cam_from_world.Inverse();
-    for (const Eigen::Vector3d& corner : corners) {
-      frustum_points.push_back(world_from_cam * (depth * corner));
+  // so that they do not overlap; each frame with its thumbnail.
+  void AddFrustums() {
+    const double depth = 0.2 * spacing_;
+    const std::vector<size_t> frame_indices =
+        SpreadFrames(scene_.frames, 1.5 * depth, kMinFrustumTurnDeg, options_.max_cameras);
+    const std::array<Eigen::Vector3d, 6> corners = FrustumCorners();
+    frames_ = nlohmann::json::array();
+    for (const size_t i : frame_indices) {
+      const Viewer3dFrame& frame = scene_.frames[i];
+      const Rigid3d world_from_cam = frame.cam_from_world.Inverse();
+      for (const Eigen::Vector3d& corner : corners) {
+        frustum_points_.push_back(world_from_cam * (depth * corner));
+      }
+      const std::vector<uint8_t> thumbnail =
+          MakeThumbnailJpeg(frame.image_path, options_.thumbnail_width);
+      frames_.push_back(
+          {{"name", frame.name},
+           {"time_s", frame.time_s ? nlohmann::json(*frame.time_s) : nlohmann::json()},
+           {"image_path", frame.image_path.string()},
+           {"thumbnail", Base64(thumbnail)}});
     }
-    const std::vector<uint8_t> thumbnail =
-        MakeThumbnailJpeg(frame.image_path, options.thumbnail_width);
-    frames.push_back({{"name", frame.name},
-                      {"time_s", frame.time_s ? nlohmann::json(*frame.time_s) : nlohmann::json()},
-                      {"image_path", frame.image_path.string()},
-                      {"thumbnail", Base64(thumbnail)}});
   }
 
-  nlohmann::json data = {{"width", options.width},
-                         {"height", options.height},
-                         {"radius", radius},
-                         {"center", {center.x(), center.y(), center.z()}},
-                         {"origin", {-center.x(), -center.y(), -center.z()}},
-                         {"total_points", scene.points.size()},
-                         {"num_points", points.size()},
-                         {"has_point_colors", has_colors},
-                         {"height_min", height_min - center.z()},
-                         {"height_max", height_max - center.z()},
-                         {"num_path", scene.path.size()},
-                         {"num_ground_truth", scene.ground_truth_path.size()},
-                         {"gravity_up", scene.gravity_up},
-                         {"grid",
-                          {{"spacing", spacing},
-                           {"size", 2.0 * grid_half},
-                           {"center", {grid_center.x() - center.x(), grid_center.y() - center.y()}},
-                           {"z", height_min - center.z()}}},
-                         {"points", Float32Base64(points, center)},
-                         {"point_colors", Base64(colors)},
-                         {"path", Float32Base64(scene.path, center)},
-                         {"path_colors", Base64(path_colors)},
-                         {"ground_truth", Float32Base64(scene.ground_truth_path, center)},
-                         {"frustums", Float32Base64(frustum_points, center)},
-                         {"frames", frames}};
+  // The frustum's apex, the image's corners at unit depth and the tick
+  // above its top edge (a 4:3 image without intrinsics).
+  std::array<Eigen::Vector3d, 6> FrustumCorners() const {
+    const Camera& cam = scene_.camera;
+    const bool has_intrinsics = cam.width > 0 && cam.height > 0 && cam.HasValidParams();
+    const double w = has_intrinsics ? static_cast<double>(cam.width) : 4.0;
+    const double h = has_intrinsics ? static_cast<double>(cam.height) : 3.0;
+    const auto ray = [&](double u, double v) -> Eigen::Vector3d {
+      if (!has_intrinsics) return Eigen::Vector3d((u - 0.5 * w) / w, (v - 0.5 * h) / w, 1.0);
+      const Eigen::Vector2d xy = ImageToCam(cam, Eigen::Vector2d(u, v));
+      return Eigen::Vector3d(xy.x(), xy.y(), 1.0);
+    };
+    return {Eigen::Vector3d::Zero(), ray(0, 0), ray(w, 0), ray(w, h), ray(0, h),
+            ray(0.5 * w, -0.25 * h)};
+  }
 
-  std::ostringstream out;
-  out << "<style>" << kViewerStyle << "</style>\n<div id=\"viewer3d\">\n";
-  out << "<div class=\"controls\">Colour the points by <label><input type=\"radio\" "
-         "name=\"viewer3d-color\" value=\"height\""
-      << (has_colors ? "" : " checked") << "> height</label><label><input type=\"radio\" "
-      << "name=\"viewer3d-color\" value=\"image\"" << (has_colors ? " checked" : " disabled")
-      << "> the images' colour</label> &middot; Show ";
-  for (const auto& [id, text] :
-       {std::pair{"points", "points"}, std::pair{"cameras", "cameras"},
-        std::pair{"path", "camera path"}, std::pair{"grid", "grid and axes"}}) {
-    out << "<label><input type=\"checkbox\" id=\"viewer3d-show-" << id << "\" checked> " << text
-        << "</label>";
+  nlohmann::json SceneJson() const {
+    const Eigen::Vector3d& c = center_;
+    return {{"width", options_.width},
+            {"height", options_.height},
+            {"radius", radius_},
+            {"center", {c.x(), c.y(), c.z()}},
+            {"origin", {-c.x(), -c.y(), -c.z()}},
+            {"total_points", scene_.points.size()},
+            {"num_points", points_.size()},
+            {"has_point_colors", has_colors_},
+            {"height_min", height_min_ - c.z()},
+            {"height_max", height_max_ - c.z()},
+            {"num_path", scene_.path.size()},
+            {"num_ground_truth", scene_.ground_truth_path.size()},
+            {"gravity_up", scene_.gravity_up},
+            {"grid",
+             {{"spacing", spacing_},
+              {"size", 2.0 * grid_half_},
+              {"center", {grid_center_.x() - c.x(), grid_center_.y() - c.y()}},
+              {"z", height_min_ - c.z()}}},
+            {"points", Float32Base64(points_, c)},
+            {"point_colors", Base64(colors_)},
+            {"path", Float32Base64(scene_.path, c)},
+            {"path_colors", Base64(path_colors_)},
+            {"ground_truth", Float32Base64(scene_.ground_truth_path, c)},
+            {"frustums", Float32Base64(frustum_points_, c)},
+            {"frames", frames_}};
   }
-  out << "</div>\n<div class=\"stage\">\n<canvas id=\"viewer3d-canvas\" width=\"" << options.width
-      << "\" height=\"" << options.height << "\" style=\"width:" << options.width
-      << "px;height:" << options.height
-      << "px;max-width:100%;border:1px solid #ccc;touch-action:none;display:block\"></canvas>\n";
-  out << "<figure id=\"viewer3d-frame\" hidden><button type=\"button\" id=\"viewer3d-frame-close\">"
-         "close</button><figcaption id=\"viewer3d-frame-caption\"></figcaption>"
-         "<img id=\"viewer3d-frame-image\" alt=\"the frame's image\"></figure>\n</div>\n";
-  out << "<p id=\"viewer3d-status\" class=\"meta\">The 3D view needs JavaScript and WebGL.</p>\n";
-  out << "<p id=\"viewer3d-legend\" class=\"meta\">Grid: " << Number(spacing)
-      << " m cells at z = " << Number(height_min)
-      << " m (the floor: 2 % of the points lie lower); axes at the "
-      << "world's origin, " << Number(spacing) << " m long: x red, y green, z blue"
-      << (scene.gravity_up ? " (up, against gravity)" : " (the model's; no gravity: images only)")
-      << ". Cameras orange, the clicked one yellow; the tick marks the image's top edge.</p>\n";
-  out << "<p id=\"viewer3d-height-legend\" class=\"meta\">Points by height: " << Number(height_min)
-      << " m <span style=\"background:linear-gradient(to right";
-  for (int i = 0; i <= 8; ++i) out << ", " << ColorMap(i / 8.0).Hex();
-  out << ")\"></span> " << Number(height_max) << " m</p>\n";
-  if (by_error) {
-    out << "<p class=\"meta\">Camera path coloured by position error: <span "
-           "style=\"display:inline-block;width:160px;height:10px;vertical-align:middle;"
-           "background:linear-gradient(to right";
-    for (int i = 0; i <= 4; ++i) out << ", " << ColorMap(i / 4.0).Hex();
-    out << ")\"></span> 0 to " << Number(max_error)
-        << " m (Sim(3)-aligned); ground truth in grey.</p>\n";
-  } else {
-    out << "<p class=\"meta\">Camera path in white.</p>\n";
+
+  // The colouring and show/hide controls, the canvas and the frame's figure.
+  void WriteControls(std::ostringstream& out) const {
+    out << "<style>" << kViewerStyle << "</style>\n<div id=\"viewer3d\">\n";
+    out << "<div class=\"controls\">Colour the points by <label><input type=\"radio\" "
+           "name=\"viewer3d-color\" value=\"height\""
+        << (has_colors_ ? "" : " checked") << "> height</label><label><input type=\"radio\" "
+        << "name=\"viewer3d-color\" value=\"image\"" << (has_colors_ ? " checked" : " disabled")
+        << "> the images' colour</label> &middot; Show ";
+    for (const auto& [id, text] :
+         {std::pair{"points", "points"}, std::pair{"cameras", "cameras"},
+          std::pair{"path", "camera path"}, std::pair{"grid", "grid and axes"}}) {
+      out << "<label><input type=\"checkbox\" id=\"viewer3d-show-" << id << "\" checked> " << text
+          << "</label>";
+    }
+    out << "</div>\n<div class=\"stage\">\n<canvas id=\"viewer3d-canvas\" width=\""
+        << options_.width << "\" height=\"" << options_.height
+        << "\" style=\"width:" << options_.width << "px;height:" << options_.height
+        << "px;max-width:100%;border:1px solid #ccc;touch-action:none;display:block\"></canvas>\n";
+    out << "<figure id=\"viewer3d-frame\" hidden><button type=\"button\" "
+           "id=\"viewer3d-frame-close\">"
+           "close</button><figcaption id=\"viewer3d-frame-caption\"></figcaption>"
+           "<img id=\"viewer3d-frame-image\" alt=\"the frame's image\"></figure>\n</div>\n";
+    out << "<p id=\"viewer3d-status\" class=\"meta\">The 3D view needs JavaScript and WebGL.</p>\n";
   }
-  out << "<pre id=\"viewer3d-selftest\" hidden></pre>\n</div>\n";
-  out << "<script>\n" << ScriptSafe(three) << "\n</script>\n";
-  out << "<script>\n" << ScriptSafe(orbit) << "\n</script>\n";
-  out << "<script>\nvar VIOSFM_SCENE = " << ScriptSafe(data.dump()) << ";\n"
-      << kViewerScript << "</script>\n";
-  return out.str();
+
+  // The grid's, the heights' and the path's legends.
+  void WriteLegends(std::ostringstream& out) const {
+    out << "<p id=\"viewer3d-legend\" class=\"meta\">Grid: " << Number(spacing_)
+        << " m cells at z = " << Number(height_min_)
+        << " m (the floor: 2 % of the points lie lower); axes at the "
+        << "world's origin, " << Number(spacing_) << " m long: x red, y green, z blue"
+        << (scene_.gravity_up ? " (up, against gravity)"
+                              : " (the model's; no gravity: images only)")
+        << ". Cameras orange, the clicked one yellow; the tick marks the image's top edge.</p>\n";
+    out << "<p id=\"viewer3d-height-legend\" class=\"meta\">Points by height: "
+        << Number(height_min_) << " m <span style=\"background:linear-gradient(to right";
+    for (int i = 0; i <= 8; ++i) out << ", " << ColorMap(i / 8.0).Hex();
+    out << ")\"></span> " << Number(height_max_) << " m</p>\n";
+    if (by_error_) {
+      out << "<p class=\"meta\">Camera path coloured by position error: <span "
+             "style=\"display:inline-block;width:160px;height:10px;vertical-align:middle;"
+             "background:linear-gradient(to right";
+      for (int i = 0; i <= 4; ++i) out << ", " << ColorMap(i / 4.0).Hex();
+      out << ")\"></span> 0 to " << Number(max_error_)
+          << " m (Sim(3)-aligned); ground truth in grey.</p>\n";
+    } else {
+      out << "<p class=\"meta\">Camera path in white.</p>\n";
+    }
+  }
+
+  const Viewer3dScene& scene_;
+  const Viewer3dOptions& options_;
+
+  std::vector<Eigen::Vector3d> points_;
+  std::vector<uint8_t> colors_;
+  bool has_colors_ = false;
+  Eigen::Vector3d center_ = Eigen::Vector3d::Zero();
+  double radius_ = 0.0;
+
+  double max_error_ = 0.0;
+  bool by_error_ = false;
+  std::vector<uint8_t> path_colors_;
+
+  double height_min_ = 0.0;
+  double height_max_ = 0.0;
+  double spacing_ = 0.0;
+  double grid_half_ = 0.0;
+  Eigen::Vector2d grid_center_ = Eigen::Vector2d::Zero();
+
+  std::vector<Eigen::Vector3d> frustum_points_;
+  nlohmann::json frames_;
+};
+
+}  // namespace
+
+std::string RenderViewer3d(const Viewer3dScene& scene, const Viewer3dOptions& options) {
+  if (const std::string error = options.Validate(); !error.empty()) {
+    throw InputError("invalid 3D view options: " + error);
+  }
+  return Viewer3dRenderer(scene, options).Render();
 }
 
 }  // namespace viosfm

@@ -82,8 +82,8 @@ std::vector<std::vector<ImageScore>> RetrieveSimilarImageScores(
   for (const std::vector<ImageScore>& result : results) num_retrieved += result.size();
   VIOSFM_LOG(INFO) << "Retrieval: " << image_ids.size() << " images, vocabulary of "
                    << vocabulary->num_words() << " words (" << source << "), " << num_retrieved
-                   << " retrieved neighbours (up to " << options.num_neighbors << " per image), "
-                   << timer.ElapsedSeconds() << " s";
+                   << " retrieved neighbours, " << timer.ElapsedSeconds() << " s" << LogDetails()
+                   << " (up to " << options.num_neighbors << " per image)";
   return results;
 }
 

@@ -52,6 +52,8 @@ void ProgressBar::Finish() {
   finished_ = true;
   if (draw_) {
     Draw(true);
+    LogToFileOnly(LogLevel::kINFO,
+                  FormatLine(label_, done_.load(), total_, timer_.ElapsedSeconds(), 0));
   } else {
     VIOSFM_LOG(INFO) << FormatLine(label_, done_.load(), total_, timer_.ElapsedSeconds(), 0);
   }

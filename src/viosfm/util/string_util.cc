@@ -67,4 +67,8 @@ std::string FormatDouble(const char* format, double value) {
   return buffer;
 }
 
+std::string FormatRoundTrip(double value) {
+  return FormatDouble("%.17g", value);
+}
+
 }  // namespace viosfm

@@ -19,6 +19,9 @@ std::string ToLower(std::string_view text);
 // `value` printed with a printf format holding one floating-point
 // conversion ("%.2f"), up to 63 characters.
 std::string FormatDouble(const char* format, double value);
+// `value` as "%.17g": the shortest printf form that always reads back to
+// the same double.
+std::string FormatRoundTrip(double value);
 
 // Whole-string numeric parses; nullopt if anything but the number is there.
 std::optional<double> ParseDouble(std::string_view text);
