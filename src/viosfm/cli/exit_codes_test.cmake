@@ -138,9 +138,11 @@ execute_process(COMMAND "${VIOSFM}" --log-level info run "${WORK}/dataset" --max
                         --out "${WORK}/out_realtime" --realtime
                         --set mapper.ba_window_batches=3
                 RESULT_VARIABLE result ERROR_VARIABLE stderr OUTPUT_VARIABLE stdout)
+# (the console breaks lines longer than 120 characters: joined again here)
+string(REGEX REPLACE "\n +" " " log "${stderr}${stdout}")
 set(pattern "N1 10, N2 5, [0-9.]+ Hz, batch size 50, BA window 3, max 2000 features, guided matching,")
-if(NOT "${stderr}${stdout}" MATCHES "${pattern}")
-  message(FATAL_ERROR "run --realtime: the log '${stderr}${stdout}' does not match '${pattern}'")
+if(NOT log MATCHES "${pattern}")
+  message(FATAL_ERROR "run --realtime: the log '${log}' does not match '${pattern}'")
 endif()
 # The default (--preset realtime; --realtime the same) lets the feature
 # budget and the texture decide the feature count and the rate: 1000
@@ -151,8 +153,9 @@ foreach(extra "" "--realtime;--rate;5" "--set;frame_selection.target_rate_hz=5")
   execute_process(COMMAND "${VIOSFM}" --log-level info run "${WORK}/dataset" ${extra}
                           --out "${WORK}/out_probe"
                   RESULT_VARIABLE result ERROR_VARIABLE stderr OUTPUT_VARIABLE stdout)
-  string(REGEX MATCH "max [0-9]+ features, [^,]*," decision "${stderr}${stdout}")
-  string(REGEX MATCH "real-time budget: [^\n]*: [0-9]+ a frame" budget "${stderr}${stdout}")
+  string(REGEX REPLACE "\n +" " " log "${stderr}${stdout}")
+  string(REGEX MATCH "max [0-9]+ features, [^,]*," decision "${log}")
+  string(REGEX MATCH "real-time budget: [^\n]*: [0-9]+ a frame" budget "${log}")
   if(extra STREQUAL "")
     set(expected "max 8192 features, rate and features by texture,")
     set(expected_budget "at 10 frames a second: 1000 a frame")
