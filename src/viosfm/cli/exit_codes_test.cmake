@@ -133,14 +133,14 @@ if(EXISTS "${WORK}/out_readout")
   message(FATAL_ERROR "run with a bad readout left ${WORK}/out_readout behind")
 endif()
 # run --realtime: its settings, overridden by a flag given with it (whatever
-# the flags' order) and by --set; the run's first log line says which apply.
+# the flags' order) and by --set; the run's first line in its run.log says
+# which apply (the console shows its start).
 execute_process(COMMAND "${VIOSFM}" --log-level info run "${WORK}/dataset" --max-features 2000
                         --out "${WORK}/out_realtime" --realtime
                         --set mapper.ba_window_batches=3
                 RESULT_VARIABLE result ERROR_VARIABLE stderr OUTPUT_VARIABLE stdout)
-# (the console breaks lines longer than 120 characters: joined again here)
-string(REGEX REPLACE "\n +" " " log "${stderr}${stdout}")
-set(pattern "N1 10, N2 5, [0-9.]+ Hz, batch size 50, BA window 3, max 2000 features, guided matching,")
+file(READ "${WORK}/out_realtime/run.log" log)
+set(pattern "N1 10, N2 5, [0-9.]+ Hz, max 2000 features, batch size 50, BA window 3, guided matching,")
 if(NOT log MATCHES "${pattern}")
   message(FATAL_ERROR "run --realtime: the log '${log}' does not match '${pattern}'")
 endif()
@@ -153,14 +153,14 @@ foreach(extra "" "--realtime;--rate;5" "--set;frame_selection.target_rate_hz=5")
   execute_process(COMMAND "${VIOSFM}" --log-level info run "${WORK}/dataset" ${extra}
                           --out "${WORK}/out_probe"
                   RESULT_VARIABLE result ERROR_VARIABLE stderr OUTPUT_VARIABLE stdout)
-  string(REGEX REPLACE "\n +" " " log "${stderr}${stdout}")
-  string(REGEX MATCH "max [0-9]+ features, [^,]*," decision "${log}")
+  file(READ "${WORK}/out_probe/run.log" log)
+  string(REGEX MATCH "max [0-9]+ features, batch size 50, BA window 4, [^,]*," decision "${log}")
   string(REGEX MATCH "real-time budget: [^\n]*: [0-9]+ a frame" budget "${log}")
   if(extra STREQUAL "")
-    set(expected "max 8192 features, rate and features by texture,")
+    set(expected "max 8192 features, batch size 50, BA window 4, rate and features by texture,")
     set(expected_budget "at 10 frames a second: 1000 a frame")
   else()
-    set(expected "max 8192 features, guided matching,")
+    set(expected "max 8192 features, batch size 50, BA window 4, guided matching,")
     set(expected_budget "at 5 frames a second: 2000 a frame")
   endif()
   if(NOT decision STREQUAL expected)

@@ -132,7 +132,8 @@ void RunMatch(MatchArguments args) {
                         << " s); pairs across them are verified by RANSAC only";
   }
   const VerificationResult result = RunVerification(sequence, vio, &database, options, segments);
-  VIOSFM_LOG(INFO) << "match: " << FormatVerificationSummary(result.summary) << "; database holds "
+  VIOSFM_LOG(INFO) << "match: " << FormatVerificationHeadline(result.summary) << LogDetails()
+                   << " (" << FormatVerificationSummary(result.summary) << "); database holds "
                    << database.NumMatchedImagePairs() << " matched and "
                    << database.NumVerifiedImagePairs() << " verified pairs";
 

@@ -79,16 +79,16 @@ void RunRun(RunArguments args) {
   if (const std::string error = options.Validate(); !error.empty()) {
     throw InputError("invalid run options: " + error);
   }
-  VIOSFM_LOG(INFO) << "run: " << args.dataset << " -> " << args.out << " (N1 "
+  VIOSFM_LOG(INFO) << "run: " << args.dataset << " -> " << args.out << ": N1 "
                    << options.verification.pairs.num_temporal_neighbors << ", N2 "
                    << options.verification.pairs.num_retrieval_neighbors << ", "
-                   << options.frame_selection.target_rate_hz << " Hz, batch size "
-                   << options.mapper.batch_size
+                   << options.frame_selection.target_rate_hz << " Hz, max "
+                   << options.sift.max_num_features << " features" << LogDetails()
+                   << ", batch size " << options.mapper.batch_size
                    << (options.mapper.ba_window_batches > 0
                            ? ", BA window " + std::to_string(options.mapper.ba_window_batches)
                            : std::string())
-                   << ", max " << options.sift.max_num_features << " features, "
-                   << (options.texture_probe.enable ? "rate and features by texture, " : "")
+                   << ", " << (options.texture_probe.enable ? "rate and features by texture, " : "")
                    << (options.verification.guided_matching ? "guided matching, " : "")
                    << (options.follow   ? "followed as recorded, "
                        : options.stream ? "streamed, "
@@ -98,8 +98,7 @@ void RunRun(RunArguments args) {
                            ? std::string("RPC, ") +
                                  PriorWeightingName(options.mapper.ba.prior_weighting) +
                                  " weighting"
-                           : std::string("no RPC"))
-                   << ")";
+                           : std::string("no RPC"));
   const PipelineSummary summary = RunPipeline(options);
   std::cout << summary.ToString() << "\n";
 }

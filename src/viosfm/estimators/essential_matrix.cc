@@ -8,13 +8,12 @@
 #include <complex>
 #include <cstdint>
 
+#include "viosfm/geometry/epipolar.h"
 #include "viosfm/geometry/lie.h"
 #include "viosfm/util/errors.h"
 
 namespace viosfm {
 namespace {
-
-using RowMajorMatrix3d = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>;
 
 // Polynomials of degree <= 3 in (x, y, z), as coefficients of 20 monomials in
 // graded order: the ten cubic monomials first, then the ten of degree <= 2
@@ -83,10 +82,6 @@ Eigen::MatrixXd EpipolarConstraints(const std::vector<Eigen::Vector2d>& points1,
   return constraints;
 }
 
-Eigen::Matrix3d FromRowMajor(const Eigen::Matrix<double, 9, 1>& entries) {
-  return Eigen::Map<const RowMajorMatrix3d>(entries.data());
-}
-
 }  // namespace
 
 std::vector<Eigen::Matrix3d> EssentialMatrixFivePoint(const std::vector<Eigen::Vector2d>& points1,
@@ -99,7 +94,7 @@ std::vector<Eigen::Matrix3d> EssentialMatrixFivePoint(const std::vector<Eigen::V
                                               Eigen::ComputeFullV);
   const Eigen::MatrixXd& v = svd.matrixV();
   std::array<Eigen::Matrix3d, 4> basis;
-  for (int k = 0; k < 4; ++k) basis[k] = FromRowMajor(v.col(5 + k));
+  for (int k = 0; k < 4; ++k) basis[k] = Matrix3FromRowMajor(v.col(5 + k));
 
   // Entries of E as linear polynomials.
   Polynomial e[3][3];
@@ -181,7 +176,7 @@ std::vector<Eigen::Matrix3d> EssentialMatrixEightPoint(
   if (points1.size() < 8) return {};
   const Eigen::JacobiSVD<Eigen::MatrixXd> svd(EpipolarConstraints(points1, points2),
                                               Eigen::ComputeFullV);
-  const Eigen::Matrix3d linear = FromRowMajor(svd.matrixV().col(8));
+  const Eigen::Matrix3d linear = Matrix3FromRowMajor(svd.matrixV().col(8));
   const Eigen::JacobiSVD<Eigen::Matrix3d> projection(linear,
                                                      Eigen::ComputeFullU | Eigen::ComputeFullV);
   const Eigen::Matrix3d essential = projection.matrixU() * Eigen::Vector3d(1, 1, 0).asDiagonal() *

@@ -5,12 +5,11 @@
 #include <algorithm>
 #include <cmath>
 
+#include "viosfm/geometry/epipolar.h"
 #include "viosfm/util/errors.h"
 
 namespace viosfm {
 namespace {
-
-using RowMajorMatrix3d = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>;
 
 // Null-space basis of the epipolar constraints on Hartley-normalised points.
 Eigen::MatrixXd NormalizedConstraints(const std::vector<Eigen::Vector2d>& points1,
@@ -26,10 +25,6 @@ Eigen::MatrixXd NormalizedConstraints(const std::vector<Eigen::Vector2d>& points
     }
   }
   return constraints;
-}
-
-Eigen::Matrix3d FromRowMajor(const Eigen::VectorXd& entries) {
-  return Eigen::Map<const RowMajorMatrix3d>(entries.data());
 }
 
 Eigen::Matrix3d Denormalize(const Eigen::Matrix3d& normalized, const Eigen::Matrix3d& transform1,
@@ -62,7 +57,7 @@ std::vector<Eigen::Matrix3d> FundamentalMatrixEightPoint(
   const Eigen::JacobiSVD<Eigen::MatrixXd> svd(
       NormalizedConstraints(points1, points2, points1.size(), transform1, transform2),
       Eigen::ComputeFullV);
-  const Eigen::Matrix3d linear = FromRowMajor(svd.matrixV().col(8));
+  const Eigen::Matrix3d linear = Matrix3FromRowMajor(svd.matrixV().col(8));
   // Rank 2: the nearest matrix in Frobenius norm with a zero singular value.
   const Eigen::JacobiSVD<Eigen::Matrix3d> rank(linear, Eigen::ComputeFullU | Eigen::ComputeFullV);
   Eigen::Vector3d singular = rank.singularValues();
@@ -82,8 +77,8 @@ std::vector<Eigen::Matrix3d> FundamentalMatrixSevenPoint(
   const Eigen::Matrix3d transform2 = HartleyNormalization(first2);
   const Eigen::JacobiSVD<Eigen::MatrixXd> svd(
       NormalizedConstraints(first1, first2, 7, transform1, transform2), Eigen::ComputeFullV);
-  const Eigen::Matrix3d f1 = FromRowMajor(svd.matrixV().col(7));
-  const Eigen::Matrix3d f2 = FromRowMajor(svd.matrixV().col(8));
+  const Eigen::Matrix3d f1 = Matrix3FromRowMajor(svd.matrixV().col(7));
+  const Eigen::Matrix3d f2 = Matrix3FromRowMajor(svd.matrixV().col(8));
   // det(f2 + a (f1 - f2)) = c3 a^3 + c2 a^2 + c1 a + c0, recovered exactly
   // from its values at a = 0, 1, -1, 2.
   const Eigen::Matrix3d difference = f1 - f2;

@@ -13,12 +13,6 @@
 namespace viosfm {
 namespace {
 
-constexpr double kRadToDeg = 180.0 / M_PI;
-
-double AngleDeg(const Eigen::Quaterniond& rotation) {
-  return QuaternionLog(rotation.normalized()).norm() * kRadToDeg;
-}
-
 // A longer gap between two gyro samples leaves an interval uncompared
 // (the IMU dropped out there).
 constexpr timestamp_ns_t kMaxGyroGapNs = 25'000'000;
@@ -192,7 +186,7 @@ GyroCheckResult CheckRotationsAgainstGyro(const Trajectory& world_from_cam,
       const Eigen::Quaterniond gyro = IntegrateGyro(intervals[i].gyro, bias);
       // The camera-IMU rotation turns the body's rotation error into the
       // camera's without changing its angle.
-      errors.push_back(AngleDeg(gyro.conjugate() * trajectory_rotations[i]));
+      errors.push_back(RotationAngleDeg(gyro.conjugate() * trajectory_rotations[i]));
     }
     return errors;
   };
@@ -229,7 +223,7 @@ GyroCheckResult CheckRotationsAgainstGyro(const Trajectory& world_from_cam,
     GyroCheckInterval checked;
     checked.from_ns = world_from_cam.poses[intervals[i].from].timestamp_ns;
     checked.to_ns = world_from_cam.poses[intervals[i].to].timestamp_ns;
-    checked.gyro_angle_deg = AngleDeg(IntegrateGyro(intervals[i].gyro, result.gyro_bias));
+    checked.gyro_angle_deg = RotationAngleDeg(IntegrateGyro(intervals[i].gyro, result.gyro_bias));
     checked.error_deg = errors[i];
     result.intervals.push_back(checked);
   }

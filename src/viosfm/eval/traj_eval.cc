@@ -6,16 +6,12 @@
 #include <numeric>
 
 #include "viosfm/geometry/alignment.h"
+#include "viosfm/geometry/lie.h"
 #include "viosfm/util/errors.h"
 #include "viosfm/util/string_util.h"
 
 namespace viosfm {
 namespace {
-
-// Rotation angle of a unit quaternion, in degrees, in [0, 180].
-double AngleDeg(const Eigen::Quaterniond& q) {
-  return 2.0 * std::atan2(q.vec().norm(), std::abs(q.w())) * 180.0 / std::numbers::pi;
-}
 
 std::vector<timestamp_ns_t> Stamps(const Trajectory& trajectory) {
   std::vector<timestamp_ns_t> stamps(trajectory.size());
@@ -145,7 +141,7 @@ RelativePoseErrors ComputeRelativeErrors(const std::vector<Rigid3d>& est_aligned
     const Rigid3d est_motion = est_aligned[i].Inverse() * est_aligned[j];
     const Rigid3d error = ref_motion.Inverse() * est_motion;
     result.translation_errors_m.push_back(error.translation.norm());
-    result.rotation_errors_deg.push_back(AngleDeg(error.rotation));
+    result.rotation_errors_deg.push_back(RotationAngleDeg(error.rotation));
   }
   result.translation_m = ComputeErrorStatistics(result.translation_errors_m);
   result.rotation_deg = ComputeErrorStatistics(result.rotation_errors_deg);
@@ -267,7 +263,7 @@ EvaluationResult EvaluateTrajectories(const Trajectory& est_input, const Traject
     est_aligned[k] = result.ref_from_est.TransformPose(est_poses[k]);
     result.translation_errors_m[k] = (ref_positions[k] - est_aligned[k].translation).norm();
     result.rotation_errors_deg[k] =
-        AngleDeg(ref_poses[k].rotation.inverse() * est_aligned[k].rotation);
+        RotationAngleDeg(ref_poses[k].rotation.inverse() * est_aligned[k].rotation);
   }
   result.ate_translation_m = ComputeErrorStatistics(result.translation_errors_m);
   result.ate_rotation_deg = ComputeErrorStatistics(result.rotation_errors_deg);

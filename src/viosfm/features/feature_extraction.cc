@@ -100,10 +100,11 @@ std::vector<Task> RegisterImages(const Sequence& sequence, ColmapDatabase* datab
 
 std::string FeatureExtractionSummary::ToString() const {
   std::ostringstream text;
-  text << num_images << " images (" << num_extracted << " extracted";
-  if (num_extracted_before > 0) text << " (" << num_extracted_before << " beside the VIO)";
-  text << ", " << num_skipped << " already stored), " << std::fixed << std::setprecision(1)
-       << MeanFeatures() << " features per image, " << std::setprecision(2) << seconds << " s";
+  text << num_images << " images, " << std::fixed << std::setprecision(1) << MeanFeatures()
+       << " features per image, " << std::setprecision(2) << seconds << " s (" << num_extracted
+       << " extracted";
+  if (num_extracted_before > 0) text << ", " << num_extracted_before << " of them beside the VIO";
+  text << "; " << num_skipped << " already stored)";
   return text.str();
 }
 

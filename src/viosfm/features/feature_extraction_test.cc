@@ -74,7 +74,7 @@ TEST(FeatureExtraction, WritesEveryImageAndResumes) {
   EXPECT_EQ(summary.num_extracted, 2u);
   EXPECT_EQ(summary.num_skipped, 2u);
   EXPECT_GT(summary.MeanFeatures(), 300.0);
-  EXPECT_THAT(summary.ToString(), ::testing::HasSubstr("4 images (2 extracted, 2 already stored)"));
+  EXPECT_THAT(summary.ToString(), ::testing::HasSubstr("(2 extracted; 2 already stored)"));
 
   EXPECT_EQ(database.NumCameras(), 1u);
   EXPECT_EQ(database.NumImages(), 4u);
@@ -131,7 +131,7 @@ TEST(FeatureExtraction, TakesFeaturesExtractedBefore) {
   EXPECT_EQ(summary.num_extracted, 4u);
   EXPECT_EQ(summary.num_extracted_before, 1u);
   EXPECT_EQ(num_decoded, 3);
-  EXPECT_THAT(summary.ToString(), ::testing::HasSubstr("4 extracted (1 beside the VIO)"));
+  EXPECT_THAT(summary.ToString(), ::testing::HasSubstr("4 extracted, 1 of them beside the VIO"));
   const image_t id =
       database.ReadImageWithName(sequence.images[1].path.filename().string())->image_id;
   const FeatureKeypoints keypoints = database.ReadKeypoints(id);

@@ -55,4 +55,11 @@ double SampsonError(const Eigen::Matrix3d& fundamental, const Eigen::Vector2d& x
   return numerator * numerator / denominator;
 }
 
+Eigen::Matrix3d Matrix3FromRowMajor(const Eigen::Ref<const Eigen::VectorXd>& entries) {
+  Eigen::Matrix3d matrix;
+  matrix << entries(0), entries(1), entries(2), entries(3), entries(4), entries(5), entries(6),
+      entries(7), entries(8);
+  return matrix;
+}
+
 }  // namespace viosfm

@@ -39,4 +39,8 @@ double SymmetricEpipolarDistance(const Eigen::Matrix3d& fundamental, const Eigen
 double SampsonError(const Eigen::Matrix3d& fundamental, const Eigen::Vector2d& x1,
                     const Eigen::Vector2d& x2);
 
+// The 3x3 matrix whose rows are entries[0..2], [3..5], [6..8]: the null
+// vector of a linear epipolar system as a matrix.
+Eigen::Matrix3d Matrix3FromRowMajor(const Eigen::Ref<const Eigen::VectorXd>& entries);
+
 }  // namespace viosfm

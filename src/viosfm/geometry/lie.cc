@@ -103,4 +103,8 @@ Matrix6d Se3Adjoint(const Rigid3d& transform) {
   return adjoint;
 }
 
+double RotationAngleDeg(const Eigen::Quaterniond& rotation) {
+  return 2.0 * std::atan2(rotation.vec().norm(), std::abs(rotation.w())) * kDegreesPerRadian;
+}
+
 }  // namespace viosfm

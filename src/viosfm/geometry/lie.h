@@ -34,6 +34,9 @@ Eigen::Quaterniond So3Exp(const Eigen::Vector3d& omega);
 // Rotation vector of a (not necessarily normalised) quaternion; the angle is
 // in [0, pi]. Accurate near the identity and near a half turn.
 Eigen::Vector3d So3Log(const Eigen::Quaterniond& rotation);
+// The rotation's angle in degrees, in [0, 180] (any quaternion norm > 0).
+double RotationAngleDeg(const Eigen::Quaterniond& rotation);
+inline constexpr double kDegreesPerRadian = 180.0 / M_PI;
 
 Eigen::Matrix3d So3RightJacobian(const Eigen::Vector3d& omega);
 Eigen::Matrix3d So3RightJacobianInverse(const Eigen::Vector3d& omega);

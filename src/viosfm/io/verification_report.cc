@@ -93,7 +93,7 @@ void WriteVerificationJson(const std::filesystem::path& path, const Verification
   s["seconds_total"] = summary.seconds_total;
   s["seconds_pair_generation"] = summary.seconds_pair_generation;
   s["seconds_loading"] = summary.seconds_loading;
-  s["seconds_writing"] = summary.seconds_writing;
+  s["seconds_deciding"] = summary.seconds_deciding;
   s["thread_seconds_matching"] = summary.seconds_matching;
   s["thread_seconds_vio"] = summary.seconds_vio;
   s["thread_seconds_ransac"] = summary.seconds_ransac;

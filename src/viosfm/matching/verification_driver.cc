@@ -66,6 +66,14 @@ std::vector<std::pair<std::string, std::string>> VerificationOptions::ToKeyValue
   return OptionsToKeyValues(*this);
 }
 
+std::string FormatVerificationHeadline(const VerificationSummary& s) {
+  std::ostringstream out;
+  out << s.num_accepted << " of " << s.num_pairs
+      << " pairs accepted; rejected: " << s.num_vio_rejected << " by the VIO, "
+      << s.num_ransac_rejected << " by RANSAC, " << s.num_no_matches << " without matches";
+  return out.str();
+}
+
 std::string FormatVerificationSummary(const VerificationSummary& s) {
   std::ostringstream out;
   out << s.num_pairs << " pairs of " << s.num_images << " images (" << s.num_images_with_prior
@@ -80,9 +88,10 @@ std::string FormatVerificationSummary(const VerificationSummary& s) {
   if (s.num_resumed > 0) out << "; " << s.num_resumed << " already stored";
   if (s.num_reverified > 0) out << "; " << s.num_reverified << " re-verified from stored matches";
   out << std::fixed << std::setprecision(2) << "; " << s.seconds_total << " s (pairs "
-      << s.seconds_pair_generation << " s, loading " << s.seconds_loading << " s, writing "
-      << s.seconds_writing << " s; thread-seconds: matching " << s.seconds_matching << ", VIO "
-      << s.seconds_vio << ", RANSAC " << s.seconds_ransac << ")";
+      << s.seconds_pair_generation << " s, loading " << s.seconds_loading
+      << " s, matching, verifying and storing " << s.seconds_deciding
+      << " s; thread-seconds: matching " << s.seconds_matching << ", VIO " << s.seconds_vio
+      << ", RANSAC " << s.seconds_ransac << ")";
   return out.str();
 }
 
@@ -311,7 +320,7 @@ VerificationResult RunVerification(const Sequence& sequence,
     // Match, verify (in parallel over the batch's pairs) and store.
     step_timer.Start();
     std::vector<ImagePairMatches> accepted = decider.Decide(batch);
-    summary.seconds_writing += step_timer.ElapsedSeconds();
+    summary.seconds_deciding += step_timer.ElapsedSeconds();
     if (on_verified) on_verified(std::move(accepted), pending_from_ns[end]);
     progress.Update(static_cast<int64_t>(end - begin));
   }
@@ -333,7 +342,8 @@ VerificationResult RunVerification(const Sequence& sequence,
   summary.seconds_vio = counts.seconds_vio;
   summary.seconds_ransac = counts.seconds_ransac;
   summary.seconds_total = total_timer.ElapsedSeconds();
-  VIOSFM_LOG(INFO) << "verification: " << FormatVerificationSummary(summary);
+  VIOSFM_LOG(INFO) << "verification: " << FormatVerificationHeadline(summary) << LogDetails()
+                   << " (" << FormatVerificationSummary(summary) << ")";
   return result;
 }
 

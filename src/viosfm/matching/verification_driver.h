@@ -308,7 +308,11 @@ double DriftEpipolarBandPx(const Eigen::Matrix<double, 6, 6>& covariance,
                            const Rigid3d& cam2_from_cam1, double focal_length_px,
                            const VerificationOptions& options);
 
-// "120 pairs: 80 accepted, 30 rejected by VIO, 10 by RANSAC, ... ; 3.2 s"
+// "80 of 120 pairs accepted; rejected: 30 by the VIO, 10 by RANSAC, 0 without
+// matches": the console's line.
+std::string FormatVerificationHeadline(const VerificationSummary& summary);
+// "120 pairs of 40 images (...): 80 accepted, 30 rejected by VIO, ...; 3.2 s
+// (...)": every count and time.
 std::string FormatVerificationSummary(const VerificationSummary& summary);
 
 }  // namespace viosfm

@@ -127,7 +127,10 @@ void ResolveRateByTexture(const Sequence& sequence, FrameCache* frame_cache,
     message << " (" << std::fixed << std::setprecision(1) << summary->texture_probe.seconds
             << " s)";
     summary->texture_probe_message = message.str();
-    VIOSFM_LOG(INFO) << "run: texture " << summary->texture_probe_message;
+    VIOSFM_LOG(INFO) << "run: texture " << (summary->texture_probe.textured ? "rich" : "not rich")
+                     << ": " << options->frame_selection.target_rate_hz << " Hz, "
+                     << options->sift.max_num_features << " features a frame" << LogDetails()
+                     << " (" << summary->texture_probe_message << ")";
   }
   summary->frame_rate_hz = options->frame_selection.target_rate_hz;
   summary->max_num_features = options->sift.max_num_features;

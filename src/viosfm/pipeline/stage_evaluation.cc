@@ -176,7 +176,10 @@ TrajectoryEvaluation EvaluateStage(const Sequence& sequence, const SelectedFrame
   for (const SequenceImage& image : sequence.images) image_stamps.push_back(image.timestamp_ns);
   result.all_frames = PoseAllFrames(image_stamps, posed.model_frames, vio.world_from_body,
                                     vio.segments, max_vio_time_difference_ns);
-  VIOSFM_LOG(INFO) << "run: every image posed: " << result.all_frames.counts.ToString();
+  const AllFramePoseCounts& counts = result.all_frames.counts;
+  VIOSFM_LOG(INFO) << "run: every image posed: " << counts.num_images - counts.num_unposed()
+                   << " of " << counts.num_images << " images have a pose" << LogDetails() << " ("
+                   << counts.ToString() << ")";
   // The own VIO's rig holds the time offset it estimated; an external
   // VIO's run uses the calibration's.
   CheckAgainstGyro(sequence, vio.own_vio_rig.value_or(frames.sequence.rig), &result);

@@ -1,5 +1,6 @@
 #include "viosfm/pipeline/stage_mapping.h"
 
+#include <iomanip>
 #include <sstream>
 
 #include "viosfm/pipeline/frame_ingest.h"
@@ -81,7 +82,6 @@ Reconstruction MapStage(const BatchedMapperInput& input, const Sequence& sequenc
 
 void FinishMapping(const Sequence& sequence, const VioPoses& vio, const PipelineOptions& options,
                    PipelineSummary* summary, Reconstruction* reconstruction) {
-  VIOSFM_LOG(INFO) << "run: mapper " << summary->mapper.ToString();
   if (sequence.camera_guessed) {
     const Camera& camera = reconstruction->GetCamera(sequence.rig.camera.camera_id);
     std::ostringstream params;
@@ -105,7 +105,11 @@ void FinishMapping(const Sequence& sequence, const VioPoses& vio, const Pipeline
     if (summary->metric_scale.vio_scale_refuted) {
       VIOSFM_LOG(WARNING) << "run: metric scale: " << summary->metric_scale.message;
     } else {
-      VIOSFM_LOG(INFO) << "run: metric scale: " << summary->metric_scale.message;
+      const MetricScaleSummary& scale = summary->metric_scale;
+      VIOSFM_LOG(INFO) << std::fixed << std::setprecision(5)
+                       << "run: metric scale: the model times " << scale.applied_scale << " (+- "
+                       << std::setprecision(2) << 100.0 * scale.applied_scale_sigma << " %)"
+                       << LogDetails() << "; " << scale.message;
     }
   }
   summary->num_frames_registered = static_cast<size_t>(summary->mapper.num_supported);

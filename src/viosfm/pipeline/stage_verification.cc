@@ -1,7 +1,5 @@
 #include "viosfm/pipeline/stage_verification.h"
 
-#include "viosfm/util/logging.h"
-
 namespace viosfm {
 
 VerificationResult VerifyPairsStage(const SelectedFrames& frames, const VioPoses& vio,
@@ -17,7 +15,6 @@ VerificationResult VerifyPairsStage(const SelectedFrames& frames, const VioPoses
   VerificationResult result =
       RunVerification(frames.sequence, frame_poses, database,
                       options.EffectiveVerificationOptions(), frames.rolling_shutter, on_verified);
-  VIOSFM_LOG(INFO) << "run: verification " << FormatVerificationSummary(result.summary);
   return result;
 }
 

@@ -166,7 +166,8 @@ VioPoses PosesOfOwnVio(const Sequence& sequence, const PipelineOptions& options,
   VIOSFM_LOG(INFO) << "run: own VIO: " << poses.world_from_body.size() << " of "
                    << result.frames.size() << " frames posed in " << segment + 1 << " segment(s) ("
                    << result.summary.num_resets << " reset(s)), " << result.summary.cpu_seconds
-                   << " CPU s (output in " << (options.output_folder / "vio").string() << ")";
+                   << " CPU s" << LogDetails() << " (output in "
+                   << (options.output_folder / "vio").string() << ")";
   CompleteVioPoses(&poses);
   return poses;
 }

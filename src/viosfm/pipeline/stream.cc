@@ -238,7 +238,8 @@ void Stream::TakeVerification(double verification_seconds) {
               return std::make_pair(a.image_id1, a.image_id2) <
                      std::make_pair(b.image_id1, b.image_id2);
             });
-  VIOSFM_LOG(INFO) << "run: verification " << FormatVerificationSummary(summary);
+  VIOSFM_LOG(INFO) << "run: verification: " << FormatVerificationHeadline(summary) << LogDetails()
+                   << " (" << FormatVerificationSummary(summary) << ")";
 }
 
 void Stream::OpenDatabase() {

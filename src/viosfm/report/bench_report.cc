@@ -188,17 +188,10 @@ std::vector<BenchRun> ReadSweep(const fs::path& folder, const std::string& seque
   return result;
 }
 
-std::string Fixed(const std::optional<double>& value, int decimals) {
-  if (!value) return "n/a";
-  char buffer[64];
-  std::snprintf(buffer, sizeof(buffer), "%.*f", decimals, *value);
-  return buffer;
-}
-
 // An ATE in metres as millimetres with two decimals ("n/a" without one).
 std::string Millimetres(const std::optional<double>& metres) {
   if (!metres) return "n/a";
-  return Fixed(*metres * 1e3, 2);
+  return FormatFixedOrNa(*metres * 1e3, 2);
 }
 
 std::string Registered(const BenchRun& run) {
@@ -475,10 +468,10 @@ class BenchMarkdown {
       name += marks;
       md_ << "| " << name << " | " << (is_vio ? "-" : Registered(run)) << " | "
           << Millimetres(run.ate_rmse_m) << " | " << Millimetres(run.ate_median_m) << " | "
-          << Millimetres(run.ate_se3_rmse_m) << " | " << Fixed(run.scale, 4) << " | "
-          << (is_vio ? "-" : Fixed(run.seconds, 1)) << " | "
-          << (is_vio ? "-" : Fixed(run.cpu_seconds, 1)) << " | "
-          << (is_vio ? "-" : Fixed(run.peak_memory_mb, 0)) << " |\n";
+          << Millimetres(run.ate_se3_rmse_m) << " | " << FormatFixedOrNa(run.scale, 4) << " | "
+          << (is_vio ? "-" : FormatFixedOrNa(run.seconds, 1)) << " | "
+          << (is_vio ? "-" : FormatFixedOrNa(run.cpu_seconds, 1)) << " | "
+          << (is_vio ? "-" : FormatFixedOrNa(run.peak_memory_mb, 0)) << " |\n";
     }
     if (!notes.empty()) md_ << "\n";
     for (size_t i = 0; i < notes.size(); ++i) md_ << "[" << i + 1 << "] " << notes[i] << "\n";
@@ -496,8 +489,9 @@ class BenchMarkdown {
         for (size_t i = 0; i < p.floors.size(); ++i) {
           const double ate = p.floor_ate_rmse_m[i];
           md_ << "| " << MethodName(p.method) << " | " << p.floors[i] << " | " << p.num_frames[i]
-              << " | " << Fixed(p.mean_height_m[i], 2) << " | " << Fixed(p.true_mean_height_m[i], 2)
-              << " | " << (std::isnan(ate) ? std::string("n/a") : Millimetres(ate)) << " |\n";
+              << " | " << FormatFixedOrNa(p.mean_height_m[i], 2) << " | "
+              << FormatFixedOrNa(p.true_mean_height_m[i], 2) << " | "
+              << (std::isnan(ate) ? std::string("n/a") : Millimetres(ate)) << " |\n";
         }
       }
     }
@@ -526,9 +520,9 @@ class BenchMarkdown {
         << "|---|---|---|---|---|---|---|\n";
     for (const BenchRun& run : results_.batch_size) {
       md_ << "| " << run.method << " | " << Registered(run) << " | " << Millimetres(run.ate_rmse_m)
-          << " | " << Fixed(run.seconds, 1) << " | " << Fixed(run.cpu_seconds, 1) << " | "
-          << Fixed(run.mapping_seconds, 1) << " | "
-          << (run.version.empty() ? meta_version_ : run.version) << " |\n";
+          << " | " << FormatFixedOrNa(run.seconds, 1) << " | "
+          << FormatFixedOrNa(run.cpu_seconds, 1) << " | " << FormatFixedOrNa(run.mapping_seconds, 1)
+          << " | " << (run.version.empty() ? meta_version_ : run.version) << " |\n";
     }
     md_ << "\n![ATE against batch size](" << figures_
         << "/bench_batch_size_ate.svg) ![time against batch size](" << figures_
@@ -541,8 +535,9 @@ class BenchMarkdown {
            "peak memory (MiB) | viosfm |\n|---|---|---|---|---|---|---|---|\n";
     for (const BenchRun& run : results_.length) {
       md_ << "| " << run.method << " | " << Registered(run) << " | " << Millimetres(run.ate_rmse_m)
-          << " | " << Fixed(run.seconds, 1) << " | " << Fixed(run.cpu_seconds, 1) << " | "
-          << Fixed(run.mapping_seconds, 1) << " | " << Fixed(run.peak_memory_mb, 0) << " | "
+          << " | " << FormatFixedOrNa(run.seconds, 1) << " | "
+          << FormatFixedOrNa(run.cpu_seconds, 1) << " | " << FormatFixedOrNa(run.mapping_seconds, 1)
+          << " | " << FormatFixedOrNa(run.peak_memory_mb, 0) << " | "
           << (run.version.empty() ? meta_version_ : run.version) << " |\n";
     }
     for (const BenchRun& run : results_.length) {

@@ -54,13 +54,6 @@ std::string Escape(const std::string& text) {
   return XmlEscape(text);
 }
 
-std::string Fixed(std::optional<double> value, int decimals) {
-  if (!value || !std::isfinite(*value)) return "n/a";
-  char buffer[64];
-  std::snprintf(buffer, sizeof(buffer), "%.*f", decimals, *value);
-  return buffer;
-}
-
 std::string Integer(std::optional<double> value) {
   if (!value || !std::isfinite(*value)) return "n/a";
   char buffer[64];
@@ -310,7 +303,7 @@ void SummarySection(const RunData& run, Page* page) {
   const std::optional<double> registered = Number(s, "frames/registered");
   std::string registered_text = Integer(registered);
   if (frames_in && registered && *frames_in > 0) {
-    registered_text += " (" + Fixed(100.0 * *registered / *frames_in, 1) + " %)";
+    registered_text += " (" + FormatFixedOrNa(100.0 * *registered / *frames_in, 1) + " %)";
   }
   std::vector<std::pair<std::string, std::string>> rows = {
       {"frames in", Integer(frames_in)},
@@ -325,8 +318,8 @@ void SummarySection(const RunData& run, Page* page) {
        Integer(Number(s, "vio/segments")) + " (" + Integer(Number(s, "vio/segments_joined")) + ")"},
       {"3D points", Integer(Number(s, "points"))},
       {"observations", Integer(Number(s, "observations"))},
-      {"mean track length", Fixed(Number(s, "mean_track_length"), 2)},
-      {"mean reprojection error (px)", Fixed(Number(s, "mean_reprojection_error_px"), 3)},
+      {"mean track length", FormatFixedOrNa(Number(s, "mean_track_length"), 2)},
+      {"mean reprojection error (px)", FormatFixedOrNa(Number(s, "mean_reprojection_error_px"), 3)},
   };
   if (Text(s, "texture_probe/probed") == "true") {
     rows.push_back({"frame rate and features, from the texture", Text(s, "texture_probe/message")});
@@ -341,29 +334,29 @@ void SummarySection(const RunData& run, Page* page) {
              Integer(Number(s, "all_frames/unposed")) + " without a pose"});
   }
   if (run.ate.Any()) {
-    rows.push_back({"ATE RMSE, viosfm (m)", Fixed(run.ate.rmse, 4)});
-    rows.push_back({"ATE median, viosfm (m)", Fixed(run.ate.median, 4)});
+    rows.push_back({"ATE RMSE, viosfm (m)", FormatFixedOrNa(run.ate.rmse, 4)});
+    rows.push_back({"ATE median, viosfm (m)", FormatFixedOrNa(run.ate.median, 4)});
   } else {
     rows.push_back({"ATE, viosfm", "no ground truth"});
   }
   if (run.vio_ate.Any()) {
-    rows.push_back({"ATE RMSE, input VIO (m)", Fixed(run.vio_ate.rmse, 4)});
-    rows.push_back({"ATE median, input VIO (m)", Fixed(run.vio_ate.median, 4)});
+    rows.push_back({"ATE RMSE, input VIO (m)", FormatFixedOrNa(run.vio_ate.rmse, 4)});
+    rows.push_back({"ATE median, input VIO (m)", FormatFixedOrNa(run.vio_ate.median, 4)});
   } else {
     rows.push_back({"ATE, input VIO", "no ground truth"});
   }
   if (Find(s, "gyro_check/rmse_deg")) {
     rows.push_back({"rotations against the gyro over 1 s (deg; the model uses the gyro)",
-                    "RMSE " + Fixed(Number(s, "gyro_check/rmse_deg"), 3) + ", max " +
-                        Fixed(Number(s, "gyro_check/max_deg"), 3) + " (" +
-                        Fixed(Number(s, "gyro_check/worst_from_s"), 2) + " to " +
-                        Fixed(Number(s, "gyro_check/worst_to_s"), 2) + " s), " +
+                    "RMSE " + FormatFixedOrNa(Number(s, "gyro_check/rmse_deg"), 3) + ", max " +
+                        FormatFixedOrNa(Number(s, "gyro_check/max_deg"), 3) + " (" +
+                        FormatFixedOrNa(Number(s, "gyro_check/worst_from_s"), 2) + " to " +
+                        FormatFixedOrNa(Number(s, "gyro_check/worst_to_s"), 2) + " s), " +
                         Integer(Number(s, "gyro_check/intervals")) + " intervals"});
   } else if (Find(s, "gyro_check/message")) {
     rows.push_back({"rotations against the gyro", Text(s, "gyro_check/message")});
   }
-  rows.push_back({"total time (s)", Fixed(Number(s, "total_seconds"), 2)});
-  rows.push_back({"peak memory (MB)", Fixed(Number(s, "peak_memory_mb"), 1)});
+  rows.push_back({"total time (s)", FormatFixedOrNa(Number(s, "total_seconds"), 2)});
+  rows.push_back({"peak memory (MB)", FormatFixedOrNa(Number(s, "peak_memory_mb"), 1)});
   page->KeyValueTable("summary-table", rows);
   if (const Json* unposed = Find(s, "unposed_frames");
       unposed && unposed->is_array() && !unposed->empty()) {
@@ -387,8 +380,9 @@ void AccuracySection(const RunData& run, Page* page, TrajectoryFigures* figures_
         rows.push_back({name, "n/a", "n/a", "n/a", "n/a", "n/a", "", ""});
         continue;
       }
-      rows.push_back({name, Fixed(ate->rmse, 4), Fixed(ate->mean, 4), Fixed(ate->median, 4),
-                      Fixed(ate->max, 4), Integer(ate->count), ate->alignment, ate->source});
+      rows.push_back({name, FormatFixedOrNa(ate->rmse, 4), FormatFixedOrNa(ate->mean, 4),
+                      FormatFixedOrNa(ate->median, 4), FormatFixedOrNa(ate->max, 4),
+                      Integer(ate->count), ate->alignment, ate->source});
     }
     page->Table("ate-table",
                 {"trajectory", "ATE RMSE (m)", "mean (m)", "median (m)", "max (m)", "poses",
@@ -403,11 +397,11 @@ void AccuracySection(const RunData& run, Page* page, TrajectoryFigures* figures_
          {std::pair{"viosfm", "eval/metric"}, std::pair{"input VIO", "eval/vio_metric"}}) {
       const std::string k = key;
       const std::optional<double> scale_error = Number(run.summary, k + "/scale_error");
-      rows.push_back({name, Fixed(Number(run.summary, k + "/ate_sim3_rmse_m"), 4),
-                      Fixed(Number(run.summary, k + "/ate_se3_rmse_m"), 4),
-                      Fixed(Number(run.summary, k + "/ate_posyaw_rmse_m"), 4),
-                      Fixed(Number(run.summary, k + "/scale"), 4),
-                      scale_error ? Fixed(100.0 * *scale_error, 2) : std::string("n/a")});
+      rows.push_back({name, FormatFixedOrNa(Number(run.summary, k + "/ate_sim3_rmse_m"), 4),
+                      FormatFixedOrNa(Number(run.summary, k + "/ate_se3_rmse_m"), 4),
+                      FormatFixedOrNa(Number(run.summary, k + "/ate_posyaw_rmse_m"), 4),
+                      FormatFixedOrNa(Number(run.summary, k + "/scale"), 4),
+                      scale_error ? FormatFixedOrNa(100.0 * *scale_error, 2) : std::string("n/a")});
     }
     page->Paragraph(
         "Metric accuracy: the ATE RMSE after each alignment (Sim(3): the shape; SE(3): shape "
@@ -434,10 +428,10 @@ void AccuracySection(const RunData& run, Page* page, TrajectoryFigures* figures_
                figures_out->estimate_alignment_error);
   } else {
     const EvaluationResult& e = *figures_out->estimate_evaluation;
-    page->Paragraph("The estimate is aligned to the ground truth by " +
-                    AlignmentModeName(e.alignment) + " (scale " + Fixed(e.ref_from_est.scale, 4) +
-                    ", " + std::to_string(e.pairs.size()) +
-                    " associated poses) and coloured by its position error.");
+    page->Paragraph(
+        "The estimate is aligned to the ground truth by " + AlignmentModeName(e.alignment) +
+        " (scale " + FormatFixedOrNa(e.ref_from_est.scale, 4) + ", " +
+        std::to_string(e.pairs.size()) + " associated poses) and coloured by its position error.");
   }
   page->Figures({RenderSvg(figures_out->top_view), RenderSvg(figures_out->side_view)});
 }
@@ -600,7 +594,8 @@ void VerificationSection(const RunData& run, Page* page) {
     rows.push_back(
         {"pairs without VIO prior", Integer(Number(v, "summary/num_pairs_without_prior"))});
     rows.push_back({"pairs resumed from the database", Integer(Number(v, "summary/num_resumed"))});
-    rows.push_back({"verification time (s)", Fixed(Number(v, "summary/seconds_total"), 2)});
+    rows.push_back(
+        {"verification time (s)", FormatFixedOrNa(Number(v, "summary/seconds_total"), 2)});
   }
   page->KeyValueTable("pairs-table", rows);
 
@@ -632,8 +627,8 @@ void VerificationSection(const RunData& run, Page* page) {
   Series kept, rejected;
   kept.kind = rejected.kind = SeriesKind::kBars;
   kept.bar_width = rejected.bar_width = bin;
-  kept.label = "ratio <= " + Fixed(threshold, 2);
-  rejected.label = "ratio > " + Fixed(threshold, 2);
+  kept.label = "ratio <= " + FormatFixedOrNa(threshold, 2);
+  rejected.label = "ratio > " + FormatFixedOrNa(threshold, 2);
   kept.color = {31, 119, 180};
   rejected.color = {214, 39, 40};
   for (int k = 0; k < kHistogramBins; ++k) {
@@ -644,10 +639,10 @@ void VerificationSection(const RunData& run, Page* page) {
   }
   figure.series = {kept, rejected};
   figure.vertical_lines.push_back(
-      {threshold, "threshold " + Fixed(threshold, 2), {60, 60, 60}, true});
+      {threshold, "threshold " + FormatFixedOrNa(threshold, 2), {60, 60, 60}, true});
   page->Paragraph(std::to_string(run.outlier_ratios.size()) + " pairs with a VIO check (from " +
                   run.pairs_source + "); " + std::to_string(above) + " above the threshold " +
-                  Fixed(threshold, 2) + ".");
+                  FormatFixedOrNa(threshold, 2) + ".");
   page->Figures({RenderSvg(figure)});
 }
 
@@ -665,7 +660,7 @@ void TimingSection(const RunData& run, Page* page) {
       chart.names.push_back(Text(stage, "name"));
       chart.values.push_back(Number(stage, "seconds").value_or(0.0));
     }
-    page->Paragraph("Total: " + Fixed(Number(run.summary, "total_seconds"), 2) + " s.");
+    page->Paragraph("Total: " + FormatFixedOrNa(Number(run.summary, "total_seconds"), 2) + " s.");
     page->Figures({RenderSvg(chart)});
   }
 
@@ -684,8 +679,8 @@ void TimingSection(const RunData& run, Page* page) {
     rows.push_back({Integer(index), Integer(Number(batch, "images")),
                     Integer(Number(batch, "registered_total")),
                     Integer(Number(batch, "points_total")),
-                    Fixed(Number(batch, "mean_reprojection_error_px"), 3),
-                    Fixed(Number(batch, "seconds_ba"), 2)});
+                    FormatFixedOrNa(Number(batch, "mean_reprojection_error_px"), 3),
+                    FormatFixedOrNa(Number(batch, "seconds_ba"), 2)});
     if (index) {
       bars.x.push_back(*index);
       bars.y.push_back(Number(batch, "seconds_ba").value_or(0.0));

@@ -99,7 +99,7 @@ struct VerificationSummary {
   double seconds_total = 0.0;
   double seconds_pair_generation = 0.0;  // retrieval and pair generation
   double seconds_loading = 0.0;          // reading and undistorting features
-  double seconds_writing = 0.0;          // database writes
+  double seconds_deciding = 0.0;         // matching, verifying, storing
   // Thread-seconds (summed over worker threads) of the per-pair steps.
   double seconds_matching = 0.0;
   double seconds_vio = 0.0;

@@ -128,6 +128,15 @@ std::string BatchedMapperOptions::Validate() const {
   return "";
 }
 
+std::string BatchedMapperSummary::Headline() const {
+  std::ostringstream out;
+  out << std::fixed << std::setprecision(3) << "batched mapper: " << num_registered << " of "
+      << num_images << " images registered in " << batches.size() << " batches, " << num_points
+      << " points, " << mean_reprojection_error_px << " px, " << std::setprecision(1)
+      << seconds_total << " s";
+  return out.str();
+}
+
 std::string BatchedMapperSummary::ToString() const {
   std::ostringstream out;
   out << std::fixed << std::setprecision(3) << "batched mapper: " << num_registered << " of "
@@ -241,14 +250,6 @@ void ValidateBatchedMapperInput(const BatchedMapperInput& input) {
   validator.Check(input.images, 0);
   ValidateVerifiedPairs(input.images, input.verified_pairs, 0);
 }
-
-// A VIO jump is refused where the frame's verified matches with the
-// registered frames fit the VIO's pose more than this many times as often as
-// the PnP pose (FrameRegistrationOptions): a look-alike place's matches fit
-// the VIO's pose several times better, a pose along the baseline about as
-// well (see docs/history/benchmarks-2026.md, "A look-alike place is not a
-// VIO jump").
-constexpr double kJumpRefutingMatchRatio = 2.0;
 
 namespace {
 
@@ -392,7 +393,8 @@ bool BatchedMapper::TakeStreamedBatch(size_t begin, size_t* end, bool last) {
       throw InputError(kInputLabel, 0, "no images to reconstruct");
     }
     VIOSFM_LOG(INFO) << "batched mapper: " << num_images_ << " images, " << pairs_->size()
-                     << " verified pairs (streamed); " << summary_.tracks.Summary();
+                     << " verified pairs (streamed)" << LogDetails() << "; "
+                     << summary_.tracks.Summary();
   }
   return last;
 }
@@ -610,12 +612,11 @@ void BatchedMapper::MapBatch(size_t b, size_t num_batches, const MapperBatchCall
                    << (frames_streamed_ ? std::string() : "/" + std::to_string(num_batches))
                    << ": images " << stats.num_registered_total << " (+" << stats.num_images
                    << "), points " << stats.num_points_total << " (+"
-                   << triangulation.num_points_added << " new), reprojection error "
-                   << stats.mean_reprojection_error_px << " px, BA over "
-                   << stats.num_ba_free_images << " images " << stats.seconds_ba << " s ("
-                   << stats.num_ba_iterations << " iterations, "
-                   << BaLinearSolverName(stats.ba_linear_solver) << "), " << stats.seconds_total
-                   << " s";
+                   << triangulation.num_points_added << " new), "
+                   << stats.mean_reprojection_error_px << " px, " << stats.seconds_total << " s"
+                   << LogDetails() << "; BA over " << stats.num_ba_free_images << " images "
+                   << stats.seconds_ba << " s (" << stats.num_ba_iterations << " iterations, "
+                   << BaLinearSolverName(stats.ba_linear_solver) << ")";
   if (on_batch && !last) on_batch(reconstruction, stats);
   summary_.batches.push_back(stats);
 }
@@ -702,7 +703,7 @@ Reconstruction BatchedMapper::Run(BatchedMapperSummary* summary_out,
   if (stream_ == nullptr) {
     BuildTracks(*pairs_);
     VIOSFM_LOG(INFO) << "batched mapper: " << num_images_ << " images, " << pairs_->size()
-                     << " verified pairs; " << summary_.tracks.Summary();
+                     << " verified pairs" << LogDetails() << "; " << summary_.tracks.Summary();
   }
   if (!frames_streamed_) BuildPriors();
   summary_.images_only = !frames_streamed_ && gauge_image_ == kInvalidImageId;
@@ -775,7 +776,7 @@ Reconstruction BatchedMapper::Run(BatchedMapperSummary* summary_out,
   summary_.mean_track_length = reconstruction.ComputeMeanTrackLength();
   summary_.mean_reprojection_error_px = MeanReprojectionError(reconstruction, options_.num_threads);
   summary_.seconds_total = total_timer.ElapsedSeconds();
-  VIOSFM_LOG(INFO) << summary_.ToString();
+  VIOSFM_LOG(INFO) << summary_.Headline() << LogDetails() << "\n" << summary_.ToString();
   if (summary_out != nullptr) *summary_out = std::move(summary_);
   return reconstruction;
 }

@@ -342,6 +342,7 @@ struct BatchedMapperSummary {
   int num_observations_split_off = 0;
   double seconds_tracks = 0.0;
   double seconds_total = 0.0;
+  std::string Headline() const;  // one short line: images, points, error, time
   std::string ToString() const;  // a few lines for the log
 };
 
@@ -365,6 +366,10 @@ class BatchedMapper {
                      std::vector<Reconstruction>* other_models);
 
  private:
+  // A registered image's velocity is taken from its registered neighbours at
+  // most this far apart in time (ns).
+  static constexpr timestamp_ns_t kVelocityMaxGapNs = 500'000'000;
+
   // Input: frames joining the model, tracks, priors, a streamed batch.
   void AddNewImages();
   void BuildTracks(const std::vector<ImagePairMatches>& new_pairs);

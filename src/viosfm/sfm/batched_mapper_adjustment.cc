@@ -19,10 +19,6 @@
 namespace viosfm {
 namespace {
 
-// A registered image's velocity is taken from its registered neighbours at
-// most this far apart in time (ns).
-constexpr timestamp_ns_t kVelocityMaxGapNs = 500'000'000;
-
 // Several callers' terms in one adjustment.
 class CombinedTerms : public BundleAdjustmentTerms {
  public:
@@ -163,10 +159,10 @@ BaLinearSolver BatchedMapper::ChooseLinearSolver(const std::vector<image_t>& fre
   const BaProblemStructure structure =
       ComputeBaProblemStructure(core_.reconstruction(), free_images, /*with_factorization=*/true);
   const BaLinearSolver solver = solver_chooser_.Next(structure, /*final=*/true);
-  VIOSFM_LOG(INFO) << "final bundle adjustment: " << structure.num_free_images
-                   << " images, factorisation work per image " << structure.FactorizationPerImage()
-                   << " (per observation " << structure.FactorizationPerObservation()
-                   << "): " << OptionText(solver);
+  VIOSFM_LOG(INFO) << "final bundle adjustment: " << structure.num_free_images << " images, "
+                   << OptionText(solver) << LogDetails() << "; factorisation work per image "
+                   << structure.FactorizationPerImage() << " (per observation "
+                   << structure.FactorizationPerObservation() << ")";
   return solver;
 }
 
@@ -241,7 +237,8 @@ std::unique_ptr<InertialTerms> BatchedMapper::MakeInertialTerms(
   if (terms->Initialise(options_.num_threads, inertial_sigma_floor_)) {
     inertial_sigma_floor_ = terms->sigma_factor();
     summary_.num_inertial_factors = terms->num_factors();
-    VIOSFM_LOG(INFO) << "final bundle adjustment: before it, " << terms->Message();
+    VIOSFM_LOG(INFO) << "final bundle adjustment: " << terms->num_factors() << " IMU factors"
+                     << LogDetails() << "; before it, " << terms->Message();
     return terms;
   }
   summary_.inertial_message = terms->Message();
@@ -398,7 +395,8 @@ BundleAdjustmentSummary BatchedMapper::Adjust(size_t window_begin, bool global) 
   const auto use_gyro_priors = [&]() {
     summary_.num_gyro_priors = static_cast<int>(gyro_priors->priors.size());
     summary_.gyro_message = gyro_priors->message;
-    VIOSFM_LOG(INFO) << "final bundle adjustment: " << gyro_priors->message;
+    VIOSFM_LOG(INFO) << "final bundle adjustment: " << gyro_priors->priors.size()
+                     << " gyro rotation priors" << LogDetails() << "; " << gyro_priors->message;
     priors = ActivePriors(/*with_bridging=*/true);
     priors.insert(priors.end(), gyro_priors->priors.begin(), gyro_priors->priors.end());
   };
@@ -447,7 +445,9 @@ BundleAdjustmentSummary BatchedMapper::Adjust(size_t window_begin, bool global) 
             << std::setprecision(2) << inertial_terms->MedianWhitenedResidual(reconstruction)
             << " sigma";
     summary_.inertial_message = message.str();
-    VIOSFM_LOG(INFO) << "final bundle adjustment: " << summary_.inertial_message;
+    VIOSFM_LOG(INFO) << "final bundle adjustment: IMU factors: metric scale " << std::fixed
+                     << std::setprecision(5) << inertial_terms->scale() << LogDetails() << "; "
+                     << summary_.inertial_message;
   }
   solver_chooser_.Record(ba_summary, free_images.size());
   if (!ba_summary.usable && ba_summary.termination != "nothing to adjust") {

@@ -12,13 +12,9 @@
 namespace viosfm {
 namespace {
 
-// A registered image's velocity is taken from its registered neighbours at
-// most this far apart in time (ns).
-constexpr timestamp_ns_t kVelocityMaxGapNs = 500'000'000;
-
 // A VIO jump is refused where the frame's verified matches with the
 // registered frames fit the VIO's pose more than this many times as often as
-// the PnP pose (FrameRegistrationOptions; docs/benchmarks.md "A look-alike
+// the PnP pose (FrameRegistrationOptions; docs/history/benchmarks-2026.md "A look-alike
 // place is not a VIO jump").
 constexpr double kJumpRefutingMatchRatio = 2.0;
 

@@ -7,6 +7,7 @@
 
 #include "viosfm/estimators/two_view_geometry.h"
 #include "viosfm/geometry/alignment.h"
+#include "viosfm/geometry/lie.h"
 #include "viosfm/geometry/triangulation.h"
 #include "viosfm/scene/reprojection.h"
 #include "viosfm/sensor/camera_models.h"
@@ -16,8 +17,6 @@
 
 namespace viosfm {
 namespace {
-
-constexpr double kRadToDeg = 180.0 / M_PI;
 
 // Copy of an image for a sub-problem: the same keypoints, linked to no point.
 Image CopyImageWithoutPoints(const Image& image) {
@@ -286,7 +285,7 @@ std::optional<InitialPair> IncrementalMapper::FindInitialPair(
     candidate.frame2 = frame2;
     candidate.cam2_from_cam1 = result.cam2_from_cam1;
     candidate.num_inliers = static_cast<int>(angles.size());
-    candidate.median_angle_deg = angles[angles.size() / 2] * kRadToDeg;
+    candidate.median_angle_deg = angles[angles.size() / 2] * kDegreesPerRadian;
     evaluated.push_back(candidate);
   }
   // The bound relaxed until some pair reaches it; among those, the most inliers.

@@ -9,6 +9,7 @@
 #include <unordered_map>
 #include <utility>
 
+#include "viosfm/geometry/lie.h"
 #include "viosfm/geometry/triangulation.h"
 #include "viosfm/sensor/camera_models.h"
 #include "viosfm/util/errors.h"
@@ -16,7 +17,6 @@
 namespace viosfm {
 namespace {
 
-constexpr double kRadToDeg = 180.0 / M_PI;
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
 // Gauss-Newton stops when a step moves the point by less than this fraction
 // of its distance from the origin (plus one metre).
@@ -183,7 +183,7 @@ std::optional<TrackTriangulation> TriangulateTrack(const std::vector<Triangulati
   std::vector<Eigen::Vector3d> centers;
   centers.reserve(active.size());
   for (size_t i : active) centers.push_back(ProjectionCenter(views[i].cam_from_world));
-  const double max_angle_deg = MaxTriangulationAngle(centers, *accepted) * kRadToDeg;
+  const double max_angle_deg = MaxTriangulationAngle(centers, *accepted) * kDegreesPerRadian;
   if (!(max_angle_deg >= options.min_angle_deg)) return std::nullopt;
 
   TrackTriangulation result;

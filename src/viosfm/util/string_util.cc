@@ -2,6 +2,7 @@
 
 #include <cctype>
 #include <charconv>
+#include <cmath>
 #include <cstdio>
 
 namespace viosfm {
@@ -69,6 +70,13 @@ std::string FormatDouble(const char* format, double value) {
 
 std::string FormatRoundTrip(double value) {
   return FormatDouble("%.17g", value);
+}
+
+std::string FormatFixedOrNa(std::optional<double> value, int decimals) {
+  if (!value || !std::isfinite(*value)) return "n/a";
+  char buffer[64];
+  std::snprintf(buffer, sizeof(buffer), "%.*f", decimals, *value);
+  return buffer;
 }
 
 }  // namespace viosfm

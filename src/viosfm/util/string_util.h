@@ -22,6 +22,8 @@ std::string FormatDouble(const char* format, double value);
 // `value` as "%.17g": the shortest printf form that always reads back to
 // the same double.
 std::string FormatRoundTrip(double value);
+// `value` with `decimals` decimals ("%.*f"); "n/a" when absent or not finite.
+std::string FormatFixedOrNa(std::optional<double> value, int decimals);
 
 // Whole-string numeric parses; nullopt if anything but the number is there.
 std::optional<double> ParseDouble(std::string_view text);

@@ -160,7 +160,8 @@ VisualInertialOdometry::VisualInertialOdometry(const SensorRig& rig,
       options_.imu_noise, rig_.CamToImuTime(first_frame_ns), rig_.CamToImuTime(last_frame_ns));
   rig_.imu_noise = summary_.imu_noise.used;
   if (summary_.imu_noise.changes.empty()) {
-    VIOSFM_LOG(INFO) << "vio: " << summary_.imu_noise.message;
+    VIOSFM_LOG(INFO) << "vio: IMU noise of the calibration kept" << LogDetails() << " ("
+                     << summary_.imu_noise.message << ")";
   } else {
     VIOSFM_LOG(WARNING) << "vio: " << summary_.imu_noise.message;
   }
@@ -176,7 +177,7 @@ VisualInertialOdometry::VisualInertialOdometry(const SensorRig& rig,
     last_good_state_ = static_state_;
     have_good_state_ = true;
     VIOSFM_LOG(INFO) << "vio: static start over " << NsToSeconds(init.end_ns - init.start_ns)
-                     << " s (ending "
+                     << " s" << LogDetails() << " (ending "
                      << FormatNsAsSeconds(init.end_ns - rig_.CamToImuTime(first_frame_ns), 2)
                      << " s from the first image): roll " << init.roll_rad * 180.0 / M_PI
                      << " deg, pitch " << init.pitch_rad * 180.0 / M_PI << " deg, gyro bias "
@@ -802,7 +803,8 @@ struct VioRunner::State {
                                      MeanFocalLength(rig.camera), options.time_offset,
                                      estimate_readout ? static_cast<int>(rig.camera.height) : 0);
     time_offset_done = true;
-    VIOSFM_LOG(INFO) << "vio: " << time_offset.message;
+    VIOSFM_LOG(INFO) << "vio: " << TimeOffsetHeadline(time_offset) << LogDetails() << " ("
+                     << time_offset.message << ")";
     rig.cam_time_offset_ns = time_offset.offset_ns;
     if (time_offset.readout_estimated) {
       // The startup frames, tracked uncorrected, corrected now (at the
@@ -1104,7 +1106,8 @@ VioResult VioRunner::Finish(const std::filesystem::path& root) {
                    << summary.status_counts[1] << ", initializing " << summary.status_counts[0]
                    << ", imu_only " << summary.status_counts[2] << ", lost "
                    << summary.status_counts[3] << "), " << summary.num_keyframes
-                   << " keyframes, CPU " << summary.cpu_seconds << " s: " << summary.message;
+                   << " keyframes, CPU " << std::fixed << std::setprecision(1)
+                   << summary.cpu_seconds << " s" << LogDetails() << ": " << summary.message;
   if (s.on_progress) {
     s.on_progress(
         {&result.frames, result.frames.size(), &summary.time_offset, &summary.imu_noise, true});

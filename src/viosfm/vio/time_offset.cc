@@ -358,6 +358,22 @@ std::string TimeOffsetOptions::Validate() const {
   return "";
 }
 
+std::string TimeOffsetHeadline(const TimeOffsetEstimate& estimate) {
+  std::ostringstream out;
+  out << std::fixed << std::setprecision(1) << "camera-IMU time offset ";
+  const double calibration_ms = NsToSeconds(estimate.calibration_offset_ns) * 1e3;
+  if (estimate.estimated) {
+    out << NsToSeconds(estimate.offset_ns) * 1e3 << " ms (standard error " << estimate.sigma_s * 1e3
+        << " ms), replacing the calibration's " << calibration_ms << " ms";
+  } else {
+    out << "of the calibration kept (" << calibration_ms << " ms)";
+  }
+  if (estimate.readout_estimated) {
+    out << "; rolling-shutter readout " << estimate.readout_s * 1e3 << " ms";
+  }
+  return out.str();
+}
+
 double GyroRotationSumDeg(const std::vector<FrameFeatures>& frames,
                           const std::vector<ImuSample>& imu, timestamp_ns_t offset_ns) {
   double sum = 0.0;

@@ -145,6 +145,11 @@ struct TimeOffsetEstimate {
   std::string message;  // one line: the estimate or why it was not trusted
 };
 
+// The estimate's decision in a short line: "camera-IMU time offset -48.4 ms
+// (standard error 0.8 ms; the calibration's 0.0 ms replaced)" or "... the
+// calibration's 0.0 ms kept".
+std::string TimeOffsetHeadline(const TimeOffsetEstimate& estimate);
+
 // Sum over consecutive frames of the gyro rotation angle (deg) between
 // their stamps (camera clock, converted with offset_ns); frames without IMU
 // coverage count zero.
