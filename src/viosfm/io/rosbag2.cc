@@ -400,7 +400,8 @@ void Rosbag2SqliteFile::ReadMessages(
   for (const Topic& topic : topics_) {
     if (!wanted(topic)) continue;
     selected[topic.id] = &topic;
-    ids += (ids.empty() ? "" : ",") + std::to_string(topic.id);
+    if (!ids.empty()) ids.push_back(',');
+    ids.append(std::to_string(topic.id));
   }
   if (selected.empty()) return;
   sqlite3* db = database_->db.get();

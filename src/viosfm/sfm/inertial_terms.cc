@@ -295,7 +295,8 @@ double InertialTerms::MedianWhitenedResidual(const std::vector<Rigid3d>& cam_fro
     const InertialCost cost(factor->preintegration, cam_from_body, 1.0);
     const PoseParameters pose_i = ToPoseParameters(cam_from_world[factor->i]);
     const PoseParameters pose_j = ToPoseParameters(cam_from_world[factor->j]);
-    Eigen::Matrix<double, InertialCost::kNumResiduals, 1> residual;
+    Eigen::Matrix<double, InertialCost::kNumResiduals, 1> residual =
+        Eigen::Matrix<double, InertialCost::kNumResiduals, 1>::Zero();
     cost(pose_i.data(), velocity_[factor->i].data(), pose_j.data(), velocity_[factor->j].data(),
          biases_[window_[factor->i]].data(), scale_.data(), tilt_.data(), residual.data());
     norms.push_back(residual.norm());

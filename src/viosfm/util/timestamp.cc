@@ -83,7 +83,10 @@ std::string FormatNsAsSeconds(timestamp_ns_t ns, int decimals) {
 }
 
 std::string FormatNsSpan(timestamp_ns_t first, timestamp_ns_t last) {
-  return "[" + FormatNsAsSeconds(first, 3) + ", " + FormatNsAsSeconds(last, 3) + "] s";
+  std::string span = "[";
+  span.append(FormatNsAsSeconds(first, 3)).append(", ").append(FormatNsAsSeconds(last, 3));
+  span.append("] s");
+  return span;
 }
 
 }  // namespace viosfm
