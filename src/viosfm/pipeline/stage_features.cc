@@ -1,5 +1,7 @@
 #include "viosfm/pipeline/stage_features.h"
 
+#include <iomanip>
+
 #include "viosfm/util/logging.h"
 
 namespace viosfm {
@@ -28,7 +30,9 @@ FeaturesStageOutput ExtractFeaturesStage(const SelectedFrames& frames,
   }
   output.summary = ExtractFeatures(frames.sequence, options.EffectiveSiftOptions(),
                                    &output.database, options.show_progress, access);
-  VIOSFM_LOG(INFO) << "run: features " << output.summary.ToString();
+  VIOSFM_LOG(INFO) << "run: features of " << output.summary.num_images << " images, "
+                   << std::fixed << std::setprecision(1) << output.summary.seconds << " s"
+                   << LogDetails() << ": " << output.summary.ToString();
   return output;
 }
 
