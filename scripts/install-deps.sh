@@ -23,6 +23,10 @@ packages=(
   libzstd-dev  # ROS 2 bags: zstd MCAP chunks, zstd-compressed rosbag2 messages and files
   libxxhash-dev  # XXH3 content hashes of the inputs (util/hash.h)
   libjs-three  # three.js, copied into the report's 3D view
+  # An optimised BLAS and LAPACK (single-threaded, so runs stay repeatable)
+  # in place of the reference or ATLAS ones: the sparse Cholesky of the
+  # bundle adjustment's reduced camera system spends its time in them.
+  libopenblas0-serial
   file  # `make package`: CPack's Debian generator reads the binary's type with it
 )
 # To test and benchmark it.

@@ -82,8 +82,13 @@ void RunRun(RunArguments args) {
   VIOSFM_LOG(INFO) << "run: " << args.dataset << " -> " << args.out << ": N1 "
                    << options.verification.pairs.num_temporal_neighbors << ", N2 "
                    << options.verification.pairs.num_retrieval_neighbors << ", "
-                   << options.frame_selection.target_rate_hz << " Hz, max "
-                   << options.sift.max_num_features << " features" << LogDetails()
+                   << options.frame_selection.target_rate_hz << " Hz, "
+                   << (options.feature_budget.features_per_second > 0
+                           ? std::to_string(options.feature_budget.features_per_second) +
+                                 " features a second (at most " +
+                                 std::to_string(options.sift.max_num_features) + " a frame)"
+                           : "max " + std::to_string(options.sift.max_num_features) + " features")
+                   << LogDetails()
                    << ", batch size " << options.mapper.batch_size
                    << (options.mapper.ba_window_batches > 0
                            ? ", BA window " + std::to_string(options.mapper.ba_window_batches)
