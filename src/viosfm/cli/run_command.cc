@@ -88,8 +88,7 @@ void RunRun(RunArguments args) {
                                  " features a second (at most " +
                                  std::to_string(options.sift.max_num_features) + " a frame)"
                            : "max " + std::to_string(options.sift.max_num_features) + " features")
-                   << LogDetails()
-                   << ", batch size " << options.mapper.batch_size
+                   << LogDetails() << ", batch size " << options.mapper.batch_size
                    << (options.mapper.ba_window_batches > 0
                            ? ", BA window " + std::to_string(options.mapper.ba_window_batches)
                            : std::string())

@@ -30,9 +30,9 @@ FeaturesStageOutput ExtractFeaturesStage(const SelectedFrames& frames,
   }
   output.summary = ExtractFeatures(frames.sequence, options.EffectiveSiftOptions(),
                                    &output.database, options.show_progress, access);
-  VIOSFM_LOG(INFO) << "run: features of " << output.summary.num_images << " images, "
-                   << std::fixed << std::setprecision(1) << output.summary.seconds << " s"
-                   << LogDetails() << ": " << output.summary.ToString();
+  VIOSFM_LOG(INFO) << "run: features of " << output.summary.num_images << " images, " << std::fixed
+                   << std::setprecision(1) << output.summary.seconds << " s" << LogDetails() << ": "
+                   << output.summary.ToString();
   return output;
 }
 
