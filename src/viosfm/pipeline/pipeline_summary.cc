@@ -5,6 +5,8 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "viosfm/matching/verification_driver.h"
+
 #ifndef VIOSFM_VERSION
 #define VIOSFM_VERSION "unknown"
 #endif
@@ -65,7 +67,11 @@ std::string PipelineSummary::ToString() const {
       << all_frames.num_beyond << " beyond its VIO segment's model frames, "
       << all_frames.num_unposed() << " unposed\n";
   if (texture_probe.probed) {
-    out << "texture: " << texture_probe_message << "\n";
+    // The probe's figures: summary.json and run.log.
+    out << "texture: "
+        << (texture_probe.textured ? "rich: fewer frames with more features"
+                                   : "not rich: the rate and the feature count as set")
+        << "\n";
   }
   if (vio_gaps.num_gaps > 0) out << "VIO gaps: " << vio_gaps.ToString() << "\n";
   out << "VIO: " << num_vio_segments << " segment(s), " << mapper.num_vio_segments_joined
@@ -73,14 +79,7 @@ std::string PipelineSummary::ToString() const {
       << ", registered without a VIO pose " << mapper.num_registered_without_vio << "; jumps found "
       << mapper.num_vio_breaks << ", refused " << mapper.num_vio_jumps_refused << "\n";
   // The metric scale's line is among the decisions (its details: summary.json, run.log).
-  out << "pairs: " << verification.num_pairs << " candidates, " << verification.num_accepted
-      << " accepted";
-  if (verification.num_accepted_corrected > 0) {
-    out << " (" << verification.num_accepted_corrected << " with the VIO's pose corrected)";
-  }
-  out << ", " << verification.num_vio_rejected << " rejected by VIO, "
-      << verification.num_ransac_rejected << " by RANSAC, " << verification.num_no_matches
-      << " without matches\n";
+  out << "pairs: " << FormatVerificationHeadline(verification) << "\n";
   out << "points: " << num_points << ", observations " << num_observations << ", mean track length "
       << mean_track_length << ", mean reprojection error " << mean_reprojection_error_px << " px\n";
   if (evaluation) {

@@ -191,11 +191,11 @@ OwnVioReadout OwnVioRollingShutter(const PipelineOptions& options,
     } else {
       readout.source = source.str() + ", under rolling_shutter.min_readout_evidence: not used";
       if (log) {
-        VIOSFM_LOG(INFO) << "run: the own VIO estimated a rolling-shutter readout of "
-                         << std::setprecision(1) << std::fixed << time_offset.readout_s * 1e3
-                         << " ms, but the images' evidence for it is weak (" << source.str()
-                         << ", under rolling_shutter.min_readout_evidence " << std::setprecision(2)
-                         << options.min_readout_evidence
+        VIOSFM_LOG(INFO) << "run: rolling-shutter readout of the own VIO (" << std::setprecision(1)
+                         << std::fixed << time_offset.readout_s * 1e3
+                         << " ms) not used: the images' evidence is weak" << LogDetails() << " ("
+                         << source.str() << ", under rolling_shutter.min_readout_evidence "
+                         << std::setprecision(2) << options.min_readout_evidence
                          << "): the keypoints are taken as from a global shutter";
       }
     }

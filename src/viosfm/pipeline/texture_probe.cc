@@ -48,7 +48,7 @@ std::string ApplyFeatureBudget(const FeatureBudgetOptions& budget, double rate_h
   }
   std::ostringstream line;
   line << budget.features_per_second << " features a second at " << std::setprecision(3) << rate_hz
-       << " frames a second: " << sift->max_num_features << " a frame, on images of at most "
+       << " frames a second: " << sift->max_num_features << " a frame, images up to "
        << sift->max_image_size << " px";
   return line.str();
 }

@@ -533,10 +533,11 @@ void BatchedMapper::RefineFinalModel(bool frames_changed, double final_change, b
     if (!frames_changed) {
       ++summary_.num_final_ba_refinements;
       VIOSFM_LOG(INFO) << std::fixed << std::setprecision(2)
-                       << "final bundle adjustment: filtering and re-triangulation changed "
-                       << 100.0 * final_change << " % of the observations: refinement "
+                       << "final bundle adjustment: refinement "
                        << summary_.num_final_ba_refinements << " of at most "
-                       << options_.final_ba_max_refinements;
+                       << options_.final_ba_max_refinements << LogDetails()
+                       << ": filtering and re-triangulation changed " << 100.0 * final_change
+                       << " % of the observations";
     }
     frames_changed = false;
     summary_.final_ba = Adjust(0, true);

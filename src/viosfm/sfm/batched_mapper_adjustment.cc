@@ -242,8 +242,8 @@ std::unique_ptr<InertialTerms> BatchedMapper::MakeInertialTerms(
     return terms;
   }
   summary_.inertial_message = terms->Message();
-  VIOSFM_LOG(INFO) << "final bundle adjustment: " << summary_.inertial_message
-                   << "; the gyro's priors instead";
+  VIOSFM_LOG(INFO) << "final bundle adjustment: the gyro's priors instead of IMU factors"
+                   << LogDetails() << ": " << summary_.inertial_message;
   inertial_declined_ = true;
   return nullptr;
 }

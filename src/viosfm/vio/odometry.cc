@@ -163,7 +163,9 @@ VisualInertialOdometry::VisualInertialOdometry(const SensorRig& rig,
     VIOSFM_LOG(INFO) << "vio: IMU noise of the calibration kept" << LogDetails() << " ("
                      << summary_.imu_noise.message << ")";
   } else {
-    VIOSFM_LOG(WARNING) << "vio: " << summary_.imu_noise.message;
+    VIOSFM_LOG(WARNING) << "vio: IMU noise of the calibration replaced ("
+                        << summary_.imu_noise.changes.size() << " figures; summary.json: warnings)"
+                        << LogDetails() << ": " << summary_.imu_noise.message;
   }
   window_ = std::make_unique<SlidingWindowEstimator>(rig_.body_from_cam, rig_.imu_noise,
                                                      MeanFocalLength(rig_.camera), options_.window);

@@ -363,13 +363,13 @@ std::string TimeOffsetHeadline(const TimeOffsetEstimate& estimate) {
   out << std::fixed << std::setprecision(1) << "camera-IMU time offset ";
   const double calibration_ms = NsToSeconds(estimate.calibration_offset_ns) * 1e3;
   if (estimate.estimated) {
-    out << NsToSeconds(estimate.offset_ns) * 1e3 << " ms (standard error " << estimate.sigma_s * 1e3
-        << " ms), replacing the calibration's " << calibration_ms << " ms";
+    out << NsToSeconds(estimate.offset_ns) * 1e3 << " ms, +- " << estimate.sigma_s * 1e3
+        << " ms (the calibration's " << calibration_ms << " ms replaced)";
   } else {
     out << "of the calibration kept (" << calibration_ms << " ms)";
   }
   if (estimate.readout_estimated) {
-    out << "; rolling-shutter readout " << estimate.readout_s * 1e3 << " ms";
+    out << "; readout " << estimate.readout_s * 1e3 << " ms";
   }
   return out.str();
 }

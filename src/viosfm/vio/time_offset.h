@@ -145,9 +145,10 @@ struct TimeOffsetEstimate {
   std::string message;  // one line: the estimate or why it was not trusted
 };
 
-// The estimate's decision in a short line: "camera-IMU time offset -48.4 ms
-// (standard error 0.8 ms; the calibration's 0.0 ms replaced)" or "... the
-// calibration's 0.0 ms kept".
+// The estimate's decision in a short line: "camera-IMU time offset -48.4 ms,
+// +- 0.3 ms (the calibration's 0.0 ms replaced); readout 27.7 ms" (+- the
+// standard error; the rolling-shutter readout when estimated) or "camera-IMU
+// time offset of the calibration kept (0.0 ms)".
 std::string TimeOffsetHeadline(const TimeOffsetEstimate& estimate);
 
 // Sum over consecutive frames of the gyro rotation angle (deg) between
