@@ -51,7 +51,7 @@ const char* LevelTag(LogLevel level) {
   return "?";
 }
 
-// The console's "16:50:01" and the file's "2026-12-08 16:50:01.123", local time.
+// The console's "HH:MM:SS" and the file's "YYYY-MM-DD HH:MM:SS.mmm", local time.
 struct Stamps {
   char console[16];
   char file[32];

@@ -53,7 +53,7 @@ TEST(LogFile, TakesEveryLevelTheDetailsAndTheConsolesEarlierLines) {
 
   const std::vector<std::string> lines = Lines(ReadTextFile(path));
   ASSERT_EQ(lines.size(), 5u);
-  // "I 2026-12-08 16:50:01.123 text"
+  // "I YYYY-MM-DD HH:MM:SS.mmm text"
   EXPECT_EQ(lines[0].substr(0, 2), "I ");
   EXPECT_EQ(lines[0].substr(25), " before the file opened");
   EXPECT_EQ(lines[1].substr(25), " vio: offset kept; residual 0.03 px over 135 pairs");
