@@ -109,7 +109,7 @@ struct PipelineSummary {
   // runs with equal ones were made from the same inputs and data-shaping options.
   std::string fingerprint;
   std::filesystem::path output_folder;
-  std::string started_utc;  // "2026-11-21T07:38:16Z"
+  std::string started_utc;  // ISO 8601 in UTC, "YYYY-MM-DDTHH:MM:SSZ"
   size_t num_frames_in = 0;
   size_t num_frames_selected = 0;          // selected (with or without a VIO pose)
   size_t num_frames_without_vio_pose = 0;  // selected frames without a VIO pose

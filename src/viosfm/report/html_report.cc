@@ -696,8 +696,8 @@ void TimingSection(const RunData& run, Page* page) {
   figure.series.push_back(bars);
   page->Figures({RenderSvg(figure)});
   page->Table("batch-table",
-              {"batch", "images", "registered (total)", "points (total)", "reprojection error (px)",
-               "BA time (s)"},
+              {"batch", "images", "registered (total)", "points (total)",
+               "window reprojection error (px)", "BA time (s)"},
               rows);
 }
 

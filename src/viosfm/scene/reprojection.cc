@@ -82,6 +82,38 @@ double MeanReprojectionError(const Reconstruction& reconstruction, int num_threa
   return count == 0 ? 0.0 : sum / static_cast<double>(count);
 }
 
+double MeanReprojectionErrorInImages(const Reconstruction& reconstruction,
+                                     const std::vector<image_t>& image_ids, int num_threads) {
+  // Per image, then over the images in order: the same sum for any number
+  // of threads.
+  std::vector<PointErrors> errors(image_ids.size());
+  ParallelForChunks(
+      static_cast<int64_t>(image_ids.size()), num_threads, 16, [&](int64_t begin, int64_t end) {
+        for (int64_t k = begin; k < end; ++k) {
+          if (!reconstruction.ExistsImage(image_ids[k])) continue;
+          const Image& image = reconstruction.GetImage(image_ids[k]);
+          if (!image.registered) continue;
+          const Camera& camera = reconstruction.GetCamera(image.camera_id);
+          for (const Point2D& point2D : image.points2D) {
+            if (!point2D.HasPoint3D()) continue;
+            const double error =
+                ReprojectionErrorPx(camera, image.cam_from_world,
+                                    reconstruction.GetPoint3D(point2D.point3D_id).xyz, point2D.xy);
+            if (!std::isfinite(error)) continue;
+            errors[k].sum += error;
+            ++errors[k].count;
+          }
+        }
+      });
+  double sum = 0.0;
+  size_t count = 0;
+  for (const PointErrors& image : errors) {
+    sum += image.sum;
+    count += image.count;
+  }
+  return count == 0 ? 0.0 : sum / static_cast<double>(count);
+}
+
 double UpdateReprojectionErrors(Reconstruction* reconstruction, int num_threads) {
   VIOSFM_CHECK(reconstruction != nullptr);
   return UpdateReprojectionErrors(reconstruction, reconstruction->Point3DIds(), num_threads);

@@ -20,6 +20,10 @@ double ReprojectionErrorPx(const Camera& camera, const Rigid3d& cam_from_world,
 // 0 without observations. Up to num_threads threads; the same result for any
 // number.
 double MeanReprojectionError(const Reconstruction& reconstruction, int num_threads = 1);
+// The same over the observations in the images `image_ids` (registered ones;
+// the others are skipped): its cost is theirs, not the whole model's.
+double MeanReprojectionErrorInImages(const Reconstruction& reconstruction,
+                                     const std::vector<image_t>& image_ids, int num_threads = 1);
 
 // Writes each point's mean reprojection error (px, over its observations in
 // registered images) to Point3D::error: +infinity if the point is behind a

@@ -607,7 +607,10 @@ void BatchedMapper::MapBatch(size_t b, size_t num_batches, const MapperBatchCall
   const Reconstruction& reconstruction = core_.reconstruction();
   stats.num_registered_total = static_cast<int>(MainRegistered().size());
   stats.num_points_total = static_cast<int>(reconstruction.NumPoints3D());
-  stats.mean_reprojection_error_px = MeanReprojectionError(reconstruction, options_.num_threads);
+  stats.mean_reprojection_error_px =
+      window_begin == 0 ? MeanReprojectionError(reconstruction, options_.num_threads)
+                        : MeanReprojectionErrorInImages(reconstruction, WindowImages(window_begin),
+                                                        options_.num_threads);
   stats.seconds_total = batch_timer.ElapsedSeconds();
   VIOSFM_LOG(INFO) << std::fixed << std::setprecision(3) << "batch " << b + 1
                    << (frames_streamed_ ? std::string() : "/" + std::to_string(num_batches))

@@ -244,8 +244,9 @@ struct MapperBatchStatistics {
   int num_points_total = 0;      // points after the batch (after filtering)
   int num_ba_iterations = 0;     // iterations of the batch's bundle adjustment
   BaLinearSolver ba_linear_solver = BaLinearSolver::kAuto;  // the one it used
-  // Mean over all observations after the batch (BA, filtering and
-  // re-triangulation), px.
+  // Mean over the observations in the images of the batch's adjustment
+  // window (every image after a global adjustment), after the batch (BA,
+  // filtering and re-triangulation), px.
   double mean_reprojection_error_px = 0.0;
   double seconds_registration = 0.0;   // the batch's frames, VIO prediction and PnP check
   double seconds_triangulation = 0.0;  // its tracks, and the pending frames retried
@@ -416,6 +417,7 @@ class BatchedMapper {
   double FilterAndRetriangulateAll();
   void FilterAndRetriangulateWindow(size_t window_begin);
   std::vector<point3D_t> PointsToFilter(size_t window_begin) const;
+  std::vector<image_t> WindowImages(size_t window_begin) const;
 
   // A batch, the final refinements, and every frame's verdict.
   void MapBatch(size_t b, size_t num_batches, const MapperBatchCallback& on_batch, bool* last);

@@ -509,6 +509,13 @@ std::vector<point3D_t> BatchedMapper::PointsToFilter(size_t window_begin) const 
   return point_ids;
 }
 
+std::vector<image_t> BatchedMapper::WindowImages(size_t window_begin) const {
+  const std::vector<image_t>& registered = MainRegistered();
+  const size_t begin = std::min(window_begin, registered.size());
+  return std::vector<image_t>(registered.begin() + static_cast<std::ptrdiff_t>(begin),
+                              registered.end());
+}
+
 void BatchedMapper::FilterAndRetriangulateWindow(size_t window_begin) {
   Reconstruction& reconstruction = core_.reconstruction();
   if (all_changed_since_filter_) {
@@ -521,9 +528,8 @@ void BatchedMapper::FilterAndRetriangulateWindow(size_t window_begin) {
   all_changed_since_filter_ = false;
   if (!options_.retriangulate) return;
   std::vector<size_t> window_frames;
-  const std::vector<image_t>& registered = MainRegistered();
-  for (size_t r = window_begin; r < registered.size(); ++r) {
-    window_frames.push_back(core_.FrameIndex(registered[r]));
+  for (const image_t image_id : WindowImages(window_begin)) {
+    window_frames.push_back(core_.FrameIndex(image_id));
   }
   TriangulateTracksOf(window_frames);
 }

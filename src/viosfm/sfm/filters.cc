@@ -1,6 +1,7 @@
 #include "viosfm/sfm/filters.h"
 
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <vector>
 
@@ -33,41 +34,78 @@ std::string PointFilterStatistics::Summary() const {
   return out.str();
 }
 
-size_t FilterObservationsWithLargeReprojectionError(Reconstruction* reconstruction,
-                                                    double max_reprojection_error_px,
-                                                    const std::vector<point3D_t>& point3D_ids,
-                                                    int num_threads) {
-  VIOSFM_CHECK(reconstruction != nullptr);
-  // Which observations to delete, point by point on up to num_threads
-  // threads (reading only), then deleted in order.
-  std::vector<std::vector<TrackElement>> bad(point3D_ids.size());
-  const Reconstruction& model = *reconstruction;
+namespace {
+
+// One point's registered observations judged: those to delete, and the sum
+// and count of the finite errors of those kept (and whether one kept was
+// behind its camera), from which its error after the deletions follows.
+struct JudgedPoint {
+  std::vector<TrackElement> bad;
+  double kept_sum = 0.0;
+  size_t kept_count = 0;
+  bool kept_behind = false;
+};
+
+// Every point's observations judged against the threshold, point by point
+// on up to num_threads threads (reading only).
+std::vector<JudgedPoint> JudgeReprojection(const Reconstruction& model,
+                                           double max_reprojection_error_px,
+                                           const std::vector<point3D_t>& point3D_ids,
+                                           int num_threads) {
+  std::vector<JudgedPoint> judged(point3D_ids.size());
   ParallelForChunks(
       static_cast<int64_t>(point3D_ids.size()), num_threads, 1024, [&](int64_t begin, int64_t end) {
         for (int64_t k = begin; k < end; ++k) {
           if (!model.ExistsPoint3D(point3D_ids[k])) continue;
           const Point3D& point3D = model.GetPoint3D(point3D_ids[k]);
+          JudgedPoint& point = judged[k];
           for (const TrackElement& element : point3D.track) {
             const Image& image = model.GetImage(element.image_id);
             if (!image.registered) continue;
             const double error =
                 ReprojectionErrorPx(model.GetCamera(image.camera_id), image.cam_from_world,
                                     point3D.xyz, image.points2D.at(element.point2D_idx).xy);
-            if (!(error <= max_reprojection_error_px)) bad[k].push_back(element);
+            if (!(error <= max_reprojection_error_px)) {
+              point.bad.push_back(element);
+            } else if (!std::isfinite(error)) {
+              point.kept_behind = true;
+            } else {
+              point.kept_sum += error;
+              ++point.kept_count;
+            }
           }
         }
       });
+  return judged;
+}
+
+// Deletes the judged bad observations in order; returns how many.
+size_t DeleteBadObservations(Reconstruction* reconstruction,
+                             const std::vector<point3D_t>& point3D_ids,
+                             const std::vector<JudgedPoint>& judged) {
   size_t num_removed = 0;
   for (size_t k = 0; k < point3D_ids.size(); ++k) {
     // Deleting may delete the point (fewer than two observations left); its
     // remaining keypoints are then free and need no deletion.
-    for (const TrackElement& element : bad[k]) {
+    for (const TrackElement& element : judged[k].bad) {
       if (!reconstruction->ExistsPoint3D(point3D_ids[k])) break;
       reconstruction->DeleteObservation(element.image_id, element.point2D_idx);
       ++num_removed;
     }
   }
   return num_removed;
+}
+
+}  // namespace
+
+size_t FilterObservationsWithLargeReprojectionError(Reconstruction* reconstruction,
+                                                    double max_reprojection_error_px,
+                                                    const std::vector<point3D_t>& point3D_ids,
+                                                    int num_threads) {
+  VIOSFM_CHECK(reconstruction != nullptr);
+  return DeleteBadObservations(
+      reconstruction, point3D_ids,
+      JudgeReprojection(*reconstruction, max_reprojection_error_px, point3D_ids, num_threads));
 }
 
 size_t FilterPointsWithSmallTriangulationAngle(Reconstruction* reconstruction,
@@ -90,7 +128,7 @@ size_t FilterPointsWithSmallTriangulationAngle(Reconstruction* reconstruction,
                           const Image& image = model.GetImage(element.image_id);
                           if (image.registered) centers.push_back(image.ProjectionCenter());
                         }
-                        small[k] = MaxTriangulationAngle(centers, point3D.xyz) < min_angle_rad;
+                        small[k] = !ReachesTriangulationAngle(centers, point3D.xyz, min_angle_rad);
                       }
                     });
   size_t num_removed = 0;
@@ -129,8 +167,9 @@ PointFilterStatistics FilterPoints(Reconstruction* reconstruction,
   VIOSFM_CHECK(options.Check()) << options.Validate();
   PointFilterStatistics stats;
   stats.num_points_before = reconstruction->NumPoints3D();
-  stats.num_observations_removed = FilterObservationsWithLargeReprojectionError(
-      reconstruction, options.max_reprojection_error_px, point3D_ids, num_threads);
+  const std::vector<JudgedPoint> judged = JudgeReprojection(
+      *reconstruction, options.max_reprojection_error_px, point3D_ids, num_threads);
+  stats.num_observations_removed = DeleteBadObservations(reconstruction, point3D_ids, judged);
   // Points DeleteObservation removed, plus any that had fewer than two
   // observations to begin with.
   stats.num_points_removed_few_observations =
@@ -140,7 +179,21 @@ PointFilterStatistics FilterPoints(Reconstruction* reconstruction,
   stats.num_points_removed_small_angle = FilterPointsWithSmallTriangulationAngle(
       reconstruction, options.min_triangulation_angle_deg, point3D_ids, num_threads);
 
-  UpdateReprojectionErrors(reconstruction, point3D_ids, num_threads);
+  // Each remaining point's error, as UpdateReprojectionErrors computes it:
+  // its kept observations' errors are those judged (nothing moved since),
+  // summed in the track's order, which the deletions keep.
+  for (size_t k = 0; k < point3D_ids.size(); ++k) {
+    if (!reconstruction->ExistsPoint3D(point3D_ids[k])) continue;
+    const JudgedPoint& point = judged[k];
+    Point3D& point3D = reconstruction->GetPoint3D(point3D_ids[k]);
+    if (point.kept_behind) {
+      point3D.error = std::numeric_limits<double>::infinity();
+    } else if (point.kept_count == 0) {
+      point3D.error = -1.0;
+    } else {
+      point3D.error = point.kept_sum / static_cast<double>(point.kept_count);
+    }
+  }
   stats.num_points_after = reconstruction->NumPoints3D();
   return stats;
 }

@@ -152,6 +152,56 @@ TEST(FiltersTest, ThreadsGiveTheSameResult) {
             MeanReprojectionError(three.reconstruction, 3));
 }
 
+TEST(FiltersTest, StoresEachPointsErrorAsUpdateReprojectionErrorsDoes) {
+  // Every keypoint 0.5 px off at random besides the injected errors: the
+  // error each remaining point is left with is, bit for bit, what
+  // UpdateReprojectionErrors computes on the filtered model.
+  InjectedScene scene = MakeInjectedScene();
+  Reconstruction& reconstruction = scene.reconstruction;
+  Random random(5);
+  for (const image_t image_id : reconstruction.RegImageIds()) {
+    for (Point2D& point2D : reconstruction.GetImage(image_id).points2D) {
+      point2D.xy += Eigen::Vector2d(random.Uniform(-0.5, 0.5), random.Uniform(-0.5, 0.5));
+    }
+  }
+  FilterPoints(&reconstruction, {}, 2);
+  Reconstruction recomputed = reconstruction;
+  UpdateReprojectionErrors(&recomputed);
+  ASSERT_GT(reconstruction.NumPoints3D(), 150u);
+  for (const point3D_t point3D_id : reconstruction.Point3DIds()) {
+    EXPECT_GT(reconstruction.GetPoint3D(point3D_id).error, 0.0);
+    EXPECT_EQ(reconstruction.GetPoint3D(point3D_id).error, recomputed.GetPoint3D(point3D_id).error)
+        << "point " << point3D_id;
+  }
+}
+
+TEST(FiltersTest, MeanReprojectionErrorInImagesIsTheirObservationsMean) {
+  // On the unfiltered injected scene: over every image it is the model's
+  // mean; over images 2 and 7 the mean of their observations' errors,
+  // computed here one by one; unknown ids are skipped; any thread count.
+  const InjectedScene scene = MakeInjectedScene();
+  const Reconstruction& reconstruction = scene.reconstruction;
+  EXPECT_NEAR(MeanReprojectionErrorInImages(reconstruction, reconstruction.ImageIds(), 1),
+              MeanReprojectionError(reconstruction, 1), 1e-12);
+  double sum = 0.0;
+  size_t count = 0;
+  for (const image_t id : {image_t{2}, image_t{7}}) {
+    const Image& image = reconstruction.GetImage(id);
+    for (const Point2D& point2D : image.points2D) {
+      if (!point2D.HasPoint3D()) continue;
+      sum += ReprojectionErrorPx(reconstruction.GetCamera(image.camera_id), image.cam_from_world,
+                                 reconstruction.GetPoint3D(point2D.point3D_id).xyz, point2D.xy);
+      ++count;
+    }
+  }
+  ASSERT_GT(count, 0u);
+  ASSERT_GT(sum, 0.0);
+  const double mean = MeanReprojectionErrorInImages(reconstruction, {2, 7, 999}, 1);
+  EXPECT_NEAR(mean, sum / static_cast<double>(count), 1e-12);
+  EXPECT_EQ(MeanReprojectionErrorInImages(reconstruction, {2, 7, 999}, 3), mean);
+  EXPECT_EQ(MeanReprojectionErrorInImages(reconstruction, {}, 1), 0.0);
+}
+
 TEST(FiltersTest, FiltersOnlyTheGivenPointsAndTheRestLater) {
   InjectedScene whole = MakeInjectedScene();
   FilterPoints(&whole.reconstruction);

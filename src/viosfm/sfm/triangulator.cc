@@ -121,6 +121,28 @@ double MaxTriangulationAngle(const std::vector<Eigen::Vector3d>& centers,
   return std::atan2(rays[best_i].cross(rays[best_j]).norm(), rays[best_i].dot(rays[best_j]));
 }
 
+bool ReachesTriangulationAngle(const std::vector<Eigen::Vector3d>& centers,
+                               const Eigen::Vector3d& point_in_world, double min_angle_rad) {
+  // A pair whose cosine is below the threshold's by more than rounding
+  // decides; otherwise the largest angle is computed as MaxTriangulationAngle
+  // does, so the answer is the same as comparing it.
+  constexpr double kCosineMargin = 1e-12;
+  const double cosine_threshold = std::cos(min_angle_rad) - kCosineMargin;
+  std::vector<Eigen::Vector3d> rays;
+  rays.reserve(centers.size());
+  for (const Eigen::Vector3d& center : centers) {
+    const Eigen::Vector3d ray = point_in_world - center;
+    const double norm = ray.norm();
+    if (norm > 0.0) rays.push_back(ray / norm);
+  }
+  for (size_t i = 0; i < rays.size(); ++i) {
+    for (size_t j = i + 1; j < rays.size(); ++j) {
+      if (rays[i].dot(rays[j]) < cosine_threshold) return true;
+    }
+  }
+  return MaxTriangulationAngle(centers, point_in_world) >= min_angle_rad;
+}
+
 std::optional<TrackTriangulation> TriangulateTrack(const std::vector<TriangulationView>& views,
                                                    const TriangulationOptions& options) {
   VIOSFM_CHECK(options.Check()) << options.Validate();

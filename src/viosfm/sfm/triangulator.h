@@ -82,6 +82,11 @@ std::optional<TrackTriangulation> TriangulateTrack(const std::vector<Triangulati
 // given camera centres; 0 for fewer than two.
 double MaxTriangulationAngle(const std::vector<Eigen::Vector3d>& centers,
                              const Eigen::Vector3d& point_in_world);
+// Whether MaxTriangulationAngle(centers, point_in_world) >= min_angle_rad
+// (in [0, pi]), stopping at the first pair clearly that wide: a long
+// track's first rays usually are, where the largest angle looks at every pair.
+bool ReachesTriangulationAngle(const std::vector<Eigen::Vector3d>& centers,
+                               const Eigen::Vector3d& point_in_world, double min_angle_rad);
 
 struct TriangulationStatistics {
   // Tracks with at least two free observations in the given images and no

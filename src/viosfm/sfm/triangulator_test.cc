@@ -156,6 +156,38 @@ TEST(TriangulatorTest, FallbackDropsOneGrossOutlierView) {
   }
 }
 
+TEST(TriangulatorTest, ReachesTriangulationAngleAgreesWithTheLargestAngle) {
+  // Random camera centres around points near and far, thresholds around
+  // their largest angles (and exactly at them): the early answer is the
+  // comparison with MaxTriangulationAngle.
+  Random random(31);
+  int num_reached = 0;
+  int num_cases = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    const int num_centers = random.UniformInt(0, 40);
+    std::vector<Eigen::Vector3d> centers;
+    const double spread = random.Uniform(0.001, 2.0);
+    for (int k = 0; k < num_centers; ++k) {
+      centers.emplace_back(random.Uniform(-spread, spread), random.Uniform(-spread, spread),
+                           random.Uniform(-spread, spread));
+    }
+    const Eigen::Vector3d point(random.Uniform(-1.0, 1.0), random.Uniform(-1.0, 1.0),
+                                random.Uniform(1.0, 200.0));
+    const double largest = MaxTriangulationAngle(centers, point);
+    for (const double threshold : {0.0, 0.5 * largest, largest, largest * (1.0 + 1e-9),
+                                   std::min(2.0 * largest + 1e-6, M_PI), 0.0261799}) {
+      const bool reached = ReachesTriangulationAngle(centers, point, threshold);
+      EXPECT_EQ(reached, largest >= threshold)
+          << "trial " << trial << ", " << num_centers << " centres, threshold " << threshold;
+      num_reached += reached ? 1 : 0;
+      ++num_cases;
+    }
+  }
+  // Both answers occur.
+  EXPECT_GT(num_reached, num_cases / 4);
+  EXPECT_LT(num_reached, num_cases);
+}
+
 TEST(TriangulatorTest, OptionsValidate) {
   TriangulationOptions options;
   EXPECT_TRUE(options.Check());
