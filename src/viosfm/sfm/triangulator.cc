@@ -93,9 +93,11 @@ std::string TriangulationOptions::Validate() const {
   return "";
 }
 
-double MaxTriangulationAngle(const std::vector<Eigen::Vector3d>& centers,
-                             const Eigen::Vector3d& point_in_world) {
-  // The largest angle is the smallest cosine between unit rays.
+namespace {
+
+// The unit rays from the centres to the point (none from a centre at it).
+std::vector<Eigen::Vector3d> UnitRays(const std::vector<Eigen::Vector3d>& centers,
+                                      const Eigen::Vector3d& point_in_world) {
   std::vector<Eigen::Vector3d> rays;
   rays.reserve(centers.size());
   for (const Eigen::Vector3d& center : centers) {
@@ -103,6 +105,15 @@ double MaxTriangulationAngle(const std::vector<Eigen::Vector3d>& centers,
     const double norm = ray.norm();
     if (norm > 0.0) rays.push_back(ray / norm);
   }
+  return rays;
+}
+
+}  // namespace
+
+double MaxTriangulationAngle(const std::vector<Eigen::Vector3d>& centers,
+                             const Eigen::Vector3d& point_in_world) {
+  // The largest angle is the smallest cosine between unit rays.
+  const std::vector<Eigen::Vector3d> rays = UnitRays(centers, point_in_world);
   if (rays.size() < 2) return 0.0;
   size_t best_i = 0;
   size_t best_j = 1;
@@ -128,13 +139,7 @@ bool ReachesTriangulationAngle(const std::vector<Eigen::Vector3d>& centers,
   // does, so the answer is the same as comparing it.
   constexpr double kCosineMargin = 1e-12;
   const double cosine_threshold = std::cos(min_angle_rad) - kCosineMargin;
-  std::vector<Eigen::Vector3d> rays;
-  rays.reserve(centers.size());
-  for (const Eigen::Vector3d& center : centers) {
-    const Eigen::Vector3d ray = point_in_world - center;
-    const double norm = ray.norm();
-    if (norm > 0.0) rays.push_back(ray / norm);
-  }
+  const std::vector<Eigen::Vector3d> rays = UnitRays(centers, point_in_world);
   for (size_t i = 0; i < rays.size(); ++i) {
     for (size_t j = i + 1; j < rays.size(); ++j) {
       if (rays[i].dot(rays[j]) < cosine_threshold) return true;
