@@ -28,6 +28,33 @@ std::vector<int> ConstantIntrinsicIndices(const Camera& camera,
   return PrincipalPointIndices(camera);
 }
 
+// The problem's cost functions, which it does not own: a problem that owns
+// them keeps an entry of a tree for each (about 60 bytes and an insertion
+// an observation). Declared before the problem, so deleted after it.
+class OwnedCostFunctions {
+ public:
+  ceres::CostFunction* Add(ceres::CostFunction* cost) {
+    owned_.emplace_back(cost);
+    return cost;
+  }
+  // The cost functions of the residual blocks added to `problem` from the
+  // `first` on: a caller's terms, added as to a problem that owns them.
+  void TakeFrom(const ceres::Problem& problem, size_t first) {
+    std::vector<ceres::ResidualBlockId> blocks;
+    problem.GetResidualBlocks(&blocks);
+    std::vector<const ceres::CostFunction*> costs;
+    for (size_t k = first; k < blocks.size(); ++k) {
+      costs.push_back(problem.GetCostFunctionForResidualBlock(blocks[k]));
+    }
+    std::sort(costs.begin(), costs.end());
+    costs.erase(std::unique(costs.begin(), costs.end()), costs.end());
+    for (const ceres::CostFunction* cost : costs) Add(const_cast<ceres::CostFunction*>(cost));
+  }
+
+ private:
+  std::vector<std::unique_ptr<ceres::CostFunction>> owned_;
+};
+
 }  // namespace
 
 const char* BaLinearSolverName(BaLinearSolver solver) {
@@ -100,6 +127,332 @@ ceres::LossFunction* CreateWhitenedLoss(double prior_loss_scale, double image_no
   return loss;
 }
 
+namespace {
+
+// One adjustment: its problem built, solved and written back in named steps
+// (BundleAdjust). Each registered image's pose is one parameter block
+// (cost_functions.h) and each point's position another, copied into arrays
+// in the order they enter the problem and back after the solve; the
+// caller's terms' blocks live in the poses' array, after them. The arrays
+// never grow past their reserved size, so the blocks' addresses are stable,
+// and they increase in that order: Ceres orders the blocks of each group of
+// linear_solver_ordering by address, so the solve does not depend on where
+// the reconstruction's or the caller's memory happens to be.
+class BundleAdjuster {
+ public:
+  BundleAdjuster(Reconstruction* reconstruction, const std::vector<image_t>& constant_poses,
+                 const BundleAdjustmentOptions& options, BundleAdjustmentTerms* terms)
+      : reconstruction_(reconstruction),
+        options_(options),
+        terms_(terms),
+        constant_(constant_poses.begin(), constant_poses.end()),
+        problem_(ProblemOptions()),
+        max_num_poses_(reconstruction->NumRegImages()),
+        pose_and_term_values_(max_num_poses_ * kPoseSize +
+                              (terms != nullptr ? terms->NumParameters() : 0)) {}
+
+  // The constant poses checked, the rotations normalised, the error before.
+  void Prepare() {
+    for (const image_t image_id : constant_) {
+      VIOSFM_CHECK(reconstruction_->ExistsImage(image_id))
+          << "constant pose of unknown image " << image_id;
+      VIOSFM_CHECK(reconstruction_->GetImage(image_id).registered)
+          << "constant pose of unregistered image " << image_id;
+    }
+    for (const image_t image_id : reconstruction_->RegImageIds()) {
+      reconstruction_->GetImage(image_id).cam_from_world.rotation.normalize();
+    }
+    summary_.mean_reprojection_error_before_px =
+        MeanReprojectionError(*reconstruction_, options_.num_threads);
+  }
+
+  // Every point's observations in registered images.
+  void AddObservations();
+  // The relative-pose priors between registered images, not both constant.
+  void AddPriors(const std::vector<RelativePosePrior>& priors);
+  // The caller's terms, their blocks in the poses' array.
+  void AddTerms();
+  // The poses' manifold and the constant ones; the intrinsics held.
+  void SetManifolds();
+
+  bool Empty() const { return problem_.NumResidualBlocks() == 0; }
+  // Solves, and writes the poses, points and terms back.
+  void Solve();
+  // The summary, the errors after and the time.
+  BundleAdjustmentSummary Finish(const std::string& termination);
+
+ private:
+  static constexpr size_t kPoseSize = std::tuple_size_v<PoseParameters>;
+
+  // The shared loss and the manifolds are owned by the problem, the cost
+  // functions by cost_functions_.
+  static ceres::Problem::Options ProblemOptions() {
+    ceres::Problem::Options options;
+    options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    return options;
+  }
+  double* PoseData(size_t k) { return pose_and_term_values_.data() + k * kPoseSize; }
+  double* TermStorage() { return pose_and_term_values_.data() + max_num_poses_ * kPoseSize; }
+  // The image's pose block, added on first use.
+  double* PoseBlock(const Image& image);
+  Rigid3d PoseOfBlock(size_t k) {
+    PoseParameters values;
+    std::copy(PoseData(k), PoseData(k) + kPoseSize, values.begin());
+    return FromPoseParameters(values);
+  }
+  ceres::Solver::Options SolverOptions();
+
+  Reconstruction* const reconstruction_;
+  const BundleAdjustmentOptions& options_;
+  BundleAdjustmentTerms* const terms_;
+  const std::unordered_set<image_t> constant_;
+  const Timer timer_;
+  BundleAdjustmentSummary summary_;
+  OwnedCostFunctions cost_functions_;  // before problem_: deleted after it
+  ceres::Problem problem_;
+  const size_t max_num_poses_;
+  std::vector<double> pose_and_term_values_;
+  size_t num_poses_ = 0;
+  std::vector<image_t> pose_image_ids_;
+  std::unordered_map<image_t, size_t> pose_index_;
+  std::vector<Eigen::Vector3d> point_parameters_;
+  std::vector<point3D_t> point_ids_in_problem_;
+  std::unordered_set<camera_t> cameras_in_problem_;
+  std::vector<double*> term_blocks_;
+  double seconds_before_solve_ = 0.0;
+  std::string solve_times_;  // Ceres' times, for the log
+};
+
+double* BundleAdjuster::PoseBlock(const Image& image) {
+  auto [it, inserted] = pose_index_.try_emplace(image.image_id, num_poses_);
+  if (inserted) {
+    VIOSFM_CHECK_LT(num_poses_, max_num_poses_);
+    const PoseParameters values = ToPoseParameters(image.cam_from_world);
+    std::copy(values.begin(), values.end(), PoseData(num_poses_));
+    pose_image_ids_.push_back(image.image_id);
+    ++num_poses_;
+  }
+  return PoseData(it->second);
+}
+
+void BundleAdjuster::AddObservations() {
+  ceres::LossFunction* loss =
+      options_.loss_scale_px > 0.0 ? new ceres::CauchyLoss(options_.loss_scale_px) : nullptr;
+  bool loss_used = false;
+  const std::vector<point3D_t> all_point_ids = reconstruction_->Point3DIds();
+  point_parameters_.reserve(all_point_ids.size());
+  for (const point3D_t point3D_id : all_point_ids) {
+    const Point3D& point3D = reconstruction_->GetPoint3D(point3D_id);
+    bool point_used = false;
+    double* xyz = nullptr;
+    for (const TrackElement& element : point3D.track) {
+      Image& image = reconstruction_->GetImage(element.image_id);
+      if (!image.registered) continue;
+      Camera& camera = reconstruction_->GetCamera(image.camera_id);
+      const Point2D& point2D = image.points2D.at(element.point2D_idx);
+      if (xyz == nullptr) {
+        point_parameters_.push_back(point3D.xyz);
+        xyz = point_parameters_.back().data();
+      }
+      if (options_.refine_intrinsics) {
+        problem_.AddResidualBlock(
+            cost_functions_.Add(CreateReprojectionCost(camera.model_id, point2D.xy)), loss,
+            PoseBlock(image), xyz, camera.params.data());
+        cameras_in_problem_.insert(camera.camera_id);
+      } else {
+        problem_.AddResidualBlock(
+            cost_functions_.Add(CreateConstantCameraReprojectionCost(camera, point2D.xy)), loss,
+            PoseBlock(image), xyz);
+      }
+      loss_used = true;
+      point_used = true;
+      ++summary_.num_observations;
+    }
+    if (point_used) {
+      ++summary_.num_points;
+      point_ids_in_problem_.push_back(point3D_id);
+    }
+  }
+  if (loss != nullptr && !loss_used) delete loss;
+}
+
+void BundleAdjuster::AddPriors(const std::vector<RelativePosePrior>& priors) {
+  if (!options_.use_relative_pose_priors) return;
+  for (const RelativePosePrior& prior : priors) {
+    if (!reconstruction_->ExistsImage(prior.image_id1) ||
+        !reconstruction_->ExistsImage(prior.image_id2)) {
+      continue;
+    }
+    Image& image1 = reconstruction_->GetImage(prior.image_id1);
+    Image& image2 = reconstruction_->GetImage(prior.image_id2);
+    if (!image1.registered || !image2.registered) continue;
+    if (constant_.count(prior.image_id1) > 0 && constant_.count(prior.image_id2) > 0) continue;
+    Eigen::Matrix<double, 6, 6> sqrt_information;
+    ceres::LossFunction* prior_loss = nullptr;
+    // The loss of a whitened prior (covariance-weighted or the gyro's).
+    const auto whitened_loss = [this]() {
+      return CreateWhitenedLoss(options_.prior_loss_scale, options_.image_noise_px);
+    };
+    if (prior.from_gyro) {
+      VIOSFM_CHECK(prior.sqrt_information.has_value());
+      sqrt_information = *prior.sqrt_information;
+      prior_loss = whitened_loss();
+    } else if (options_.prior_weighting == PriorWeighting::kCovariance && prior.sqrt_information) {
+      // The connectivity factor exp(-beta c) scales the information.
+      const double factor =
+          std::sqrt(prior.weight_scale *
+                    RelativePoseWeight(prior.num_verified_matches, 1.0, options_.prior_beta));
+      sqrt_information = factor * *prior.sqrt_information;
+      if (prior.rotation_only) {
+        // The rotation's marginal information: whiten the rotation block alone.
+        sqrt_information.setZero();
+        const Eigen::Matrix<double, 6, 6> information =
+            prior.sqrt_information->transpose() * *prior.sqrt_information;
+        const Eigen::Matrix3d rotation_covariance = information.inverse().topLeftCorner<3, 3>();
+        const Eigen::Matrix3d rotation_sqrt =
+            rotation_covariance.llt().matrixL().solve(Eigen::Matrix3d::Identity());
+        sqrt_information.topLeftCorner<3, 3>() = factor * rotation_sqrt;
+      }
+      prior_loss = whitened_loss();
+    } else {
+      const double weight =
+          prior.weight_scale *
+          RelativePoseWeight(prior.num_verified_matches, options_.prior_alpha, options_.prior_beta);
+      sqrt_information = RelativePoseSqrtInformation(weight, options_.prior_rotation_sigma_rad,
+                                                     options_.prior_translation_sigma_m);
+      if (prior.rotation_only) sqrt_information.bottomRightCorner<3, 3>().setZero();
+    }
+    problem_.AddResidualBlock(
+        cost_functions_.Add(RelativePoseError::Create(prior.cam2_from_cam1, sqrt_information)),
+        prior_loss, PoseBlock(image1), PoseBlock(image2));
+    ++summary_.num_priors;
+  }
+}
+
+void BundleAdjuster::AddTerms() {
+  if (terms_ == nullptr) return;
+  const size_t first_term = static_cast<size_t>(problem_.NumResidualBlocks());
+  term_blocks_ = terms_->AddTo(
+      &problem_,
+      [this](image_t image_id) -> double* {
+        if (!reconstruction_->ExistsImage(image_id)) return nullptr;
+        const Image& image = reconstruction_->GetImage(image_id);
+        return image.registered ? PoseBlock(image) : nullptr;
+      },
+      TermStorage());
+  cost_functions_.TakeFrom(problem_, first_term);
+}
+
+void BundleAdjuster::SetManifolds() {
+  summary_.num_images = static_cast<int>(num_poses_);
+  for (size_t k = 0; k < num_poses_; ++k) {
+    problem_.SetManifold(PoseData(k), CreatePoseManifold());
+    if (constant_.count(pose_image_ids_[k]) > 0) problem_.SetParameterBlockConstant(PoseData(k));
+  }
+  // (Only with refine_intrinsics are cameras parameter blocks.)
+  for (const camera_t camera_id : cameras_in_problem_) {
+    Camera& camera = reconstruction_->GetCamera(camera_id);
+    const std::vector<int> held = ConstantIntrinsicIndices(camera, options_);
+    if (!held.empty()) {
+      problem_.SetManifold(camera.params.data(),
+                           new ceres::SubsetManifold(static_cast<int>(camera.params.size()), held));
+    }
+  }
+}
+
+ceres::Solver::Options BundleAdjuster::SolverOptions() {
+  ceres::Solver::Options solver_options;
+  solver_options.max_num_iterations = options_.max_num_iterations;
+  solver_options.num_threads = options_.num_threads;
+  solver_options.function_tolerance = options_.function_tolerance;
+  solver_options.gradient_tolerance = options_.gradient_tolerance;
+  solver_options.parameter_tolerance = options_.parameter_tolerance;
+  solver_options.minimizer_progress_to_stdout = options_.print_progress;
+  solver_options.logging_type =
+      options_.print_progress ? ceres::PER_MINIMIZER_ITERATION : ceres::SILENT;
+  const bool sparse_available =
+      ceres::IsSparseLinearAlgebraLibraryTypeAvailable(ceres::SUITE_SPARSE) ||
+      ceres::IsSparseLinearAlgebraLibraryTypeAvailable(ceres::EIGEN_SPARSE);
+  BaLinearSolver solver = options_.linear_solver;
+  if (solver == BaLinearSolver::kAuto) {
+    solver = summary_.num_images > options_.max_images_for_sparse_schur
+                 ? BaLinearSolver::kIterativeSchur
+                 : BaLinearSolver::kSparseSchur;
+  }
+  if (solver == BaLinearSolver::kSparseSchur && !sparse_available) {
+    solver = BaLinearSolver::kDenseSchur;
+  }
+  summary_.linear_solver = solver;
+  switch (solver) {
+    case BaLinearSolver::kIterativeSchur:
+      solver_options.linear_solver_type = ceres::ITERATIVE_SCHUR;
+      solver_options.preconditioner_type = ceres::SCHUR_JACOBI;
+      solver_options.max_linear_solver_iterations = options_.max_linear_solver_iterations;
+      break;
+    case BaLinearSolver::kDenseSchur: solver_options.linear_solver_type = ceres::DENSE_SCHUR; break;
+    default: solver_options.linear_solver_type = ceres::SPARSE_SCHUR; break;
+  }
+  if (!options_.refine_intrinsics) {
+    // The points first (eliminated), then the poses and the caller's
+    // blocks: the ordering Ceres finds for a bundle adjustment problem,
+    // given instead of searched for in the problem's graph, a large part of
+    // Ceres' preprocessing. (With intrinsics, whose blocks live elsewhere,
+    // Ceres searches.)
+    auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
+    for (Eigen::Vector3d& xyz : point_parameters_) ordering->AddElementToGroup(xyz.data(), 0);
+    for (size_t k = 0; k < num_poses_; ++k) {
+      if (constant_.count(pose_image_ids_[k]) == 0) ordering->AddElementToGroup(PoseData(k), 1);
+    }
+    for (double* block : term_blocks_) ordering->AddElementToGroup(block, 1);
+    if (ordering->NumGroups() == 2) solver_options.linear_solver_ordering = ordering;
+  }
+  std::string error;
+  VIOSFM_CHECK(solver_options.IsValid(&error)) << error;
+  return solver_options;
+}
+
+void BundleAdjuster::Solve() {
+  const ceres::Solver::Options solver_options = SolverOptions();
+  seconds_before_solve_ = timer_.ElapsedSeconds();
+  ceres::Solver::Summary ceres_summary;
+  ceres::Solve(solver_options, &problem_, &ceres_summary);
+
+  for (size_t k = 0; k < num_poses_; ++k) {
+    if (constant_.count(pose_image_ids_[k]) > 0) continue;
+    reconstruction_->GetImage(pose_image_ids_[k]).cam_from_world = PoseOfBlock(k);
+  }
+  if (terms_ != nullptr) terms_->TakeSolution(TermStorage());
+  for (size_t k = 0; k < point_ids_in_problem_.size(); ++k) {
+    reconstruction_->GetPoint3D(point_ids_in_problem_[k]).xyz = point_parameters_[k];
+  }
+  summary_.initial_cost = ceres_summary.initial_cost;
+  summary_.final_cost = ceres_summary.final_cost;
+  summary_.num_iterations = std::max(0, static_cast<int>(ceres_summary.iterations.size()) - 1);
+  summary_.termination =
+      std::string(ceres::TerminationTypeToString(ceres_summary.termination_type)) + ": " +
+      ceres_summary.message;
+  summary_.usable = ceres_summary.IsSolutionUsable();
+  std::ostringstream times;
+  times << "; before the solve (errors, problem built) " << seconds_before_solve_
+        << " s; Ceres: in all " << ceres_summary.total_time_in_seconds << " s, linear solver "
+        << ceres_summary.linear_solver_time_in_seconds << " s, Jacobians "
+        << ceres_summary.jacobian_evaluation_time_in_seconds << " s, residuals "
+        << ceres_summary.residual_evaluation_time_in_seconds << " s, preprocessing "
+        << ceres_summary.preprocessor_time_in_seconds << " s";
+  solve_times_ = times.str();
+}
+
+BundleAdjustmentSummary BundleAdjuster::Finish(const std::string& termination) {
+  if (!termination.empty()) summary_.termination = termination;
+  summary_.mean_reprojection_error_after_px =
+      UpdateReprojectionErrors(reconstruction_, options_.num_threads);
+  summary_.time_s = timer_.ElapsedSeconds();
+  if (!solve_times_.empty()) VIOSFM_LOG(DEBUG) << summary_.ToString() << solve_times_;
+  return summary_;
+}
+
+}  // namespace
+
 BundleAdjustmentSummary BundleAdjust(Reconstruction* reconstruction,
                                      const std::vector<RelativePosePrior>& priors,
                                      const std::vector<image_t>& constant_poses,
@@ -107,262 +460,15 @@ BundleAdjustmentSummary BundleAdjust(Reconstruction* reconstruction,
                                      BundleAdjustmentTerms* terms) {
   VIOSFM_CHECK(reconstruction != nullptr);
   VIOSFM_CHECK(options.Check()) << options.Validate();
-  const Timer timer;
-  BundleAdjustmentSummary summary;
-
-  const std::unordered_set<image_t> constant(constant_poses.begin(), constant_poses.end());
-  for (const image_t image_id : constant) {
-    VIOSFM_CHECK(reconstruction->ExistsImage(image_id))
-        << "constant pose of unknown image " << image_id;
-    VIOSFM_CHECK(reconstruction->GetImage(image_id).registered)
-        << "constant pose of unregistered image " << image_id;
-  }
-  for (const image_t image_id : reconstruction->RegImageIds()) {
-    reconstruction->GetImage(image_id).cam_from_world.rotation.normalize();
-  }
-  summary.mean_reprojection_error_before_px =
-      MeanReprojectionError(*reconstruction, options.num_threads);
-
-  ceres::Problem::Options problem_options;
-  // Cost functions, the shared loss and the manifolds are owned by the problem.
-  ceres::Problem problem(problem_options);
-  ceres::LossFunction* loss =
-      options.loss_scale_px > 0.0 ? new ceres::CauchyLoss(options.loss_scale_px) : nullptr;
-  bool loss_used = false;
-
-  // Each registered image's pose as one parameter block (cost_functions.h)
-  // and each point's position, copied into arrays in the order they enter
-  // the problem and back after the solve; the caller's terms' blocks in
-  // the poses' array, after them. The arrays never grow past their
-  // reserved size, so the blocks' addresses are stable, and they increase
-  // in that order: Ceres orders the blocks of each group of
-  // linear_solver_ordering by address, so the solve does not depend on
-  // where the reconstruction's or the caller's memory happens to be.
-  constexpr size_t kPoseSize = std::tuple_size_v<PoseParameters>;
-  const size_t max_num_poses = reconstruction->NumRegImages();
-  std::vector<double> pose_and_term_values(max_num_poses * kPoseSize +
-                                           (terms != nullptr ? terms->NumParameters() : 0));
-  double* const term_storage = pose_and_term_values.data() + max_num_poses * kPoseSize;
-  size_t num_poses = 0;
-  const auto pose_data = [&](size_t k) { return pose_and_term_values.data() + k * kPoseSize; };
-  const auto pose_of_block = [&](size_t k) {
-    PoseParameters values;
-    std::copy(pose_data(k), pose_data(k) + kPoseSize, values.begin());
-    return FromPoseParameters(values);
-  };
-  std::vector<image_t> pose_image_ids;
-  std::unordered_map<image_t, size_t> pose_index;
-  const auto pose_block = [&](const Image& image) {
-    auto [it, inserted] = pose_index.try_emplace(image.image_id, num_poses);
-    if (inserted) {
-      VIOSFM_CHECK_LT(num_poses, max_num_poses);
-      const PoseParameters values = ToPoseParameters(image.cam_from_world);
-      std::copy(values.begin(), values.end(), pose_data(num_poses));
-      pose_image_ids.push_back(image.image_id);
-      ++num_poses;
-    }
-    return pose_data(it->second);
-  };
-  const std::vector<point3D_t> all_point_ids = reconstruction->Point3DIds();
-  std::vector<Eigen::Vector3d> point_parameters;
-  point_parameters.reserve(all_point_ids.size());
-  std::unordered_set<camera_t> cameras_in_problem;
-  std::vector<point3D_t> point_ids_in_problem;
-  for (const point3D_t point3D_id : all_point_ids) {
-    const Point3D& point3D = reconstruction->GetPoint3D(point3D_id);
-    bool point_used = false;
-    double* xyz = nullptr;
-    for (const TrackElement& element : point3D.track) {
-      Image& image = reconstruction->GetImage(element.image_id);
-      if (!image.registered) continue;
-      Camera& camera = reconstruction->GetCamera(image.camera_id);
-      const Point2D& point2D = image.points2D.at(element.point2D_idx);
-      if (xyz == nullptr) {
-        point_parameters.push_back(point3D.xyz);
-        xyz = point_parameters.back().data();
-      }
-      if (options.refine_intrinsics) {
-        problem.AddResidualBlock(CreateReprojectionCost(camera.model_id, point2D.xy), loss,
-                                 pose_block(image), xyz, camera.params.data());
-        cameras_in_problem.insert(camera.camera_id);
-      } else {
-        problem.AddResidualBlock(CreateConstantCameraReprojectionCost(camera, point2D.xy), loss,
-                                 pose_block(image), xyz);
-      }
-      loss_used = true;
-      point_used = true;
-      ++summary.num_observations;
-    }
-    if (point_used) {
-      ++summary.num_points;
-      point_ids_in_problem.push_back(point3D_id);
-    }
-  }
-  if (loss != nullptr && !loss_used) delete loss;
-
-  if (options.use_relative_pose_priors) {
-    for (const RelativePosePrior& prior : priors) {
-      if (!reconstruction->ExistsImage(prior.image_id1) ||
-          !reconstruction->ExistsImage(prior.image_id2)) {
-        continue;
-      }
-      Image& image1 = reconstruction->GetImage(prior.image_id1);
-      Image& image2 = reconstruction->GetImage(prior.image_id2);
-      if (!image1.registered || !image2.registered) continue;
-      if (constant.count(prior.image_id1) > 0 && constant.count(prior.image_id2) > 0) continue;
-      Eigen::Matrix<double, 6, 6> sqrt_information;
-      ceres::LossFunction* prior_loss = nullptr;
-      // The loss of a whitened prior (covariance-weighted or the gyro's).
-      const auto whitened_loss = [&options]() {
-        return CreateWhitenedLoss(options.prior_loss_scale, options.image_noise_px);
-      };
-      if (prior.from_gyro) {
-        VIOSFM_CHECK(prior.sqrt_information.has_value());
-        sqrt_information = *prior.sqrt_information;
-        prior_loss = whitened_loss();
-      } else if (options.prior_weighting == PriorWeighting::kCovariance && prior.sqrt_information) {
-        // The connectivity factor exp(-beta c) scales the information.
-        const double factor =
-            std::sqrt(prior.weight_scale *
-                      RelativePoseWeight(prior.num_verified_matches, 1.0, options.prior_beta));
-        sqrt_information = factor * *prior.sqrt_information;
-        if (prior.rotation_only) {
-          // The rotation's marginal information: whiten the rotation block alone.
-          sqrt_information.setZero();
-          const Eigen::Matrix<double, 6, 6> information =
-              prior.sqrt_information->transpose() * *prior.sqrt_information;
-          const Eigen::Matrix3d rotation_covariance = information.inverse().topLeftCorner<3, 3>();
-          const Eigen::Matrix3d rotation_sqrt =
-              rotation_covariance.llt().matrixL().solve(Eigen::Matrix3d::Identity());
-          sqrt_information.topLeftCorner<3, 3>() = factor * rotation_sqrt;
-        }
-        prior_loss = whitened_loss();
-      } else {
-        const double weight =
-            prior.weight_scale *
-            RelativePoseWeight(prior.num_verified_matches, options.prior_alpha, options.prior_beta);
-        sqrt_information = RelativePoseSqrtInformation(weight, options.prior_rotation_sigma_rad,
-                                                       options.prior_translation_sigma_m);
-        if (prior.rotation_only) sqrt_information.bottomRightCorner<3, 3>().setZero();
-      }
-      problem.AddResidualBlock(RelativePoseError::Create(prior.cam2_from_cam1, sqrt_information),
-                               prior_loss, pose_block(image1), pose_block(image2));
-      ++summary.num_priors;
-    }
-  }
-  std::vector<double*> term_blocks;
-  if (terms != nullptr) {
-    term_blocks = terms->AddTo(
-        &problem,
-        [&](image_t image_id) -> double* {
-          if (!reconstruction->ExistsImage(image_id)) return nullptr;
-          const Image& image = reconstruction->GetImage(image_id);
-          return image.registered ? pose_block(image) : nullptr;
-        },
-        term_storage);
-  }
-  summary.num_images = static_cast<int>(num_poses);
-
-  for (size_t k = 0; k < num_poses; ++k) {
-    problem.SetManifold(pose_data(k), CreatePoseManifold());
-    if (constant.count(pose_image_ids[k]) > 0) problem.SetParameterBlockConstant(pose_data(k));
-  }
-  // (Only with refine_intrinsics are cameras parameter blocks.)
-  for (const camera_t camera_id : cameras_in_problem) {
-    Camera& camera = reconstruction->GetCamera(camera_id);
-    const std::vector<int> held = ConstantIntrinsicIndices(camera, options);
-    if (!held.empty()) {
-      problem.SetManifold(camera.params.data(),
-                          new ceres::SubsetManifold(static_cast<int>(camera.params.size()), held));
-    }
-  }
-
-  if (problem.NumResidualBlocks() == 0) {
-    summary.termination = "nothing to adjust";
-    summary.mean_reprojection_error_after_px =
-        UpdateReprojectionErrors(reconstruction, options.num_threads);
-    summary.time_s = timer.ElapsedSeconds();
-    return summary;
-  }
-
-  ceres::Solver::Options solver_options;
-  solver_options.max_num_iterations = options.max_num_iterations;
-  solver_options.num_threads = options.num_threads;
-  solver_options.function_tolerance = options.function_tolerance;
-  solver_options.gradient_tolerance = options.gradient_tolerance;
-  solver_options.parameter_tolerance = options.parameter_tolerance;
-  solver_options.minimizer_progress_to_stdout = options.print_progress;
-  solver_options.logging_type =
-      options.print_progress ? ceres::PER_MINIMIZER_ITERATION : ceres::SILENT;
-  const bool sparse_available =
-      ceres::IsSparseLinearAlgebraLibraryTypeAvailable(ceres::SUITE_SPARSE) ||
-      ceres::IsSparseLinearAlgebraLibraryTypeAvailable(ceres::EIGEN_SPARSE);
-  BaLinearSolver solver = options.linear_solver;
-  if (solver == BaLinearSolver::kAuto) {
-    solver = summary.num_images > options.max_images_for_sparse_schur
-                 ? BaLinearSolver::kIterativeSchur
-                 : BaLinearSolver::kSparseSchur;
-  }
-  if (solver == BaLinearSolver::kSparseSchur && !sparse_available) {
-    solver = BaLinearSolver::kDenseSchur;
-  }
-  summary.linear_solver = solver;
-  switch (solver) {
-    case BaLinearSolver::kIterativeSchur:
-      solver_options.linear_solver_type = ceres::ITERATIVE_SCHUR;
-      solver_options.preconditioner_type = ceres::SCHUR_JACOBI;
-      solver_options.max_linear_solver_iterations = options.max_linear_solver_iterations;
-      break;
-    case BaLinearSolver::kDenseSchur: solver_options.linear_solver_type = ceres::DENSE_SCHUR; break;
-    default: solver_options.linear_solver_type = ceres::SPARSE_SCHUR; break;
-  }
-  if (!options.refine_intrinsics) {
-    // The points first (eliminated), then the poses and the caller's
-    // blocks: the ordering Ceres finds for a bundle adjustment problem,
-    // given instead of searched for in the problem's graph, a large part of
-    // Ceres' preprocessing. (With intrinsics, whose blocks live elsewhere,
-    // Ceres searches.)
-    auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
-    for (Eigen::Vector3d& xyz : point_parameters) ordering->AddElementToGroup(xyz.data(), 0);
-    for (size_t k = 0; k < num_poses; ++k) {
-      if (constant.count(pose_image_ids[k]) == 0) ordering->AddElementToGroup(pose_data(k), 1);
-    }
-    for (double* block : term_blocks) ordering->AddElementToGroup(block, 1);
-    if (ordering->NumGroups() == 2) solver_options.linear_solver_ordering = ordering;
-  }
-  std::string error;
-  VIOSFM_CHECK(solver_options.IsValid(&error)) << error;
-
-  const double seconds_before_solve = timer.ElapsedSeconds();
-  ceres::Solver::Summary ceres_summary;
-  ceres::Solve(solver_options, &problem, &ceres_summary);
-
-  for (size_t k = 0; k < num_poses; ++k) {
-    if (constant.count(pose_image_ids[k]) > 0) continue;
-    reconstruction->GetImage(pose_image_ids[k]).cam_from_world = pose_of_block(k);
-  }
-  if (terms != nullptr) terms->TakeSolution(term_storage);
-  for (size_t k = 0; k < point_ids_in_problem.size(); ++k) {
-    reconstruction->GetPoint3D(point_ids_in_problem[k]).xyz = point_parameters[k];
-  }
-  summary.initial_cost = ceres_summary.initial_cost;
-  summary.final_cost = ceres_summary.final_cost;
-  summary.num_iterations = std::max(0, static_cast<int>(ceres_summary.iterations.size()) - 1);
-  summary.termination =
-      std::string(ceres::TerminationTypeToString(ceres_summary.termination_type)) + ": " +
-      ceres_summary.message;
-  summary.usable = ceres_summary.IsSolutionUsable();
-  summary.mean_reprojection_error_after_px =
-      UpdateReprojectionErrors(reconstruction, options.num_threads);
-  summary.time_s = timer.ElapsedSeconds();
-  VIOSFM_LOG(DEBUG) << summary.ToString() << "; before the solve (errors, problem built) "
-                    << seconds_before_solve << " s; Ceres: in all "
-                    << ceres_summary.total_time_in_seconds << " s, linear solver "
-                    << ceres_summary.linear_solver_time_in_seconds << " s, Jacobians "
-                    << ceres_summary.jacobian_evaluation_time_in_seconds << " s, residuals "
-                    << ceres_summary.residual_evaluation_time_in_seconds << " s, preprocessing "
-                    << ceres_summary.preprocessor_time_in_seconds << " s";
-  return summary;
+  BundleAdjuster adjuster(reconstruction, constant_poses, options, terms);
+  adjuster.Prepare();
+  adjuster.AddObservations();
+  adjuster.AddPriors(priors);
+  adjuster.AddTerms();
+  adjuster.SetManifolds();
+  if (adjuster.Empty()) return adjuster.Finish("nothing to adjust");
+  adjuster.Solve();
+  return adjuster.Finish("");
 }
 
 }  // namespace viosfm

@@ -85,11 +85,11 @@ class ReprojectionError {
 template <typename CameraModel>
 class ReprojectionErrorConstantCamera final : public ceres::SizedCostFunction<2, 7, 3> {
  public:
+  // `params` (the camera's) must outlive the cost function: it is read, not
+  // copied (a bundle adjustment holds millions of these).
   ReprojectionErrorConstantCamera(const Eigen::Vector2d& observed, const double* params,
                                   const Eigen::Matrix2d& sqrt_information)
-      : observed_(observed), sqrt_information_(sqrt_information) {
-    for (int i = 0; i < CameraModel::kNumParams(); ++i) params_[i] = params[i];
-  }
+      : observed_(observed), sqrt_information_(sqrt_information), params_(params) {}
 
   bool Evaluate(double const* const* parameters, double* residuals,
                 double** jacobians) const override {
@@ -146,7 +146,7 @@ class ReprojectionErrorConstantCamera final : public ceres::SizedCostFunction<2,
  private:
   Eigen::Vector2d observed_;
   Eigen::Matrix2d sqrt_information_;
-  double params_[CameraModel::kNumParams()];
+  const double* params_;
 };
 
 // ReprojectionError<Model>::Create for the model of `model_id`; throws
@@ -156,7 +156,8 @@ ceres::CostFunction* CreateReprojectionCost(
     const Eigen::Matrix2d& sqrt_information = Eigen::Matrix2d::Identity());
 
 // ReprojectionErrorConstantCamera<Model>::Create for `camera` (its model and
-// parameters); throws InputError for a model that cannot project.
+// parameters, which must outlive the cost function); throws InputError for
+// a model that cannot project.
 ceres::CostFunction* CreateConstantCameraReprojectionCost(
     const Camera& camera, const Eigen::Vector2d& observed,
     const Eigen::Matrix2d& sqrt_information = Eigen::Matrix2d::Identity());
