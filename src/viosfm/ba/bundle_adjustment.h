@@ -251,6 +251,8 @@ class BundleAdjustmentTerms {
   virtual size_t NumParameters() const = 0;
   // Adds the terms to `problem`, the caller's own parameter blocks laid out
   // in `storage` (NumParameters() doubles) and set to their current values.
+  // The cost functions, losses and manifolds it adds are deleted with the
+  // adjustment, as by a problem that owns them.
   // pose_block(image_id) is the pose block (geometry/pose_parameters.h) of
   // a registered image, nullptr for any other image. Returns the caller's
   // own parameter blocks.
