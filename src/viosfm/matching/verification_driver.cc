@@ -137,28 +137,14 @@ VerificationResult RunVerification(const Sequence& sequence, const Trajectory& v
   return RunVerification(sequence, frame_poses, database, options);
 }
 
-VerificationResult RunVerification(const Sequence& sequence,
-                                   const std::vector<std::optional<FrameVioPose>>& frame_poses,
-                                   ColmapDatabase* database, const VerificationOptions& options,
-                                   const FrameRollingShutter& rolling_shutter,
-                                   const VerifiedPairsCallback& on_verified) {
-  VIOSFM_CHECK(database != nullptr);
-  VIOSFM_CHECK(!rolling_shutter.active() ||
-               rolling_shutter.cam_angular_rate.size() == sequence.images.size());
-  VIOSFM_CHECK(frame_poses.size() == sequence.images.size())
-      << frame_poses.size() << " frame poses for " << sequence.images.size() << " images";
-  if (const std::string error = options.Validate(); !error.empty()) {
-    throw InputError("invalid verification options: " + error);
-  }
-  Timer total_timer;
-  VerificationResult result;
-  VerificationSummary& summary = result.summary;
-  summary.options = options.ToKeyValues();
-  const std::string database_path = database->path().string();
-  summary.database_path = database_path;
+namespace {
 
-  // Images: the database's images that belong to the sequence, in time order.
-  Timer step_timer;
+// The database's images that belong to the sequence, in time order, with
+// their VIO poses and the camera's angular rates (a rolling shutter).
+std::vector<PairImage> ReadPairImages(const Sequence& sequence,
+                                      const std::vector<std::optional<FrameVioPose>>& frame_poses,
+                                      ColmapDatabase* database, const VerificationOptions& options,
+                                      const FrameRollingShutter& rolling_shutter) {
   std::unordered_map<std::string, size_t> frame_by_name;
   for (size_t i = 0; i < sequence.images.size(); ++i) {
     frame_by_name.emplace(DatabaseImageName(sequence.images[i]), i);
@@ -168,7 +154,7 @@ VerificationResult RunVerification(const Sequence& sequence,
     const auto it = frame_by_name.find(row.name);
     if (it == frame_by_name.end()) continue;
     if (!database->ExistsFeatures(row.image_id)) {
-      throw InputError(database_path, 0,
+      throw InputError(database->path().string(), 0,
                        "image '" + row.name +
                            "' has no keypoints/descriptors (run `viosfm "
                            "features` first)");
@@ -188,40 +174,30 @@ VerificationResult RunVerification(const Sequence& sequence,
   }
   std::sort(images.begin(), images.end(),
             [](const PairImage& a, const PairImage& b) { return a.timestamp_ns < b.timestamp_ns; });
-  summary.num_images = images.size();
-  bool any_prior = false;
-  for (const std::optional<FrameVioPose>& pose : frame_poses) any_prior = any_prior || pose;
-  const bool use_prior = options.use_vio_prior && any_prior;
-  for (const PairImage& info : images) {
-    if (info.world_from_body) ++summary.num_images_with_prior;
-  }
-  if (use_prior && summary.num_images_with_prior < images.size()) {
-    VIOSFM_LOG(WARNING) << "verification: " << images.size() - summary.num_images_with_prior
-                        << " of " << images.size() << " images have no VIO pose within "
-                        << FormatNsAsSeconds(options.max_pose_time_difference_ns, 3)
-                        << " s; their pairs are verified by RANSAC only";
-  }
-  std::unordered_map<image_t, size_t> index_by_id;
-  for (size_t k = 0; k < images.size(); ++k) index_by_id[images[k].image_id] = k;
-  std::map<camera_t, Camera> cameras;
-  for (const PairImage& info : images) {
-    if (!cameras.count(info.camera_id)) {
-      cameras.emplace(info.camera_id, database->ReadCamera(info.camera_id));
-    }
-  }
+  return images;
+}
 
-  // Pairs.
+// The candidate pairs of the images (in time order), and which of them are
+// temporal neighbours.
+struct CandidatePairs {
+  std::vector<ImagePair> pairs;
+  std::set<ImagePair> temporal;
+};
+
+CandidatePairs GenerateCandidatePairs(const std::vector<PairImage>& images,
+                                      ColmapDatabase* database,
+                                      const VerificationOptions& options) {
+  CandidatePairs candidates;
   PairGeneratorInput input;
   for (const PairImage& info : images) input.images.push_back({info.image_id, info.timestamp_ns});
   const int n1 = options.pairs.num_temporal_neighbors;
   const int n2 = options.pairs.num_retrieval_neighbors;
-  std::set<ImagePair> temporal_pairs;
   if (options.pairs.mode == PairMode::kTemporalRetrieval) {
     std::vector<std::vector<image_t>> exclude(images.size());
     for (size_t k = 0; k < images.size(); ++k) {
       for (const size_t j : TemporalNeighbors(input.images, k, n1)) {
         exclude[k].push_back(images[j].image_id);
-        temporal_pairs.insert(ImagePair::Ordered(images[k].image_id, images[j].image_id));
+        candidates.temporal.insert(ImagePair::Ordered(images[k].image_id, images[j].image_id));
       }
     }
     // Retrieval only if some image has candidates beyond its temporal neighbours.
@@ -239,7 +215,139 @@ VerificationResult RunVerification(const Sequence& sequence,
       input.retrieval = RetrieveSimilarImages(ids, load, exclude, retrieval);
     }
   }
-  const std::vector<ImagePair> pairs = GeneratePairs(input, options.pairs);
+  candidates.pairs = GeneratePairs(input, options.pairs);
+  return candidates;
+}
+
+// The images of the pairs being verified with their features, read from
+// the database a batch at a time (kept from one batch to the next where
+// needed again).
+class BatchImages {
+ public:
+  BatchImages(const std::vector<PairImage>& images, ColmapDatabase* database,
+              const VerificationOptions& options, const FrameRollingShutter& rolling_shutter)
+      : images_(images), database_(database), options_(options), rolling_shutter_(rolling_shutter) {
+    for (size_t k = 0; k < images.size(); ++k) index_by_id_[images[k].image_id] = k;
+    for (const PairImage& info : images) {
+      if (!cameras_.count(info.camera_id)) {
+        cameras_.emplace(info.camera_id, database->ReadCamera(info.camera_id));
+      }
+    }
+  }
+
+  const PairImage& Info(image_t image_id) const { return images_[index_by_id_.at(image_id)]; }
+  const Camera& camera(camera_t camera_id) const { return cameras_.at(camera_id); }
+  const PairImage& Loaded(image_t image_id) const { return cache_.at(image_id); }
+
+  // Pairs [begin, end)'s images loaded with what their matching needs:
+  // keypoints only for stored pairs, the stored descriptors for guided
+  // matching, the normalised ones too for brute-force matching.
+  void Load(const std::vector<ImagePair>& pairs, size_t begin, size_t end,
+            const std::vector<bool>& stored) {
+    std::unordered_map<image_t, ImageNeeds> needed;
+    for (size_t i = begin; i < end; ++i) {
+      ImageNeeds& needs1 = needed[pairs[i].image_id1];
+      ImageNeeds& needs2 = needed[pairs[i].image_id2];
+      if (stored[i]) continue;
+      const bool guided = options_.guided_matching &&
+                          HasVioPrior(Info(pairs[i].image_id1), Info(pairs[i].image_id2));
+      for (ImageNeeds* needs : {&needs1, &needs2}) {
+        needs->stored_descriptors = true;
+        needs->normalised_descriptors |= !guided;
+      }
+    }
+    for (auto it = cache_.begin(); it != cache_.end();) {
+      it = needed.count(it->first) ? std::next(it) : cache_.erase(it);
+    }
+    for (const auto& [image_id, needs] : needed) {
+      const auto [entry, inserted] = cache_.try_emplace(image_id);
+      PairImage& data = entry->second;
+      const PairImage& info = Info(image_id);
+      if (inserted) {
+        data = info;
+        SetPairImageKeypoints(cameras_.at(info.camera_id), database_->ReadKeypoints(image_id),
+                              rolling_shutter_.readout_s, options_.guided_matching, &data);
+      }
+      if (needs.stored_descriptors && !data.stored_descriptors) {
+        data.stored_descriptors =
+            std::make_shared<const FeatureDescriptors>(database_->ReadDescriptors(image_id));
+      }
+      if (needs.normalised_descriptors && !data.descriptors) {
+        data.descriptors = std::make_shared<const FloatDescriptors>(
+            NormalizeDescriptors(*data.stored_descriptors));
+      }
+    }
+  }
+
+ private:
+  const std::vector<PairImage>& images_;
+  ColmapDatabase* database_;
+  const VerificationOptions& options_;
+  const FrameRollingShutter& rolling_shutter_;
+  std::unordered_map<image_t, size_t> index_by_id_;
+  std::map<camera_t, Camera> cameras_;
+  std::unordered_map<image_t, PairImage> cache_;
+};
+
+// The decider's counts and times into the run's summary.
+void TakeDecisionCounts(const VerificationSummary& counts, VerificationSummary* summary) {
+  summary->num_resumed = counts.num_resumed;
+  summary->num_reverified = counts.num_reverified;
+  summary->num_pairs_without_prior = counts.num_pairs_without_prior;
+  summary->num_no_matches = counts.num_no_matches;
+  summary->num_vio_rejected = counts.num_vio_rejected;
+  summary->num_vio_depth_rejected = counts.num_vio_depth_rejected;
+  summary->num_accepted_corrected = counts.num_accepted_corrected;
+  summary->num_ransac_rejected = counts.num_ransac_rejected;
+  summary->num_accepted = counts.num_accepted;
+  summary->seconds_matching = counts.seconds_matching;
+  summary->seconds_vio = counts.seconds_vio;
+  summary->seconds_ransac = counts.seconds_ransac;
+}
+
+}  // namespace
+
+VerificationResult RunVerification(const Sequence& sequence,
+                                   const std::vector<std::optional<FrameVioPose>>& frame_poses,
+                                   ColmapDatabase* database, const VerificationOptions& options,
+                                   const FrameRollingShutter& rolling_shutter,
+                                   const VerifiedPairsCallback& on_verified) {
+  VIOSFM_CHECK(database != nullptr);
+  VIOSFM_CHECK(!rolling_shutter.active() ||
+               rolling_shutter.cam_angular_rate.size() == sequence.images.size());
+  VIOSFM_CHECK(frame_poses.size() == sequence.images.size())
+      << frame_poses.size() << " frame poses for " << sequence.images.size() << " images";
+  if (const std::string error = options.Validate(); !error.empty()) {
+    throw InputError("invalid verification options: " + error);
+  }
+  Timer total_timer;
+  VerificationResult result;
+  VerificationSummary& summary = result.summary;
+  summary.options = options.ToKeyValues();
+  summary.database_path = database->path().string();
+
+  // Images: the database's images that belong to the sequence, in time order.
+  Timer step_timer;
+  const std::vector<PairImage> images =
+      ReadPairImages(sequence, frame_poses, database, options, rolling_shutter);
+  summary.num_images = images.size();
+  bool any_prior = false;
+  for (const std::optional<FrameVioPose>& pose : frame_poses) any_prior = any_prior || pose;
+  const bool use_prior = options.use_vio_prior && any_prior;
+  for (const PairImage& info : images) {
+    if (info.world_from_body) ++summary.num_images_with_prior;
+  }
+  if (use_prior && summary.num_images_with_prior < images.size()) {
+    VIOSFM_LOG(WARNING) << "verification: " << images.size() - summary.num_images_with_prior
+                        << " of " << images.size() << " images have no VIO pose within "
+                        << FormatNsAsSeconds(options.max_pose_time_difference_ns, 3)
+                        << " s; their pairs are verified by RANSAC only";
+  }
+  BatchImages batch_images(images, database, options, rolling_shutter);
+
+  // Pairs.
+  const CandidatePairs candidates = GenerateCandidatePairs(images, database, options);
+  const std::vector<ImagePair>& pairs = candidates.pairs;
   summary.seconds_pair_generation = step_timer.ElapsedSeconds();
   summary.num_pairs = pairs.size();
   VIOSFM_LOG(INFO) << "verification: " << pairs.size() << " pairs of " << images.size()
@@ -257,63 +365,29 @@ VerificationResult RunVerification(const Sequence& sequence,
                                               std::numeric_limits<timestamp_ns_t>::max());
   for (size_t k = pairs.size(); k-- > 0;) {
     pending_from_ns[k] =
-        std::min({pending_from_ns[k + 1], images[index_by_id.at(pairs[k].image_id1)].timestamp_ns,
-                  images[index_by_id.at(pairs[k].image_id2)].timestamp_ns});
+        std::min({pending_from_ns[k + 1], batch_images.Info(pairs[k].image_id1).timestamp_ns,
+                  batch_images.Info(pairs[k].image_id2).timestamp_ns});
   }
 
   ProgressBar progress(
       "verifying pairs", static_cast<int64_t>(pairs.size()),
       options.show_progress ? ProgressBar::Mode::kAuto : ProgressBar::Mode::kNever);
-  // The batch's images with their features.
-  std::unordered_map<image_t, PairImage> cache;
   for (size_t begin = 0; begin < pairs.size(); begin += options.batch_size) {
     const size_t end = std::min(pairs.size(), begin + static_cast<size_t>(options.batch_size));
 
-    // Load the batch's features (kept from the previous batch where needed again).
+    // Load the batch's features.
     step_timer.Start();
-    std::unordered_map<image_t, ImageNeeds> needed;
-    for (size_t i = begin; i < end; ++i) {
-      ImageNeeds& needs1 = needed[pairs[i].image_id1];
-      ImageNeeds& needs2 = needed[pairs[i].image_id2];
-      if (stored[i]) continue;
-      const bool guided =
-          options.guided_matching && HasVioPrior(images[index_by_id.at(pairs[i].image_id1)],
-                                                 images[index_by_id.at(pairs[i].image_id2)]);
-      for (ImageNeeds* needs : {&needs1, &needs2}) {
-        needs->stored_descriptors = true;
-        needs->normalised_descriptors |= !guided;
-      }
-    }
-    for (auto it = cache.begin(); it != cache.end();) {
-      it = needed.count(it->first) ? std::next(it) : cache.erase(it);
-    }
-    for (const auto& [image_id, needs] : needed) {
-      const auto [entry, inserted] = cache.try_emplace(image_id);
-      PairImage& data = entry->second;
-      const PairImage& info = images[index_by_id.at(image_id)];
-      if (inserted) {
-        data = info;
-        SetPairImageKeypoints(cameras.at(info.camera_id), database->ReadKeypoints(image_id),
-                              rolling_shutter.readout_s, options.guided_matching, &data);
-      }
-      if (needs.stored_descriptors && !data.stored_descriptors) {
-        data.stored_descriptors =
-            std::make_shared<const FeatureDescriptors>(database->ReadDescriptors(image_id));
-      }
-      if (needs.normalised_descriptors && !data.descriptors) {
-        data.descriptors = std::make_shared<const FloatDescriptors>(
-            NormalizeDescriptors(*data.stored_descriptors));
-      }
-    }
+    batch_images.Load(pairs, begin, end, stored);
     std::vector<PairToDecide> batch;
     for (size_t i = begin; i < end; ++i) {
-      const PairImage& image1 = cache.at(pairs[i].image_id1);
-      const PairImage& image2 = cache.at(pairs[i].image_id2);
-      const std::string source = options.pairs.mode == PairMode::kTemporalRetrieval
-                                     ? (temporal_pairs.count(pairs[i]) ? "temporal" : "retrieval")
-                                     : PairModeName(options.pairs.mode);
-      batch.push_back(
-          {&image1, &image2, &cameras.at(image1.camera_id), &cameras.at(image2.camera_id), source});
+      const PairImage& image1 = batch_images.Loaded(pairs[i].image_id1);
+      const PairImage& image2 = batch_images.Loaded(pairs[i].image_id2);
+      const std::string source =
+          options.pairs.mode == PairMode::kTemporalRetrieval
+              ? (candidates.temporal.count(pairs[i]) ? "temporal" : "retrieval")
+              : PairModeName(options.pairs.mode);
+      batch.push_back({&image1, &image2, &batch_images.camera(image1.camera_id),
+                       &batch_images.camera(image2.camera_id), source});
     }
     summary.seconds_loading += step_timer.ElapsedSeconds();
 
@@ -328,19 +402,7 @@ VerificationResult RunVerification(const Sequence& sequence,
 
   VerificationResult decided = decider.TakeResult();
   result.decisions = std::move(decided.decisions);
-  const VerificationSummary& counts = decided.summary;
-  summary.num_resumed = counts.num_resumed;
-  summary.num_reverified = counts.num_reverified;
-  summary.num_pairs_without_prior = counts.num_pairs_without_prior;
-  summary.num_no_matches = counts.num_no_matches;
-  summary.num_vio_rejected = counts.num_vio_rejected;
-  summary.num_vio_depth_rejected = counts.num_vio_depth_rejected;
-  summary.num_accepted_corrected = counts.num_accepted_corrected;
-  summary.num_ransac_rejected = counts.num_ransac_rejected;
-  summary.num_accepted = counts.num_accepted;
-  summary.seconds_matching = counts.seconds_matching;
-  summary.seconds_vio = counts.seconds_vio;
-  summary.seconds_ransac = counts.seconds_ransac;
+  TakeDecisionCounts(decided.summary, &summary);
   summary.seconds_total = total_timer.ElapsedSeconds();
   VIOSFM_LOG(INFO) << "verification: " << FormatVerificationHeadline(summary) << LogDetails()
                    << " (" << FormatVerificationSummary(summary) << ")";
