@@ -66,64 +66,189 @@ struct ScaleSolution {
   int num_pairs = 0;
 };
 
-ScaleSolution SolveScale(const std::vector<StampedPose>& poses, const std::vector<size_t>& frames,
-                         const std::vector<ImuSample>& imu, const ImuNoise& noise,
-                         const ImuScaleOptions& options) {
-  ScaleSolution result;
-  const timestamp_ns_t t0 = poses[frames.front()].timestamp_ns;
-  const auto window_of = [&](timestamp_ns_t t) {
-    return static_cast<int>(static_cast<double>(t - t0) * 1e-9 / options.bias_window_s);
-  };
-  std::vector<Pair> pairs;
-  for (size_t f = 0; f + 1 < frames.size(); ++f) {
+// The normal equations of whitened rows W A x = W b, (W A)^T (W A) and
+// (W A)^T W b, assembled from rows whose unknowns come in blocks of 3 columns.
+class NormalEquations {
+ public:
+  using Blocks = std::vector<std::pair<int, Eigen::Matrix<double, 6, 3>>>;
+
+  explicit NormalEquations(int num_unknowns) : rhs_(Eigen::VectorXd::Zero(num_unknowns)) {}
+
+  void Add(const Blocks& blocks, const Eigen::Matrix<double, 6, 1>& b,
+           const Eigen::Matrix<double, 6, 6>& whiten) {
+    Blocks white;
+    for (const auto& [col, block] : blocks) white.emplace_back(col, whiten * block);
+    const Eigen::Matrix<double, 6, 1> wb = whiten * b;
+    whitened_b2_ += wb.squaredNorm();
+    for (const auto& [col_a, a] : white) {
+      rhs_.segment<3>(col_a) += a.transpose() * wb;
+      for (const auto& [col_b, bb] : white) {
+        const Eigen::Matrix3d product = a.transpose() * bb;
+        for (int r = 0; r < 3; ++r) {
+          for (int c = 0; c < 3; ++c) {
+            if (product(r, c) != 0.0) triplets_.emplace_back(col_a + r, col_b + c, product(r, c));
+          }
+        }
+      }
+    }
+    num_rows_ += 6;
+  }
+  // A weak prior of `weight` on every unknown.
+  void AddDiagonal(double weight) {
+    for (int k = 0; k < rhs_.size(); ++k) triplets_.emplace_back(k, k, weight);
+  }
+  Eigen::SparseMatrix<double> Matrix() const {
+    Eigen::SparseMatrix<double> matrix(rhs_.size(), rhs_.size());
+    matrix.setFromTriplets(triplets_.begin(), triplets_.end());
+    return matrix;
+  }
+  const Eigen::VectorXd& rhs() const { return rhs_; }
+  double whitened_b2() const { return whitened_b2_; }
+  int num_rows() const { return num_rows_; }
+
+ private:
+  std::vector<Eigen::Triplet<double>> triplets_;
+  Eigen::VectorXd rhs_;
+  double whitened_b2_ = 0.0;
+  int num_rows_ = 0;
+};
+
+// The least squares of SolveScale over the consecutive pairs of `frames`:
+// scale, gravity direction, accel biases per window and velocities per
+// frame, whitened and iterated on the gravity direction.
+class ScaleLeastSquares {
+ public:
+  ScaleLeastSquares(const std::vector<StampedPose>& poses, const std::vector<size_t>& frames,
+                    const ImuNoise& noise, const ImuScaleOptions& options)
+      : poses_(poses), frames_(frames), noise_(noise), options_(options) {}
+
+  // The pairs the IMU covers, preintegrated with each window's gyro bias.
+  void Preintegrate(const std::vector<ImuSample>& imu);
+  ScaleSolution Solve();
+
+ private:
+  // Unknowns' columns: the scale, the gravity direction's 2-d tangent
+  // correction, 3 per bias window, 3 per frame's velocity.
+  static constexpr int kColScale = 0;
+  static constexpr int kColGravity = 1;
+  static constexpr int kColBias = 3;
+  int ColVelocity() const { return kColBias + 3 * num_windows_; }
+  int NumUnknowns() const { return ColVelocity() + 3 * static_cast<int>(frames_.size()); }
+  int WindowOf(timestamp_ns_t t) const {
+    return static_cast<int>(static_cast<double>(t - poses_[frames_.front()].timestamp_ns) * 1e-9 /
+                            options_.bias_window_s);
+  }
+  Eigen::Matrix3d Rotation(size_t f) const {
+    return poses_[frames_[f]].world_from_frame.rotation.toRotationMatrix();
+  }
+  Eigen::Vector3d Position(size_t f) const {
+    return poses_[frames_[f]].world_from_frame.translation;
+  }
+  // One pair's rows [velocity (3); position (3)] under `gravity`, whitened
+  // by their covariance; none when it is not positive definite.
+  void AddPairRows(const Pair& pair, const Eigen::Vector3d& gravity,
+                   const Eigen::Matrix<double, 3, 2>& tangent, NormalEquations* equations) const;
+
+  const std::vector<StampedPose>& poses_;
+  const std::vector<size_t>& frames_;
+  const ImuNoise& noise_;
+  const ImuScaleOptions& options_;
+  std::vector<Pair> pairs_;
+  int num_windows_ = 0;
+};
+
+void ScaleLeastSquares::Preintegrate(const std::vector<ImuSample>& imu) {
+  for (size_t f = 0; f + 1 < frames_.size(); ++f) {
     Pair pair;
     pair.i = f;
     pair.j = f + 1;
-    pair.window = window_of(poses[frames[f]].timestamp_ns);
+    pair.window = WindowOf(poses_[frames_[f]].timestamp_ns);
     pair.preintegration = std::make_unique<ImuPreintegration>(Eigen::Vector3d::Zero(),
-                                                              Eigen::Vector3d::Zero(), noise);
-    if (!pair.preintegration->IntegrateRange(imu, poses[frames[f]].timestamp_ns,
-                                             poses[frames[f + 1]].timestamp_ns)) {
+                                                              Eigen::Vector3d::Zero(), noise_);
+    if (!pair.preintegration->IntegrateRange(imu, poses_[frames_[f]].timestamp_ns,
+                                             poses_[frames_[f + 1]].timestamp_ns)) {
       continue;
     }
-    pairs.push_back(std::move(pair));
+    pairs_.push_back(std::move(pair));
   }
-  const int num_windows = window_of(poses[frames.back()].timestamp_ns) + 1;
-  const auto rotation = [&](size_t f) {
-    return poses[frames[f]].world_from_frame.rotation.toRotationMatrix();
-  };
-  const auto position = [&](size_t f) { return poses[frames[f]].world_from_frame.translation; };
-
-  // 1. Gyro bias per window from the rotations (gyro_priors.h).
-  {
-    std::vector<GyroPair> gyro_pairs;
-    for (const Pair& pair : pairs) {
-      gyro_pairs.push_back(
-          {pair.preintegration.get(), rotation(pair.i), rotation(pair.j), pair.window});
-    }
-    const std::vector<Eigen::Vector3d> gyro_bias =
-        EstimateGyroBiases(gyro_pairs, num_windows, options.rotation_sigma_rad, noise);
-    for (Pair& pair : pairs) {
-      pair.preintegration->Repropagate(gyro_bias[pair.window], Eigen::Vector3d::Zero());
-    }
+  num_windows_ = WindowOf(poses_[frames_.back()].timestamp_ns) + 1;
+  // Gyro bias per window from the rotations (gyro_priors.h).
+  std::vector<GyroPair> gyro_pairs;
+  for (const Pair& pair : pairs_) {
+    gyro_pairs.push_back(
+        {pair.preintegration.get(), Rotation(pair.i), Rotation(pair.j), pair.window});
   }
+  const std::vector<Eigen::Vector3d> gyro_bias =
+      EstimateGyroBiases(gyro_pairs, num_windows_, options_.rotation_sigma_rad, noise_);
+  for (Pair& pair : pairs_) {
+    pair.preintegration->Repropagate(gyro_bias[pair.window], Eigen::Vector3d::Zero());
+  }
+}
 
-  // 2. Scale, gravity direction, accel biases and velocities: whitened linear
-  // least squares on the normal equations (sparse: a velocity meets only its
-  // two pairs), iterated on the gravity direction.
-  const int num_frames = static_cast<int>(frames.size());
-  const int col_scale = 0;
-  const int col_gravity = 1;                     // 2: tangent correction of the gravity direction
-  const int col_bias = 3;                        // 3 per window
-  const int col_velocity = 3 + 3 * num_windows;  // 3 per frame
-  const int num_unknowns = col_velocity + 3 * num_frames;
+void ScaleLeastSquares::AddPairRows(const Pair& pair, const Eigen::Vector3d& gravity,
+                                    const Eigen::Matrix<double, 3, 2>& tangent,
+                                    NormalEquations* equations) const {
+  const ImuPreintegration& p = *pair.preintegration;
+  const double dt = p.delta_t_s();
+  const Eigen::Matrix3d ri = Rotation(pair.i);
+  const Eigen::Vector3d dp = ri * p.delta_p();
+  const Eigen::Vector3d dv = ri * p.delta_v();
+  // Residual rows [velocity (3); position (3)], unknown blocks of 3
+  // columns (the scale and gravity columns padded into one 3-wide block).
+  Eigen::Matrix<double, 6, 3> globals = Eigen::Matrix<double, 6, 3>::Zero();
+  globals.block<3, 1>(3, 0) = Position(pair.j) - Position(pair.i);  // scale
+  globals.block<3, 2>(0, 1) = -dt * tangent;
+  globals.block<3, 2>(3, 1) = -0.5 * dt * dt * tangent;
+  Eigen::Matrix<double, 6, 3> bias;
+  bias.topRows<3>() = -ri * p.dv_dba();
+  bias.bottomRows<3>() = -ri * p.dp_dba();
+  Eigen::Matrix<double, 6, 3> velocity_i;
+  velocity_i.topRows<3>() = -Eigen::Matrix3d::Identity();
+  velocity_i.bottomRows<3>() = -dt * Eigen::Matrix3d::Identity();
+  Eigen::Matrix<double, 6, 3> velocity_j = Eigen::Matrix<double, 6, 3>::Zero();
+  velocity_j.topRows<3>() = Eigen::Matrix3d::Identity();
+  Eigen::Matrix<double, 6, 1> b;
+  b.head<3>() = dv + gravity * dt;
+  b.tail<3>() = dp + 0.5 * gravity * dt * dt;
+  // Covariance: the preintegration's [v, p] block (rotated into the
+  // world), the bias walking away from its window's value, the frames'
+  // rotations (turning dv and dp) and positions.
+  Eigen::Matrix<double, 6, 6> covariance;
+  const Matrix9d& c = p.covariance();
+  covariance.topLeftCorner<3, 3>() = ri * c.block<3, 3>(3, 3) * ri.transpose();
+  covariance.topRightCorner<3, 3>() = ri * c.block<3, 3>(3, 6) * ri.transpose();
+  covariance.bottomLeftCorner<3, 3>() = covariance.topRightCorner<3, 3>().transpose();
+  covariance.bottomRightCorner<3, 3>() = ri * c.block<3, 3>(6, 6) * ri.transpose();
+  const double walk2 = std::pow(noise_.accel_random_walk, 2) * (0.5 * options_.bias_window_s + dt);
+  const Eigen::Matrix3d eye = Eigen::Matrix3d::Identity();
+  covariance.topLeftCorner<3, 3>() += walk2 * dt * dt * eye;
+  covariance.topRightCorner<3, 3>() += walk2 * 0.5 * dt * dt * dt * eye;
+  covariance.bottomLeftCorner<3, 3>() += walk2 * 0.5 * dt * dt * dt * eye;
+  covariance.bottomRightCorner<3, 3>() += walk2 * 0.25 * dt * dt * dt * dt * eye;
+  const double rotation_sigma = options_.rotation_sigma_rad;
+  const double rotation2 = rotation_sigma * rotation_sigma + std::pow(1e-4 * dt, 2);
+  covariance.topLeftCorner<3, 3>() += rotation2 * dv.squaredNorm() * eye;
+  covariance.bottomRightCorner<3, 3>() +=
+      (rotation2 * dp.squaredNorm() + 2.0 * options_.position_sigma_m * options_.position_sigma_m) *
+      eye;
+  const Eigen::LLT<Eigen::Matrix<double, 6, 6>> llt(covariance);
+  if (llt.info() != Eigen::Success) return;
+  const Eigen::Matrix<double, 6, 6> whiten =
+      llt.matrixL().solve(Eigen::Matrix<double, 6, 6>::Identity());
+  equations->Add({{kColScale, globals},
+                  {kColBias + 3 * pair.window, bias},
+                  {ColVelocity() + 3 * static_cast<int>(pair.i), velocity_i},
+                  {ColVelocity() + 3 * static_cast<int>(pair.j), velocity_j}},
+                 b, whiten);
+}
+
+ScaleSolution ScaleLeastSquares::Solve() {
+  ScaleSolution result;
+  const int num_unknowns = NumUnknowns();
   const double g_norm = kStandardGravity;
   Eigen::Vector3d gravity = GravityInWorld();
-  const double rotation_sigma = options.rotation_sigma_rad;
   double scale = 1.0;
-  Eigen::VectorXd solution;
-  Eigen::SparseMatrix<double> normal_matrix;
-  for (int iteration = 0; iteration < options.gravity_iterations; ++iteration) {
+  for (int iteration = 0; iteration < options_.gravity_iterations; ++iteration) {
     const Eigen::Vector3d up = -gravity.normalized();
     Eigen::Vector3d t1 = up.cross(Eigen::Vector3d::UnitX());
     if (t1.norm() < 0.1) t1 = up.cross(Eigen::Vector3d::UnitY());
@@ -131,116 +256,37 @@ ScaleSolution SolveScale(const std::vector<StampedPose>& poses, const std::vecto
     const Eigen::Vector3d t2 = up.cross(t1);
     Eigen::Matrix<double, 3, 2> tangent;
     tangent << g_norm * t1, g_norm * t2;
-    std::vector<Eigen::Triplet<double>> triplets;
-    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(num_unknowns);
-    double whitened_b2 = 0.0;
-    int num_rows = 0;
-    const auto accumulate =
-        [&](const std::vector<std::pair<int, Eigen::Matrix<double, 6, 3>>>& blocks,
-            const Eigen::Matrix<double, 6, 1>& b, const Eigen::Matrix<double, 6, 6>& whiten) {
-          // Rows whitened: W A x = W b; normal equations (W A)^T (W A), (W A)^T W b.
-          std::vector<std::pair<int, Eigen::Matrix<double, 6, 3>>> white;
-          for (const auto& [col, block] : blocks) white.emplace_back(col, whiten * block);
-          const Eigen::Matrix<double, 6, 1> wb = whiten * b;
-          whitened_b2 += wb.squaredNorm();
-          for (const auto& [col_a, a] : white) {
-            rhs.segment<3>(col_a) += a.transpose() * wb;
-            for (const auto& [col_b, bb] : white) {
-              const Eigen::Matrix3d product = a.transpose() * bb;
-              for (int r = 0; r < 3; ++r) {
-                for (int c = 0; c < 3; ++c) {
-                  if (product(r, c) != 0.0)
-                    triplets.emplace_back(col_a + r, col_b + c, product(r, c));
-                }
-              }
-            }
-          }
-        };
-    for (const Pair& pair : pairs) {
-      const ImuPreintegration& p = *pair.preintegration;
-      const double dt = p.delta_t_s();
-      const Eigen::Matrix3d ri = rotation(pair.i);
-      const Eigen::Vector3d dp = ri * p.delta_p();
-      const Eigen::Vector3d dv = ri * p.delta_v();
-      // Residual rows [velocity (3); position (3)], unknown blocks of 3
-      // columns (the scale and gravity columns padded into one 3-wide block).
-      Eigen::Matrix<double, 6, 3> globals = Eigen::Matrix<double, 6, 3>::Zero();
-      globals.block<3, 1>(3, 0) = position(pair.j) - position(pair.i);  // scale
-      globals.block<3, 2>(0, 1) = -dt * tangent;
-      globals.block<3, 2>(3, 1) = -0.5 * dt * dt * tangent;
-      Eigen::Matrix<double, 6, 3> bias;
-      bias.topRows<3>() = -ri * p.dv_dba();
-      bias.bottomRows<3>() = -ri * p.dp_dba();
-      Eigen::Matrix<double, 6, 3> velocity_i;
-      velocity_i.topRows<3>() = -Eigen::Matrix3d::Identity();
-      velocity_i.bottomRows<3>() = -dt * Eigen::Matrix3d::Identity();
-      Eigen::Matrix<double, 6, 3> velocity_j = Eigen::Matrix<double, 6, 3>::Zero();
-      velocity_j.topRows<3>() = Eigen::Matrix3d::Identity();
-      Eigen::Matrix<double, 6, 1> b;
-      b.head<3>() = dv + gravity * dt;
-      b.tail<3>() = dp + 0.5 * gravity * dt * dt;
-      // Covariance: the preintegration's [v, p] block (rotated into the
-      // world), the bias walking away from its window's value, the frames'
-      // rotations (turning dv and dp) and positions.
-      Eigen::Matrix<double, 6, 6> covariance;
-      const Matrix9d& c = p.covariance();
-      covariance.topLeftCorner<3, 3>() = ri * c.block<3, 3>(3, 3) * ri.transpose();
-      covariance.topRightCorner<3, 3>() = ri * c.block<3, 3>(3, 6) * ri.transpose();
-      covariance.bottomLeftCorner<3, 3>() = covariance.topRightCorner<3, 3>().transpose();
-      covariance.bottomRightCorner<3, 3>() = ri * c.block<3, 3>(6, 6) * ri.transpose();
-      const double walk2 =
-          std::pow(noise.accel_random_walk, 2) * (0.5 * options.bias_window_s + dt);
-      const Eigen::Matrix3d eye = Eigen::Matrix3d::Identity();
-      covariance.topLeftCorner<3, 3>() += walk2 * dt * dt * eye;
-      covariance.topRightCorner<3, 3>() += walk2 * 0.5 * dt * dt * dt * eye;
-      covariance.bottomLeftCorner<3, 3>() += walk2 * 0.5 * dt * dt * dt * eye;
-      covariance.bottomRightCorner<3, 3>() += walk2 * 0.25 * dt * dt * dt * dt * eye;
-      const double rotation2 = rotation_sigma * rotation_sigma + std::pow(1e-4 * dt, 2);
-      covariance.topLeftCorner<3, 3>() += rotation2 * dv.squaredNorm() * eye;
-      covariance.bottomRightCorner<3, 3>() +=
-          (rotation2 * dp.squaredNorm() +
-           2.0 * options.position_sigma_m * options.position_sigma_m) *
-          eye;
-      const Eigen::LLT<Eigen::Matrix<double, 6, 6>> llt(covariance);
-      if (llt.info() != Eigen::Success) continue;
-      const Eigen::Matrix<double, 6, 6> whiten =
-          llt.matrixL().solve(Eigen::Matrix<double, 6, 6>::Identity());
-      num_rows += 6;
-      accumulate({{col_scale, globals},
-                  {col_bias + 3 * pair.window, bias},
-                  {col_velocity + 3 * static_cast<int>(pair.i), velocity_i},
-                  {col_velocity + 3 * static_cast<int>(pair.j), velocity_j}},
-                 b, whiten);
-    }
+    NormalEquations equations(num_unknowns);
+    for (const Pair& pair : pairs_) AddPairRows(pair, gravity, tangent, &equations);
     // A weak prior on every unknown keeps unobserved ones (a window without
     // pairs) determined: 10 m/s, 1 m/s^2, 1 rad, scale 10.
-    for (int k = 0; k < num_unknowns; ++k) triplets.emplace_back(k, k, 1e-8);
+    equations.AddDiagonal(1e-8);
     // Too few equations for the unknowns: the weak priors would decide, and
     // the residual, nearly zero, would claim a precise scale.
+    const int num_rows = equations.num_rows();
     if (num_rows - num_unknowns < kMinRedundancy) {
       result.failure = std::to_string(num_rows) + " equations for " + std::to_string(num_unknowns) +
-                       " unknowns from " + std::to_string(pairs.size()) +
+                       " unknowns from " + std::to_string(pairs_.size()) +
                        " frame pairs (at least " + std::to_string(kMinRedundancy) +
                        " more equations than unknowns needed)";
       return result;
     }
-    normal_matrix = Eigen::SparseMatrix<double>(num_unknowns, num_unknowns);
-    normal_matrix.setFromTriplets(triplets.begin(), triplets.end());
+    const Eigen::SparseMatrix<double> normal_matrix = equations.Matrix();
     const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(normal_matrix);
     if (solver.info() != Eigen::Success) {
       result.failure = "the least squares is singular";
       return result;
     }
-    solution = solver.solve(rhs);
-    scale = solution[col_scale];
-    const Eigen::Vector3d corrected = gravity + tangent * solution.segment<2>(col_gravity);
+    const Eigen::VectorXd solution = solver.solve(equations.rhs());
+    scale = solution[kColScale];
+    const Eigen::Vector3d corrected = gravity + tangent * solution.segment<2>(kColGravity);
     gravity = g_norm * corrected.normalized();
-    if (iteration + 1 == options.gravity_iterations) {
+    if (iteration + 1 == options_.gravity_iterations) {
       // The scale's variance: (A^T A)^-1 at (0, 0).
       Eigen::VectorXd unit = Eigen::VectorXd::Zero(num_unknowns);
-      unit[col_scale] = 1.0;
+      unit[kColScale] = 1.0;
       const Eigen::VectorXd column = solver.solve(unit);
-      result.scale_sigma = std::sqrt(std::max(0.0, column[col_scale])) / std::abs(scale);
+      result.scale_sigma = std::sqrt(std::max(0.0, column[kColScale])) / std::abs(scale);
       // The whitened residual at the optimum, |W b|^2 - x^T A^T W^T W b,
       // gives the a-posteriori variance factor (sse / dof): the covariance
       // assumed for the equations (the preintegration's, plus the images'
@@ -250,7 +296,7 @@ ScaleSolution SolveScale(const std::vector<StampedPose>& poses, const std::vecto
       // scale's uncertainty grows; when they agree better, it shrinks.
       // Hundreds of equations make the factor itself reliable; a shape
       // whose errors are systematic is caught by max_residual_ratio.
-      const double sse = std::max(0.0, whitened_b2 - solution.dot(rhs));
+      const double sse = std::max(0.0, equations.whitened_b2() - solution.dot(equations.rhs()));
       const int dof = num_rows - num_unknowns;
       result.residual_ratio = std::sqrt(sse / dof);
       // Over few degrees of freedom the factor itself is uncertain (about
@@ -261,9 +307,17 @@ ScaleSolution SolveScale(const std::vector<StampedPose>& poses, const std::vecto
   }
   result.scale = scale;
   result.gravity_in_world = gravity;
-  result.num_frames = num_frames;
-  result.num_pairs = static_cast<int>(pairs.size());
+  result.num_frames = static_cast<int>(frames_.size());
+  result.num_pairs = static_cast<int>(pairs_.size());
   return result;
+}
+
+ScaleSolution SolveScale(const std::vector<StampedPose>& poses, const std::vector<size_t>& frames,
+                         const std::vector<ImuSample>& imu, const ImuNoise& noise,
+                         const ImuScaleOptions& options) {
+  ScaleLeastSquares least_squares(poses, frames, noise, options);
+  least_squares.Preintegrate(imu);
+  return least_squares.Solve();
 }
 
 std::string Describe(const ScaleSolution& solution) {
