@@ -385,6 +385,65 @@ double GyroRotationSumDeg(const std::vector<FrameFeatures>& frames,
   return sum * 180.0 / M_PI;
 }
 
+namespace {
+
+// The rolling shutter's readout at the offset found as a global shutter,
+// then the offset again at that readout within three coarse steps of where
+// it was, twice; kept when it lowers the cost by min_cost_reduction, which
+// then updates `offset`, `best_cost` and `estimate`. Returns the readout, s
+// (0: a global shutter), and says what was found in `message`.
+template <class Cost, class OffsetCost>
+double SearchReadout(const Cost& cost, const OffsetCost& offset_cost,
+                     timestamp_ns_t calibration_offset_ns, double focal_length_px,
+                     const TimeOffsetOptions& options, LineMinimum* offset, double* best_cost,
+                     TimeOffsetEstimate* estimate, std::ostringstream* message) {
+  const double coarse_ms = options.coarse_step_s * 1e3;
+  const double fine_ms = options.fine_step_s * 1e3;
+  const double global_cost = offset->cost;
+  estimate->global_shutter_cost_px = global_cost * focal_length_px;
+  const double max_readout_ms = options.max_readout_s * 1e3;
+  const double readout_step_ms = options.readout_coarse_step_s * 1e3;
+  LineMinimum at = *offset;
+  LineMinimum readout;
+  bool kept = false;
+  for (int round = 0; round < 2; ++round) {
+    const timestamp_ns_t at_ns = calibration_offset_ns + SecondsToNs(at.x * 1e-3);
+    readout = MinimizeOnLine([&](double readout_ms) { return cost(at_ns, readout_ms * 1e-3); }, 0.0,
+                             max_readout_ms, readout_step_ms, fine_ms);
+    kept = readout.found && readout.x + readout_step_ms <= max_readout_ms &&
+           readout.cost < (1.0 - options.min_cost_reduction) * global_cost;
+    if (!kept) break;
+    const LineMinimum again = MinimizeOnLine(offset_cost(readout.x * 1e-3), at.x - 3.0 * coarse_ms,
+                                             at.x + 3.0 * coarse_ms, coarse_ms, fine_ms);
+    at.cost = readout.cost;
+    if (again.found && again.cost <= readout.cost) {
+      at.x = again.x;
+      at.cost = again.cost;
+    }
+  }
+  if (kept) {
+    *offset = at;
+    *best_cost = offset->cost;
+    const double readout_s = readout.x * 1e-3;
+    estimate->readout_estimated = true;
+    estimate->readout_s = readout_s;
+    estimate->rolling_shutter_cost_px = *best_cost * focal_length_px;
+    *message << std::setprecision(1) << "; rolling-shutter readout " << readout_s * 1e3
+             << " ms (residual " << std::setprecision(2) << *best_cost * focal_length_px
+             << " px against " << global_cost * focal_length_px << " px as a global shutter)";
+    return readout_s;
+  }
+  if (readout.found) {
+    *message << std::setprecision(2) << "; a global shutter explains the images as well "
+             << "(" << global_cost * focal_length_px << " px; with a readout of "
+             << std::setprecision(1) << readout.x << " ms " << std::setprecision(2)
+             << readout.cost * focal_length_px << " px)";
+  }
+  return 0.0;
+}
+
+}  // namespace
+
 TimeOffsetEstimate EstimateTimeOffset(const std::vector<FrameFeatures>& frames,
                                       const std::vector<ImuSample>& imu,
                                       const Rigid3d& body_from_cam,
@@ -442,48 +501,8 @@ TimeOffsetEstimate EstimateTimeOffset(const std::vector<FrameFeatures>& frames,
   std::ostringstream readout_message;
   readout_message << std::fixed;
   if (options.estimate_readout && image_height > 0 && offset.found && !offset.at_edge) {
-    // Two rounds of: the readout at the offset, then the offset at that
-    // readout within three coarse steps of where it was.
-    const double global_cost = offset.cost;
-    estimate.global_shutter_cost_px = global_cost * focal_length_px;
-    const double max_readout_ms = options.max_readout_s * 1e3;
-    const double readout_step_ms = options.readout_coarse_step_s * 1e3;
-    LineMinimum at = offset;
-    LineMinimum readout;
-    bool kept = false;
-    for (int round = 0; round < 2; ++round) {
-      const timestamp_ns_t at_ns = calibration_offset_ns + SecondsToNs(at.x * 1e-3);
-      readout = MinimizeOnLine([&](double readout_ms) { return cost(at_ns, readout_ms * 1e-3); },
-                               0.0, max_readout_ms, readout_step_ms, fine_ms);
-      kept = readout.found && readout.x + readout_step_ms <= max_readout_ms &&
-             readout.cost < (1.0 - options.min_cost_reduction) * global_cost;
-      if (!kept) break;
-      const LineMinimum again =
-          MinimizeOnLine(offset_cost(readout.x * 1e-3), at.x - 3.0 * coarse_ms,
-                         at.x + 3.0 * coarse_ms, coarse_ms, fine_ms);
-      at.cost = readout.cost;
-      if (again.found && again.cost <= readout.cost) {
-        at.x = again.x;
-        at.cost = again.cost;
-      }
-    }
-    if (kept) {
-      offset = at;
-      best_cost = offset.cost;
-      readout_s = readout.x * 1e-3;
-      estimate.readout_estimated = true;
-      estimate.readout_s = readout_s;
-      estimate.rolling_shutter_cost_px = best_cost * focal_length_px;
-      readout_message << std::setprecision(1) << "; rolling-shutter readout " << readout_s * 1e3
-                      << " ms (residual " << std::setprecision(2) << best_cost * focal_length_px
-                      << " px against " << global_cost * focal_length_px
-                      << " px as a global shutter)";
-    } else if (readout.found) {
-      readout_message << std::setprecision(2) << "; a global shutter explains the images as well "
-                      << "(" << global_cost * focal_length_px << " px; with a readout of "
-                      << std::setprecision(1) << readout.x << " ms " << std::setprecision(2)
-                      << readout.cost * focal_length_px << " px)";
-    }
+    readout_s = SearchReadout(cost, offset_cost, calibration_offset_ns, focal_length_px, options,
+                              &offset, &best_cost, &estimate, &readout_message);
   }
   const timestamp_ns_t refined = calibration_offset_ns + SecondsToNs(offset.x * 1e-3);
   // The offset against the calibration's, both with the readout chosen.
