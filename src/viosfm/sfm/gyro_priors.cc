@@ -6,6 +6,7 @@
 #include <cmath>
 #include <iomanip>
 #include <memory>
+#include <optional>
 #include <sstream>
 
 #include "viosfm/geometry/lie.h"
@@ -104,6 +105,64 @@ std::vector<Eigen::Vector3d> EstimateGyroBiases(const std::vector<GyroPair>& pai
   return filled;
 }
 
+namespace {
+
+// The gyro's relative-rotation prior of one pair of frames, and the
+// reconstruction's whitened residual against it.
+struct PairPrior {
+  RelativePosePrior prior;
+  double whitened_residual = 0.0;
+};
+
+// The prior of frames 1 and 2 from their pair's preintegration (its gyro
+// bias already corrected, of standard error bias_sigma); none when its
+// covariance is not positive definite.
+std::optional<PairPrior> GyroPairPrior(const ImuPreintegration& preintegration, double bias_sigma,
+                                       const GyroFrame& frame1, const GyroFrame& frame2,
+                                       const Eigen::Matrix3d& body_from_cam, const ImuNoise& noise,
+                                       const GyroPriorOptions& options) {
+  const double dt = preintegration.delta_t_s();
+  // Covariance of the body rotation's error (in body j's frame): the
+  // white noise, the bias's uncertainty and its walk from the window's
+  // value, and the floor.
+  const Eigen::Matrix3d& jacobian = preintegration.dR_dbg();
+  const double walk2 = std::pow(noise.gyro_random_walk, 2) * (0.5 * options.bias_window_s + dt);
+  Eigen::Matrix3d covariance =
+      preintegration.covariance().topLeftCorner<3, 3>() +
+      std::pow(bias_sigma, 2) * jacobian * jacobian.transpose() +
+      walk2 * dt * dt * Eigen::Matrix3d::Identity() +
+      std::pow(options.rotation_floor_rad, 2) * Eigen::Matrix3d::Identity();
+  // cam2_from_cam1 = cam_from_body * body_j_from_body_i * body_from_cam,
+  // body_j_from_body_i = delta_R^T; the error, a left perturbation in
+  // camera 2's frame, has the covariance turned into the camera's frame.
+  const Eigen::Matrix3d delta_r = preintegration.delta_R().toRotationMatrix();
+  const Eigen::Matrix3d cam2_from_cam1 =
+      body_from_cam.transpose() * delta_r.transpose() * body_from_cam;
+  covariance = body_from_cam.transpose() * covariance * body_from_cam;
+  const Eigen::LLT<Eigen::Matrix3d> llt(covariance);
+  if (llt.info() != Eigen::Success) return std::nullopt;
+  const Eigen::Matrix3d sqrt_information = llt.matrixL().solve(Eigen::Matrix3d::Identity());
+
+  RelativePosePrior prior;
+  prior.image_id1 = frame1.image_id;
+  prior.image_id2 = frame2.image_id;
+  prior.cam2_from_cam1 =
+      Rigid3d(Eigen::Quaterniond(cam2_from_cam1).normalized(), Eigen::Vector3d::Zero());
+  prior.rotation_only = true;
+  prior.from_gyro = true;
+  Eigen::Matrix<double, 6, 6> sqrt_information6 = Eigen::Matrix<double, 6, 6>::Zero();
+  sqrt_information6.topLeftCorner<3, 3>() = sqrt_information;
+  prior.sqrt_information = sqrt_information6;
+  // The reconstruction's relative rotation against the prior.
+  const Eigen::Quaterniond model_cam2_from_cam1 =
+      frame2.cam_from_world.rotation * frame1.cam_from_world.rotation.conjugate();
+  const Eigen::Vector3d residual = QuaternionLog(
+      (model_cam2_from_cam1 * prior.cam2_from_cam1.rotation.conjugate()).normalized());
+  return PairPrior{std::move(prior), (sqrt_information * residual).norm()};
+}
+
+}  // namespace
+
 GyroPriors MakeGyroPriors(const std::vector<GyroFrame>& frames, const std::vector<ImuSample>& imu,
                           const SensorRig& rig, const GyroPriorOptions& options,
                           double min_sigma_factor) {
@@ -163,48 +222,12 @@ GyroPriors MakeGyroPriors(const std::vector<GyroFrame>& frames, const std::vecto
     ImuPreintegration& preintegration = *preintegrations[p];
     const int window = pairs[p].window;
     preintegration.Repropagate(result.gyro_biases[window], Eigen::Vector3d::Zero());
-    const double dt = preintegration.delta_t_s();
-    // Covariance of the body rotation's error (in body j's frame): the
-    // white noise, the bias's uncertainty and its walk from the window's
-    // value, and the floor.
-    const Eigen::Matrix3d& jacobian = preintegration.dR_dbg();
-    const double walk2 =
-        std::pow(rig.imu_noise.gyro_random_walk, 2) * (0.5 * options.bias_window_s + dt);
-    Eigen::Matrix3d covariance =
-        preintegration.covariance().topLeftCorner<3, 3>() +
-        std::pow(bias_sigma[window], 2) * jacobian * jacobian.transpose() +
-        walk2 * dt * dt * Eigen::Matrix3d::Identity() +
-        std::pow(options.rotation_floor_rad, 2) * Eigen::Matrix3d::Identity();
-    // cam2_from_cam1 = cam_from_body * body_j_from_body_i * body_from_cam,
-    // body_j_from_body_i = delta_R^T; the error, a left perturbation in
-    // camera 2's frame, has the covariance turned into the camera's frame.
-    const Eigen::Matrix3d delta_r = preintegration.delta_R().toRotationMatrix();
-    const Eigen::Matrix3d cam2_from_cam1 =
-        body_from_cam.transpose() * delta_r.transpose() * body_from_cam;
-    covariance = body_from_cam.transpose() * covariance * body_from_cam;
-    const Eigen::LLT<Eigen::Matrix3d> llt(covariance);
-    if (llt.info() != Eigen::Success) continue;
-    const Eigen::Matrix3d sqrt_information = llt.matrixL().solve(Eigen::Matrix3d::Identity());
-
-    const GyroFrame& frame1 = frames[first_frame[p]];
-    const GyroFrame& frame2 = frames[first_frame[p] + 1];
-    RelativePosePrior prior;
-    prior.image_id1 = frame1.image_id;
-    prior.image_id2 = frame2.image_id;
-    prior.cam2_from_cam1 =
-        Rigid3d(Eigen::Quaterniond(cam2_from_cam1).normalized(), Eigen::Vector3d::Zero());
-    prior.rotation_only = true;
-    prior.from_gyro = true;
-    Eigen::Matrix<double, 6, 6> sqrt_information6 = Eigen::Matrix<double, 6, 6>::Zero();
-    sqrt_information6.topLeftCorner<3, 3>() = sqrt_information;
-    prior.sqrt_information = sqrt_information6;
-    // The reconstruction's relative rotation against the prior.
-    const Eigen::Quaterniond model_cam2_from_cam1 =
-        frame2.cam_from_world.rotation * frame1.cam_from_world.rotation.conjugate();
-    const Eigen::Vector3d residual = QuaternionLog(
-        (model_cam2_from_cam1 * prior.cam2_from_cam1.rotation.conjugate()).normalized());
-    whitened.push_back((sqrt_information * residual).norm());
-    result.priors.push_back(std::move(prior));
+    const std::optional<PairPrior> pair_prior =
+        GyroPairPrior(preintegration, bias_sigma[window], frames[first_frame[p]],
+                      frames[first_frame[p] + 1], body_from_cam, rig.imu_noise, options);
+    if (!pair_prior) continue;
+    whitened.push_back(pair_prior->whitened_residual);
+    result.priors.push_back(pair_prior->prior);
   }
   if (!whitened.empty()) {
     std::nth_element(whitened.begin(), whitened.begin() + whitened.size() / 2, whitened.end());
