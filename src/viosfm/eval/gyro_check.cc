@@ -108,6 +108,59 @@ std::string GyroCheckOptions::Validate() const {
   return "";
 }
 
+namespace {
+
+// An interval of the trajectory and the gyro's samples over it.
+struct GyroInterval {
+  size_t from;  // indices into world_from_cam.poses
+  size_t to;
+  std::vector<ImuSample> gyro;  // GyroStretch
+};
+
+// The trajectory's intervals, end to end, in time order; those across a gap
+// or outside the IMU's samples counted in `result`.
+std::vector<GyroInterval> GyroIntervals(const Trajectory& world_from_cam,
+                                        const std::vector<ImuSample>& imu, const SensorRig& rig,
+                                        const GyroCheckOptions& options, GyroCheckResult* result) {
+  std::vector<size_t> order(world_from_cam.size());
+  std::iota(order.begin(), order.end(), size_t{0});
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+    return world_from_cam.poses[a].timestamp_ns < world_from_cam.poses[b].timestamp_ns;
+  });
+
+  // The intervals, end to end.
+  const auto interval_ns = static_cast<timestamp_ns_t>(std::llround(options.interval_s * 1e9));
+  const auto longest_ns = static_cast<timestamp_ns_t>(
+      std::llround(options.interval_s * options.max_interval_factor * 1e9));
+  std::vector<GyroInterval> intervals;
+  size_t k = 0;
+  while (k < order.size()) {
+    const StampedPose& from = world_from_cam.poses[order[k]];
+    size_t next = k + 1;
+    while (next < order.size() &&
+           world_from_cam.poses[order[next]].timestamp_ns - from.timestamp_ns < interval_ns) {
+      ++next;
+    }
+    if (next == order.size()) break;
+    const StampedPose& to = world_from_cam.poses[order[next]];
+    if (to.timestamp_ns - from.timestamp_ns > longest_ns) {
+      ++result->num_gaps;
+    } else {
+      std::vector<ImuSample> gyro =
+          GyroStretch(imu, rig.CamToImuTime(from.timestamp_ns), rig.CamToImuTime(to.timestamp_ns));
+      if (!gyro.empty()) {
+        intervals.push_back({order[k], order[next], std::move(gyro)});
+      } else {
+        ++result->num_without_imu;
+      }
+    }
+    k = next;
+  }
+  return intervals;
+}
+
+}  // namespace
+
 GyroCheckResult CheckRotationsAgainstGyro(const Trajectory& world_from_cam,
                                           const std::vector<ImuSample>& imu, const SensorRig& rig,
                                           const GyroCheckOptions& options) {
@@ -120,45 +173,8 @@ GyroCheckResult CheckRotationsAgainstGyro(const Trajectory& world_from_cam,
   GyroCheckResult result;
   result.num_frames = world_from_cam.size();
   result.time_offset_ns = rig.cam_time_offset_ns;
-  std::vector<size_t> order(world_from_cam.size());
-  std::iota(order.begin(), order.end(), size_t{0});
-  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
-    return world_from_cam.poses[a].timestamp_ns < world_from_cam.poses[b].timestamp_ns;
-  });
-
-  // The intervals, end to end.
-  const auto interval_ns = static_cast<timestamp_ns_t>(std::llround(options.interval_s * 1e9));
-  const auto longest_ns = static_cast<timestamp_ns_t>(
-      std::llround(options.interval_s * options.max_interval_factor * 1e9));
-  struct Interval {
-    size_t from;  // indices into world_from_cam.poses
-    size_t to;
-    std::vector<ImuSample> gyro;  // GyroStretch
-  };
-  std::vector<Interval> intervals;
-  size_t k = 0;
-  while (k < order.size()) {
-    const StampedPose& from = world_from_cam.poses[order[k]];
-    size_t next = k + 1;
-    while (next < order.size() &&
-           world_from_cam.poses[order[next]].timestamp_ns - from.timestamp_ns < interval_ns) {
-      ++next;
-    }
-    if (next == order.size()) break;
-    const StampedPose& to = world_from_cam.poses[order[next]];
-    if (to.timestamp_ns - from.timestamp_ns > longest_ns) {
-      ++result.num_gaps;
-    } else {
-      std::vector<ImuSample> gyro =
-          GyroStretch(imu, rig.CamToImuTime(from.timestamp_ns), rig.CamToImuTime(to.timestamp_ns));
-      if (!gyro.empty()) {
-        intervals.push_back({order[k], order[next], std::move(gyro)});
-      } else {
-        ++result.num_without_imu;
-      }
-    }
-    k = next;
-  }
+  const std::vector<GyroInterval> intervals =
+      GyroIntervals(world_from_cam, imu, rig, options, &result);
   if (intervals.empty()) {
     throw InputError("gyro check: no interval of " + std::to_string(options.interval_s) +
                      " s between the trajectory's " + std::to_string(world_from_cam.size()) +
@@ -176,7 +192,7 @@ GyroCheckResult CheckRotationsAgainstGyro(const Trajectory& world_from_cam,
   // body_i_from_body_j from the trajectory, and its angle from the gyro's
   // at a bias.
   std::vector<Eigen::Quaterniond> trajectory_rotations;
-  for (const Interval& interval : intervals) {
+  for (const GyroInterval& interval : intervals) {
     trajectory_rotations.emplace_back(world_from_body(interval.from).transpose() *
                                       world_from_body(interval.to));
   }

@@ -146,6 +146,35 @@ std::pair<double, double> MeasureHighFrequencyDensities(const std::vector<ImuSam
   return {median(&gyro_densities), median(&accel_densities)};
 }
 
+namespace {
+
+// The check's one line: what was measured and what changed.
+std::string DescribeCheck(const ImuNoiseCheck& check, const StaticInitResult* static_interval) {
+  std::ostringstream message;
+  message << "IMU noise: ";
+  if (check.measured) {
+    message << "white noise measured at rest over "
+            << Number(NsToSeconds(static_interval->end_ns - static_interval->start_ns))
+            << " s: gyro " << Number(check.measured_gyro_density) << " rad/s/sqrt(Hz), accel "
+            << Number(check.measured_accel_density) << " m/s^2/sqrt(Hz); ";
+  }
+  if (check.motion_gyro_density > 0.0) {
+    message << "in motion: gyro " << Number(check.motion_gyro_density) << ", accel "
+            << Number(check.motion_accel_density) << "; ";
+  }
+  if (check.changes.empty()) {
+    message << "the calibration's figures are used";
+  } else {
+    message << "changed ";
+    for (size_t i = 0; i < check.changes.size(); ++i) {
+      message << (i > 0 ? "; " : "") << check.changes[i];
+    }
+  }
+  return message.str();
+}
+
+}  // namespace
+
 ImuNoiseCheck CheckImuNoise(const ImuNoise& given, const std::vector<ImuSample>& imu,
                             const StaticInitResult* static_interval,
                             const ImuNoiseCheckOptions& options, timestamp_ns_t motion_start_ns,
@@ -244,27 +273,7 @@ ImuNoiseCheck CheckImuNoise(const ImuNoise& given, const std::vector<ImuSample>&
   Bound("accelerometer_random_walk", why, kMinAccelWalk, kMaxAccelWalk, &used.accel_random_walk,
         &check.changes);
 
-  std::ostringstream message;
-  message << "IMU noise: ";
-  if (check.measured) {
-    message << "white noise measured at rest over "
-            << Number(NsToSeconds(static_interval->end_ns - static_interval->start_ns))
-            << " s: gyro " << Number(check.measured_gyro_density) << " rad/s/sqrt(Hz), accel "
-            << Number(check.measured_accel_density) << " m/s^2/sqrt(Hz); ";
-  }
-  if (check.motion_gyro_density > 0.0) {
-    message << "in motion: gyro " << Number(check.motion_gyro_density) << ", accel "
-            << Number(check.motion_accel_density) << "; ";
-  }
-  if (check.changes.empty()) {
-    message << "the calibration's figures are used";
-  } else {
-    message << "changed ";
-    for (size_t i = 0; i < check.changes.size(); ++i) {
-      message << (i > 0 ? "; " : "") << check.changes[i];
-    }
-  }
-  check.message = message.str();
+  check.message = DescribeCheck(check, static_interval);
   return check;
 }
 
