@@ -72,6 +72,23 @@ void TakeVioAndFrames(const VioPoses& vio, const SelectedFrames& frames, Pipelin
   summary->rolling_shutter_source = vio.rolling_shutter_source;
 }
 
+// The decoded frames the points' colours do not need leave the frame cache
+// before the mapper, the run's largest stage: those whose keypoints' grey
+// values were sampled as their features were extracted. A resumed run's
+// stored features were not, so their frames stay.
+void ReleaseFramesColoursDoNotNeed(const SelectedFrames& frames, const BatchedMapperInput& input,
+                                   const KeypointGreyValues& keypoint_values,
+                                   FrameCache* frame_cache) {
+  std::vector<std::filesystem::path> still_needed;
+  for (size_t i = 0; i < input.images.size(); ++i) {
+    if (keypoint_values.Find(input.images[i].image_id) == nullptr) {
+      still_needed.push_back(frames.sequence.images[i].path);
+    }
+  }
+  frame_cache->RetainOnly(still_needed);
+  ReturnFreedMemory();
+}
+
 }  // namespace
 
 PipelineSummary RunPipeline(const PipelineOptions& requested) {
@@ -143,6 +160,7 @@ PipelineSummary RunPipeline(const PipelineOptions& requested) {
     return LoadMapperInputStage(frames, vio, verification, &features.database, &summary.vio_gaps);
   });
   if (summary.vio_gaps.num_gaps > 0) summary.num_vio_segments = summary.vio_gaps.num_segments;
+  ReleaseFramesColoursDoNotNeed(frames, input, keypoint_values, &frame_cache);
 
   std::vector<Reconstruction> other_models;
   Reconstruction reconstruction = clock.Run(
