@@ -29,8 +29,8 @@ std::vector<int> ConstantIntrinsicIndices(const Camera& camera,
 }
 
 // The problem's cost functions, which it does not own: a problem that owns
-// them keeps an entry of a tree for each (about 60 bytes and an insertion
-// an observation). Declared before the problem, so deleted after it.
+// them keeps a tree node for each, an allocation and an insertion per
+// observation. Declared before the problem, so deleted after it.
 class OwnedCostFunctions {
  public:
   ceres::CostFunction* Add(ceres::CostFunction* cost) {
