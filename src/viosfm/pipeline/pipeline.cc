@@ -74,8 +74,8 @@ void TakeVioAndFrames(const VioPoses& vio, const SelectedFrames& frames, Pipelin
 
 // The decoded frames the points' colours do not need leave the frame cache
 // before the mapper, the run's largest stage: those whose keypoints' grey
-// values were sampled as their features were extracted. A resumed run's
-// stored features were not, so their frames stay.
+// values the features stage sampled (every frame's, unless a frame was
+// missing then).
 void ReleaseFramesColoursDoNotNeed(const SelectedFrames& frames, const BatchedMapperInput& input,
                                    const KeypointGreyValues& keypoint_values,
                                    FrameCache* frame_cache) {

@@ -1,10 +1,32 @@
 #include "viosfm/pipeline/stage_features.h"
 
 #include <iomanip>
+#include <string>
+#include <unordered_map>
 
 #include "viosfm/util/logging.h"
 
 namespace viosfm {
+namespace {
+
+// The keypoints' grey values (the points' colours) of the features an
+// earlier run stored, sampled now from their stored keypoints while the
+// VIO's decoded frames are still held: then no later stage needs a frame,
+// and a resumed run's colours are a fresh run's.
+void SampleStoredFeatures(const Sequence& sequence, const ColmapDatabase& database,
+                          FrameCache* frame_cache, KeypointGreyValues* values) {
+  std::unordered_map<std::string, image_t> image_of_name;
+  for (const DatabaseImage& row : database.ReadAllImages()) {
+    image_of_name.emplace(row.name, row.image_id);
+  }
+  for (const SequenceImage& image : sequence.images) {
+    const auto it = image_of_name.find(DatabaseImageName(image));
+    if (it == image_of_name.end() || values->Find(it->second) != nullptr) continue;
+    values->Sample(it->second, *frame_cache->Take(image.path), database.ReadKeypoints(it->second));
+  }
+}
+
+}  // namespace
 
 FeaturesStageOutput ExtractFeaturesStage(const SelectedFrames& frames,
                                          const PipelineOptions& options, const RunFolder& folder,
@@ -30,6 +52,7 @@ FeaturesStageOutput ExtractFeaturesStage(const SelectedFrames& frames,
   }
   output.summary = ExtractFeatures(frames.sequence, options.EffectiveSiftOptions(),
                                    &output.database, options.show_progress, access);
+  SampleStoredFeatures(frames.sequence, output.database, frame_cache, values);
   VIOSFM_LOG(INFO) << "run: features of " << output.summary.num_images << " images, " << std::fixed
                    << std::setprecision(1) << output.summary.seconds << " s" << LogDetails() << ": "
                    << output.summary.ToString();
