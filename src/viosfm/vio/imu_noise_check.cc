@@ -148,7 +148,7 @@ std::pair<double, double> MeasureHighFrequencyDensities(const std::vector<ImuSam
 
 namespace {
 
-// The check's one line: what was measured and what changed.
+// The check's one line: what it found and what it changed.
 std::string DescribeCheck(const ImuNoiseCheck& check, const StaticInitResult* static_interval) {
   std::ostringstream message;
   message << "IMU noise: ";
