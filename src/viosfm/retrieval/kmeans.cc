@@ -22,23 +22,43 @@ float SquaredDistance(const FloatDescriptors& points, int32_t row, const FloatDe
   return (points.row(row) - centers.row(center)).squaredNorm();
 }
 
+// Every row's squared distance to centre `center`, capped by `cap` (when
+// given): the distances in parallel chunks, each the same computation as
+// alone, so the values do not depend on the thread count.
+void DistancesToCenter(const FloatDescriptors& points, const std::vector<int32_t>& rows,
+                       const FloatDescriptors& centers, int center, const std::vector<double>* cap,
+                       int num_threads, std::vector<double>* distances) {
+  const int64_t n = static_cast<int64_t>(rows.size());
+  const int threads = n * points.cols() >= kMinParallelWork ? ResolveNumThreads(num_threads) : 1;
+  ParallelForChunks(n, threads, kAssignChunk, [&](int64_t begin, int64_t end) {
+    for (int64_t i = begin; i < end; ++i) {
+      const double distance = SquaredDistance(points, rows[i], centers, center);
+      (*distances)[i] = cap ? std::min<double>((*cap)[i], distance) : distance;
+    }
+  });
+}
+
+// The sum in row order (deterministic).
+double Sum(const std::vector<double>& values) {
+  double total = 0.0;
+  for (const double value : values) total += value;
+  return total;
+}
+
 // Greedy k-means++ (Arthur & Vassilvitskii 2007): the first centre uniformly;
 // for each next one, 2 + floor(ln k) candidates drawn with probability
 // proportional to the squared distance to the nearest centre so far, keeping
 // the candidate that lowers the sum of those squared distances most.
 FloatDescriptors SeedCenters(const FloatDescriptors& points, const std::vector<int32_t>& rows,
-                             int k, Random* random) {
+                             int k, int num_threads, Random* random) {
   const int64_t n = static_cast<int64_t>(rows.size());
   const int dim = static_cast<int>(points.cols());
   const int num_candidates = 2 + static_cast<int>(std::log(static_cast<double>(k)));
   FloatDescriptors centers(k, dim);
   centers.row(0) = points.row(rows[random->UniformInt(0, n - 1)]);
   std::vector<double> nearest(n);
-  double total = 0.0;
-  for (int64_t i = 0; i < n; ++i) {
-    nearest[i] = SquaredDistance(points, rows[i], centers, 0);
-    total += nearest[i];
-  }
+  DistancesToCenter(points, rows, centers, 0, nullptr, num_threads, &nearest);
+  double total = Sum(nearest);
   std::vector<double> candidate_nearest(n);
   std::vector<double> best_nearest(n);
   for (int c = 1; c < k; ++c) {
@@ -61,12 +81,8 @@ FloatDescriptors SeedCenters(const FloatDescriptors& points, const std::vector<i
         }
       }
       centers.row(c) = points.row(rows[candidate]);
-      double candidate_total = 0.0;
-      for (int64_t i = 0; i < n; ++i) {
-        candidate_nearest[i] =
-            std::min<double>(nearest[i], SquaredDistance(points, rows[i], centers, c));
-        candidate_total += candidate_nearest[i];
-      }
+      DistancesToCenter(points, rows, centers, c, &nearest, num_threads, &candidate_nearest);
+      const double candidate_total = Sum(candidate_nearest);
       if (candidate_total < best_total) {
         best_total = candidate_total;
         best_candidate = candidate;
@@ -138,7 +154,7 @@ KMeansResult KMeans(const FloatDescriptors& points, const std::vector<int32_t>& 
   for (const int32_t row : rows) VIOSFM_CHECK(row >= 0 && row < points.rows()) << row;
   const int k = static_cast<int>(std::min<int64_t>(options.num_clusters, n));
   Random random(options.seed);
-  FloatDescriptors centers = SeedCenters(points, rows, k, &random);
+  FloatDescriptors centers = SeedCenters(points, rows, k, options.num_threads, &random);
 
   std::vector<int32_t> labels(n, -1);
   std::vector<int64_t> sizes(k, 0);

@@ -3,7 +3,6 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
-#include <deque>
 #include <limits>
 #include <numeric>
 
@@ -75,39 +74,52 @@ VocabularyTree VocabularyTree::Train(const FloatDescriptors& descriptors,
     int level;
     std::vector<int32_t> rows;
   };
-  std::deque<Pending> queue;
+  const auto is_leaf = [&options](const Pending& pending) {
+    return pending.level == options.depth ||
+           static_cast<int64_t>(pending.rows.size()) < options.branching;
+  };
   std::vector<int32_t> all_rows(descriptors.rows());
   std::iota(all_rows.begin(), all_rows.end(), 0);
-  queue.push_back({add_node(nullptr), 0, std::move(all_rows)});
-  // Breadth first, so that every node's children get consecutive ids.
-  while (!queue.empty()) {
-    Pending pending = std::move(queue.front());
-    queue.pop_front();
-    const int64_t n = static_cast<int64_t>(pending.rows.size());
-    if (pending.level == options.depth || n < options.branching) {
-      data.word_of_node[pending.node] = data.num_words++;
-      continue;
+  std::vector<Pending> level_nodes;
+  level_nodes.push_back({add_node(nullptr), 0, std::move(all_rows)});
+  // Level by level, so that every node's children get consecutive ids (breadth
+  // first). A level's nodes are clustered in parallel, a single node with
+  // parallel assignments; each clustering depends on its seed only.
+  while (!level_nodes.empty()) {
+    const bool across_nodes = level_nodes.size() > 1;
+    std::vector<KMeansResult> clusters(level_nodes.size());
+    ParallelFor(static_cast<int64_t>(level_nodes.size()), across_nodes ? options.num_threads : 1,
+                [&](int64_t index, int /*thread_index*/) {
+                  const Pending& pending = level_nodes[index];
+                  if (is_leaf(pending)) return;
+                  KMeansOptions kmeans;
+                  kmeans.num_clusters = options.branching;
+                  kmeans.max_iterations = options.kmeans_iterations;
+                  kmeans.seed = DeriveSeed(options.seed, static_cast<uint64_t>(pending.node));
+                  kmeans.num_threads = across_nodes ? 1 : options.num_threads;
+                  clusters[index] = KMeans(descriptors, pending.rows, kmeans);
+                });
+    std::vector<Pending> next_level;
+    for (size_t index = 0; index < level_nodes.size(); ++index) {
+      Pending& pending = level_nodes[index];
+      const int k = static_cast<int>(clusters[index].centers.rows());
+      if (is_leaf(pending) || k < 2) {  // k < 2: all descriptors identical, nothing to split
+        data.word_of_node[pending.node] = data.num_words++;
+        continue;
+      }
+      std::vector<std::vector<int32_t>> child_rows(k);
+      for (size_t i = 0; i < pending.rows.size(); ++i) {
+        child_rows[clusters[index].labels[i]].push_back(pending.rows[i]);
+      }
+      pending.rows = {};
+      data.first_child[pending.node] = static_cast<int32_t>(data.num_nodes());
+      data.num_children[pending.node] = k;
+      for (int c = 0; c < k; ++c) {
+        const int32_t child = add_node(clusters[index].centers.row(c).data());
+        next_level.push_back({child, pending.level + 1, std::move(child_rows[c])});
+      }
     }
-    KMeansOptions kmeans;
-    kmeans.num_clusters = options.branching;
-    kmeans.max_iterations = options.kmeans_iterations;
-    kmeans.seed = DeriveSeed(options.seed, static_cast<uint64_t>(pending.node));
-    kmeans.num_threads = options.num_threads;
-    const KMeansResult clusters = KMeans(descriptors, pending.rows, kmeans);
-    const int k = static_cast<int>(clusters.centers.rows());
-    if (k < 2) {  // all descriptors identical: nothing to split
-      data.word_of_node[pending.node] = data.num_words++;
-      continue;
-    }
-    std::vector<std::vector<int32_t>> child_rows(k);
-    for (int64_t i = 0; i < n; ++i) child_rows[clusters.labels[i]].push_back(pending.rows[i]);
-    pending.rows = {};
-    data.first_child[pending.node] = static_cast<int32_t>(data.num_nodes());
-    data.num_children[pending.node] = k;
-    for (int c = 0; c < k; ++c) {
-      const int32_t child = add_node(clusters.centers.row(c).data());
-      queue.push_back({child, pending.level + 1, std::move(child_rows[c])});
-    }
+    level_nodes = std::move(next_level);
   }
   return VocabularyTree(std::move(data));
 }
