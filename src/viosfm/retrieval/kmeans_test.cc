@@ -89,10 +89,10 @@ TEST(KMeans, ClustersASubsetOfRows) {
 }
 
 TEST(KMeans, DeterministicPerSeedAndIndependentOfThreads) {
-  // Structureless points, so that the seed matters; enough work per step
-  // that the assignment runs on several threads.
+  // Structureless points, so that the seed matters; enough of them that the
+  // seeding's distances and the assignment run on several threads.
   Random random(7);
-  FloatDescriptors points(4000, 128);
+  FloatDescriptors points(20000, 128);
   for (int i = 0; i < points.rows(); ++i) {
     for (int d = 0; d < points.cols(); ++d) points(i, d) = static_cast<float>(random.Normal());
   }
