@@ -150,14 +150,11 @@ constexpr double kShaftTop = 6.5;
 constexpr double kStairStartY = -2.0, kStairRun = 0.3, kStairRise = 0.25;
 constexpr int kNumSteps = 14;
 
-Scenario MakeTwoFloors(const ScenarioOptions& options) {
-  Scenario scenario;
-  scenario.storey_height_m = kStoreyHeight;
-  SceneBuilder builder(&scenario.scene, options.seed, options.photos);
-  const double tpm = options.texels_per_metre;
-  const double weak_tpm = std::min(24.0, tpm);
+// The stairs' landing starts where the last step's tread would end (y = 1.9).
+constexpr double kLandingY = kStairStartY + (kNumSteps - 1) * kStairRun;
 
-  // One set of textures, used by both floors.
+// Both floors' rooms: one set of textures, used by both.
+void AddTwoFloorsRooms(SceneBuilder& builder, double tpm) {
   const int floor_texture = builder.RichTexture(8, 8, tpm);
   const int ceiling_texture = builder.RichTexture(8, 8, tpm);
   const int wall_south = builder.RichTexture(8, kRoomHeight, tpm);
@@ -198,8 +195,10 @@ Scenario MakeTwoFloors(const ScenarioOptions& options) {
     builder.Box(Vector3d(-0.3, -0.3, 0) + z0, Vector3d(0.3, 0.3, kRoomHeight) + z0, pillar_textures,
                 tpm, /*with_top=*/false);
   }
+}
 
-  // Stairwell: weak textures everywhere.
+// The stairwell, its stairs and landing: weak textures everywhere.
+void AddStairwell(SceneBuilder& builder, double weak_tpm) {
   const double shaft_width = kShaftX1 - kShaftX0;
   const int shaft_wall = builder.WeakTextureId(8, kShaftTop, weak_tpm, 0.62f, 0.08f);
   const int shaft_floor = builder.WeakTextureId(2, 8, weak_tpm, 0.45f, 0.08f);
@@ -227,7 +226,7 @@ Scenario MakeTwoFloors(const ScenarioOptions& options) {
                    tread_texture, weak_tpm);
     }
   }
-  const double landing_y = kStairStartY + (kNumSteps - 1) * kStairRun;  // 1.9
+  const double landing_y = kLandingY;
   builder.Quad({kShaftX0, landing_y, kStoreyHeight}, {shaft_width, 0, 0}, {0, 4 - landing_y, 0},
                tread_texture, weak_tpm);
   // Underside of the flight, 0.25 m below the step nosings, and the fascia
@@ -238,6 +237,14 @@ Scenario MakeTwoFloors(const ScenarioOptions& options) {
   builder.Quad({kShaftX0, soffit_y0, 0}, {shaft_width, 0, 0}, soffit_axis, riser_texture, weak_tpm);
   builder.Quad({kShaftX0, landing_y, soffit_axis.z()}, {shaft_width, 0, 0},
                {0, 0, kStoreyHeight - kStairRise - soffit_axis.z()}, riser_texture, weak_tpm);
+}
+
+Scenario MakeTwoFloors(const ScenarioOptions& options) {
+  Scenario scenario;
+  scenario.storey_height_m = kStoreyHeight;
+  SceneBuilder builder(&scenario.scene, options.seed, options.photos);
+  AddTwoFloorsRooms(builder, options.texels_per_metre);
+  AddStairwell(builder, std::min(24.0, options.texels_per_metre));
 
   // Route: one loop of floor 1 (A B C D A), on past B out through the
   // lower doorway, up the stairs, in through the upper doorway to C, and one
@@ -257,7 +264,7 @@ Scenario MakeTwoFloors(const ScenarioOptions& options) {
                     a,
                     {shaft_x, door_low, e},
                     {shaft_x, kStairStartY - 0.3, e},
-                    {shaft_x, landing_y - 0.1, s + e},
+                    {shaft_x, kLandingY - 0.1, s + e},
                     {shaft_x, door_high, s + e},
                     c + up,
                     d + up,
