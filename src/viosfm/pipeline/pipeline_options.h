@@ -299,7 +299,7 @@ struct PipelineOptions {
 // settings (`--preset paper`). The real-time preset (`viosfm run`'s default,
 // `--preset realtime`) reconstructs a recording in about its own duration on
 // two cores: N1 10 and N2 5, a budget of 10000 features a second of
-// recording (1000 a frame at 10 Hz, on images of at most 960 px; sparse
+// recording (1000 a frame at 10 Hz, on images of at most 800 px; sparse
 // frames and photos keep every feature), matching inside the VIO's epipolar
 // band, the texture probe, per-batch adjustments over a window of 4 batches
 // with 5 held views a point, looser bundle-adjustment tolerances and one

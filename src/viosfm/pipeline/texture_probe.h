@@ -91,8 +91,12 @@ struct TextureProbeOptions {
 struct FeatureBudgetOptions {
   // Features a second of recording (>= 0; default 0: no budget).
   int features_per_second = 0;
-  // px, the longest image side where the budget limits (>= 64; default 960).
-  int max_image_size = 960;
+  // px, the longest image side where the budget limits (>= 64; default 800).
+  // SIFT starts from the image doubled, so a 1280x720 camera's frames cost
+  // most of a core at 10 Hz; at a thousand features a frame the reduced
+  // image holds the accuracy (docs/benchmarks.md, "Real time"). 752-pixel
+  // cameras (EuRoC's) keep their full size.
+  int max_image_size = 800;
 
   std::string Validate() const;  // empty if valid, else names the bad field
 

@@ -156,7 +156,7 @@ TEST(ProbeTexture, DisabledOrInvalid) {
 }
 
 // The budget of features a second: 1000 a frame at 10 Hz on images of at
-// most 960 px, 2500 at 4 Hz; frames slower than budget / cap, photos without
+// most 800 px, 2500 at 4 Hz; frames slower than budget / cap, photos without
 // stamps and a budget of 0 are not limited; the rate is the target's or the
 // camera's where that is slower.
 TEST(FeatureBudget, SpreadsTheFeaturesOverTheFramesOfASecond) {
@@ -168,7 +168,7 @@ TEST(FeatureBudget, SpreadsTheFeaturesOverTheFramesOfASecond) {
   SiftOptions at_10_hz = sift;
   EXPECT_NE(ApplyFeatureBudget(budget, 10.0, &at_10_hz), "");
   EXPECT_EQ(at_10_hz.max_num_features, 1000);
-  EXPECT_EQ(at_10_hz.max_image_size, 960);
+  EXPECT_EQ(at_10_hz.max_image_size, 800);
   SiftOptions at_4_hz = sift;
   ApplyFeatureBudget(budget, 4.0, &at_4_hz);
   EXPECT_EQ(at_4_hz.max_num_features, 2500);
