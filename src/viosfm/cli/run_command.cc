@@ -36,11 +36,13 @@ struct RunArguments {
   PipelineOptions options;
 };
 
-// A rate, a feature count or an image size the user gives is kept: the
-// texture probe and the feature budget would change it.
+// A rate, a feature count, an image size, N2 or an adjustment setting the
+// user gives is kept: the texture probe, the feature budget and a sparse
+// recording's settings would change it.
 void KeepUsersChoice(const std::string& key, PipelineOptions* options) {
   if (SettledByTextureProbe(key)) options->texture_probe.enable = false;
   if (SettledByFeatureBudget(key)) options->feature_budget.features_per_second = 0;
+  if (SettledBySparseRecording(key)) options->feature_budget.paper_settings_when_sparse = false;
 }
 
 // --list-options: every option key with its default, whether it shapes the

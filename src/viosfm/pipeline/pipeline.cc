@@ -116,7 +116,7 @@ PipelineSummary RunPipeline(const PipelineOptions& requested) {
 
   const Sequence sequence = clock.Run([&] {
     Sequence read = ReadDatasetStage(options, folder, &fingerprint);
-    ResolveRateByTexture(read, &frame_cache, &options, &summary);
+    ResolveSettingsByPace(read, &frame_cache, &options, &summary);
     if (options.texture_probe.enable) AddSettledRateAndFeatures(options, &fingerprint);
     return read;
   });

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
+#include <sstream>
 
 #include "viosfm/util/errors.h"
 #include "viosfm/util/string_util.h"
@@ -148,6 +150,38 @@ std::vector<std::pair<std::string, std::string>> PipelineOptions::ToKeyValues() 
 
 std::vector<std::pair<std::string, std::string>> PipelineOptions::StoredDataKeyValues() const {
   return StoredDataOptions(WithEffectiveStageOptions());
+}
+
+std::string ApplySparseRecordingSettings(double rate_hz, PipelineOptions* options) {
+  const FeatureBudgetOptions& budget = options->feature_budget;
+  if (!budget.paper_settings_when_sparse || budget.features_per_second <= 0 || !(rate_hz > 0.0) ||
+      budget.features_per_second / rate_hz < options->sift.max_num_features) {
+    return "";
+  }
+  const PipelineOptions paper;
+  options->verification.pairs.num_retrieval_neighbors =
+      std::max(options->verification.pairs.num_retrieval_neighbors,
+               paper.verification.pairs.num_retrieval_neighbors);
+  options->mapper.ba.function_tolerance =
+      std::min(options->mapper.ba.function_tolerance, paper.mapper.ba.function_tolerance);
+  options->mapper.ba.max_linear_solver_iterations =
+      std::max(options->mapper.ba.max_linear_solver_iterations,
+               paper.mapper.ba.max_linear_solver_iterations);
+  options->mapper.final_ba_max_refinements =
+      std::max(options->mapper.final_ba_max_refinements, paper.mapper.final_ba_max_refinements);
+  options->mapper.final_ba_refine_min_change =
+      std::min(options->mapper.final_ba_refine_min_change, paper.mapper.final_ba_refine_min_change);
+  std::ostringstream line;
+  line << std::setprecision(3) << rate_hz << " frames a second, slower than the budget limits: N2 "
+       << options->verification.pairs.num_retrieval_neighbors
+       << " and the paper's bundle-adjustment settings";
+  return line.str();
+}
+
+bool SettledBySparseRecording(const std::string& key) {
+  return key == "verification.pairs.num_retrieval_neighbors" ||
+         key == "mapper.ba.function_tolerance" || key == "mapper.ba.max_linear_solver_iterations" ||
+         key == "mapper.final_ba_max_refinements" || key == "mapper.final_ba_refine_min_change";
 }
 
 void ApplyPreset(RunPreset preset, PipelineOptions* options) {

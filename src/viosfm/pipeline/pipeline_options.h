@@ -310,4 +310,19 @@ enum class RunPreset { kRealtime, kPaper };
 // Sets the fields a preset decides; the others are left as they are.
 void ApplyPreset(RunPreset preset, PipelineOptions* options);
 
+// A recording whose frames come at `rate_hz` (> 0), slower than the feature
+// budget limits (feature_budget.features_per_second / sift.max_num_features
+// or fewer frames a second; budget on, paper_settings_when_sparse): its run
+// has the time for the paper's retrieval neighbours (N2) and bundle
+// adjustments (tolerance, conjugate-gradient steps, the final adjustment's
+// refinements), which the real-time preset reduces for frame-rate
+// recordings. Sets them and returns a line saying so; "" when it does not
+// apply. Called before the budget is applied. See docs/benchmarks.md,
+// section "Real time".
+std::string ApplySparseRecordingSettings(double rate_hz, PipelineOptions* options);
+
+// Whether the option `key` is one a user's choice of keeps from
+// ApplySparseRecordingSettings.
+bool SettledBySparseRecording(const std::string& key);
+
 }  // namespace viosfm

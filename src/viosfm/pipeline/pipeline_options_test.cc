@@ -154,5 +154,47 @@ TEST(PipelineOptions, RealtimePresetChangesOnlyItsOptions) {
   EXPECT_EQ(realtime.ToKeyValues(), before);
 }
 
+// A sparse recording (its frames slower than the budget limits: 10000 / 8192
+// = 1.22 a second) gets back the paper's N2 and adjustment settings, and
+// only those; a frame-rate recording, a photo collection (rate 0), a run
+// without the budget and a user's own choice keep the preset's.
+TEST(PipelineOptions, SparseRecordingTakesThePapersRetrievalAndAdjustments) {
+  PipelineOptions paper;
+  PipelineOptions realtime;
+  ApplyPreset(RunPreset::kRealtime, &realtime);
+  PipelineOptions sparse = realtime;
+  EXPECT_NE(ApplySparseRecordingSettings(0.9, &sparse), "");
+  PipelineOptions expected = realtime;
+  expected.verification.pairs.num_retrieval_neighbors =
+      paper.verification.pairs.num_retrieval_neighbors;
+  expected.mapper.ba.function_tolerance = paper.mapper.ba.function_tolerance;
+  expected.mapper.ba.max_linear_solver_iterations = paper.mapper.ba.max_linear_solver_iterations;
+  expected.mapper.final_ba_max_refinements = paper.mapper.final_ba_max_refinements;
+  expected.mapper.final_ba_refine_min_change = paper.mapper.final_ba_refine_min_change;
+  EXPECT_EQ(sparse.ToKeyValues(), expected.ToKeyValues());
+  EXPECT_EQ(sparse.verification.pairs.num_retrieval_neighbors, 30);
+  EXPECT_EQ(sparse.mapper.final_ba_max_refinements, 3);
+
+  PipelineOptions at_budget = realtime;  // 10000 / 1.3 < 8192: limited
+  EXPECT_EQ(ApplySparseRecordingSettings(1.3, &at_budget), "");
+  EXPECT_EQ(at_budget.ToKeyValues(), realtime.ToKeyValues());
+  for (const double rate_hz : {10.0, 0.0}) {
+    PipelineOptions options = realtime;
+    EXPECT_EQ(ApplySparseRecordingSettings(rate_hz, &options), "") << rate_hz;
+    EXPECT_EQ(options.ToKeyValues(), realtime.ToKeyValues()) << rate_hz;
+  }
+  PipelineOptions no_budget = realtime;
+  no_budget.feature_budget.features_per_second = 0;
+  EXPECT_EQ(ApplySparseRecordingSettings(0.9, &no_budget), "");
+  PipelineOptions users_n2 = realtime;
+  users_n2.verification.pairs.num_retrieval_neighbors = 7;
+  users_n2.feature_budget.paper_settings_when_sparse = false;  // as `--n2 7` leaves it
+  EXPECT_EQ(ApplySparseRecordingSettings(0.9, &users_n2), "");
+  EXPECT_EQ(users_n2.verification.pairs.num_retrieval_neighbors, 7);
+  EXPECT_TRUE(SettledBySparseRecording("verification.pairs.num_retrieval_neighbors"));
+  EXPECT_TRUE(SettledBySparseRecording("mapper.final_ba_max_refinements"));
+  EXPECT_FALSE(SettledBySparseRecording("verification.pairs.num_temporal_neighbors"));
+}
+
 }  // namespace
 }  // namespace viosfm

@@ -83,6 +83,14 @@ void StageClock::End(const std::string& name, double seconds, double cpu_seconds
                    << " s of CPU)";
 }
 
+void ResolveSettingsByPace(const Sequence& sequence, FrameCache* frame_cache,
+                           PipelineOptions* options, PipelineSummary* summary) {
+  const std::string sparse = ApplySparseRecordingSettings(
+      ReconstructionRateHz(sequence, options->frame_selection.target_rate_hz), options);
+  if (!sparse.empty()) VIOSFM_LOG(INFO) << "run: sparse recording: " << sparse;
+  ResolveRateByTexture(sequence, frame_cache, options, summary);
+}
+
 void ResolveRateByTexture(const Sequence& sequence, FrameCache* frame_cache,
                           PipelineOptions* options, PipelineSummary* summary) {
   // The budget first: the probe extracts on the images the budget reduces.

@@ -102,4 +102,11 @@ void TakeEvaluation(const TrajectoryEvaluation& evaluation, PipelineSummary* sum
 void ResolveRateByTexture(const Sequence& sequence, FrameCache* frame_cache,
                           PipelineOptions* options, PipelineSummary* summary);
 
+// A recorded sequence's settings by its pace, before anything is
+// extracted: the paper's retrieval and adjustments where its frames come
+// slower than the feature budget limits (ApplySparseRecordingSettings),
+// then ResolveRateByTexture.
+void ResolveSettingsByPace(const Sequence& sequence, FrameCache* frame_cache,
+                           PipelineOptions* options, PipelineSummary* summary);
+
 }  // namespace viosfm

@@ -86,7 +86,7 @@ StreamSource ReadStreamSource(const RunFolder& folder, bool own_vio, FrameCache*
     return source;
   }
   source.recorded = ReadDatasetStage(*options, folder, fingerprint);
-  ResolveRateByTexture(*source.recorded, frame_cache, options, summary);
+  ResolveSettingsByPace(*source.recorded, frame_cache, options, summary);
   if (options->texture_probe.enable) AddSettledRateAndFeatures(*options, fingerprint);
   summary->num_frames_in = source.recorded->images.size();
   if (own_vio && !source.recorded->has_imu()) {

@@ -97,6 +97,12 @@ struct FeatureBudgetOptions {
   // image holds the accuracy (docs/benchmarks.md, "Real time"). 752-pixel
   // cameras (EuRoC's) keep their full size.
   int max_image_size = 800;
+  // Where the budget does not limit a timed recording (its frames come
+  // slower than features_per_second / sift.max_num_features: sparse
+  // keyframes), the run has the time for the paper's retrieval neighbours
+  // and bundle-adjustment settings, and takes them
+  // (pipeline_options.h ApplySparseRecordingSettings).
+  bool paper_settings_when_sparse = true;
 
   std::string Validate() const;  // empty if valid, else names the bad field
 
@@ -108,6 +114,10 @@ struct FeatureBudgetOptions {
     visit(
         {"max_image_size", "px, the longest image side where the budget limits", kShapesStoredData},
         self.max_image_size);
+    visit({"paper_settings_when_sparse",
+           "where the budget does not limit (sparse frames): the paper's N2 and adjustment",
+           kShapesStoredData},
+          self.paper_settings_when_sparse);
   }
 };
 
