@@ -12,13 +12,12 @@
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 VIOSFM=${VIOSFM:-$here/build/src/viosfm/cli/viosfm}
+# shellcheck source=lib/trust-cases.sh
+. "$here/scripts/lib/trust-cases.sh"
 out=${1:?usage: scripts/bench-presets.sh OUT [CASE...]}
 shift
 cases=("$@")
-if [ ${#cases[@]} = 0 ]; then
-  cases=(room_kf:room:144:kf two_floors_kf:two_floors:144:kf corridor_kf:corridor:144:kf
-         room_10hz:room:40:10 two_floors_10hz:two_floors:40:10 corridor_10hz:corridor:40:10)
-fi
+if [ ${#cases[@]} = 0 ]; then cases=("${TRUST_CASES[@]}"); fi
 mkdir -p "$out"
 
 metric() {  # summary.json key path -> value
@@ -29,13 +28,8 @@ mm() { awk -v v="$1" 'BEGIN { if (v == "-") print "-"; else printf "%.2f", 1000 
 for case in "${cases[@]}"; do
   IFS=: read -r name scenario duration mode <<< "$case"
   seq=$out/seq/$name
-  if [ ! -d "$seq" ]; then
-    sim_flags=(--scenario "$scenario" --duration "$duration" --seed "${SEED:-0}" --vio-profile realistic)
-    if [ "$mode" = kf ]; then sim_flags+=(--keyframes --rate 20); else sim_flags+=(--rate "$mode"); fi
-    "$VIOSFM" simulate "${sim_flags[@]}" --out "$seq" > "$out/$name.simulate.log" 2>&1
-  fi
-  rate_flags=(--rate 0)
-  [ "$mode" != kf ] && rate_flags=(--rate "$mode")
+  simulate_trust_case "$out" "$name" "$scenario" "$duration" "$mode"
+  read -r -a rate_flags <<< "$(trust_rate_flags "$mode")"
   for preset in realtime paper; do
     run=$out/runs/$name/$preset
     [ -f "$run/summary.json" ] && continue

@@ -26,13 +26,12 @@ here=$(cd "$(dirname "$0")/.." && pwd)
 VIOSFM=${VIOSFM:-$here/build/src/viosfm/cli/viosfm}
 # shellcheck source=lib/prior-variants.sh
 . "$here/scripts/lib/prior-variants.sh"
+# shellcheck source=lib/trust-cases.sh
+. "$here/scripts/lib/trust-cases.sh"
 out=${1:?usage: scripts/bench-vio-trust.sh OUT [CASE...]}
 shift
 cases=("$@")
-if [ ${#cases[@]} = 0 ]; then
-  cases=(room_kf:room:144:kf two_floors_kf:two_floors:144:kf corridor_kf:corridor:144:kf
-         room_10hz:room:40:10 two_floors_10hz:two_floors:40:10 corridor_10hz:corridor:40:10)
-fi
+if [ ${#cases[@]} = 0 ]; then cases=("${TRUST_CASES[@]}"); fi
 mkdir -p "$out"
 run_flags=(--n1 10 --n2 5 --max-features 1500 --no-progress)
 
@@ -43,14 +42,8 @@ metric() {  # summary.json key path -> value
 for case in "${cases[@]}"; do
   IFS=: read -r name scenario duration mode extra <<< "$case"
   seq=$out/seq/$name
-  if [ ! -d "$seq" ]; then
-    sim_flags=(--scenario "$scenario" --duration "$duration" --seed "${SEED:-0}" --vio-profile realistic)
-    if [ "$mode" = kf ]; then sim_flags+=(--keyframes --rate 20); else sim_flags+=(--rate "$mode"); fi
-    # shellcheck disable=SC2086
-    "$VIOSFM" simulate "${sim_flags[@]}" $extra --out "$seq" > "$out/$name.simulate.log" 2>&1
-  fi
-  rate_flags=(--rate 0)
-  [ "$mode" != kf ] && rate_flags=(--rate "$mode")
+  simulate_trust_case "$out" "$name" "$scenario" "$duration" "$mode" "$extra"
+  read -r -a rate_flags <<< "$(trust_rate_flags "$mode")"
   map_prior_variants "$out/runs/$name" "$seq" --vio-trajectory "$seq/vio_emulated.tum" \
     "${rate_flags[@]}" "${run_flags[@]}"
 done
