@@ -117,7 +117,7 @@ PipelineSummary RunPipeline(const PipelineOptions& requested) {
   const Sequence sequence = clock.Run([&] {
     Sequence read = ReadDatasetStage(options, folder, &fingerprint);
     ResolveSettingsByPace(read, &frame_cache, &options, &summary);
-    if (options.texture_probe.enable) AddSettledRateAndFeatures(options, &fingerprint);
+    AddSettledRateAndFeatures(options, &fingerprint);
     return read;
   });
   summary.num_frames_in = sequence.images.size();

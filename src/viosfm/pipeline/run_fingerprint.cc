@@ -118,9 +118,13 @@ RunFingerprint FingerprintOfInputs(const PipelineOptions& options) {
   if (!options.verification.retrieval.vocabulary_path.empty()) {
     fingerprint.Set("vocabulary.file", FileValue(options.verification.retrieval.vocabulary_path));
   }
+  const bool sparse_may_settle = options.feature_budget.paper_settings_when_sparse &&
+                                 options.feature_budget.features_per_second > 0;
   for (const auto& [key, value] : options.StoredDataKeyValues()) {
-    // Set once the texture probe has settled them (AddSettledRateAndFeatures).
+    // Set once the texture probe and the recording's pace have settled them
+    // (AddSettledRateAndFeatures).
     if (options.texture_probe.enable && SettledByTextureProbe(key)) continue;
+    if (sparse_may_settle && SettledBySparseRecording(key)) continue;
     fingerprint.Set(key, value);
   }
   return fingerprint;
@@ -128,7 +132,7 @@ RunFingerprint FingerprintOfInputs(const PipelineOptions& options) {
 
 void AddSettledRateAndFeatures(const PipelineOptions& options, RunFingerprint* fingerprint) {
   for (const auto& [key, value] : options.StoredDataKeyValues()) {
-    if (SettledByTextureProbe(key)) fingerprint->Set(key, value);
+    if (SettledByTextureProbe(key) || SettledBySparseRecording(key)) fingerprint->Set(key, value);
   }
 }
 

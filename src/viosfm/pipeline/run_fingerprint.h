@@ -84,12 +84,15 @@ bool ShapesStoredData(const std::string& key, const PipelineOptions& options);
 // What is known before the dataset is read: the input files and the
 // options. A file that does not exist is "missing" (its reader reports it).
 // With the texture probe on, the frame rate and the feature count are left
-// out until it has settled them (AddSettledRateAndFeatures): checks of a
+// out until it has settled them, and with a sparse recording's settings on
+// (pipeline_options.h ApplySparseRecordingSettings) N2 is, until the
+// recording's pace has settled it (AddSettledRateAndFeatures): checks of a
 // stored run before then do not compare them.
 // Throws InputError naming a file that exists but cannot be read.
 RunFingerprint FingerprintOfInputs(const PipelineOptions& options);
 // Adds the frame rate and the feature count of `options`, as the texture
-// probe settled them (texture_probe.h).
+// probe settled them (texture_probe.h), and N2 as the recording's pace
+// settled it.
 void AddSettledRateAndFeatures(const PipelineOptions& options, RunFingerprint* fingerprint);
 // Adds dataset.images and dataset.rig of the sequence as read.
 void AddSequenceToFingerprint(const Sequence& sequence, RunFingerprint* fingerprint);

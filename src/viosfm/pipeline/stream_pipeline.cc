@@ -87,7 +87,7 @@ StreamSource ReadStreamSource(const RunFolder& folder, bool own_vio, FrameCache*
   }
   source.recorded = ReadDatasetStage(*options, folder, fingerprint);
   ResolveSettingsByPace(*source.recorded, frame_cache, options, summary);
-  if (options->texture_probe.enable) AddSettledRateAndFeatures(*options, fingerprint);
+  AddSettledRateAndFeatures(*options, fingerprint);
   summary->num_frames_in = source.recorded->images.size();
   if (own_vio && !source.recorded->has_imu()) {
     throw InputError(options->dataset.string(), 0,
@@ -158,7 +158,7 @@ void TakeFollowedRecording(StreamOutput* streamed, StreamSource* source, Pipelin
   summary->max_num_features = streamed->max_num_features;
   *fingerprint = FingerprintOfInputs(*options);
   AddSequenceToFingerprint(*source->recorded, fingerprint);
-  if (options->texture_probe.enable) AddSettledRateAndFeatures(*options, fingerprint);
+  AddSettledRateAndFeatures(*options, fingerprint);
 }
 
 // The stream's parts of the summary.

@@ -116,7 +116,7 @@ struct FeatureBudgetOptions {
         self.max_image_size);
     visit({"paper_settings_when_sparse",
            "where the budget does not limit (sparse frames): the paper's N2 and adjustment",
-           kShapesStoredData},
+           kRunOnly},
           self.paper_settings_when_sparse);
   }
 };
