@@ -122,6 +122,35 @@ TEST(RunFingerprint, InputsFilesAndOptions) {
   EXPECT_EQ(*FingerprintOfInputs(own).Find("dataset.kind"), "missing");
 }
 
+// Under the real-time preset N2 is left out until the recording's pace has
+// settled it: a sparse recording's 30 is then what the fingerprint holds;
+// a user's own N2 is there from the start.
+TEST(RunFingerprint, NTwoAsTheRecordingsPaceSettlesIt) {
+  const fs::path root = MakeEurocTextFiles(testing::MakeScratchFolder("fingerprint_pace"));
+  PipelineOptions options = Options(root, root / "out");
+  ApplyPreset(RunPreset::kRealtime, &options);
+  const std::string key = "verification.pairs.num_retrieval_neighbors";
+  RunFingerprint fingerprint = FingerprintOfInputs(options);
+  EXPECT_EQ(fingerprint.Find(key), nullptr);
+  PipelineOptions sparse = options;
+  ASSERT_NE(ApplySparseRecordingSettings(0.9, &sparse), "");
+  AddSettledRateAndFeatures(sparse, &fingerprint);
+  ASSERT_NE(fingerprint.Find(key), nullptr);
+  EXPECT_EQ(*fingerprint.Find(key), "30");
+
+  RunFingerprint at_frame_rate = FingerprintOfInputs(options);
+  PipelineOptions frame_rate = options;
+  EXPECT_EQ(ApplySparseRecordingSettings(10.0, &frame_rate), "");
+  AddSettledRateAndFeatures(frame_rate, &at_frame_rate);
+  EXPECT_EQ(*at_frame_rate.Find(key), "5");
+
+  PipelineOptions users = options;
+  users.verification.pairs.num_retrieval_neighbors = 30;
+  users.feature_budget.paper_settings_when_sparse = false;  // as `--n2 30` leaves it
+  ASSERT_NE(FingerprintOfInputs(users).Find(key), nullptr);
+  EXPECT_EQ(*FingerprintOfInputs(users).Find(key), "30");
+}
+
 TEST(RunFingerprint, SequenceAndVioPoses) {
   const fs::path root = testing::MakeScratchFolder("fingerprint_sequence");
   Sequence sequence;
