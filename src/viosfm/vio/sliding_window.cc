@@ -155,17 +155,22 @@ Eigen::MatrixXd StatesInformation(const ceres::CRSMatrix& jacobian, int num_stat
   Eigen::MatrixXd states = Eigen::MatrixXd::Zero(num_states, num_states);
   Eigen::MatrixXd states_depths = Eigen::MatrixXd::Zero(num_states, num_depths);
   Eigen::VectorXd depths = Eigen::VectorXd::Zero(num_depths);
+  // Each pair of a row's entries once: a product adds to both of its
+  // symmetric cells, as the full double loop would add it to each in turn.
   for (int row = 0; row < jacobian.num_rows; ++row) {
     for (int a = jacobian.rows[row]; a < jacobian.rows[row + 1]; ++a) {
       const int column_a = jacobian.cols[a];
-      for (int b = jacobian.rows[row]; b < jacobian.rows[row + 1]; ++b) {
+      for (int b = a; b < jacobian.rows[row + 1]; ++b) {
         const int column_b = jacobian.cols[b];
         const double product = jacobian.values[a] * jacobian.values[b];
         if (column_a < num_states && column_b < num_states) {
           states(column_a, column_b) += product;
+          if (column_a != column_b) states(column_b, column_a) += product;
         } else if (column_a < num_states) {
           states_depths(column_a, column_b - num_states) += product;
-        } else if (column_b >= num_states) {
+        } else if (column_b < num_states) {
+          states_depths(column_b, column_a - num_states) += product;
+        } else {
           VIOSFM_CHECK_EQ(column_a, column_b) << "a residual sees two inverse depths";
           depths(column_a - num_states) += product;
         }
