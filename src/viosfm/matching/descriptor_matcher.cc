@@ -203,11 +203,11 @@ class PointGrid {
     Fill(points, /*by_column=*/false, &by_row_);
   }
 
-  // Calls visit(j, point j) for every point in the cells the band |a x + b y
-  // + c| <= half_width crosses (a^2 + b^2 = 1); a superset of the points in
-  // the band.
+  // Calls visit(indices, points, count) for every run of points in
+  // consecutive cells the band |a x + b y + c| <= half_width crosses (a^2 +
+  // b^2 = 1): a superset of the points in the band, each point at most once.
   template <typename Visit>
-  void ForEachNearLine(double a, double b, double c, double half_width, Visit&& visit) const {
+  void ForEachRunNearLine(double a, double b, double c, double half_width, Visit&& visit) const {
     if (nx_ == 0) return;
     // Walk along the axis the line is closer to, so the band covers few cells
     // per step: y as a function of x when |b| >= |a|, else x of y.
@@ -239,10 +239,9 @@ class PointGrid {
       const int64_t cv0 = low > 0.0 ? static_cast<int64_t>(low) : 0;
       const int64_t cv1 = std::min<int64_t>(nv - 1, static_cast<int64_t>(high));
       // Cells (cu, cv0..cv1) are consecutive in this layout.
+      const int64_t begin = layout.start[cu * nv + cv0];
       const int64_t end = layout.start[cu * nv + cv1 + 1];
-      for (int64_t k = layout.start[cu * nv + cv0]; k < end; ++k) {
-        visit(layout.index[k], layout.points[k]);
-      }
+      if (end > begin) visit(layout.index.data() + begin, layout.points.data() + begin, end - begin);
     }
   }
 
@@ -328,8 +327,9 @@ FeatureMatches MatchDescriptorsGuided(const FeatureDescriptors& descriptors1,
       num_threads, std::vector<BestTwo>(matching.cross_check ? num_columns : 0));
   ParallelFor(num_tasks, num_threads, [&](int64_t task, int thread) {
     std::vector<BestTwo>& thread_columns = columns[thread];
-    std::vector<int32_t> candidates;
-    std::vector<int32_t> dots;
+    // Room for every point of image 2: the band visits each at most once.
+    std::vector<int32_t> candidates(points2.size());
+    std::vector<int32_t> dots(points2.size());
     const int64_t end = std::min(num_rows, (task + 1) * kRowsPerTask);
     for (int64_t i = task * kRowsPerTask; i < end; ++i) {
       const Eigen::Vector2d& point1 = points1[i];
@@ -339,21 +339,24 @@ FeatureMatches MatchDescriptorsGuided(const FeatureDescriptors& descriptors1,
       const double max_line_value = max_distance * norm;
       // EpipolarLineDistance(fundamental, point1, points2[j]) <= max_distance,
       // with the line and its norm computed once per row.
-      candidates.clear();
-      grid.ForEachNearLine(line.x() / norm, line.y() / norm, line.z() / norm, search_half_width,
-                           [&](int32_t j, const Eigen::Vector2d& point2) {
-                             if (std::abs(line.dot(point2.homogeneous())) <= max_line_value) {
-                               candidates.push_back(j);
-                             }
-                           });
-      if (candidates.empty() || inverse_norms1[i] == 0.0) continue;
-      dots.resize(candidates.size());
+      // Each visited point is written, and kept when inside the band
+      // (without a branch: about half the visited points are outside).
+      int32_t num_candidates = 0;
+      int32_t* const candidate = candidates.data();
+      grid.ForEachRunNearLine(
+          line.x() / norm, line.y() / norm, line.z() / norm, search_half_width,
+          [&](const int32_t* indices, const Eigen::Vector2d* points, int64_t count) {
+            for (int64_t k = 0; k < count; ++k) {
+              candidate[num_candidates] = indices[k];
+              num_candidates += std::abs(line.dot(points[k].homogeneous())) <= max_line_value;
+            }
+          });
+      if (num_candidates == 0 || inverse_norms1[i] == 0.0) continue;
       DescriptorDotProducts(descriptors1.row(i).data(), descriptors2.data(), descriptors2.cols(),
-                            dims, candidates.data(), static_cast<int>(candidates.size()),
-                            dots.data());
+                            dims, candidates.data(), num_candidates, dots.data());
       BestTwo& row = rows[i];
       const auto row_index = static_cast<int32_t>(i);
-      for (size_t k = 0; k < candidates.size(); ++k) {
+      for (int32_t k = 0; k < num_candidates; ++k) {
         const int32_t j = candidates[k];
         const auto score = static_cast<float>(static_cast<double>(dots[k]) * inverse_norms1[i] *
                                               inverse_norms2[j]);
