@@ -33,17 +33,21 @@ TEST(DescriptorDotProducts, BothKernelsGiveTheExactIntegers) {
     std::vector<uint8_t> query(dims + 1);
     for (uint8_t& value : query) value = static_cast<uint8_t>(byte(rng));
     std::vector<uint8_t> saturated_query(dims + 1, 255);
-    const std::vector<int32_t> indices = {0, 7, 49, 3, 3, 12, 7};
-    for (const std::vector<uint8_t>* q : {&query, &saturated_query}) {
-      std::vector<int32_t> fast(indices.size(), -1), portable(indices.size(), -1);
-      DescriptorDotProducts(q->data(), rows.data(), stride, dims, indices.data(),
-                            static_cast<int>(indices.size()), fast.data());
-      DescriptorDotProductsPortable(q->data(), rows.data(), stride, dims, indices.data(),
-                                    static_cast<int>(indices.size()), portable.data());
-      for (size_t k = 0; k < indices.size(); ++k) {
-        const int64_t truth = NaiveDot(q->data(), rows.data() + indices[k] * stride, dims);
-        EXPECT_EQ(fast[k], truth) << "candidate " << k;
-        EXPECT_EQ(portable[k], truth) << "candidate " << k;
+    const std::vector<int32_t> all_indices = {0, 7, 49, 3, 3, 12, 7};
+    // Odd and even counts: the AVX2 kernel takes candidates two at a time.
+    for (const size_t count : {size_t{1}, size_t{2}, size_t{6}, all_indices.size()}) {
+      const std::vector<int32_t> indices(all_indices.begin(), all_indices.begin() + count);
+      for (const std::vector<uint8_t>* q : {&query, &saturated_query}) {
+        std::vector<int32_t> fast(indices.size(), -1), portable(indices.size(), -1);
+        DescriptorDotProducts(q->data(), rows.data(), stride, dims, indices.data(),
+                              static_cast<int>(indices.size()), fast.data());
+        DescriptorDotProductsPortable(q->data(), rows.data(), stride, dims, indices.data(),
+                                      static_cast<int>(indices.size()), portable.data());
+        for (size_t k = 0; k < indices.size(); ++k) {
+          const int64_t truth = NaiveDot(q->data(), rows.data() + indices[k] * stride, dims);
+          EXPECT_EQ(fast[k], truth) << "candidate " << k << " of " << count;
+          EXPECT_EQ(portable[k], truth) << "candidate " << k << " of " << count;
+        }
       }
     }
   }
