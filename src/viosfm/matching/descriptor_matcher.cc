@@ -241,7 +241,8 @@ class PointGrid {
       // Cells (cu, cv0..cv1) are consecutive in this layout.
       const int64_t begin = layout.start[cu * nv + cv0];
       const int64_t end = layout.start[cu * nv + cv1 + 1];
-      if (end > begin) visit(layout.index.data() + begin, layout.points.data() + begin, end - begin);
+      if (end > begin)
+        visit(layout.index.data() + begin, layout.points.data() + begin, end - begin);
     }
   }
 
