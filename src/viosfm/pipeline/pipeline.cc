@@ -50,8 +50,7 @@ void StartFeaturesBesideTheVio(const Sequence& sequence, const PipelineOptions& 
   std::vector<std::filesystem::path> paths;
   for (const size_t index : predicted.kept) paths.push_back(sequence.images[index].path);
   frame_cache->RetainOnly(paths);
-  const bool own_vio = !options.vio_source && options.vio_trajectory.empty();
-  if (own_vio && options.num_threads > 1 &&
+  if (options.UsesOwnVio() && options.num_threads > 1 &&
       !std::filesystem::exists(folder.path() / "database.db")) {
     prefetch->emplace(std::move(paths), options.EffectiveSiftOptions(), sequence.rig.camera,
                       frame_cache, kFeaturePrefetchBytes);
@@ -100,9 +99,7 @@ PipelineSummary RunPipeline(const PipelineOptions& requested) {
   Timer total_timer;
   total_timer.Start();
   StageClock clock(&summary.stages, kStageNames);
-  const std::string vio_name = options.vio_source || options.vio_trajectory.empty()
-                                   ? std::string("the VIO")
-                                   : options.vio_trajectory.string();
+  const std::string vio_name = options.VioName();
 
   // A dataset path that names nothing leaves no output folder behind.
   CheckDatasetExists(options.dataset);

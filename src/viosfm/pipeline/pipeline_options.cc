@@ -61,7 +61,7 @@ std::string PipelineOptions::Validate() const {
   if (!(follow_idle_s > 0.0) || !std::isfinite(follow_idle_s)) {
     return "follow_idle_s must be > 0 s";
   }
-  if (follow && (vio_source || !vio_trajectory.empty())) {
+  if (follow && !UsesOwnVio()) {
     return "follow: a recording being made is followed with viosfm's own VIO (no "
            "vio_trajectory)";
   }

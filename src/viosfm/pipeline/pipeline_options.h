@@ -198,6 +198,14 @@ struct PipelineOptions {
   BatchedMapperOptions EffectiveMapperOptions() const;
   // rosbag with the default extract folder applied.
   RosbagDatasetOptions EffectiveRosbagOptions() const;
+  // Whether viosfm's own VIO makes the poses: neither vio_source nor
+  // vio_trajectory is given.
+  bool UsesOwnVio() const { return !vio_source && vio_trajectory.empty(); }
+  // The VIO as messages name it: the trajectory file, or "the VIO" (viosfm's
+  // own, or vio_source).
+  std::string VioName() const {
+    return vio_source || vio_trajectory.empty() ? std::string("the VIO") : vio_trajectory.string();
+  }
 
   // Every option of a run, in the order of options.json (see
   // util/option_fields.h). The stage options' own fields are described by
@@ -205,7 +213,7 @@ struct PipelineOptions {
   template <class Self, class Visitor>
   static void VisitFields(Self& self, Visitor&& visit) {
     const bool is_bag = IsBagPath(self.dataset);
-    const bool own_vio_runs = !self.vio_source && self.vio_trajectory.empty();
+    const bool own_vio_runs = self.UsesOwnVio();
     // The uncertainty model widens the verification's epipolar band (and
     // weighs the mapper's priors, which stores nothing).
     const OptionEffect uncertainty_effect =

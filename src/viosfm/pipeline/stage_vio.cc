@@ -232,7 +232,7 @@ Trajectory LoadVioTrajectory(const Sequence& sequence, const PipelineOptions& op
 
 VioPoses LoadVioPoses(const Sequence& sequence, const PipelineOptions& options, FrameCache* frames,
                       const VioProgressCallback& on_progress) {
-  if (!options.vio_source && options.vio_trajectory.empty()) {
+  if (options.UsesOwnVio()) {
     if (const std::optional<std::string> reason = WhyNoOwnVio(sequence, options)) {
       VioPoses poses;
       poses.absent = true;

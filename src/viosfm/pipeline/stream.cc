@@ -272,10 +272,9 @@ void Stream::TakeTimes(const StreamTimes& times) {
 }
 
 StreamOutput Stream::Run(const Timer& stream_timer) {
-  const bool own_vio = !options_.vio_source && options_.vio_trajectory.empty();
   // The database, from here on written by this thread only.
   OpenDatabase();
-  if (!own_vio) {
+  if (!options_.UsesOwnVio()) {
     out_.vio = LoadVioPoses(*sequence_, options_);
     settled_.SetAll(out_.vio);
   }

@@ -71,7 +71,7 @@ struct StreamSource {
   std::optional<FrameSelection> selection;  // a recorded dataset's frames
 };
 
-StreamSource ReadStreamSource(const RunFolder& folder, bool own_vio, FrameCache* frame_cache,
+StreamSource ReadStreamSource(const RunFolder& folder, FrameCache* frame_cache,
                               PipelineOptions* options, PipelineSummary* summary,
                               RunFingerprint* fingerprint) {
   StreamSource source;
@@ -89,12 +89,13 @@ StreamSource ReadStreamSource(const RunFolder& folder, bool own_vio, FrameCache*
   ResolveSettingsByPace(*source.recorded, frame_cache, options, summary);
   AddSettledRateAndFeatures(*options, fingerprint);
   summary->num_frames_in = source.recorded->images.size();
-  if (own_vio && !source.recorded->has_imu()) {
+  if (options->UsesOwnVio() && !source.recorded->has_imu()) {
     throw InputError(options->dataset.string(), 0,
                      "--stream: the stream runs viosfm's own VIO, which needs an IMU, and the "
                      "dataset has none; run the images alone without --stream");
   }
-  if (own_vio && FrameSelectionUsesTrajectory(*source.recorded, options->frame_selection)) {
+  if (options->UsesOwnVio() &&
+      FrameSelectionUsesTrajectory(*source.recorded, options->frame_selection)) {
     throw InputError(options->dataset.string(), 0,
                      "--stream: the frame selection would need the own VIO's trajectory "
                      "(frame_selection.static_source), which a stream has only at its end; "
@@ -107,13 +108,12 @@ StreamSource ReadStreamSource(const RunFolder& folder, bool own_vio, FrameCache*
 // selected first (an external VIO's trajectory read for the selection when
 // it asks); a followed recording's are selected as it grows.
 StreamOutput RunStreamOverSource(const PipelineOptions& options, const RunFolder& folder,
-                                 bool own_vio, FrameCache* frame_cache,
-                                 KeypointGreyValues* keypoint_values, StreamSource* source,
-                                 RunFingerprint* fingerprint) {
+                                 FrameCache* frame_cache, KeypointGreyValues* keypoint_values,
+                                 StreamSource* source, RunFingerprint* fingerprint) {
   const Timer stream_timer;
   // What the database is made from, before it changes: the VIO's poses
   // (and a followed recording's files) once the VIO has ended.
-  if (own_vio) {
+  if (options.UsesOwnVio()) {
     fingerprint->Set("vio.poses", "pending: a streamed run writes them when its VIO ends");
   }
   if (source->follower) {
@@ -125,7 +125,7 @@ StreamOutput RunStreamOverSource(const PipelineOptions& options, const RunFolder
   }
   const Sequence& recorded = *source->recorded;
   std::optional<Trajectory> external;
-  if (!own_vio && FrameSelectionUsesTrajectory(recorded, options.frame_selection)) {
+  if (!options.UsesOwnVio() && FrameSelectionUsesTrajectory(recorded, options.frame_selection)) {
     external = LoadVioTrajectory(recorded, options);
   }
   source->selection =
@@ -185,9 +185,7 @@ PipelineSummary RunStreamPipeline(const PipelineOptions& requested) {
   Timer total_timer;
   total_timer.Start();
   StageClock clock(&summary.stages, kStreamStageNames);
-  const bool own_vio = !options.vio_source && options.vio_trajectory.empty();
-  const std::string vio_name =
-      own_vio || options.vio_source ? std::string("the VIO") : options.vio_trajectory.string();
+  const std::string vio_name = options.VioName();
 
   CheckDatasetExists(options.dataset);
   const RunFolder folder(options);
@@ -204,11 +202,10 @@ PipelineSummary RunStreamPipeline(const PipelineOptions& requested) {
   KeypointGreyValues keypoint_values;
   RunFingerprint fingerprint = FingerprintOfInputs(options);
 
-  StreamSource source = clock.Run([&] {
-    return ReadStreamSource(folder, own_vio, &frame_cache, &options, &summary, &fingerprint);
-  });
+  StreamSource source = clock.Run(
+      [&] { return ReadStreamSource(folder, &frame_cache, &options, &summary, &fingerprint); });
   StreamOutput streamed = clock.Run([&] {
-    return RunStreamOverSource(options, folder, own_vio, &frame_cache, &keypoint_values, &source,
+    return RunStreamOverSource(options, folder, &frame_cache, &keypoint_values, &source,
                                &fingerprint);
   });
   if (source.follower) {

@@ -59,8 +59,7 @@ namespace viosfm {
 namespace fs = std::filesystem;
 
 void Stream::RunRecordedVio(const Timer& stream_timer, double* vio_seconds) {
-  const bool own_vio = !options_.vio_source && options_.vio_trajectory.empty();
-  if (own_vio) {
+  if (options_.UsesOwnVio()) {
     try {
       out_.vio = LoadVioPoses(*sequence_, options_, frame_cache_,
                               [&](const VioProgress& progress) { settled_.Report(progress); });
