@@ -20,10 +20,6 @@ cases=("$@")
 if [ ${#cases[@]} = 0 ]; then cases=("${TRUST_CASES[@]}"); fi
 mkdir -p "$out"
 
-metric() {  # summary.json key path -> value
-  jq -r "$2 // \"-\"" "$1/summary.json" 2>/dev/null || echo -
-}
-mm() { awk -v v="$1" 'BEGIN { if (v == "-") print "-"; else printf "%.2f", 1000 * v }'; }
 
 for case in "${cases[@]}"; do
   IFS=: read -r name scenario duration mode <<< "$case"

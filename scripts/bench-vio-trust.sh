@@ -35,9 +35,6 @@ if [ ${#cases[@]} = 0 ]; then cases=("${TRUST_CASES[@]}"); fi
 mkdir -p "$out"
 run_flags=(--n1 10 --n2 5 --max-features 1500 --no-progress)
 
-metric() {  # summary.json key path -> value
-  jq -r "$2 // \"-\"" "$1/summary.json" 2>/dev/null || echo -
-}
 
 for case in "${cases[@]}"; do
   IFS=: read -r name scenario duration mode extra <<< "$case"
@@ -54,7 +51,6 @@ done
   for case in "${cases[@]}"; do
     IFS=: read -r name _ <<< "$case"
     runs=$out/runs/$name
-    mm() { awk -v v="$1" 'BEGIN { if (v == "-") print "-"; else printf "%.2f", 1000 * v }'; }
     vio=$(metric "$runs/default" .eval.vio_metric.ate_sim3_rmse_m)
     d=$(metric "$runs/default" .eval.metric.ate_sim3_rmse_m)
     frames="$(metric "$runs/default" .frames.registered) / $(metric "$runs/default" .frames.vio_only) / $(metric "$runs/default" .frames.unposed) of $(metric "$runs/default" .frames.selected)"

@@ -6,6 +6,8 @@
 #       simulates OUT/seq/NAME unless it exists (log: OUT/NAME.simulate.log);
 #       MODE kf: keyframe-like frames (gaps 0.05-7 s), else a frame rate in Hz
 #   trust_rate_flags MODE      prints the `viosfm run` rate flags of MODE
+#   metric RUN KEY             a run's summary.json value at the jq path KEY, or -
+#   mm VALUE                   metres as millimetres with two decimals (- stays -)
 # Needs VIOSFM (the viosfm binary); SEED (environment, default 0) seeds the
 # sequences.
 TRUST_CASES=(room_kf:room:144:kf two_floors_kf:two_floors:144:kf corridor_kf:corridor:144:kf
@@ -24,3 +26,9 @@ simulate_trust_case() {
 trust_rate_flags() {
   if [ "$1" = kf ]; then echo --rate 0; else echo --rate "$1"; fi
 }
+
+metric() {
+  jq -r "$2 // \"-\"" "$1/summary.json" 2>/dev/null || echo -
+}
+
+mm() { awk -v v="$1" 'BEGIN { if (v == "-") print "-"; else printf "%.2f", 1000 * v }'; }
